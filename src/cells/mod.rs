@@ -1,0 +1,22 @@
+//! Stage 1: the quadtree of error-bounded TIN cells.
+//!
+//! Data types: [`Quadtree`] and [`CellKey`] address cells; [`SampleRect`] is a cell's
+//! clipped rectangle of DEM samples; [`Tin`] is one cell's simplified triangulation on DEM
+//! sample positions, with its measured maximum vertical error against every full-resolution
+//! sample of the cell.
+
+mod quadtree;
+
+pub use quadtree::{CellKey, Quadtree, SampleRect};
+
+/// A cell's simplified TIN. Vertices are DEM sample indices (their heights come from the
+/// DEM); triangles are counter-clockwise seen from above (x east, y north).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tin {
+    /// `[col, row]` of each vertex in the full-resolution DEM.
+    pub vertices: Vec<[u32; 2]>,
+    /// Vertex indices, CCW seen from above in world coordinates.
+    pub triangles: Vec<[u32; 3]>,
+    /// Largest vertical distance from any full-resolution DEM sample of the cell to the TIN.
+    pub max_error: f64,
+}

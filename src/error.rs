@@ -1,0 +1,64 @@
+//! The crate's error type. Every error that comes from user input names the file
+//! (or option) and the problem, so the CLI can print it and exit non-zero.
+
+use std::path::{Path, PathBuf};
+
+/// Result alias used across cliffmap.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong in cliffmap. Input errors carry the offending path.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// An I/O error while reading or writing `path`.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file involved.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The file exists but its content is not acceptable (truncated, NaN heights, bad tags...).
+    #[error("{path}: {msg}")]
+    BadInput {
+        /// The file involved.
+        path: PathBuf,
+        /// What is wrong, in words a user can act on.
+        msg: String,
+    },
+    /// An option or combination of options is invalid (no file involved).
+    #[error("invalid option: {0}")]
+    BadOption(String),
+    /// The input would need more memory than the configured limit.
+    #[error("{path}: would need {needed} bytes, over the memory limit of {limit} bytes (raise --max-memory if this is intended)")]
+    TooLarge {
+        /// The file involved.
+        path: PathBuf,
+        /// Bytes the input would need.
+        needed: u64,
+        /// The configured limit in bytes.
+        limit: u64,
+    },
+    /// A store on disk is corrupt or of an unknown version.
+    #[error("store {path}: {msg}")]
+    Store {
+        /// The store file involved.
+        path: PathBuf,
+        /// What is wrong.
+        msg: String,
+    },
+}
+
+impl Error {
+    /// Wraps an I/O error with the path it concerns.
+    pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
+        Error::Io { path: path.as_ref().to_path_buf(), source }
+    }
+    /// A content problem in `path`.
+    pub fn bad_input(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
+        Error::BadInput { path: path.as_ref().to_path_buf(), msg: msg.into() }
+    }
+    /// A problem in the store file `path`.
+    pub fn store(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
+        Error::Store { path: path.as_ref().to_path_buf(), msg: msg.into() }
+    }
+}
