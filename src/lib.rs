@@ -27,3 +27,7 @@ pub use dem::{Dem, DemFormat, DemLoadOptions, load_dem};
 pub use error::{Error, Result};
 pub use georef::{GridGeoref, WorldRect};
 pub use ortho::{Ortho, OrthoPlacement, load_ortho};
+pub mod fsutil;
+pub mod pipeline;
+pub mod scene;
+pub mod store;

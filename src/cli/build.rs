@@ -1,0 +1,141 @@
+//! `cliffmap build`: DEM (+ ortho) to a cell store.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+use cliffmap::{DemFormat, DemLoadOptions, OrthoPlacement, WorldRect, load_dem, load_ortho};
+
+use super::stats::print_summary;
+
+/// Flags of `cliffmap build`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The DEM file (GeoTIFF, 16-bit PNG, Terrain-RGB PNG or raw little-endian f32).
+    #[arg(long)]
+    dem: PathBuf,
+    /// DEM format; inferred from the extension (and PNG colour type) when omitted.
+    #[arg(long, value_enum)]
+    dem_format: Option<DemFormat>,
+    /// Width in samples (raw f32).
+    #[arg(long)]
+    width: Option<usize>,
+    /// Height in samples (raw f32).
+    #[arg(long)]
+    height: Option<usize>,
+    /// Height = stored value * z-scale + z-offset.
+    #[arg(long)]
+    z_scale: Option<f64>,
+    /// Height offset added after scaling.
+    #[arg(long, allow_hyphen_values = true)]
+    z_offset: Option<f64>,
+    /// Sample spacing in world units (overrides the file's georeference).
+    #[arg(long)]
+    spacing: Option<f64>,
+    /// World X,Y of the centre of the north-west sample (overrides the file's georeference).
+    #[arg(long, value_parser = super::parse_pair, allow_hyphen_values = true)]
+    origin: Option<(f64, f64)>,
+    /// Stored value meaning no-data (overrides GDAL_NODATA); "nan" declares NaN as no-data.
+    #[arg(long, allow_hyphen_values = true)]
+    nodata: Option<f64>,
+    /// Finest level's max vertical error in world units; doubles per coarser level.
+    #[arg(long, default_value_t = 0.5)]
+    max_error: f64,
+    /// Texture side in texels per cell (power of two).
+    #[arg(long, default_value_t = 256)]
+    cell_texels: u32,
+    /// Sample intervals per side of a finest-level cell (power of two).
+    #[arg(long, default_value_t = 64)]
+    cell_intervals: u32,
+    /// Ortho image (PNG, JPEG or GeoTIFF); without it textures are derived from the DEM.
+    #[arg(long)]
+    ortho: Option<PathBuf>,
+    /// The ortho's pixel (r, c) lies on DEM sample (r, c).
+    #[arg(long, conflicts_with = "ortho_extent")]
+    ortho_same_grid: bool,
+    /// World extent MINX,MINY,MAXX,MAXY of the ortho's outer pixel edges.
+    #[arg(long, value_parser = parse_extent, allow_hyphen_values = true)]
+    ortho_extent: Option<WorldRect>,
+    /// Refuse inputs that would need more memory than this (e.g. 8G).
+    #[arg(long, value_parser = super::parse_bytes, default_value = "8G")]
+    max_memory: u64,
+    /// Output store directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Rebuild over an existing store made from other inputs or options.
+    #[arg(long)]
+    force: bool,
+    /// No progress bars or summary.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn parse_extent(s: &str) -> Result<WorldRect, String> {
+    let v = super::parse_list(s, 4)?;
+    let r = WorldRect { min_x: v[0], min_y: v[1], max_x: v[2], max_y: v[3] };
+    if r.max_x <= r.min_x || r.max_y <= r.min_y {
+        return Err(format!("extent {s:?} must be MINX,MINY,MAXX,MAXY with MAX > MIN"));
+    }
+    Ok(r)
+}
+
+/// Runs `build`: loads and checks every input before creating the store directory.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let opts = BuildOptions {
+        max_error: a.max_error,
+        cell_intervals: a.cell_intervals,
+        cell_texels: a.cell_texels,
+        quiet: a.quiet,
+        force: a.force,
+    };
+    opts.validate()?;
+    let dem_opts = DemLoadOptions {
+        format: a.dem_format,
+        width: a.width,
+        height: a.height,
+        z_scale: a.z_scale,
+        z_offset: a.z_offset,
+        spacing: a.spacing,
+        origin: a.origin,
+        nodata: a.nodata,
+        max_memory: a.max_memory,
+    };
+    let dem = load_dem(&a.dem, &dem_opts)?;
+    let ortho = match &a.ortho {
+        Some(p) => {
+            let placement = if a.ortho_same_grid {
+                OrthoPlacement::SameGridAsDem
+            } else if let Some(e) = a.ortho_extent {
+                OrthoPlacement::Extent(e)
+            } else {
+                OrthoPlacement::FromFile
+            };
+            Some(load_ortho(p, placement, &dem, a.max_memory)?)
+        }
+        None => None,
+    };
+    let fingerprint = format!("{}|{}", file_crc(&a.dem)?, a.ortho.as_deref().map(file_crc).transpose()?.unwrap_or_default());
+    let inputs = BuildInputs {
+        dem: &dem,
+        ortho: ortho.as_ref(),
+        dem_source: a.dem.display().to_string(),
+        ortho_source: a.ortho.as_ref().map(|p| p.display().to_string()),
+        fingerprint,
+    };
+    let manifest = build_store(&inputs, &opts, &a.out)?;
+    if !a.quiet {
+        println!(
+            "built {} cells in {} levels into {}",
+            manifest.cells.len(),
+            manifest.quadtree.levels,
+            a.out.display()
+        );
+        print_summary(&a.out, &manifest, 1.1)?;
+    }
+    Ok(())
+}
+
+fn file_crc(p: &Path) -> anyhow::Result<String> {
+    let bytes = std::fs::read(p).with_context(|| format!("{}: cannot read", p.display()))?;
+    Ok(cliffmap::store::crc32_hex(&bytes))
+}

@@ -1,0 +1,299 @@
+//! `build`: DEM (+ ortho) -> quadtree of TIN cells with textures, normal maps and stats.
+
+use std::path::Path;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::{derived_ortho, local_mesh, progress_bar};
+use crate::cells::{self, CellKey, LevelBorders, Quadtree};
+use crate::dem::Dem;
+use crate::error::{Error, Result};
+use crate::fsutil::{encode_png, write_atomic};
+use crate::ortho::Ortho;
+use crate::stats;
+use crate::store::{
+    self, CellFiles, CellRecord, DemInfo, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION, cell_stem,
+    write_file,
+};
+
+/// Options of a build. Defaults: 0.5 m finest error, 64-interval finest cells, 256² textures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BuildOptions {
+    /// Max vertical error of the finest level (world units, > 0); doubles per coarser level.
+    pub max_error: f64,
+    /// Sample intervals per side of a finest cell (power of two, 2..=4096).
+    pub cell_intervals: u32,
+    /// Texture side in texels (power of two, 8..=8192).
+    pub cell_texels: u32,
+    /// Hide progress bars.
+    #[serde(skip)]
+    pub quiet: bool,
+    /// Rebuild over an existing store built from other inputs or options.
+    #[serde(skip)]
+    pub force: bool,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions { max_error: 0.5, cell_intervals: 64, cell_texels: 256, quiet: false, force: false }
+    }
+}
+
+impl BuildOptions {
+    /// Rejects out-of-range options with a message naming the flag.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.max_error.is_finite() && self.max_error > 0.0) {
+            return Err(Error::BadOption(format!("--max-error must be a positive number, got {}", self.max_error)));
+        }
+        if !self.cell_intervals.is_power_of_two() || !(2..=4096).contains(&self.cell_intervals) {
+            return Err(Error::BadOption(format!(
+                "--cell-intervals must be a power of two in 2..=4096, got {}",
+                self.cell_intervals
+            )));
+        }
+        if !self.cell_texels.is_power_of_two() || !(8..=8192).contains(&self.cell_texels) {
+            return Err(Error::BadOption(format!(
+                "--cell-texels must be a power of two in 8..=8192, got {}",
+                self.cell_texels
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The inputs of a build and how to describe them in the manifest.
+pub struct BuildInputs<'a> {
+    /// The DEM.
+    pub dem: &'a Dem,
+    /// The ortho image; `None` derives a hypsometric + hillshade texture from the DEM.
+    pub ortho: Option<&'a Ortho>,
+    /// Description of the DEM source (path or generator).
+    pub dem_source: String,
+    /// Description of the ortho source.
+    pub ortho_source: Option<String>,
+    /// A fingerprint of the input content (e.g. CRC of the files); part of the build key.
+    pub fingerprint: String,
+}
+
+#[derive(Serialize, Deserialize)]
+struct BuildMarker {
+    build_key: String,
+}
+
+/// Builds (or resumes) the store in `out`. Inputs are already validated; the store directory
+/// is created only now. Cells whose record and files are intact from an interrupted build with
+/// the same inputs and options are kept. Writes `manifest.json` last.
+pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result<Manifest> {
+    opts.validate()?;
+    let dem = inp.dem;
+    let tree = Quadtree::new(dem.width as u32, dem.height as u32, opts.cell_intervals);
+    let key_src = format!(
+        "{STORE_VERSION}|{}|{}|{}|{:?}|{:?}",
+        inp.fingerprint,
+        serde_json::to_string(opts).unwrap_or_default(),
+        serde_json::to_string(&dem.georef).unwrap_or_default(),
+        inp.dem_source,
+        inp.ortho_source
+    );
+    let build_key = store::crc32_hex(key_src.as_bytes());
+    prepare_dir(out, &build_key, opts.force)?;
+    write_atomic(&out.join("build.json"), &serde_json::to_vec(&BuildMarker { build_key: build_key.clone() }).unwrap_or_default())?;
+
+    let derived;
+    let ortho = match inp.ortho {
+        Some(o) => o,
+        None => {
+            derived = derived_ortho(dem);
+            &derived
+        }
+    };
+    let total: usize = (0..tree.levels).map(|l| tree.cells(l).len()).sum();
+    let pb = progress_bar(total as u64, "cells", opts.quiet);
+    let mut records = Vec::with_capacity(total);
+    for level in 0..tree.levels {
+        let eps = opts.max_error * (1u64 << (tree.finest_level() - level)) as f64;
+        let keys = tree.cells(level);
+        let borders = LevelBorders::compute(dem, &tree, level, eps);
+        let recs: Vec<Result<CellRecord>> = keys
+            .par_iter()
+            .map(|&key| {
+                let r = match resume_record(out, key) {
+                    Some(rec) => Ok(rec),
+                    None => build_cell(dem, ortho, &tree, &borders, key, eps, opts, out),
+                };
+                pb.inc(1);
+                r
+            })
+            .collect();
+        for r in recs {
+            records.push(r?);
+        }
+    }
+    pb.finish_and_clear();
+
+    let (lo, hi) = dem.height_range();
+    let manifest = Manifest {
+        format: STORE_FORMAT.into(),
+        version: STORE_VERSION,
+        generator: format!("cliffmap {}", env!("CARGO_PKG_VERSION")),
+        crs: dem.crs.clone(),
+        georef: dem.georef,
+        dem: DemInfo {
+            source: inp.dem_source.clone(),
+            width: dem.width as u32,
+            height: dem.height as u32,
+            height_min: lo as f64,
+            height_max: hi as f64,
+            void_fraction: dem.void_fraction(),
+        },
+        ortho: inp.ortho_source.clone(),
+        quadtree: tree,
+        max_error: opts.max_error,
+        cell_texels: opts.cell_texels,
+        build_key,
+        cells: records,
+    };
+    write_stats(out, &manifest, 1.1)?;
+    write_atomic(
+        &out.join("manifest.json"),
+        &serde_json::to_vec_pretty(&manifest).map_err(|e| Error::store(out, e.to_string()))?,
+    )?;
+    let _ = std::fs::remove_file(out.join("build.json"));
+    Ok(manifest)
+}
+
+/// Writes `stats.json` and `stats_histogram.png` for the store's cells; returns the JSON.
+pub fn write_stats(out: &Path, manifest: &Manifest, threshold: f64) -> Result<serde_json::Value> {
+    let entries: Vec<stats::CellStatsEntry> = manifest
+        .cells
+        .iter()
+        .map(|c| stats::CellStatsEntry {
+            id: c.id.clone(),
+            level: c.level,
+            x: c.x,
+            y: c.y,
+            triangles: c.triangles,
+            max_error: c.max_error,
+            stats: c.stats.clone(),
+        })
+        .collect();
+    let json = stats::stats_json(&entries, threshold);
+    write_atomic(
+        &out.join("stats.json"),
+        &serde_json::to_vec_pretty(&json).map_err(|e| Error::store(out, e.to_string()))?,
+    )?;
+    let rel: Vec<f64> = manifest.cells.iter().map(|c| c.stats.rel_texel).collect();
+    stats::write_histogram_png(&out.join("stats_histogram.png"), &rel, threshold)?;
+    Ok(json)
+}
+
+/// Makes sure `out` can hold this build: absent or empty, or a cliffmap store of the same
+/// build key (resume), or (with `force`) any earlier cliffmap store, whose cells are removed.
+fn prepare_dir(out: &Path, build_key: &str, force: bool) -> Result<()> {
+    if !out.exists() {
+        return std::fs::create_dir_all(out).map_err(|e| Error::io(out, e));
+    }
+    if !out.is_dir() {
+        return Err(Error::BadOption(format!("output {} exists and is not a directory", out.display())));
+    }
+    let empty = std::fs::read_dir(out).map_err(|e| Error::io(out, e))?.next().is_none();
+    if empty {
+        return Ok(());
+    }
+    let previous_key = std::fs::read(out.join("build.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<BuildMarker>(&b).ok())
+        .map(|m| m.build_key)
+        .or_else(|| Manifest::read(out).ok().map(|m| m.build_key));
+    match previous_key {
+        Some(k) if k == build_key => Ok(()),
+        Some(_) if force => {
+            for name in ["cells", "manifest.json", "stats.json", "stats_histogram.png", "build.json"] {
+                let p = out.join(name);
+                let _ = if p.is_dir() { std::fs::remove_dir_all(&p) } else { std::fs::remove_file(&p) };
+            }
+            Ok(())
+        }
+        Some(_) => Err(Error::BadOption(format!(
+            "{} holds a cliffmap store built from other inputs or options; remove it, choose another --out, or pass --force",
+            out.display()
+        ))),
+        None => Err(Error::BadOption(format!(
+            "{} exists, is not empty and is not a cliffmap store; refusing to write into it",
+            out.display()
+        ))),
+    }
+}
+
+/// The record of a cell finished by an earlier run of the same build, if all its files are intact.
+fn resume_record(out: &Path, key: CellKey) -> Option<CellRecord> {
+    let path = out.join(format!("{}.json", cell_stem(key.level, key.x, key.y)));
+    let rec: CellRecord = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
+    let f = &rec.files;
+    (rec.key() == key && [&f.mesh, &f.texture, &f.normal].iter().all(|r| store::is_intact(out, r))).then_some(rec)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_cell(
+    dem: &Dem,
+    ortho: &Ortho,
+    tree: &Quadtree,
+    borders: &LevelBorders,
+    key: CellKey,
+    eps: f64,
+    opts: &BuildOptions,
+    out: &Path,
+) -> Result<CellRecord> {
+    let rect = tree.clipped(key).ok_or_else(|| Error::BadOption(format!("cell {} lies outside the DEM", key.id())))?;
+    let tin = cells::build_tin(dem, rect, tree.stride(key.level), eps, &borders.cell_border(key));
+    let skirt_depth = 2.0 * eps.max(tin.max_error);
+    let lm = local_mesh(dem, rect, &tin, skirt_depth);
+    let (c0, r0, n) = tree.nominal(key);
+    let g = &dem.georef;
+    let (x0, y0) = g.world(r0 as f64, c0 as f64);
+    let (x1, y1) = g.world((r0 + n) as f64, (c0 + n) as f64);
+    let extent = crate::WorldRect { min_x: x0, min_y: y1, max_x: x1, max_y: y0 };
+    let texture = cells::ortho_texture(ortho, dem, extent, opts.cell_texels);
+    let normal = cells::normal_map(dem, extent, opts.cell_texels);
+    let cell_stats = stats::cell_stats(dem, tree, key, &tin, opts.cell_texels);
+
+    let stem = cell_stem(key.level, key.x, key.y);
+    let mesh_ref = write_file(out, &format!("{stem}.mesh"), &lm.mesh.to_bytes())?;
+    let tex_ref = write_png(out, &format!("{stem}.png"), &texture)?;
+    let nrm_ref = write_png(out, &format!("{stem}.normal.png"), &normal)?;
+    let rec = CellRecord {
+        id: key.id(),
+        level: key.level,
+        x: key.x,
+        y: key.y,
+        rect,
+        origin: lm.origin,
+        extent,
+        bbox_min: lm.bbox_min,
+        bbox_max: lm.bbox_max,
+        epsilon: eps,
+        max_error: tin.max_error,
+        vertices: lm.mesh.surface_vertices,
+        triangles: lm.mesh.surface_triangles,
+        skirt_depth,
+        parameterization: Parameterization::Ortho,
+        texels: opts.cell_texels,
+        files: CellFiles { mesh: mesh_ref, texture: tex_ref, normal: nrm_ref },
+        stats: cell_stats,
+    };
+    write_atomic(
+        &out.join(format!("{stem}.json")),
+        &serde_json::to_vec(&rec).map_err(|e| Error::store(out, e.to_string()))?,
+    )?;
+    Ok(rec)
+}
+
+fn write_png<P, C>(out: &Path, rel: &str, img: &image::ImageBuffer<P, C>) -> Result<store::FileRef>
+where
+    P: image::PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+    C: std::ops::Deref<Target = [P::Subpixel]>,
+{
+    write_file(out, rel, &encode_png(&out.join(rel), img)?)
+}

@@ -1,0 +1,165 @@
+//! The store manifest (`manifest.json`) and per-cell records.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::cells::{CellKey, Quadtree, SampleRect};
+use crate::error::{Error, Result};
+use crate::georef::{GridGeoref, WorldRect};
+
+/// Value of [`Manifest::format`].
+pub const STORE_FORMAT: &str = "cliffmap-store";
+/// The manifest version this cliffmap writes and reads.
+pub const STORE_VERSION: u32 = 1;
+
+/// A file of the store, relative to the store directory, with its size and CRC-32.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FileRef {
+    /// Path relative to the store directory, with `/` separators.
+    pub path: String,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// CRC-32 (IEEE) of the content, as 8 lowercase hex digits.
+    pub crc32: String,
+}
+
+/// The files of one cell.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CellFiles {
+    /// Binary mesh ([`super::CellMesh`]).
+    pub mesh: FileRef,
+    /// RGBA8 PNG colour texture (alpha 0 = unknown colour, filled for display).
+    pub texture: FileRef,
+    /// RGB8 PNG normal map in the cell-local frame (n * 0.5 + 0.5).
+    pub normal: FileRef,
+}
+
+/// Which texture parameterization a cell uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Parameterization {
+    /// Texture coordinates derived from x, y over the cell's nominal square (no UVs stored).
+    Ortho,
+    /// Texture coordinates stored in the mesh (reparameterized chart).
+    Reparam,
+}
+
+/// Everything the manifest knows about one cell.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CellRecord {
+    /// `"{level}-{x}-{y}"`.
+    pub id: String,
+    /// Quadtree level, 0 = root.
+    pub level: u8,
+    /// Column within the level.
+    pub x: u32,
+    /// Row within the level.
+    pub y: u32,
+    /// The clipped rectangle of full-resolution DEM samples the cell covers.
+    pub rect: SampleRect,
+    /// World position (f64) of the cell-local frame's origin; mesh positions are relative to it.
+    pub origin: [f64; 3],
+    /// World rectangle of the cell's nominal square (the texture's extent in ortho mode).
+    pub extent: WorldRect,
+    /// World bounding box of the surface (skirt excluded), minimum corner.
+    pub bbox_min: [f64; 3],
+    /// World bounding box of the surface, maximum corner.
+    pub bbox_max: [f64; 3],
+    /// Error bound the TIN was built for (world units).
+    pub epsilon: f64,
+    /// Measured max vertical distance from every DEM sample of the cell to the TIN.
+    pub max_error: f64,
+    /// Surface vertices.
+    pub vertices: u32,
+    /// Surface triangles.
+    pub triangles: u32,
+    /// Skirt depth below the border vertices (world units).
+    pub skirt_depth: f64,
+    /// Texture parameterization in use.
+    pub parameterization: Parameterization,
+    /// Texture side in texels.
+    pub texels: u32,
+    /// The cell's files.
+    pub files: CellFiles,
+    /// Texel-stretch statistics of the cell.
+    pub stats: crate::stats::CellStats,
+}
+
+impl CellRecord {
+    /// The cell's quadtree key.
+    pub fn key(&self) -> CellKey {
+        CellKey { level: self.level, x: self.x, y: self.y }
+    }
+}
+
+/// What the DEM was.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DemInfo {
+    /// Source file (or `"demo:seed=..."`).
+    pub source: String,
+    /// Samples per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Lowest height.
+    pub height_min: f64,
+    /// Highest height.
+    pub height_max: f64,
+    /// Fraction of no-data samples (filled).
+    pub void_fraction: f64,
+}
+
+/// The store's top-level description, written last by a build.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Always [`STORE_FORMAT`].
+    pub format: String,
+    /// Always [`STORE_VERSION`] for stores this cliffmap writes.
+    pub version: u32,
+    /// Version of cliffmap that wrote the store.
+    pub generator: String,
+    /// Coordinate reference system, if known (e.g. "EPSG:25833").
+    pub crs: Option<String>,
+    /// Georeference of the DEM grid (sample centres).
+    pub georef: GridGeoref,
+    /// The DEM.
+    pub dem: DemInfo,
+    /// Ortho source, or `None` if textures were derived from the DEM (hypsometric tint + hillshade).
+    pub ortho: Option<String>,
+    /// Quadtree shape.
+    pub quadtree: Quadtree,
+    /// Error bound of the finest level; level l uses `max_error * 2^(finest - l)`.
+    pub max_error: f64,
+    /// Texture side in texels for every cell.
+    pub cell_texels: u32,
+    /// Hash of inputs and options; a build with the same key may resume.
+    pub build_key: String,
+    /// All cells, root first, row-major within a level.
+    pub cells: Vec<CellRecord>,
+}
+
+impl Manifest {
+    /// Reads and validates `manifest.json` in `dir`.
+    pub fn read(dir: &Path) -> Result<Manifest> {
+        let path = dir.join("manifest.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        let m: Manifest =
+            serde_json::from_str(&text).map_err(|e| Error::store(&path, format!("invalid manifest: {e}")))?;
+        if m.format != STORE_FORMAT {
+            return Err(Error::store(&path, format!("format is {:?}, expected {STORE_FORMAT:?}", m.format)));
+        }
+        if m.version != STORE_VERSION {
+            return Err(Error::store(
+                &path,
+                format!("store version {} is not supported (this cliffmap reads version {STORE_VERSION})", m.version),
+            ));
+        }
+        Ok(m)
+    }
+
+    /// The record of cell `id`, if present.
+    pub fn cell(&self, id: &str) -> Option<&CellRecord> {
+        self.cells.iter().find(|c| c.id == id)
+    }
+}

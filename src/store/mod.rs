@@ -1,0 +1,101 @@
+//! The on-disk cell store: what `cliffmap build` writes and every later stage reads.
+//!
+//! Layout of a store directory (see docs/formats.md):
+//! ```text
+//! STORE/manifest.json            Manifest: georeference, quadtree, every CellRecord (written last)
+//! STORE/build.json               build key of the build in progress (for resuming)
+//! STORE/stats.json               texel-stretch statistics ({"summary", "cells"})
+//! STORE/stats_histogram.png      histogram of average texel stretch per cell
+//! STORE/cells/{level}/{x}-{y}.mesh        CellMesh (binary, cell-local f32)
+//! STORE/cells/{level}/{x}-{y}.png         RGBA8 colour texture
+//! STORE/cells/{level}/{x}-{y}.normal.png  RGB8 normal map
+//! STORE/cells/{level}/{x}-{y}.json        CellRecord of a finished cell (resume marker)
+//! ```
+//! Every file is written atomically; every cell file's size and CRC-32 are recorded and
+//! verified on read.
+
+mod files;
+mod manifest;
+mod mesh;
+mod obj;
+
+use std::path::{Path, PathBuf};
+
+pub use files::{crc32_hex, is_intact, read_verified, write_file};
+pub use manifest::{
+    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION,
+};
+pub use mesh::CellMesh;
+pub use obj::obj_text;
+
+use crate::error::{Error, Result};
+
+/// An opened store: its directory and manifest. Reading a cell verifies its checksums.
+#[derive(Clone, Debug)]
+pub struct Store {
+    /// The store directory.
+    pub dir: PathBuf,
+    /// The parsed manifest.
+    pub manifest: Manifest,
+}
+
+impl Store {
+    /// Opens the store in `dir` (reads and validates `manifest.json`).
+    pub fn open(dir: &Path) -> Result<Store> {
+        if !dir.is_dir() {
+            return Err(Error::store(dir, "not a directory (expected a cliffmap store made by `cliffmap build`)"));
+        }
+        Ok(Store { dir: dir.to_path_buf(), manifest: Manifest::read(dir)? })
+    }
+
+    /// The record of cell `id`, or an error listing how to find valid ids.
+    pub fn cell(&self, id: &str) -> Result<&CellRecord> {
+        self.manifest.cell(id).ok_or_else(|| {
+            Error::BadOption(format!(
+                "cell {id:?} is not in store {} (ids look like \"LEVEL-X-Y\", e.g. {:?}; see stats.json)",
+                self.dir.display(),
+                self.manifest.cells.first().map(|c| c.id.as_str()).unwrap_or("0-0-0")
+            ))
+        })
+    }
+
+    /// Reads and verifies a cell's mesh.
+    pub fn read_mesh(&self, rec: &CellRecord) -> Result<CellMesh> {
+        let bytes = read_verified(&self.dir, &rec.files.mesh)?;
+        CellMesh::from_bytes(&bytes, &self.dir.join(&rec.files.mesh.path))
+    }
+
+    /// Reads and verifies a cell's colour texture.
+    pub fn read_texture(&self, rec: &CellRecord) -> Result<image::RgbaImage> {
+        self.read_png(&rec.files.texture).map(|i| i.to_rgba8())
+    }
+
+    /// Reads and verifies a cell's normal map.
+    pub fn read_normal_map(&self, rec: &CellRecord) -> Result<image::RgbImage> {
+        self.read_png(&rec.files.normal).map(|i| i.to_rgb8())
+    }
+
+    fn read_png(&self, f: &FileRef) -> Result<image::DynamicImage> {
+        let bytes = read_verified(&self.dir, f)?;
+        image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+            .map_err(|e| Error::store(self.dir.join(&f.path), format!("cannot decode PNG: {e}")))
+    }
+}
+
+/// Relative path stem of a cell's files: `cells/{level}/{x}-{y}`.
+pub fn cell_stem(level: u8, x: u32, y: u32) -> String {
+    format!("cells/{level}/{x}-{y}")
+}
+
+/// Texture coordinate of vertex `i`: the stored UV, or for orthographic cells the position
+/// mapped over the cell's nominal square (u east, v south, both in [0,1] inside the cell).
+pub fn texcoord(rec: &CellRecord, mesh: &CellMesh, i: usize) -> [f32; 2] {
+    if let Some(uvs) = &mesh.uvs {
+        return uvs[i];
+    }
+    let p = mesh.positions[i];
+    let e = &rec.extent;
+    let x = p[0] as f64 + rec.origin[0];
+    let y = p[1] as f64 + rec.origin[1];
+    [((x - e.min_x) / e.width()) as f32, ((e.max_y - y) / e.height()) as f32]
+}
