@@ -8,8 +8,9 @@
 //!
 //! Stages (one module each, plain data types in and out):
 //! - [`dem`], [`ortho`]: inputs ([`Dem`], [`Ortho`]), georeferenced in f64.
-//! - [`cells`]: quadtree addressing and TIN simplification ([`Quadtree`], [`Tin`]).
-//! - [`stats`]: texel-stretch statistics.
+//! - [`cells`]: quadtree addressing, TIN simplification ([`Quadtree`], [`Tin`]) and per-cell
+//!   images ([`ortho_texture`], [`normal_map`]).
+//! - [`stats`]: texel-stretch statistics ([`cell_stats`], [`stats::stats_json`]).
 //! - [`store`]: the on-disk cell store (manifest, meshes, textures).
 //! - [`scene`]: the embedded procedural demo scene.
 
@@ -19,15 +20,20 @@
 pub mod cells;
 pub mod dem;
 pub mod error;
+pub mod fsutil;
 pub mod georef;
 pub mod ortho;
+pub mod pipeline;
+pub mod scene;
+pub mod stats;
+pub mod store;
 
-pub use cells::{CellKey, Quadtree, SampleRect, Tin};
+#[cfg(test)]
+mod testutil;
+
+pub use cells::{CellKey, Quadtree, SampleRect, Tin, normal_map, ortho_texture};
 pub use dem::{Dem, DemFormat, DemLoadOptions, load_dem};
 pub use error::{Error, Result};
 pub use georef::{GridGeoref, WorldRect};
 pub use ortho::{Ortho, OrthoPlacement, load_ortho};
-pub mod fsutil;
-pub mod pipeline;
-pub mod scene;
-pub mod store;
+pub use stats::{CellStats, CellStatsEntry, StatsSummary, cell_stats};

@@ -3,11 +3,20 @@
 //! Data types: [`Quadtree`] and [`CellKey`] address cells; [`SampleRect`] is a cell's
 //! clipped rectangle of DEM samples; [`Tin`] is one cell's simplified triangulation on DEM
 //! sample positions, with its measured maximum vertical error against every full-resolution
-//! sample of the cell.
+//! sample of the cell. Per-cell images: [`ortho_texture`] (RGBA colour + coverage) and
+//! [`normal_map`] (world-frame normals from the full-resolution DEM), both covering the
+//! cell's [`nominal_extent`].
 
+mod extent;
+pub mod normals;
 mod quadtree;
+mod taps;
+pub mod texture;
 
+pub use extent::{clipped_extent, nominal_extent};
+pub use normals::normal_map;
 pub use quadtree::{CellKey, Quadtree, SampleRect};
+pub use texture::ortho_texture;
 
 /// A cell's simplified TIN. Vertices are DEM sample indices (their heights come from the
 /// DEM); triangles are counter-clockwise seen from above (x east, y north).

@@ -1,0 +1,182 @@
+//! End-to-end tests of the `cliffmap` binary: demo, build on real data, stats, export-obj,
+//! resume, determinism across thread counts, and bad input handling.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use cliffmap::store::Store;
+use common::real_data;
+
+fn cliffmap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cliffmap")).args(args).output().expect("cannot start cliffmap")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let o = cliffmap(args);
+    assert!(
+        o.status.success(),
+        "cliffmap {args:?} failed:\nstdout: {}\nstderr: {}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn fails_naming(args: &[&str], needle: &str) {
+    let o = cliffmap(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "cliffmap {args:?} should fail");
+    assert!(err.contains(needle), "error of {args:?} should name {needle:?}: {err}");
+    assert!(!err.contains("panicked"), "cliffmap {args:?} panicked: {err}");
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+fn all_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.strip_prefix(dir).unwrap().display().to_string(), std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn demo_runs_whole_pipeline_and_is_deterministic_across_threads() {
+    let t = tempfile::tempdir().unwrap();
+    let (a, b) = (t.path().join("a"), t.path().join("b"));
+    ok(&["--threads", "1", "demo", "--out", s(&a), "--samples", "129", "--quiet"]);
+    ok(&["--threads", "2", "demo", "--out", s(&b), "--samples", "129", "--quiet"]);
+    let store = a.join("store");
+    assert!(store.join("manifest.json").is_file() && store.join("stats.json").is_file());
+    assert!(store.join("stats_histogram.png").is_file());
+    assert_eq!(all_files(&a.join("store")), all_files(&b.join("store")), "outputs differ between 1 and 2 threads");
+    let st = Store::open(&store).unwrap();
+    assert!(st.manifest.cells.len() >= 5);
+    // The demo scene has cliffs: some cell must be stretched well above the threshold.
+    let max_rel = st.manifest.cells.iter().map(|c| c.stats.rel_texel).fold(0.0, f64::max);
+    assert!(max_rel > 1.3, "max rel_texel {max_rel}");
+    for c in &st.manifest.cells {
+        assert!(c.max_error <= c.epsilon + 1e-6, "cell {} error {} > {}", c.id, c.max_error, c.epsilon);
+        let m = st.read_mesh(c).unwrap();
+        assert_eq!(m.surface_triangles, c.triangles);
+    }
+}
+
+#[test]
+fn engabreen_build_stats_export_and_resume() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("eng.store");
+    let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
+    let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
+    let args = [
+        "build", "--dem", s(&dem), "--width", "507", "--height", "590", "--spacing", "3",
+        "--origin", "445302.17,7396769.45", "--ortho", s(&ortho), "--ortho-same-grid",
+        "--max-error", "1.0", "--cell-texels", "64", "--out", s(&out), "--quiet",
+    ];
+    ok(&args);
+    let st = Store::open(&out).unwrap();
+    let m = &st.manifest;
+    assert_eq!((m.dem.width, m.dem.height), (507, 590));
+    assert!((m.dem.height_min - 213.1).abs() < 0.1 && (m.dem.height_max - 1078.3).abs() < 0.1);
+    // Engabreen has rock walls: a good share of finest cells is stretched.
+    let finest: Vec<_> = m.cells.iter().filter(|c| c.level == m.quadtree.levels - 1).collect();
+    let above = finest.iter().filter(|c| c.stats.rel_texel > 1.1).count();
+    assert!(above * 10 >= finest.len(), "{above} of {} finest cells above 1.1", finest.len());
+    // Cell origins are georeferenced and meshes are local: reconstruct a vertex in world coords.
+    let c = &finest[finest.len() / 2];
+    let mesh = st.read_mesh(c).unwrap();
+    for p in &mesh.positions[..mesh.surface_vertices as usize] {
+        let x = p[0] as f64 + c.origin[0];
+        let y = p[1] as f64 + c.origin[1];
+        let col = (x - 445302.17) / 3.0;
+        let row = (7396769.45 - y) / 3.0;
+        assert!((col - col.round()).abs() < 1e-3 && (row - row.round()).abs() < 1e-3, "vertex off the grid: {col} {row}");
+    }
+
+    // stats --json prints the documented shape.
+    let o = ok(&["stats", s(&out), "--json", "--threshold", "1.2"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let cells = v["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), m.cells.len());
+    for key in ["id", "level", "x", "y", "rel_texel", "max_slope_deg", "triangles", "max_error"] {
+        assert!(cells[0].get(key).is_some(), "stats.json cell lacks {key}");
+    }
+    assert!(v.get("summary").is_some());
+
+    // export-obj: local and world.
+    let obj = t.path().join("cell.obj");
+    ok(&["export-obj", s(&out), "--cell", &c.id, "--out", s(&obj)]);
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("v ")).count(), c.vertices as usize);
+    assert_eq!(text.lines().filter(|l| l.starts_with("vt ")).count(), c.vertices as usize);
+    assert_eq!(text.lines().filter(|l| l.starts_with("f ")).count(), c.triangles as usize);
+    ok(&["export-obj", s(&out), "--cell", &c.id, "--world", "--out", s(&obj)]);
+    let world = std::fs::read_to_string(&obj).unwrap();
+    let first_v = world.lines().find(|l| l.starts_with("v ")).unwrap();
+    let x: f64 = first_v.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(x > 445_000.0 && x < 447_000.0, "world x {x}");
+    fails_naming(&["export-obj", s(&out), "--cell", "99-0-0", "--out", s(&obj)], "99-0-0");
+
+    // Resume: delete one cell's files and its record; a rerun restores them identically.
+    let before = all_files(&out);
+    let stem = out.join(format!("cells/{}/{}-{}", c.level, c.x, c.y));
+    std::fs::remove_file(stem.with_extension("png")).unwrap();
+    std::fs::remove_file(stem.with_extension("json")).unwrap();
+    ok(&args);
+    assert_eq!(all_files(&out), before);
+
+    // A corrupted cell file is detected on read.
+    std::fs::write(stem.with_extension("mesh"), b"CLIFMESH garbage").unwrap();
+    let st = Store::open(&out).unwrap();
+    let err = st.read_mesh(st.manifest.cell(&c.id).unwrap()).unwrap_err().to_string();
+    assert!(err.contains("checksum"), "{err}");
+    // A different build into the same store is refused without --force.
+    let mut other = args.to_vec();
+    other[other.len() - 6] = "2.0"; // --max-error 2.0
+    fails_naming(&other, "--force");
+}
+
+#[test]
+fn bad_inputs_fail_cleanly_without_output() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("never");
+    let missing = t.path().join("missing.f32");
+    fails_naming(&["build", "--dem", s(&missing), "--width", "4", "--height", "4", "--out", s(&out)], "missing.f32");
+    let trunc = t.path().join("trunc.f32");
+    std::fs::write(&trunc, [0u8; 10]).unwrap();
+    fails_naming(&["build", "--dem", s(&trunc), "--width", "4", "--height", "4", "--out", s(&out)], "trunc.f32");
+    let nan = t.path().join("nan.f32");
+    let mut bytes: Vec<u8> = (0..16).flat_map(|_| 1.0f32.to_le_bytes()).collect();
+    bytes[20..24].copy_from_slice(&f32::NAN.to_le_bytes());
+    std::fs::write(&nan, &bytes).unwrap();
+    fails_naming(&["build", "--dem", s(&nan), "--width", "4", "--height", "4", "--out", s(&out)], "nan.f32");
+    let good = t.path().join("good.f32");
+    std::fs::write(&good, (0..16).flat_map(|i| (i as f32).to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+    fails_naming(
+        &["build", "--dem", s(&good), "--width", "4", "--height", "4", "--spacing", "-3", "--out", s(&out)],
+        "spacing",
+    );
+    fails_naming(
+        &["build", "--dem", s(&good), "--width", "4", "--height", "4", "--max-error", "0", "--out", s(&out)],
+        "max-error",
+    );
+    fails_naming(
+        &["build", "--dem", s(&good), "--width", "100000", "--height", "100000", "--max-memory", "1G", "--out", s(&out)],
+        "good.f32",
+    );
+    assert!(!out.exists(), "a failed build must not leave output behind");
+    fails_naming(&["stats", s(&t.path().join("nostore"))], "nostore");
+}
