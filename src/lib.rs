@@ -7,7 +7,8 @@
 //! renders the result.
 //!
 //! Stages (one module each, plain data types in and out):
-//! - [`dem`], [`ortho`]: inputs ([`Dem`], [`Ortho`]), georeferenced in f64.
+//! - [`dem`], [`ortho`]: inputs ([`Dem`], [`Ortho`]), georeferenced in f64
+//!   ([`geotiff`] holds the GeoTIFF tag parsing both share).
 //! - [`cells`]: quadtree addressing and TIN simplification ([`Quadtree`], [`Tin`]).
 //! - [`stats`]: texel-stretch statistics.
 //! - [`store`]: the on-disk cell store (manifest, meshes, textures).
@@ -20,6 +21,7 @@ pub mod cells;
 pub mod dem;
 pub mod error;
 pub mod georef;
+pub mod geotiff;
 pub mod ortho;
 
 pub use cells::{CellKey, Quadtree, SampleRect, Tin};

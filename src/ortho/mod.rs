@@ -2,7 +2,14 @@
 //!
 //! Data type: [`Ortho`], an RGBA8 image (alpha 0 = no coverage, 255 = known colour) with
 //! an f64 [`GridGeoref`] for its pixel centres, north-up. Readers: PNG, JPEG and GeoTIFF
-//! (RGB/RGBA, 8-bit), placed by GeoTIFF tags, by an explicit extent, or on the DEM's grid.
+//! (RGB/RGBA/grey, 8-bit), placed by GeoTIFF tags, by an explicit extent, or on the DEM's
+//! grid ([`OrthoPlacement`]). Pure black is ordinary colour; only alpha 0 (or a GeoTIFF's
+//! GDAL_NODATA colour) marks pixels without data.
+
+mod placement;
+mod read;
+
+pub use placement::{dem_area, georef_from_extent};
 
 use std::path::Path;
 
@@ -43,9 +50,28 @@ impl Ortho {
     }
 }
 
-/// Reads an ortho image and places it. Errors if the file is unreadable, too large for
-/// `max_memory`, or does not overlap `dem`.
+/// Reads an ortho image and places it. Errors (naming the file) if it is unreadable, too
+/// large for `max_memory` (checked from the header before decoding), lacks the placement
+/// information `placement` needs, or does not overlap the DEM's sample areas.
 pub fn load_ortho(path: &Path, placement: OrthoPlacement, dem: &Dem, max_memory: u64) -> Result<Ortho> {
-    let _ = (placement, dem, max_memory);
-    Err(Error::bad_input(path, "ortho readers are not implemented yet"))
+    let d = read::read(path, max_memory)?;
+    let georef = placement::place(path, placement, d.image.width(), d.image.height(), d.tags.as_ref(), dem)?;
+    let ortho = Ortho { image: d.image, georef };
+    let area = dem_area(dem);
+    let e = ortho.extent();
+    if e.intersect(&area).is_none() {
+        return Err(Error::bad_input(
+            path,
+            format!(
+                "ortho covers x {:.3}..{:.3}, y {:.3}..{:.3}, which does not overlap the DEM (x {:.3}..{:.3}, y {:.3}..{:.3})",
+                e.min_x, e.max_x, e.min_y, e.max_y, area.min_x, area.max_x, area.min_y, area.max_y
+            ),
+        ));
+    }
+    if let (Some(t), Some(dc)) = (d.tags.as_ref().and_then(|t| t.crs.as_deref()), dem.crs.as_deref()) {
+        if t != dc && placement == OrthoPlacement::FromFile {
+            return Err(Error::bad_input(path, format!("ortho CRS {t} differs from the DEM's {dc}; reproject one of them")));
+        }
+    }
+    Ok(ortho)
 }
