@@ -29,3 +29,8 @@ pub use dem::{Dem, DemFormat, DemLoadOptions, load_dem};
 pub use error::{Error, Result};
 pub use georef::{GridGeoref, WorldRect};
 pub use ortho::{Ortho, OrthoPlacement, load_ortho};
+
+/// Test-only TIFF writers shared with the integration tests.
+#[cfg(test)]
+#[path = "../tests/common/tiffgen.rs"]
+pub(crate) mod tiffgen;
