@@ -7,11 +7,13 @@
 //! renders the result.
 //!
 //! Stages (one module each, plain data types in and out):
-//! - [`dem`], [`ortho`]: inputs ([`Dem`], [`Ortho`]), georeferenced in f64.
-//! - [`cells`]: quadtree addressing, TIN simplification ([`Quadtree`], [`Tin`]) and per-cell
-//!   images ([`ortho_texture`], [`normal_map`]).
+//! - [`dem`], [`ortho`]: inputs ([`Dem`], [`Ortho`]), georeferenced in f64
+//!   ([`geotiff`] holds the GeoTIFF tag parsing both share).
+//! - [`cells`]: quadtree addressing, TIN simplification ([`Quadtree`], [`Tin`],
+//!   [`cells::build_tin`]) and per-cell images ([`ortho_texture`], [`normal_map`]).
 //! - [`stats`]: texel-stretch statistics ([`cell_stats`], [`stats::stats_json`]).
 //! - [`store`]: the on-disk cell store (manifest, meshes, textures).
+//! - [`pipeline`]: the stages composed into the commands' jobs ([`pipeline::build_store`]).
 //! - [`scene`]: the embedded procedural demo scene.
 
 #![forbid(unsafe_code)]
@@ -22,6 +24,7 @@ pub mod dem;
 pub mod error;
 pub mod fsutil;
 pub mod georef;
+pub mod geotiff;
 pub mod ortho;
 pub mod pipeline;
 pub mod scene;
@@ -30,6 +33,11 @@ pub mod store;
 
 #[cfg(test)]
 mod testutil;
+
+/// Test-only TIFF writers shared with the integration tests.
+#[cfg(test)]
+#[path = "../tests/common/tiffgen.rs"]
+pub(crate) mod tiffgen;
 
 pub use cells::{CellKey, Quadtree, SampleRect, Tin, normal_map, ortho_texture};
 pub use dem::{Dem, DemFormat, DemLoadOptions, load_dem};

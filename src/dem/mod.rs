@@ -4,10 +4,29 @@
 //! f64 [`GridGeoref`] and a void mask. Voids (no-data) are already filled for geometry
 //! by the rule in [`fill`]; `void[i]` stays true there so textures can mark them unknown.
 //!
-//! Readers: GeoTIFF (f32/f64/i16/u16/i32/u32, strips and tiles, deflate/LZW/none,
-//! ModelPixelScale + ModelTiepoint, GDAL_NODATA), 16-bit greyscale PNG with scale/offset,
-//! Mapbox Terrain-RGB PNG, and raw little-endian f32. Every reader refuses inputs whose
-//! header would need more than [`DemLoadOptions::max_memory`] bytes.
+//! Readers: GeoTIFF (8–64-bit integer and 16/32/64-bit float samples, strips and tiles,
+//! deflate/LZW/PackBits/none, ModelPixelScale + ModelTiepoint, GDAL_NODATA), greyscale PNG
+//! with scale/offset, Mapbox Terrain-RGB PNG, and raw little-endian f32. Every reader
+//! refuses inputs whose header would need more than [`DemLoadOptions::max_memory`] bytes
+//! before decoding pixel data. See `docs/inputs.md` for formats, flags and conventions.
+//!
+//! Pipeline of [`load_dem`]: validate options → pick the format ([`DemFormat`], inferred
+//! from extension/PNG header when not given) → reader decodes samples and marks no-data →
+//! values become heights (`value * z_scale + z_offset`, checked finite and within
+//! ±100 km) → voids are filled by [`fill::fill_voids`] → georeference from the file or
+//! the options (spacing 1, origin (0, 0) with a warning if neither).
+
+mod convert;
+mod detect;
+pub mod fill;
+mod geotiff;
+pub(crate) mod limits;
+mod png16;
+mod raw_f32;
+mod terrain_rgb;
+
+pub use convert::MAX_ABS_HEIGHT;
+pub use terrain_rgb::decode_terrain_rgb;
 
 use std::path::Path;
 
@@ -155,8 +174,139 @@ impl Dem {
     }
 }
 
+/// Samples as decoded by a reader, before void filling and georeference defaults.
+pub(crate) struct Decoded {
+    pub width: usize,
+    pub height: usize,
+    pub heights: Vec<f32>,
+    pub void: Vec<bool>,
+    pub georef: Option<GridGeoref>,
+    pub crs: Option<String>,
+    #[allow(dead_code)]
+    pub geographic: bool,
+}
+
+/// Refuses grids smaller than 2x2 (and absurd sizes that overflow indices).
+pub(crate) fn check_size(path: &Path, width: usize, height: usize) -> Result<()> {
+    if width < 2 || height < 2 {
+        return Err(Error::bad_input(path, format!("a DEM needs at least 2x2 samples, the file has {width}x{height}")));
+    }
+    if width.checked_mul(height).is_none_or(|n| n > u32::MAX as usize * 4) {
+        return Err(Error::bad_input(path, format!("absurd DEM size {width}x{height}")));
+    }
+    Ok(())
+}
+
+pub(crate) fn scaling(opts: &DemLoadOptions) -> convert::Scaling {
+    convert::Scaling { scale: opts.z_scale.unwrap_or(1.0), offset: opts.z_offset.unwrap_or(0.0) }
+}
+
+fn validate_options(path: &Path, opts: &DemLoadOptions) -> Result<()> {
+    let bad = |flag: &str, v: String, why: &str| {
+        Err(Error::BadOption(format!("{flag} {v} for {}: {why}", path.display())))
+    };
+    if let Some(s) = opts.spacing {
+        if !(s.is_finite() && s > 0.0) {
+            return bad("--spacing", s.to_string(), "must be a positive finite number of metres");
+        }
+    }
+    if let Some((x, y)) = opts.origin {
+        if !(x.is_finite() && y.is_finite()) {
+            return bad("--origin", format!("{x},{y}"), "must be two finite coordinates");
+        }
+    }
+    if let Some(z) = opts.z_scale {
+        if !(z.is_finite() && z != 0.0) {
+            return bad("--z-scale", z.to_string(), "must be a finite non-zero number");
+        }
+    }
+    if let Some(z) = opts.z_offset {
+        if !z.is_finite() {
+            return bad("--z-offset", z.to_string(), "must be finite");
+        }
+    }
+    if let Some(nd) = opts.nodata {
+        if nd.is_infinite() {
+            return bad("--nodata", nd.to_string(), "must be a number or nan");
+        }
+    }
+    for (flag, v) in [("--width", opts.width), ("--height", opts.height)] {
+        if v == Some(0) {
+            return bad(flag, "0".into(), "must be at least 2");
+        }
+    }
+    if opts.max_memory == 0 {
+        return bad("--max-memory", "0".into(), "must be positive");
+    }
+    Ok(())
+}
+
+/// Names of values commonly used as undeclared no-data markers that are still plausible heights.
+const SUSPECT_NODATA: [f32; 3] = [-9999.0, -32768.0, -32767.0];
+
 /// Reads a DEM file. Errors name the file and the problem; no panics on any input.
+///
+/// Guarantees on success: the [`Dem`] invariants hold (≥ 2x2, finite heights, validated
+/// georef); `void[i]` marks samples that were no-data (filled by [`fill::fill_voids`]);
+/// `georef` is the file's GeoTIFF georeference (sample centres, f64) with `opts.spacing`
+/// / `opts.origin` overriding it, or spacing 1 and origin (0, 0) when neither exists.
 pub fn load_dem(path: &Path, opts: &DemLoadOptions) -> Result<Dem> {
-    let _ = opts;
-    Err(Error::bad_input(path, "DEM readers are not implemented yet"))
+    validate_options(path, opts)?;
+    let format = match opts.format {
+        Some(f) => f,
+        None => detect::detect(path)?,
+    };
+    let d = match format {
+        DemFormat::Geotiff => geotiff::read(path, opts)?,
+        DemFormat::Png16 => png16::read(path, opts)?,
+        DemFormat::TerrainRgb => terrain_rgb::read(path, opts)?,
+        DemFormat::F32 => raw_f32::read(path, opts)?,
+    };
+    let Decoded { width, height, mut heights, void, georef, crs, .. } = d;
+    if format != DemFormat::F32 {
+        for (flag, v, actual) in [("--width", opts.width, width), ("--height", opts.height, height)] {
+            if v.is_some_and(|v| v != actual) {
+                return Err(Error::bad_input(
+                    path,
+                    format!("{flag} {} does not match the file's size ({width}x{height})", v.unwrap_or(0)),
+                ));
+            }
+        }
+    }
+    let nvoid = void.iter().filter(|&&v| v).count();
+    if nvoid == void.len() {
+        return Err(Error::bad_input(path, "every sample is no-data; check --nodata"));
+    }
+    if nvoid > 0 {
+        fill::fill_voids(width, height, &mut heights, &void);
+    }
+    if opts.nodata.is_none() {
+        for s in SUSPECT_NODATA {
+            let count = heights.iter().zip(&void).filter(|(h, v)| !**v && **h == s).count();
+            if count > 0 {
+                tracing::warn!(
+                    "{}: {count} samples have height {s}, a common no-data marker; pass --nodata {s} if they are missing data",
+                    path.display()
+                );
+            }
+        }
+    }
+
+    let mut g = georef.unwrap_or(GridGeoref::new(0.0, 0.0, 1.0));
+    match opts.spacing {
+        Some(s) => (g.spacing_x, g.spacing_y) = (s, s),
+        None if georef.is_none() => {
+            tracing::warn!("{}: no georeference in the file and no --spacing; using spacing 1", path.display())
+        }
+        None => {}
+    }
+    match opts.origin {
+        Some((x, y)) => (g.origin_x, g.origin_y) = (x, y),
+        None if georef.is_none() => {
+            tracing::warn!("{}: no georeference in the file and no --origin; using origin (0, 0)", path.display())
+        }
+        None => {}
+    }
+    g.validate().map_err(|e| Error::bad_input(path, e.to_string()))?;
+    Ok(Dem { width, height, heights, void, georef: g, crs })
 }
