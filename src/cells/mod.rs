@@ -3,11 +3,21 @@
 //! Data types: [`Quadtree`] and [`CellKey`] address cells; [`SampleRect`] is a cell's
 //! clipped rectangle of DEM samples; [`Tin`] is one cell's simplified triangulation on DEM
 //! sample positions, with its measured maximum vertical error against every full-resolution
-//! sample of the cell.
+//! sample of the cell. [`LevelBorders`] holds the simplified cell sides of one level, shared
+//! by neighbouring cells so their TINs are crack-free.
+//!
+//! Entry points: [`build_level`] (all cells of a level, parallel), [`build_tin`] (one
+//! rectangle with a given border), [`build_dem_tin`] (one TIN for the whole DEM) and
+//! [`measure_max_error`] (independent full-resolution check).
 
+mod border;
 mod quadtree;
+mod raster;
+mod tin;
 
+pub use border::{LevelBorders, simplify_rect_border};
 pub use quadtree::{CellKey, Quadtree, SampleRect};
+pub use tin::{build_dem_tin, build_level, build_tin, level_epsilon, measure_max_error};
 
 /// A cell's simplified TIN. Vertices are DEM sample indices (their heights come from the
 /// DEM); triangles are counter-clockwise seen from above (x east, y north).
