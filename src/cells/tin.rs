@@ -1,0 +1,357 @@
+//! Error-bounded TIN simplification of one cell by greedy insertion (Garland-Heckbert).
+//!
+//! The cell's border vertices (from [`super::border`]) are triangulated first; then the
+//! interior sample with the largest vertical error is inserted into a Delaunay
+//! triangulation (spade) until every sample is within epsilon. Phase 1 uses the level's
+//! lattice (every stride-th sample); phase 2 rescans every triangle against all
+//! full-resolution samples and continues with full-resolution candidates, so the bound
+//! holds for every DEM sample of the cell. Work is in integer grid coordinates, exact for
+//! spade's predicates (spade x = column, spade y = -row, so spade's CCW is world CCW).
+
+use std::collections::BinaryHeap;
+
+use rayon::prelude::*;
+use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
+use spade::{DelaunayTriangulation, Point2, Triangulation};
+
+use super::border::{LevelBorders, border_error, check_epsilon, check_tree, simplify_rect_border};
+use super::raster::{Lattice, for_each_span};
+use super::{CellKey, Quadtree, SampleRect, Tin};
+use crate::dem::Dem;
+use crate::error::{Error, Result};
+
+/// The error bound of `level`: `max_error_finest * 2^(finest - level)` (height units).
+pub fn level_epsilon(tree: &Quadtree, level: u8, max_error_finest: f64) -> f64 {
+    max_error_finest * (1u64 << tree.finest_level().saturating_sub(level)) as f64
+}
+
+/// Plane through three grid points with heights: `z(col,row) = h0 + a*(col-c0) + b*(row-r0)`.
+#[derive(Clone, Copy)]
+struct Plane {
+    c0: f64,
+    r0: f64,
+    h0: f64,
+    a: f64,
+    b: f64,
+}
+
+impl Plane {
+    fn new(p: [[i64; 2]; 3], h: [f64; 3]) -> Plane {
+        let (dx1, dy1) = ((p[1][0] - p[0][0]) as f64, (p[1][1] - p[0][1]) as f64);
+        let (dx2, dy2) = ((p[2][0] - p[0][0]) as f64, (p[2][1] - p[0][1]) as f64);
+        let (dh1, dh2) = (h[1] - h[0], h[2] - h[0]);
+        let det = dx1 * dy2 - dx2 * dy1;
+        let (a, b) = if det != 0.0 {
+            ((dh1 * dy2 - dh2 * dy1) / det, (dx1 * dh2 - dx2 * dh1) / det)
+        } else {
+            (0.0, 0.0)
+        };
+        Plane { c0: p[0][0] as f64, r0: p[0][1] as f64, h0: h[0], a, b }
+    }
+
+    /// `(base, a)` such that z(col, row) = base + a * col on this row.
+    #[inline]
+    fn row(&self, row: i64) -> (f64, f64) {
+        (self.h0 + self.b * (row as f64 - self.r0) - self.a * self.c0, self.a)
+    }
+}
+
+/// The worst lattice sample of a triangle that is not one of its corners:
+/// `(error, col, row)`, or error -1 if the triangle holds no such sample.
+#[inline]
+fn worst_sample(heights: &[f32], width: usize, p: [[i64; 2]; 3], lat: &Lattice) -> (f64, i64, i64) {
+    let hz = |q: [i64; 2]| heights[q[1] as usize * width + q[0] as usize] as f64;
+    let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
+    let mut best = (-1.0f64, -1i64, -1i64);
+    let s = lat.stride;
+    for_each_span(p, lat, |y, x0, x1| {
+        let (base, a) = plane.row(y);
+        let start = y as usize * width;
+        let row = &heights[start + x0 as usize..=start + x1 as usize];
+        let mut found = -1i64;
+        let mut err = best.0;
+        if s == 1 {
+            for (i, &h) in row.iter().enumerate() {
+                let e = (h as f64 - (base + a * (x0 + i as i64) as f64)).abs();
+                if e > err && !is_corner(p, x0 + i as i64, y) {
+                    err = e;
+                    found = x0 + i as i64;
+                }
+            }
+        } else {
+            for (i, &h) in row.iter().step_by(s as usize).enumerate() {
+                let x = x0 + i as i64 * s;
+                let e = (h as f64 - (base + a * x as f64)).abs();
+                if e > err && !is_corner(p, x, y) {
+                    err = e;
+                    found = x;
+                }
+            }
+        }
+        if found >= 0 {
+            best = (err, found, y);
+        }
+    });
+    best
+}
+
+#[inline]
+fn is_corner(p: [[i64; 2]; 3], x: i64, y: i64) -> bool {
+    p.iter().any(|q| q[0] == x && q[1] == y)
+}
+
+/// One queued refinement: a face's worst sample, valid while `generation` is current.
+#[derive(PartialEq, Eq, PartialOrd, Ord)]
+struct Entry {
+    /// Error bits (non-negative f64 bits order like the values).
+    err: u64,
+    face: u32,
+    generation: u32,
+    col: u32,
+    row: u32,
+    hint: u32,
+}
+
+struct Greedy<'a> {
+    heights: &'a [f32],
+    width: usize,
+    epsilon: f64,
+    tri: DelaunayTriangulation<Point2<f64>>,
+    generation: Vec<u32>,
+    face_err: Vec<f64>,
+    heap: BinaryHeap<Entry>,
+    star: Vec<FixedFaceHandle<InnerTag>>,
+}
+
+impl Greedy<'_> {
+    fn corners(&self, f: FixedFaceHandle<InnerTag>) -> ([[i64; 2]; 3], u32) {
+        let face = self.tri.face(f);
+        let vs = face.vertices();
+        let p = vs.map(|v| {
+            let q = v.position();
+            [q.x as i64, -q.y as i64]
+        });
+        (p, vs[0].fix().index() as u32)
+    }
+
+    fn rescan(&mut self, f: FixedFaceHandle<InnerTag>, lat: &Lattice) {
+        let idx = f.index();
+        if idx >= self.generation.len() {
+            let n = self.tri.num_all_faces().max(idx + 1);
+            self.generation.resize(n, 0);
+            self.face_err.resize(n, 0.0);
+        }
+        self.generation[idx] = self.generation[idx].wrapping_add(1);
+        let (p, hint) = self.corners(f);
+        let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
+        self.face_err[idx] = err.max(0.0);
+        if err > self.epsilon {
+            self.heap.push(Entry {
+                err: err.to_bits(),
+                face: idx as u32,
+                generation: self.generation[idx],
+                col: col as u32,
+                row: row as u32,
+                hint,
+            });
+        }
+    }
+
+    fn rescan_all(&mut self, lat: &Lattice) {
+        self.heap.clear();
+        let faces: Vec<_> = self.tri.fixed_inner_faces().collect();
+        for f in faces {
+            self.rescan(f, lat);
+        }
+    }
+
+    fn run(&mut self, lat: &Lattice) {
+        while let Some(e) = self.heap.pop() {
+            if self.generation[e.face as usize] != e.generation {
+                continue;
+            }
+            let point = Point2::new(e.col as f64, -(e.row as f64));
+            // Integer coordinates are always valid spade input; stop (and report the
+            // measured error honestly) if that ever changes.
+            let Ok(v) = self.tri.insert_with_hint(point, FixedVertexHandle::from_index(e.hint as usize)) else {
+                break;
+            };
+            self.star.clear();
+            for edge in self.tri.vertex(v).out_edges() {
+                if let Some(f) = edge.face().as_inner() {
+                    self.star.push(f.fix());
+                }
+            }
+            let star = std::mem::take(&mut self.star);
+            for &f in &star {
+                self.rescan(f, lat);
+            }
+            self.star = star;
+        }
+    }
+}
+
+fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
+    if !(rect.c0 < rect.c1 && rect.r0 < rect.r1 && (rect.c1 as usize) < dem.width && (rect.r1 as usize) < dem.height) {
+        return Err(Error::BadOption(format!(
+            "sample rectangle {rect:?} is empty or outside the {}x{} DEM",
+            dem.width, dem.height
+        )));
+    }
+    Ok(())
+}
+
+/// Simplifies the samples of `rect` into a TIN whose vertical distance to every
+/// full-resolution DEM sample in `rect` is at most `epsilon` (height units), provided the
+/// border polylines are within `epsilon` (as [`LevelBorders`] and
+/// [`simplify_rect_border`] guarantee). `border` lists boundary samples `[col, row]` that
+/// must be vertices (points off the rectangle's boundary are ignored; the four corners are
+/// always added); the interior is refined on the `stride` lattice anchored at
+/// `(rect.c0, rect.r0)`, then at full resolution. [`Tin::max_error`] is the measured
+/// maximum over all samples of `rect`. Triangles are CCW in world (x east, y north).
+/// Errors on an empty or out-of-DEM rectangle, stride 0, or a negative / non-finite epsilon.
+/// Deterministic.
+pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border: &[[u32; 2]]) -> Result<Tin> {
+    check_rect(dem, rect)?;
+    check_epsilon(epsilon)?;
+    if stride == 0 {
+        return Err(Error::BadOption("TIN lattice stride must be >= 1".into()));
+    }
+    let on_boundary = |v: &[u32; 2]| {
+        let (c, r) = (v[0], v[1]);
+        (rect.c0..=rect.c1).contains(&c)
+            && (rect.r0..=rect.r1).contains(&r)
+            && (c == rect.c0 || c == rect.c1 || r == rect.r0 || r == rect.r1)
+    };
+    let mut pts: Vec<[u32; 2]> = border.iter().copied().filter(on_boundary).collect();
+    pts.extend([[rect.c0, rect.r0], [rect.c1, rect.r0], [rect.c1, rect.r1], [rect.c0, rect.r1]]);
+    pts.sort_unstable_by_key(|v| (v[1], v[0]));
+    pts.dedup();
+    let spade_pts: Vec<Point2<f64>> = pts.iter().map(|v| Point2::new(v[0] as f64, -(v[1] as f64))).collect();
+    let tri = match DelaunayTriangulation::bulk_load(spade_pts.clone()) {
+        Ok(t) => t,
+        Err(_) => {
+            let mut t = DelaunayTriangulation::new();
+            for p in spade_pts {
+                let _ = t.insert(p);
+            }
+            t
+        }
+    };
+    let mut g = Greedy {
+        heights: &dem.heights,
+        width: dem.width,
+        epsilon,
+        tri,
+        generation: Vec::new(),
+        face_err: Vec::new(),
+        heap: BinaryHeap::new(),
+        star: Vec::new(),
+    };
+    let interior = |s: u32| Lattice {
+        origin_c: rect.c0 as i64,
+        origin_r: rect.r0 as i64,
+        stride: s as i64,
+        c_lo: rect.c0 as i64 + 1,
+        c_hi: rect.c1 as i64 - 1,
+        r_lo: rect.r0 as i64 + 1,
+        r_hi: rect.r1 as i64 - 1,
+    };
+    let coarse = interior(stride);
+    g.rescan_all(&coarse);
+    g.run(&coarse);
+    if stride > 1 {
+        let fine = interior(1);
+        g.rescan_all(&fine);
+        g.run(&fine);
+    }
+    let interior_err = g.tri.fixed_inner_faces().map(|f| g.face_err[f.index()]).fold(0.0f64, f64::max);
+    let max_error = interior_err.max(border_error(dem, rect, &pts));
+    Ok(to_tin(&g.tri, max_error))
+}
+
+fn to_tin(tri: &DelaunayTriangulation<Point2<f64>>, max_error: f64) -> Tin {
+    let vertices = tri
+        .vertices()
+        .map(|v| {
+            let p = v.position();
+            [p.x as u32, (-p.y) as u32]
+        })
+        .collect();
+    let triangles = tri.inner_faces().map(|f| f.vertices().map(|v| v.fix().index() as u32)).collect();
+    Tin { vertices, triangles, max_error }
+}
+
+/// One TIN over the whole DEM within `epsilon` (height units) of every sample, with the
+/// DEM's outer edge simplified to the same bound. Deterministic. Errors on a negative or
+/// non-finite epsilon.
+pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
+    check_epsilon(epsilon)?;
+    let rect = SampleRect { c0: 0, r0: 0, c1: dem.width as u32 - 1, r1: dem.height as u32 - 1 };
+    let border = simplify_rect_border(dem, rect, 1, epsilon);
+    build_tin(dem, rect, 1, epsilon, &border)
+}
+
+/// TINs of every cell of `level`, in [`Quadtree::cells`] order, each within
+/// [`level_epsilon`]`(tree, level, max_error_finest)` of every full-resolution sample of
+/// its clipped rectangle, and crack-free with its neighbours (shared sides have identical
+/// vertices). Cells run in parallel; the output does not depend on the thread count.
+pub fn build_level(dem: &Dem, tree: &Quadtree, level: u8, max_error_finest: f64) -> Result<Vec<(CellKey, Tin)>> {
+    check_tree(dem, tree, level)?;
+    check_epsilon(max_error_finest)?;
+    let eps = level_epsilon(tree, level, max_error_finest);
+    let borders = LevelBorders::compute(dem, tree, level, eps)?;
+    let stride = tree.stride(level);
+    tree.cells(level)
+        .into_par_iter()
+        .map(|key| {
+            let rect = tree
+                .clipped(key)
+                .ok_or_else(|| Error::BadOption(format!("cell {} has no samples", key.id())))?;
+            Ok((key, build_tin(dem, rect, stride, eps, &borders.cell_border(key))?))
+        })
+        .collect()
+}
+
+/// Largest vertical distance from any full-resolution sample of `rect` to `tin` (height
+/// units), measured by scanning every triangle. Infinity if the TIN does not cover every
+/// sample of `rect` or references a vertex outside the DEM.
+pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
+    if check_rect(dem, rect).is_err() {
+        return f64::INFINITY;
+    }
+    let (w, h) = ((rect.c1 - rect.c0 + 1) as usize, (rect.r1 - rect.r0 + 1) as usize);
+    let mut covered = vec![false; w * h];
+    let lat = Lattice {
+        origin_c: 0,
+        origin_r: 0,
+        stride: 1,
+        c_lo: rect.c0 as i64,
+        c_hi: rect.c1 as i64,
+        r_lo: rect.r0 as i64,
+        r_hi: rect.r1 as i64,
+    };
+    let mut worst = 0.0f64;
+    for t in &tin.triangles {
+        let mut p = [[0i64; 2]; 3];
+        let mut hz = [0.0; 3];
+        for k in 0..3 {
+            let Some(v) = tin.vertices.get(t[k] as usize) else { return f64::INFINITY };
+            if v[0] as usize >= dem.width || v[1] as usize >= dem.height {
+                return f64::INFINITY;
+            }
+            p[k] = [v[0] as i64, v[1] as i64];
+            hz[k] = dem.at(v[1] as usize, v[0] as usize) as f64;
+        }
+        let plane = Plane::new(p, hz);
+        for_each_span(p, &lat, |y, x0, x1| {
+            let (base, a) = plane.row(y);
+            for x in x0..=x1 {
+                let e = (dem.at(y as usize, x as usize) as f64 - (base + a * x as f64)).abs();
+                worst = worst.max(e);
+                covered[(y - rect.r0 as i64) as usize * w + (x - rect.c0 as i64) as usize] = true;
+            }
+        });
+    }
+    if covered.iter().all(|&c| c) { worst } else { f64::INFINITY }
+}
