@@ -37,7 +37,29 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow::Result<()> {
     let json = write_stats(dir, manifest, threshold)?;
     let s = &json["summary"];
-    println!("{}", serde_json::to_string_pretty(s)?);
+    let f = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    let r = &s["rel_texel"];
+    println!(
+        "{} cells, {} ({:.1}%) above Rel_texel {threshold}; Rel_texel p50 {:.3}, p90 {:.3}, p99 {:.3}, max {:.3}",
+        s["cells"],
+        s["cells_above"],
+        f(&s["percent_above"]),
+        f(&r["p50"]),
+        f(&r["p90"]),
+        f(&r["p99"]),
+        f(&r["max"])
+    );
+    println!("{:>5} {:>6} {:>7} {:>9} {:>9}", "level", "cells", "above", "p50", "max");
+    for l in s["levels"].as_array().into_iter().flatten() {
+        println!(
+            "{:>5} {:>6} {:>7} {:>9.3} {:>9.3}",
+            l["level"].as_u64().unwrap_or(0),
+            l["cells"].as_u64().unwrap_or(0),
+            l["cells_above"].as_u64().unwrap_or(0),
+            f(&l["rel_texel"]["p50"]),
+            f(&l["rel_texel"]["max"])
+        );
+    }
     println!("wrote {} and {}", dir.join("stats.json").display(), dir.join("stats_histogram.png").display());
     Ok(())
 }

@@ -112,9 +112,9 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
     let pb = progress_bar(total as u64, "cells", opts.quiet);
     let mut records = Vec::with_capacity(total);
     for level in 0..tree.levels {
-        let eps = opts.max_error * (1u64 << (tree.finest_level() - level)) as f64;
+        let eps = cells::level_epsilon(&tree, level, opts.max_error);
         let keys = tree.cells(level);
-        let borders = LevelBorders::compute(dem, &tree, level, eps);
+        let borders = LevelBorders::compute(dem, &tree, level, eps)?;
         let recs: Vec<Result<CellRecord>> = keys
             .par_iter()
             .map(|&key| {
@@ -246,14 +246,10 @@ fn build_cell(
     out: &Path,
 ) -> Result<CellRecord> {
     let rect = tree.clipped(key).ok_or_else(|| Error::BadOption(format!("cell {} lies outside the DEM", key.id())))?;
-    let tin = cells::build_tin(dem, rect, tree.stride(key.level), eps, &borders.cell_border(key));
+    let tin = cells::build_tin(dem, rect, tree.stride(key.level), eps, &borders.cell_border(key))?;
     let skirt_depth = 2.0 * eps.max(tin.max_error);
     let lm = local_mesh(dem, rect, &tin, skirt_depth);
-    let (c0, r0, n) = tree.nominal(key);
-    let g = &dem.georef;
-    let (x0, y0) = g.world(r0 as f64, c0 as f64);
-    let (x1, y1) = g.world((r0 + n) as f64, (c0 + n) as f64);
-    let extent = crate::WorldRect { min_x: x0, min_y: y1, max_x: x1, max_y: y0 };
+    let extent = cells::nominal_extent(tree, &dem.georef, key);
     let texture = cells::ortho_texture(ortho, dem, extent, opts.cell_texels);
     let normal = cells::normal_map(dem, extent, opts.cell_texels);
     let cell_stats = stats::cell_stats(dem, tree, key, &tin, opts.cell_texels);
