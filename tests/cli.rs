@@ -145,7 +145,8 @@ fn engabreen_build_stats_export_and_resume() {
     assert!(err.contains("checksum"), "{err}");
     // A different build into the same store is refused without --force.
     let mut other = args.to_vec();
-    other[other.len() - 6] = "2.0"; // --max-error 2.0
+    let i = other.len() - 6;
+    other[i] = "2.0"; // --max-error 2.0
     fails_naming(&other, "--force");
 }
 
