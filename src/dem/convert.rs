@@ -108,7 +108,7 @@ pub(crate) fn to_heights(
             ));
         }
         let h = v * scaling.scale + scaling.offset;
-        if !(h.abs() <= MAX_ABS_HEIGHT) {
+        if !h.is_finite() || h.abs() > MAX_ABS_HEIGHT {
             let (h, v) = (num(h), num(v));
             return Err(Error::bad_input(
                 path,
