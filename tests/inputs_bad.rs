@@ -287,3 +287,54 @@ fn bad_orthos() {
     tiffgen::write_strips::<colortype::RGB8>(&t8, 4, 4, &[30u8; 48], Compression::Uncompressed, Predictor::None, Some(&geo()));
     bad(load_ortho(&t8, OrthoPlacement::FromFile, &dem, 1 << 20), &t8, &["overlap"]);
 }
+
+mod corrupted_bytes {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn check_no_panic(bytes: &[u8], name: &str, edits: &[(usize, u8)]) {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join(name);
+        let mut b = bytes.to_vec();
+        for &(pos, val) in edits {
+            let n = b.len();
+            b[pos % n] = val;
+        }
+        std::fs::write(&p, &b).unwrap();
+        let opts = DemLoadOptions { max_memory: 1 << 22, ..Default::default() };
+        match load_dem(&p, &opts) {
+            Ok(dem) => {
+                assert_eq!(dem.heights.len(), dem.width * dem.height);
+                assert!(dem.heights.iter().all(|h| h.is_finite()));
+            }
+            Err(e) => assert!(e.to_string().contains(name), "{e}"),
+        }
+    }
+
+    fn sample_tiff() -> Vec<u8> {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("s.tif");
+        let g = Geo { nodata: Some("-9999".into()), ..geo() };
+        tiffgen::write_strips::<colortype::Gray32Float>(&p, 12, 10, &grid(12, 10), Compression::Lzw, Predictor::None, Some(&g));
+        std::fs::read(&p).unwrap()
+    }
+
+    fn sample_png() -> Vec<u8> {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("s.png");
+        ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(12, 10, |x, y| Luma([(x * 300 + y) as u16])).save(&p).unwrap();
+        std::fs::read(&p).unwrap()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+        #[test]
+        fn mutated_tiff_never_panics(edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..6)) {
+            check_no_panic(&sample_tiff(), "mut.tif", &edits);
+        }
+        #[test]
+        fn mutated_png_never_panics(edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..6)) {
+            check_no_panic(&sample_png(), "mut.png", &edits);
+        }
+    }
+}
