@@ -36,7 +36,13 @@ fn grid(w: usize, h: usize) -> Vec<f32> {
 }
 
 fn geo() -> Geo {
-    Geo { scale: (10.0, 10.0), tie: (0.0, 0.0, 500000.0, 6000000.0), pixel_is_point: false, epsg: Some(32633), nodata: None }
+    Geo {
+        scale: (10.0, 10.0),
+        tie: (0.0, 0.0, 500000.0, 6000000.0),
+        pixel_is_point: false,
+        epsg: Some(32633),
+        nodata: None,
+    }
 }
 
 fn truncate(path: &Path, keep: usize) -> PathBuf {
@@ -109,12 +115,32 @@ fn undeclared_nan_inf_and_absurd_heights() {
     let mut v = grid(w, h);
     v[w + 2] = f32::NAN;
     let p = d.path().join("nan.tif");
-    tiffgen::write_strips::<colortype::Gray32Float>(&p, w as u32, h as u32, &v, Compression::Lzw, Predictor::None, Some(&geo()));
+    tiffgen::write_strips::<colortype::Gray32Float>(
+        &p,
+        w as u32,
+        h as u32,
+        &v,
+        Compression::Lzw,
+        Predictor::None,
+        Some(&geo()),
+    );
     bad(load_dem(&p, &Default::default()), &p, &["row 1, column 2", "--nodata nan"]);
     // a z-scale that makes heights absurd
     let p = d.path().join("scaled.tif");
-    tiffgen::write_strips::<colortype::Gray32Float>(&p, w as u32, h as u32, &grid(w, h), Compression::Lzw, Predictor::None, Some(&geo()));
-    bad(load_dem(&p, &DemLoadOptions { z_scale: Some(1000.0), ..Default::default() }), &p, &["implausible", "--z-scale"]);
+    tiffgen::write_strips::<colortype::Gray32Float>(
+        &p,
+        w as u32,
+        h as u32,
+        &grid(w, h),
+        Compression::Lzw,
+        Predictor::None,
+        Some(&geo()),
+    );
+    bad(
+        load_dem(&p, &DemLoadOptions { z_scale: Some(1000.0), ..Default::default() }),
+        &p,
+        &["implausible", "--z-scale"],
+    );
 }
 
 #[test]
@@ -122,7 +148,15 @@ fn all_nodata() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("void.tif");
     let v = vec![-9999.0f32; 16];
-    tiffgen::write_strips::<colortype::Gray32Float>(&p, 4, 4, &v, Compression::Uncompressed, Predictor::None, Some(&Geo { nodata: Some("-9999".into()), ..geo() }));
+    tiffgen::write_strips::<colortype::Gray32Float>(
+        &p,
+        4,
+        4,
+        &v,
+        Compression::Uncompressed,
+        Predictor::None,
+        Some(&Geo { nodata: Some("-9999".into()), ..geo() }),
+    );
     bad(load_dem(&p, &Default::default()), &p, &["no-data"]);
     let r = d.path().join("void.f32");
     write_f32(&r, &[f32::NAN; 9]);
@@ -148,7 +182,15 @@ fn bad_geotiff_georeference() {
     for (name, scale) in [("zero.tif", (0.0, 10.0)), ("neg.tif", (10.0, -10.0)), ("nanscale.tif", (f64::NAN, 10.0))] {
         let p = d.path().join(name);
         let g = Geo { scale, ..geo() };
-        tiffgen::write_strips::<colortype::Gray32Float>(&p, 3, 3, &grid(3, 3), Compression::Uncompressed, Predictor::None, Some(&g));
+        tiffgen::write_strips::<colortype::Gray32Float>(
+            &p,
+            3,
+            3,
+            &grid(3, 3),
+            Compression::Uncompressed,
+            Predictor::None,
+            Some(&g),
+        );
         bad(load_dem(&p, &Default::default()), &p, &["GeoTIFF"]);
     }
 }
@@ -158,7 +200,16 @@ fn huge_headers_are_refused_before_decoding() {
     let d = tempfile::tempdir().unwrap();
     // TIFF claiming 100000 x 100000 f32 with almost no data.
     let p = d.path().join("huge.tif");
-    let raw = Raw { width: 100_000, height: 100_000, bits: 32, sample_format: 3, samples: 1, photometric: 1, tile: None, extra_alpha: false };
+    let raw = Raw {
+        width: 100_000,
+        height: 100_000,
+        bits: 32,
+        sample_format: 3,
+        samples: 1,
+        photometric: 1,
+        tile: None,
+        extra_alpha: false,
+    };
     tiffgen::write_raw(&p, &raw, &[0u8; 64], None, false);
     let e = bad(load_dem(&p, &Default::default()), &p, &["--max-memory"]);
     assert!(matches!(e, Error::TooLarge { .. }), "{e}");
@@ -169,7 +220,15 @@ fn huge_headers_are_refused_before_decoding() {
     assert!(matches!(e, Error::TooLarge { .. }), "{e}");
     // A normal file over a small limit.
     let r = d.path().join("small.tif");
-    tiffgen::write_strips::<colortype::Gray32Float>(&r, 10, 10, &grid(10, 10), Compression::Uncompressed, Predictor::None, Some(&geo()));
+    tiffgen::write_strips::<colortype::Gray32Float>(
+        &r,
+        10,
+        10,
+        &grid(10, 10),
+        Compression::Uncompressed,
+        Predictor::None,
+        Some(&geo()),
+    );
     let e = bad(load_dem(&r, &DemLoadOptions { max_memory: 500, ..Default::default() }), &r, &[]);
     assert!(matches!(e, Error::TooLarge { needed: 900, limit: 500, .. }), "{e}");
     // Raw f32 over the limit.
@@ -183,7 +242,16 @@ fn huge_headers_are_refused_before_decoding() {
 fn zero_and_tiny_dimensions() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("zero.tif");
-    let raw = Raw { width: 0, height: 5, bits: 32, sample_format: 3, samples: 1, photometric: 1, tile: None, extra_alpha: false };
+    let raw = Raw {
+        width: 0,
+        height: 5,
+        bits: 32,
+        sample_format: 3,
+        samples: 1,
+        photometric: 1,
+        tile: None,
+        extra_alpha: false,
+    };
     tiffgen::write_raw(&p, &raw, &[0u8; 4], None, false);
     bad(load_dem(&p, &Default::default()), &p, &[]);
     let q = d.path().join("zero.png");
@@ -193,7 +261,15 @@ fn zero_and_tiny_dimensions() {
     ImageBuffer::<Luma<u16>, Vec<u16>>::from_pixel(1, 1, Luma([5])).save(&one).unwrap();
     bad(load_dem(&one, &Default::default()), &one, &["2x2"]);
     let t = d.path().join("one_row.tif");
-    tiffgen::write_strips::<colortype::Gray32Float>(&t, 7, 1, &grid(7, 1), Compression::Uncompressed, Predictor::None, None);
+    tiffgen::write_strips::<colortype::Gray32Float>(
+        &t,
+        7,
+        1,
+        &grid(7, 1),
+        Compression::Uncompressed,
+        Predictor::None,
+        None,
+    );
     bad(load_dem(&t, &Default::default()), &t, &["2x2"]);
 }
 
@@ -202,7 +278,15 @@ fn truncated_and_corrupt_files() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("full.tif");
     let (w, h) = (40u32, 30u32);
-    tiffgen::write_strips::<colortype::Gray32Float>(&p, w, h, &grid(w as usize, h as usize), Compression::Deflate(Default::default()), Predictor::None, Some(&geo()));
+    tiffgen::write_strips::<colortype::Gray32Float>(
+        &p,
+        w,
+        h,
+        &grid(w as usize, h as usize),
+        Compression::Deflate(Default::default()),
+        Predictor::None,
+        Some(&geo()),
+    );
     let len = std::fs::metadata(&p).unwrap().len() as usize;
     for keep in [0, 3, 8, 100, len / 2, len - 10] {
         let t = truncate(&p, keep);
@@ -210,7 +294,16 @@ fn truncated_and_corrupt_files() {
     }
     // strip offset pointing past the end of the file
     let c = d.path().join("liar.tif");
-    let raw = Raw { width: 4, height: 4, bits: 32, sample_format: 3, samples: 1, photometric: 1, tile: None, extra_alpha: false };
+    let raw = Raw {
+        width: 4,
+        height: 4,
+        bits: 32,
+        sample_format: 3,
+        samples: 1,
+        photometric: 1,
+        tile: None,
+        extra_alpha: false,
+    };
     tiffgen::write_raw(&c, &raw, &tiffgen::f32_bytes(&grid(4, 4)), None, true);
     bad(load_dem(&c, &Default::default()), &c, &[]);
     // not a TIFF at all
@@ -234,12 +327,30 @@ fn unsupported_sample_formats() {
     let d = tempfile::tempdir().unwrap();
     // complex float (SampleFormat 6, 64 bits per sample)
     let p = d.path().join("complex.tif");
-    let raw = Raw { width: 4, height: 4, bits: 64, sample_format: 6, samples: 1, photometric: 1, tile: None, extra_alpha: false };
+    let raw = Raw {
+        width: 4,
+        height: 4,
+        bits: 64,
+        sample_format: 6,
+        samples: 1,
+        photometric: 1,
+        tile: None,
+        extra_alpha: false,
+    };
     tiffgen::write_raw(&p, &raw, &[0u8; 128], None, false);
     bad(load_dem(&p, &Default::default()), &p, &[]);
     // 1-bit
     let b = d.path().join("bilevel.tif");
-    let raw = Raw { width: 16, height: 4, bits: 1, sample_format: 1, samples: 1, photometric: 1, tile: None, extra_alpha: false };
+    let raw = Raw {
+        width: 16,
+        height: 4,
+        bits: 1,
+        sample_format: 1,
+        samples: 1,
+        photometric: 1,
+        tile: None,
+        extra_alpha: false,
+    };
     tiffgen::write_raw(&b, &raw, &[0xAAu8; 8], None, false);
     bad(load_dem(&b, &Default::default()), &b, &["1-bit"]);
     // RGB is not a DEM
@@ -281,10 +392,26 @@ fn bad_orthos() {
     }
     // a 16-bit-per-sample TIFF ortho and a GeoTIFF outside the DEM
     let t16 = d.path().join("rgb16.tif");
-    tiffgen::write_strips::<colortype::RGB16>(&t16, 4, 4, &[300u16; 48], Compression::Uncompressed, Predictor::None, Some(&geo()));
+    tiffgen::write_strips::<colortype::RGB16>(
+        &t16,
+        4,
+        4,
+        &[300u16; 48],
+        Compression::Uncompressed,
+        Predictor::None,
+        Some(&geo()),
+    );
     bad(load_ortho(&t16, OrthoPlacement::FromFile, &dem, 1 << 20), &t16, &["8-bit"]);
     let t8 = d.path().join("rgb8.tif");
-    tiffgen::write_strips::<colortype::RGB8>(&t8, 4, 4, &[30u8; 48], Compression::Uncompressed, Predictor::None, Some(&geo()));
+    tiffgen::write_strips::<colortype::RGB8>(
+        &t8,
+        4,
+        4,
+        &[30u8; 48],
+        Compression::Uncompressed,
+        Predictor::None,
+        Some(&geo()),
+    );
     bad(load_ortho(&t8, OrthoPlacement::FromFile, &dem, 1 << 20), &t8, &["overlap"]);
 }
 
@@ -315,7 +442,15 @@ mod corrupted_bytes {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("s.tif");
         let g = Geo { nodata: Some("-9999".into()), ..geo() };
-        tiffgen::write_strips::<colortype::Gray32Float>(&p, 12, 10, &grid(12, 10), Compression::Lzw, Predictor::None, Some(&g));
+        tiffgen::write_strips::<colortype::Gray32Float>(
+            &p,
+            12,
+            10,
+            &grid(12, 10),
+            Compression::Lzw,
+            Predictor::None,
+            Some(&g),
+        );
         std::fs::read(&p).unwrap()
     }
 
