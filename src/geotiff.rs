@@ -89,9 +89,7 @@ pub(crate) fn sample_format<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
 
 /// True if the image stores each sample plane separately (PlanarConfiguration = 2).
 pub(crate) fn is_planar<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result<bool> {
-    Ok(dec
-        .find_tag_unsigned::<u16>(Tag::PlanarConfiguration)
-        .map_err(|e| tag_err(path, "PlanarConfiguration", e))?
+    Ok(dec.find_tag_unsigned::<u16>(Tag::PlanarConfiguration).map_err(|e| tag_err(path, "PlanarConfiguration", e))?
         == Some(2))
 }
 
@@ -104,9 +102,9 @@ pub(crate) fn parse_nodata(path: &Path, s: &str) -> Result<f64> {
     let t = s.trim_matches(|c: char| c == '\0' || c.is_whitespace()).to_ascii_lowercase();
     match t.as_str() {
         "nan" | "-nan" | "+nan" => Ok(f64::NAN),
-        _ => t.parse::<f64>().map_err(|_| {
-            Error::bad_input(path, format!("GDAL_NODATA tag holds {s:?}, which is not a number"))
-        }),
+        _ => t
+            .parse::<f64>()
+            .map_err(|_| Error::bad_input(path, format!("GDAL_NODATA tag holds {s:?}, which is not a number"))),
     }
 }
 
@@ -179,12 +177,21 @@ pub(crate) fn read_geo_tags<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
                 if s.len() < 2 || t.len() < 6 {
                     return Err(Error::bad_input(
                         path,
-                        format!("ModelPixelScale has {} values and ModelTiepoint {}; need at least 2 and 6", s.len(), t.len()),
+                        format!(
+                            "ModelPixelScale has {} values and ModelTiepoint {}; need at least 2 and 6",
+                            s.len(),
+                            t.len()
+                        ),
                     ));
                 }
                 let (sx, sy) = (s[0], s[1]);
                 let (i, j, x, y) = (t[0], t[1], t[3], t[4]);
-                Some(GridGeoref { origin_x: x + (c - i) * sx, origin_y: y - (c - j) * sy, spacing_x: sx, spacing_y: sy })
+                Some(GridGeoref {
+                    origin_x: x + (c - i) * sx,
+                    origin_y: y - (c - j) * sy,
+                    spacing_x: sx,
+                    spacing_y: sy,
+                })
             }
         }
     };

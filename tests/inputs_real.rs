@@ -100,6 +100,7 @@ fn exploradores_aster_geotiff() {
     assert!((0.025..0.029).contains(&vf), "void fraction {vf}");
     let valid: Vec<f32> = dem.heights.iter().zip(&dem.void).filter(|(_, v)| !**v).map(|(h, _)| *h).collect();
     let (vlo, vhi) = valid.iter().fold((f32::MAX, f32::MIN), |(a, b), &h| (a.min(h), b.max(h)));
+    eprintln!("exploradores: voids {:.3} %, valid heights {vlo}..{vhi}", vf * 100.0);
     assert!(vlo > -100.0 && vhi < 5000.0, "valid range {vlo}..{vhi}");
     assert!(dem.heights.iter().all(|h| h.is_finite() && *h >= vlo && *h <= vhi));
     // With the no-data value overridden to something absent, -9999 is kept as a height,

@@ -58,6 +58,12 @@ impl Sample for f64 {
     }
 }
 
+/// Formats a value compactly (scientific notation when huge) but exactly enough to be
+/// passed back as `--nodata` (Rust's shortest round-trip representation).
+fn num(v: f64) -> String {
+    if v.abs() >= 1e9 { format!("{v:e}") } else { format!("{v}") }
+}
+
 /// How stored values become heights.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Scaling {
@@ -102,7 +108,8 @@ pub(crate) fn to_heights(
             ));
         }
         let h = v * scaling.scale + scaling.offset;
-        if !(h.abs() <= MAX_ABS_HEIGHT) {
+        if !h.is_finite() || h.abs() > MAX_ABS_HEIGHT {
+            let (h, v) = (num(h), num(v));
             return Err(Error::bad_input(
                 path,
                 format!(

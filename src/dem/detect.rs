@@ -80,8 +80,9 @@ fn png_kind(path: &Path) -> Result<DemFormat> {
         (0 | 4, bits) => Err(Error::bad_input(
             path,
             format!(
-                "is a {bits}-bit greyscale PNG, too coarse to be taken for a DEM by default; \
-                 to read it anyway pass --dem-format png16 with --z-scale (height = value * z-scale + z-offset)"
+                "is {} {bits}-bit greyscale PNG, too coarse to be taken for a DEM by default; \
+                 to read it anyway pass --dem-format png16 with --z-scale (height = value * z-scale + z-offset)",
+                if bits == 8 { "an" } else { "a" }
             ),
         )),
         (3, _) => Err(Error::bad_input(

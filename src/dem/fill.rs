@@ -33,8 +33,7 @@ pub fn fill_voids(width: usize, height: usize, heights: &mut [f32], void: &[bool
             .map(move |(rr, cc)| rr as usize * width + cc as usize)
     };
 
-    let mut front: Vec<usize> =
-        (0..n).filter(|&i| !known[i] && neighbours(i).any(|j| known[j])).collect();
+    let mut front: Vec<usize> = (0..n).filter(|&i| !known[i] && neighbours(i).any(|j| known[j])).collect();
     for &i in &front {
         queued[i] = 1;
     }

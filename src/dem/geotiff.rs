@@ -15,7 +15,13 @@ use super::{Decoded, DemLoadOptions, limits};
 use crate::error::{Error, Result};
 use crate::geotiff as gt;
 
-fn convert_all<T: Sample>(path: &Path, w: usize, v: &[T], s: Scaling, nodata: Option<f64>) -> Result<(Vec<f32>, Vec<bool>)> {
+fn convert_all<T: Sample>(
+    path: &Path,
+    w: usize,
+    v: &[T],
+    s: Scaling,
+    nodata: Option<f64>,
+) -> Result<(Vec<f32>, Vec<bool>)> {
     convert::to_heights(path, w, v.len(), s, nodata.is_some(), |i| {
         (v[i].to_f64(), nodata.is_some_and(|nd| v[i].is_nodata(nd)))
     })
@@ -59,7 +65,9 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
     if !ok {
         return Err(Error::bad_input(
             path,
-            format!("unsupported TIFF sample type: {bits}-bit {kind} (supported: 8/16/32/64-bit integers, 16/32/64-bit floats)"),
+            format!(
+                "unsupported TIFF sample type: {bits}-bit {kind} (supported: 8/16/32/64-bit integers, 16/32/64-bit floats)"
+            ),
         ));
     }
     super::check_size(path, w, h)?;
@@ -132,7 +140,13 @@ mod tests {
         for (point, name) in [(false, "area.tif"), (true, "point.tif")] {
             let p = d.path().join(name);
             tiffgen::write_strips::<colortype::Gray32Float>(
-                &p, w as u32, h as u32, &v, Compression::Uncompressed, Predictor::None, Some(&geo(point, None)),
+                &p,
+                w as u32,
+                h as u32,
+                &v,
+                Compression::Uncompressed,
+                Predictor::None,
+                Some(&geo(point, None)),
             );
             let dem = load_dem(&p, &Default::default()).unwrap();
             assert_eq!((dem.width, dem.height), (w, h));
@@ -149,8 +163,22 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("utm.tif");
         let v = f32_grid(4, 3);
-        let g = Geo { scale: (3.0, 3.0), tie: (0.0, 0.0, 445302.17, 7396769.45), pixel_is_point: true, epsg: None, nodata: None };
-        tiffgen::write_strips::<colortype::Gray32Float>(&p, 4, 3, &v, Compression::Uncompressed, Predictor::None, Some(&g));
+        let g = Geo {
+            scale: (3.0, 3.0),
+            tie: (0.0, 0.0, 445302.17, 7396769.45),
+            pixel_is_point: true,
+            epsg: None,
+            nodata: None,
+        };
+        tiffgen::write_strips::<colortype::Gray32Float>(
+            &p,
+            4,
+            3,
+            &v,
+            Compression::Uncompressed,
+            Predictor::None,
+            Some(&g),
+        );
         let dem = load_dem(&p, &Default::default()).unwrap();
         assert_eq!(dem.georef, GridGeoref::new(445302.17, 7396769.45, 3.0));
         assert_eq!(dem.crs, None);
@@ -177,7 +205,15 @@ mod tests {
             assert_eq!(dem.heights, want, "{name}");
         }
         let p = d.path().join("u16_lzw.tif");
-        tiffgen::write_strips::<colortype::Gray16>(&p, w, h, &vu, Compression::Lzw, Predictor::Horizontal, Some(&geo(false, Some("1017"))));
+        tiffgen::write_strips::<colortype::Gray16>(
+            &p,
+            w,
+            h,
+            &vu,
+            Compression::Lzw,
+            Predictor::Horizontal,
+            Some(&geo(false, Some("1017"))),
+        );
         let o = DemLoadOptions { z_scale: Some(0.1), z_offset: Some(-100.0), ..Default::default() };
         let dem = load_dem(&p, &o).unwrap();
         assert!(dem.void[1] && dem.void.iter().filter(|v| **v).count() == 1);
@@ -187,8 +223,17 @@ mod tests {
         // f64 + deflate
         let p = d.path().join("f64.tif");
         let v64: Vec<f64> = (0..w * h).map(|i| 1234.5678901 + i as f64).collect();
-        tiffgen::write_strips::<colortype::Gray64Float>(&p, w, h, &v64, Compression::Deflate(DeflateLevel::Fast), Predictor::None, None);
-        let dem = load_dem(&p, &DemLoadOptions { spacing: Some(1.0), origin: Some((0.0, 0.0)), ..Default::default() }).unwrap();
+        tiffgen::write_strips::<colortype::Gray64Float>(
+            &p,
+            w,
+            h,
+            &v64,
+            Compression::Deflate(DeflateLevel::Fast),
+            Predictor::None,
+            None,
+        );
+        let dem = load_dem(&p, &DemLoadOptions { spacing: Some(1.0), origin: Some((0.0, 0.0)), ..Default::default() })
+            .unwrap();
         assert!(dem.heights.iter().zip(&v64).all(|(a, b)| *a == *b as f32));
         // i32 and u8
         let p = d.path().join("i32.tif");
@@ -207,7 +252,16 @@ mod tests {
         let (w, h) = (37usize, 21usize);
         let mut v = f32_grid(w, h);
         v[5 * w + 30] = f32::NAN;
-        let raw = Raw { width: w as u32, height: h as u32, bits: 32, sample_format: 3, samples: 1, photometric: 1, tile: Some((16, 16)), extra_alpha: false };
+        let raw = Raw {
+            width: w as u32,
+            height: h as u32,
+            bits: 32,
+            sample_format: 3,
+            samples: 1,
+            photometric: 1,
+            tile: Some((16, 16)),
+            extra_alpha: false,
+        };
         let p = d.path().join("tiled.tif");
         tiffgen::write_raw(&p, &raw, &tiffgen::f32_bytes(&v), Some(&geo(false, Some("nan"))), false);
         let dem = load_dem(&p, &Default::default()).unwrap();
@@ -231,7 +285,15 @@ mod tests {
             }
         }
         let p = d.path().join("holes.tif");
-        tiffgen::write_strips::<colortype::Gray32Float>(&p, w as u32, h as u32, &v, Compression::Lzw, Predictor::None, Some(&geo(false, Some("-9999"))));
+        tiffgen::write_strips::<colortype::Gray32Float>(
+            &p,
+            w as u32,
+            h as u32,
+            &v,
+            Compression::Lzw,
+            Predictor::None,
+            Some(&geo(false, Some("-9999"))),
+        );
         let dem = load_dem(&p, &Default::default()).unwrap();
         assert_eq!(dem.void.iter().filter(|x| **x).count(), 9);
         let valid: Vec<f32> = v.iter().copied().filter(|&x| x != -9999.0).collect();

@@ -36,20 +36,20 @@ pub(crate) fn decode_image(
     check_header: impl FnOnce(u32, u32, image::ColorType) -> Result<()>,
 ) -> Result<DynamicImage> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut reader = ImageReader::new(BufReader::new(file))
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?;
+    let mut reader = ImageReader::new(BufReader::new(file)).with_guessed_format().map_err(|e| Error::io(path, e))?;
     if reader.format().is_none() {
         reader.set_format(fallback);
     }
-    let mut limits = image::Limits::default();
-    limits.max_alloc = Some(max_memory);
-    reader.limits(limits);
-    let decoder = reader
-        .into_decoder()
-        .map_err(|e| Error::bad_input(path, format!("cannot read the image header: {e}")))?;
+    // Header first without an allocation cap (it allocates little), so our own check
+    // reports an oversized image as `TooLarge`; then the decoder gets the cap.
+    reader.no_limits();
+    let mut decoder =
+        reader.into_decoder().map_err(|e| Error::bad_input(path, format!("cannot read the image header: {e}")))?;
     let (w, h) = decoder.dimensions();
     check_header(w, h, decoder.color_type())?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(max_memory);
+    decoder.set_limits(limits).map_err(|e| Error::bad_input(path, format!("image exceeds the memory limit: {e}")))?;
     DynamicImage::from_decoder(decoder)
         .map_err(|e| Error::bad_input(path, format!("cannot decode the image (truncated or corrupt?): {e}")))
 }

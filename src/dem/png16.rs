@@ -23,7 +23,13 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
             }
         }
         super::check_size(path, w as usize, h as usize)?;
-        limits::check(path, w as u64, h as u64, ct.bytes_per_pixel() as u64 + limits::DEM_BYTES_PER_SAMPLE, opts.max_memory)
+        limits::check(
+            path,
+            w as u64,
+            h as u64,
+            ct.bytes_per_pixel() as u64 + limits::DEM_BYTES_PER_SAMPLE,
+            opts.max_memory,
+        )
     })?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let nodata = opts.nodata;
@@ -57,7 +63,7 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
             })?
         }
         other => {
-            return Err(Error::bad_input(path, format!("unexpected decoded colour type {:?}", other.color()))); 
+            return Err(Error::bad_input(path, format!("unexpected decoded colour type {:?}", other.color())));
         }
     };
     Ok(Decoded { width: w, height: h, heights, void, georef: None, crs: None, geographic: false })
@@ -74,9 +80,11 @@ mod tests {
     fn round_trip_scale_offset_nodata_alpha() {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("sth.png");
-        let img: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_fn(5, 4, |x, y| Luma([1000 + (y * 5 + x) as u16 * 7]));
+        let img: ImageBuffer<Luma<u16>, Vec<u16>> =
+            ImageBuffer::from_fn(5, 4, |x, y| Luma([1000 + (y * 5 + x) as u16 * 7]));
         img.save(&p).unwrap();
-        let opts = DemLoadOptions { z_scale: Some(0.1), z_offset: Some(-50.0), spacing: Some(10.0), ..Default::default() };
+        let opts =
+            DemLoadOptions { z_scale: Some(0.1), z_offset: Some(-50.0), spacing: Some(10.0), ..Default::default() };
         let dem = load_dem(&p, &opts).unwrap();
         assert_eq!((dem.width, dem.height), (5, 4));
         for (i, &hgt) in dem.heights.iter().enumerate() {

@@ -24,16 +24,16 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         };
         return Err(Error::bad_input(
             path,
-            format!("raw f32 file has {len} bytes but {w}x{h} samples need {} bytes{hint}",
-                expected.map_or("more than 2^64".to_string(), |e| e.to_string())),
+            format!(
+                "raw f32 file has {len} bytes but {w}x{h} samples need {} bytes{hint}",
+                expected.map_or("more than 2^64".to_string(), |e| e.to_string())
+            ),
         ));
     }
     super::check_size(path, w, h)?;
     limits::check(path, w as u64, h as u64, 4 + limits::DEM_BYTES_PER_SAMPLE, opts.max_memory)?;
     let mut bytes = Vec::with_capacity(len as usize);
-    File::open(path)
-        .and_then(|f| f.take(len).read_to_end(&mut bytes))
-        .map_err(|e| Error::io(path, e))?;
+    File::open(path).and_then(|f| f.take(len).read_to_end(&mut bytes)).map_err(|e| Error::io(path, e))?;
     if bytes.len() as u64 != len {
         return Err(Error::bad_input(path, "file shrank while being read"));
     }

@@ -57,7 +57,8 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("tile.png");
         let hs: Vec<f64> = (0..20).map(|i| 439.0 + i as f64 * 91.3).collect();
-        let img: ImageBuffer<Rgb<u8>, Vec<u8>> = ImageBuffer::from_fn(5, 4, |x, y| Rgb(encode(hs[(y * 5 + x) as usize])));
+        let img: ImageBuffer<Rgb<u8>, Vec<u8>> =
+            ImageBuffer::from_fn(5, 4, |x, y| Rgb(encode(hs[(y * 5 + x) as usize])));
         img.save(&p).unwrap();
         let dem = load_dem(&p, &DemLoadOptions::default()).unwrap();
         for (a, b) in dem.heights.iter().zip(&hs) {

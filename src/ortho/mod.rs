@@ -56,6 +56,16 @@ impl Ortho {
 pub fn load_ortho(path: &Path, placement: OrthoPlacement, dem: &Dem, max_memory: u64) -> Result<Ortho> {
     let d = read::read(path, max_memory)?;
     let georef = placement::place(path, placement, d.image.width(), d.image.height(), d.tags.as_ref(), dem)?;
+    if placement == OrthoPlacement::FromFile {
+        if let (Some(t), Some(dc)) = (d.tags.as_ref().and_then(|t| t.crs.as_deref()), dem.crs.as_deref()) {
+            if t != dc {
+                return Err(Error::bad_input(
+                    path,
+                    format!("ortho CRS {t} differs from the DEM's {dc}; reproject one of them"),
+                ));
+            }
+        }
+    }
     let ortho = Ortho { image: d.image, georef };
     let area = dem_area(dem);
     let e = ortho.extent();
@@ -67,11 +77,6 @@ pub fn load_ortho(path: &Path, placement: OrthoPlacement, dem: &Dem, max_memory:
                 e.min_x, e.max_x, e.min_y, e.max_y, area.min_x, area.max_x, area.min_y, area.max_y
             ),
         ));
-    }
-    if let (Some(t), Some(dc)) = (d.tags.as_ref().and_then(|t| t.crs.as_deref()), dem.crs.as_deref()) {
-        if t != dc && placement == OrthoPlacement::FromFile {
-            return Err(Error::bad_input(path, format!("ortho CRS {t} differs from the DEM's {dc}; reproject one of them")));
-        }
     }
     Ok(ortho)
 }

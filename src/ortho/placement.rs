@@ -6,8 +6,8 @@ use std::path::Path;
 use super::OrthoPlacement;
 use crate::dem::Dem;
 use crate::error::{Error, Result};
-use crate::geotiff::GeoTags;
 use crate::georef::{GridGeoref, WorldRect};
+use crate::geotiff::GeoTags;
 
 /// Pixel-centre georeference of a `width x height` image whose outer pixel edges span `r`.
 pub fn georef_from_extent(r: &WorldRect, width: u32, height: u32) -> GridGeoref {

@@ -33,9 +33,7 @@ fn is_tiff(path: &Path) -> Result<bool> {
     }
     use std::io::Read;
     let mut b = [0u8; 4];
-    let n = std::fs::File::open(path)
-        .and_then(|mut f| f.read(&mut b))
-        .map_err(|e| Error::io(path, e))?;
+    let n = std::fs::File::open(path).and_then(|mut f| f.read(&mut b)).map_err(|e| Error::io(path, e))?;
     Ok(n == 4 && matches!(b, [b'I', b'I', 42 | 43, 0] | [b'M', b'M', 0, 42 | 43]))
 }
 
