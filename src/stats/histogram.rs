@@ -119,7 +119,7 @@ fn draw(buf: &mut [u8], bins: &RelTexelBins, n_cells: usize, threshold: f64) -> 
         let over = RGBColor(200, 60, 60);
         chart
             .draw_series([Rectangle::new([(x0, 0), (x0 + width, bins.overflow)], over.mix(0.5).filled())])?
-            .label(format!("overflow: {} cells > {:.3} (p99.5)", bins.overflow, bins.hi))
+            .label(format!("overflow: {} cell(s) > {:.3} (p99.5)", bins.overflow, bins.hi))
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], over.mix(0.5).filled()));
     }
     if threshold.is_finite() && threshold >= bins.lo && threshold <= x_max {
