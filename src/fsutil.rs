@@ -33,7 +33,8 @@ fn temp_path(path: &Path) -> Result<PathBuf> {
 }
 
 fn write_and_rename(tmp: &Path, path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(tmp).map_err(|e| Error::io(tmp, e))?;
+    let mut f =
+        std::fs::OpenOptions::new().write(true).create_new(true).open(tmp).map_err(|e| Error::io(tmp, e))?;
     f.write_all(bytes).map_err(|e| Error::io(tmp, e))?;
     f.sync_all().map_err(|e| Error::io(tmp, e))?;
     drop(f);

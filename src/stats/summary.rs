@@ -142,7 +142,11 @@ pub fn summarize(entries: &[CellStatsEntry], threshold: f64) -> StatsSummary {
         cells: entries.len(),
         threshold,
         cells_above,
-        percent_above: if entries.is_empty() { 0.0 } else { 100.0 * cells_above as f64 / entries.len() as f64 },
+        percent_above: if entries.is_empty() {
+            0.0
+        } else {
+            100.0 * cells_above as f64 / entries.len() as f64
+        },
         rel_texel: rel(&all),
         levels,
         covered_texels: covered,
@@ -169,7 +173,13 @@ mod tests {
     fn entry(level: u8, x: u32, rel: f64, hist_bin: usize) -> CellStatsEntry {
         let mut h = vec![0u64; stretch_bin_edges().len()];
         h[hist_bin] = 10;
-        let stats = CellStats { rel_texel: rel, max_slope_deg: 10.0 * rel, covered_texels: 10, stretch_histogram: h, ..CellStats::default() };
+        let stats = CellStats {
+            rel_texel: rel,
+            max_slope_deg: 10.0 * rel,
+            covered_texels: 10,
+            stretch_histogram: h,
+            ..CellStats::default()
+        };
         let tin = Tin { triangles: vec![[0, 1, 2]; 3], max_error: 0.25, ..Tin::default() };
         CellStatsEntry::new(CellKey { level, x, y: 0 }, &tin, stats)
     }
@@ -201,7 +211,15 @@ mod tests {
         let obj = v.as_object().unwrap();
         assert_eq!(obj.len(), 2);
         let summary = &v["summary"];
-        for k in ["cells", "threshold", "cells_above", "percent_above", "rel_texel", "levels", "texel_stretch_histogram"] {
+        for k in [
+            "cells",
+            "threshold",
+            "cells_above",
+            "percent_above",
+            "rel_texel",
+            "levels",
+            "texel_stretch_histogram",
+        ] {
             assert!(summary.get(k).is_some(), "summary lacks {k}");
         }
         assert_eq!(summary["cells_above"], 1);
@@ -217,7 +235,14 @@ mod tests {
         assert_eq!(c["max_error"], 0.25);
         assert_eq!(c["rel_texel"], 1.7);
         assert_eq!(c["max_slope_deg"], 17.0);
-        for k in ["surface_area_tin", "surface_area_dem", "base_area", "used_fraction", "mean_slope_deg", "steep_texel_fraction"] {
+        for k in [
+            "surface_area_tin",
+            "surface_area_dem",
+            "base_area",
+            "used_fraction",
+            "mean_slope_deg",
+            "steep_texel_fraction",
+        ] {
             assert!(c[k].is_number(), "cell lacks {k}");
         }
         assert!(c["texel_stretch"]["p99"].is_number());
