@@ -301,4 +301,29 @@ mod tests {
         let far = WorldRect { min_x: 1e6, max_x: 1e6 + 10.0, min_y: 0.0, max_y: 10.0 };
         assert!(ortho_texture(&ortho, &dem, far, 8).pixels().all(|p| p.0 == [0; 4]));
     }
+
+    #[test]
+    fn output_does_not_depend_on_thread_count() {
+        let g = GridGeoref::new(0.0, 99.0, 1.0);
+        let z: Vec<f32> =
+            (0..100 * 100).map(|k| ((k % 100) as f32 * 0.37).sin() * 20.0 + (k / 100) as f32).collect();
+        let mut dem = Dem::from_heights(100, 100, z, g).unwrap();
+        dem.void[4321] = true;
+        let ortho = ortho_from(140, 140, GridGeoref::new(-10.0, 110.0, 0.8), |c, r| {
+            [
+                (c * 7 % 256) as u8,
+                (r * 13 % 256) as u8,
+                ((c + r) % 256) as u8,
+                if (c + r) % 17 == 0 { 0 } else { 255 },
+            ]
+        });
+        let ext = WorldRect { min_x: 20.0, max_x: 148.0, min_y: -20.0, max_y: 108.0 };
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        for t in [37, 256] {
+            let (a, b) = pool
+                .install(|| (ortho_texture(&ortho, &dem, ext, t), crate::cells::normal_map(&dem, ext, t)));
+            assert_eq!(a, ortho_texture(&ortho, &dem, ext, t));
+            assert_eq!(b, crate::cells::normal_map(&dem, ext, t));
+        }
+    }
 }
