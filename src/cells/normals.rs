@@ -10,7 +10,8 @@
 //! sample spacing per axis. By the divergence theorem the mean of `dh/dx` over a box is the
 //! difference of the mean heights along its east and west edges divided by its width; the
 //! edge means are integrated exactly (the bilinear surface is piecewise linear along a grid
-//! line). At coarse levels (texel wider than a sample) this is the gradient box-filtered over
+//! line; per texel row the column-line means and row-line integrals are tabulated once, so
+//! each texel costs O(1)). At coarse levels (texel wider than a sample) this is the gradient box-filtered over
 //! the texel footprint; at fine levels it is a central difference of bilinear heights at
 //! ±half a sample. Near and beyond the DEM's data rectangle the box is shifted (and if
 //! necessary shrunk) to lie inside it, i.e. the normal of the nearest data is used. Any
@@ -31,7 +32,10 @@ use crate::georef::WorldRect;
 pub fn normal_map(dem: &Dem, extent: WorldRect, texels: u32) -> RgbImage {
     let t = texels as usize;
     let mut buf = vec![0u8; t * t * 3];
-    let valid = extent.width() > 0.0 && extent.height() > 0.0 && extent.width().is_finite() && extent.height().is_finite();
+    let valid = extent.width() > 0.0
+        && extent.height() > 0.0
+        && extent.width().is_finite()
+        && extent.height().is_finite();
     if !valid {
         for px in buf.chunks_exact_mut(3) {
             px.copy_from_slice(&encode([0.0, 0.0, 1.0]));
@@ -57,11 +61,32 @@ pub fn normal_map(dem: &Dem, extent: WorldRect, texels: u32) -> RgbImage {
         })
         .collect();
 
+    // integer DEM columns touched by any filter box
+    let kmin =
+        (cols.iter().map(|c| c.0).fold(f64::INFINITY, f64::min).floor().max(0.0) as usize).min(dem.width - 2);
+    let kmax = (cols.iter().map(|c| c.1).fold(0.0, f64::max).ceil() as usize).clamp(kmin + 1, dem.width - 1);
+    let span = kmax - kmin + 1;
+
     buf.par_chunks_mut(t * 3).enumerate().for_each(|(j, row)| {
         let (r0, r1) = rows[j];
+        // Per texel row (allocated once per row): for every integer column k of the span,
+        // m[k] = mean of h(., k) over rows [r0, r1] (the bilinear surface is linear in the
+        // column between integer columns, so column-line means interpolate linearly), and the
+        // running integrals along the row lines r0 and r1 (for the row-line means).
+        let mut m = Vec::with_capacity(span);
+        let (mut g0, mut g1) = (Vec::with_capacity(span), Vec::with_capacity(span));
+        for k in kmin..=kmax {
+            m.push(line_mean(dem, Line::Col(k as f64), r0, r1));
+            g0.push(height_on_col(dem, k, r0));
+            g1.push(height_on_col(dem, k, r1));
+        }
+        let (p0, p1) = (prefix_integral(&g0), prefix_integral(&g1));
         for (i, &(c0, c1)) in cols.iter().enumerate() {
-            let dh_dcol = (line_mean(dem, Line::Col(c1), r0, r1) - line_mean(dem, Line::Col(c0), r0, r1)) / (c1 - c0);
-            let dh_drow = (line_mean(dem, Line::Row(r1), c0, c1) - line_mean(dem, Line::Row(r0), c0, c1)) / (r1 - r0);
+            let (a, b) = (c0 - kmin as f64, c1 - kmin as f64);
+            let dh_dcol = (lerp_at(&m, b) - lerp_at(&m, a)) / (c1 - c0);
+            let mean_r1 = (integral_to(&p1, &g1, b) - integral_to(&p1, &g1, a)) / (c1 - c0);
+            let mean_r0 = (integral_to(&p0, &g0, b) - integral_to(&p0, &g0, a)) / (c1 - c0);
+            let dh_drow = (mean_r1 - mean_r0) / (r1 - r0);
             let gx = dh_dcol / g.spacing_x;
             let gy = -dh_drow / g.spacing_y; // rows run south
             let len = (gx * gx + gy * gy + 1.0).sqrt();
@@ -69,6 +94,43 @@ pub fn normal_map(dem: &Dem, extent: WorldRect, texels: u32) -> RgbImage {
         }
     });
     RgbImage::from_raw(texels, texels, buf).unwrap_or_default()
+}
+
+/// Bilinear height at integer column `k` and fractional row `r` (inside the data).
+fn height_on_col(dem: &Dem, k: usize, r: f64) -> f64 {
+    let r0 = (r.floor().max(0.0) as usize).min(dem.height - 2);
+    let f = r - r0 as f64;
+    let (p, q) = (dem.at(r0, k) as f64, dem.at(r0 + 1, k) as f64);
+    p + (q - p) * f
+}
+
+/// `out[k]` = integral from 0 to k of the piecewise-linear function through `v`.
+fn prefix_integral(v: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(v.len());
+    let mut acc = 0.0;
+    out.push(0.0);
+    for w in v.windows(2) {
+        acc += 0.5 * (w[0] + w[1]);
+        out.push(acc);
+    }
+    out
+}
+
+/// Linear interpolation of `v` (at least 2 values) at fractional index `x` in `[0, len - 1]`.
+#[inline]
+fn lerp_at(v: &[f64], x: f64) -> f64 {
+    let k = (x.floor().max(0.0) as usize).min(v.len() - 2);
+    let f = x - k as f64;
+    v[k] + (v[k + 1] - v[k]) * f
+}
+
+/// Integral from 0 to `x` of the piecewise-linear function through `v`, given its
+/// [`prefix_integral`] `p`.
+#[inline]
+fn integral_to(p: &[f64], v: &[f64], x: f64) -> f64 {
+    let k = (x.floor().max(0.0) as usize).min(v.len() - 2);
+    let f = x - k as f64;
+    p[k] + f * (v[k] + 0.5 * f * (v[k + 1] - v[k]))
 }
 
 fn encode(n: [f64; 3]) -> [u8; 3] {
@@ -86,6 +148,7 @@ fn filter_box(centre: f64, footprint: f64, n: usize) -> (f64, f64) {
 
 /// A grid line at a fractional column (varying row) or fractional row (varying column).
 #[derive(Clone, Copy)]
+#[cfg_attr(not(test), allow(dead_code))]
 enum Line {
     Col(f64),
     Row(f64),
@@ -158,15 +221,43 @@ mod tests {
         let data = dem.extent();
         // coarse (texel 4 x 4 samples), fine (texel 1/4 sample), and extending past the DEM
         let cases = [
-            (WorldRect { min_x: data.min_x, max_x: data.min_x + 192.0, min_y: data.max_y - 128.0, max_y: data.max_y }, 16),
-            (WorldRect { min_x: data.min_x + 30.0, max_x: data.min_x + 54.0, min_y: data.min_y + 20.0, max_y: data.min_y + 36.0 }, 32),
-            (WorldRect { min_x: data.min_x + 150.0, max_x: data.min_x + 406.0, min_y: data.min_y - 100.0, max_y: data.min_y + 156.0 }, 64),
+            (
+                WorldRect {
+                    min_x: data.min_x,
+                    max_x: data.min_x + 192.0,
+                    min_y: data.max_y - 128.0,
+                    max_y: data.max_y,
+                },
+                16,
+            ),
+            (
+                WorldRect {
+                    min_x: data.min_x + 30.0,
+                    max_x: data.min_x + 54.0,
+                    min_y: data.min_y + 20.0,
+                    max_y: data.min_y + 36.0,
+                },
+                32,
+            ),
+            (
+                WorldRect {
+                    min_x: data.min_x + 150.0,
+                    max_x: data.min_x + 406.0,
+                    min_y: data.min_y - 100.0,
+                    max_y: data.min_y + 156.0,
+                },
+                64,
+            ),
         ];
         for (ext, t) in cases {
             let nm = normal_map(&dem, ext, t);
             for (i, j, px) in nm.enumerate_pixels() {
                 for k in 0..3 {
-                    assert!((px.0[k] as i32 - want[k] as i32).abs() <= 1, "texel ({i},{j}): {:?} vs {want:?}", px.0);
+                    assert!(
+                        (px.0[k] as i32 - want[k] as i32).abs() <= 1,
+                        "texel ({i},{j}): {:?} vs {want:?}",
+                        px.0
+                    );
                 }
             }
         }

@@ -20,8 +20,14 @@ pub(crate) struct AxisTaps {
 impl AxisTaps {
     /// Builds taps for `footprints` (true footprint `[lo, hi]` of each texel, grid
     /// coordinates, `lo < hi`) against `n` source cells whose union is clipped to `clip`.
-    pub fn new(n: usize, footprints: impl Iterator<Item = (f64, f64)>, clip: (f64, f64), min_filter: f64) -> AxisTaps {
-        let mut t = AxisTaps { first: Vec::new(), offs: vec![0], cov: Vec::new(), filt: Vec::new(), len: Vec::new() };
+    pub fn new(
+        n: usize,
+        footprints: impl Iterator<Item = (f64, f64)>,
+        clip: (f64, f64),
+        min_filter: f64,
+    ) -> AxisTaps {
+        let mut t =
+            AxisTaps { first: Vec::new(), offs: vec![0], cov: Vec::new(), filt: Vec::new(), len: Vec::new() };
         for (lo, hi) in footprints {
             let c = 0.5 * (lo + hi);
             let half = (0.5 * (hi - lo)).max(0.5 * min_filter);
@@ -73,7 +79,12 @@ impl AxisTaps {
 /// The true footprints of `texels` equal texels splitting `[a, b]` (texel `k` covers
 /// `[a + k (b - a) / T, a + (k + 1) (b - a) / T]`), mapped through the increasing affine
 /// map `g`.
-pub(crate) fn footprints(a: f64, b: f64, texels: u32, g: impl Fn(f64) -> f64) -> impl Iterator<Item = (f64, f64)> {
+pub(crate) fn footprints(
+    a: f64,
+    b: f64,
+    texels: u32,
+    g: impl Fn(f64) -> f64,
+) -> impl Iterator<Item = (f64, f64)> {
     let t = texels as f64;
     (0..texels).map(move |k| {
         let lo = a + (b - a) * (k as f64 / t);

@@ -41,7 +41,10 @@ use crate::ortho::Ortho;
 pub fn ortho_texture(ortho: &Ortho, dem: &Dem, extent: WorldRect, texels: u32) -> RgbaImage {
     let t = texels as usize;
     let mut buf = vec![0u8; t * t * 4];
-    let valid = extent.width() > 0.0 && extent.height() > 0.0 && extent.width().is_finite() && extent.height().is_finite();
+    let valid = extent.width() > 0.0
+        && extent.height() > 0.0
+        && extent.width().is_finite()
+        && extent.height().is_finite();
     let (iw, ih) = (ortho.image.width() as usize, ortho.image.height() as usize);
     if t == 0 || !valid || iw == 0 || ih == 0 {
         return RgbaImage::from_raw(texels, texels, buf).unwrap_or_default();
@@ -78,7 +81,9 @@ pub fn ortho_texture(ortho: &Ortho, dem: &Dem, extent: WorldRect, texels: u32) -
         0.0,
     );
     let any_void = match (dx.span(), dy.span()) {
-        (Some((c0, c1)), Some((r0, r1))) => (r0..=r1).any(|r| dem.void[r * dw + c0..=r * dw + c1].iter().any(|&v| v)),
+        (Some((c0, c1)), Some((r0, r1))) => {
+            (r0..=r1).any(|r| dem.void[r * dw + c0..=r * dw + c1].iter().any(|&v| v))
+        }
         _ => false,
     };
     let dx_sum: Vec<f64> = (0..t).map(|i| dx.cov_sum(i)).collect();
@@ -111,7 +116,9 @@ pub fn ortho_texture(ortho: &Ortho, dem: &Dem, extent: WorldRect, texels: u32) -
             let area = ox.len[i] * oy.len[j];
             let ortho_known = cov / (255.0 * area);
             let dem_area = dx.len[i] * dy.len[j];
-            let dem_known = if any_void { dem_known_with_voids(dem, &dx, &dy, i, j) } else { dx_sum[i] * dy_sum } / dem_area;
+            let dem_known =
+                if any_void { dem_known_with_voids(dem, &dx, &dy, i, j) } else { dx_sum[i] * dy_sum }
+                    / dem_area;
             let known = (ortho_known * dem_known).clamp(0.0, 1.0);
             let px = &mut row[i * 4..i * 4 + 4];
             if wsum > 0.0 {
@@ -194,7 +201,12 @@ mod tests {
     fn gradient_magnified_is_bilinear() {
         // 20 x 20 pixels onto 160 x 160 texels (8 texels per pixel), away from the border
         let g = GridGeoref { origin_x: 1000.0, origin_y: 2000.0, spacing_x: 2.0, spacing_y: 2.0 };
-        let ext = WorldRect { min_x: 1000.0 + 2.0 * 30.0, max_x: 1000.0 + 2.0 * 50.0, min_y: 2000.0 - 2.0 * 60.0, max_y: 2000.0 - 2.0 * 40.0 };
+        let ext = WorldRect {
+            min_x: 1000.0 + 2.0 * 30.0,
+            max_x: 1000.0 + 2.0 * 50.0,
+            min_y: 2000.0 - 2.0 * 60.0,
+            max_y: 2000.0 - 2.0 * 40.0,
+        };
         check_gradient(160, ext, g, 0.5 + 1e-9);
     }
 
@@ -213,7 +225,8 @@ mod tests {
         // DEM 0..=63; ortho covers columns 0..=31 only (pixel edges -0.5..31.5)
         let g = GridGeoref::new(0.0, 63.0, 1.0);
         let dem = flat_dem(64, 64, g);
-        let ortho = ortho_from(32, 64, g, |c, r| if r >= 40 && c < 8 { [9, 9, 9, 0] } else { [100, 100, 100, 255] });
+        let ortho =
+            ortho_from(32, 64, g, |c, r| if r >= 40 && c < 8 { [9, 9, 9, 0] } else { [100, 100, 100, 255] });
         // extent [-0.5, 63.5] split into 64 texels of one pixel each: texel i == pixel i
         let ext = WorldRect { min_x: -0.5, max_x: 63.5, min_y: -0.5, max_y: 63.5 };
         let tex = ortho_texture(&ortho, &dem, ext, 64);
@@ -287,5 +300,30 @@ mod tests {
         assert_eq!(ortho_texture(&ortho, &dem, ext, 0).dimensions(), (0, 0));
         let far = WorldRect { min_x: 1e6, max_x: 1e6 + 10.0, min_y: 0.0, max_y: 10.0 };
         assert!(ortho_texture(&ortho, &dem, far, 8).pixels().all(|p| p.0 == [0; 4]));
+    }
+
+    #[test]
+    fn output_does_not_depend_on_thread_count() {
+        let g = GridGeoref::new(0.0, 99.0, 1.0);
+        let z: Vec<f32> =
+            (0..100 * 100).map(|k| ((k % 100) as f32 * 0.37).sin() * 20.0 + (k / 100) as f32).collect();
+        let mut dem = Dem::from_heights(100, 100, z, g).unwrap();
+        dem.void[4321] = true;
+        let ortho = ortho_from(140, 140, GridGeoref::new(-10.0, 110.0, 0.8), |c, r| {
+            [
+                (c * 7 % 256) as u8,
+                (r * 13 % 256) as u8,
+                ((c + r) % 256) as u8,
+                if (c + r) % 17 == 0 { 0 } else { 255 },
+            ]
+        });
+        let ext = WorldRect { min_x: 20.0, max_x: 148.0, min_y: -20.0, max_y: 108.0 };
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        for t in [37, 256] {
+            let (a, b) = pool
+                .install(|| (ortho_texture(&ortho, &dem, ext, t), crate::cells::normal_map(&dem, ext, t)));
+            assert_eq!(a, ortho_texture(&ortho, &dem, ext, t));
+            assert_eq!(b, crate::cells::normal_map(&dem, ext, t));
+        }
     }
 }

@@ -112,7 +112,10 @@ mod tests {
         // a 45° ramp rising to the east
         let n = cross([0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]);
         assert!((slope_deg(n) - 45.0).abs() < 1e-12);
-        assert!((triangle_area_3d([0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]) - 0.5 * 2f64.sqrt()).abs() < 1e-15);
+        assert!(
+            (triangle_area_3d([0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]) - 0.5 * 2f64.sqrt()).abs()
+                < 1e-15
+        );
     }
 
     #[test]
@@ -120,7 +123,8 @@ mod tests {
         // h = 0.5 x + 0.25 y (exact in f32), spacings 2 x 3
         let g = GridGeoref { origin_x: 0.0, origin_y: 0.0, spacing_x: 2.0, spacing_y: 3.0 };
         let (w, h) = (20usize, 15usize);
-        let z: Vec<f32> = (0..w * h).map(|k| (0.5 * 2.0 * (k % w) as f64 - 0.25 * 3.0 * (k / w) as f64) as f32).collect();
+        let z: Vec<f32> =
+            (0..w * h).map(|k| (0.5 * 2.0 * (k % w) as f64 - 0.25 * 3.0 * (k / w) as f64) as f32).collect();
         let dem = Dem::from_heights(w, h, z, g).unwrap();
         let rect = SampleRect { c0: 3, r0: 2, c1: 17, r1: 11 };
         let s = dem_surface(&dem, rect);

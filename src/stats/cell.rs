@@ -2,9 +2,9 @@
 
 use crate::cells::{CellKey, Quadtree, Tin};
 use crate::dem::Dem;
+use crate::stats::CellStats;
 use crate::stats::area::{dem_surface, local_position, triangle_area_3d};
 use crate::stats::stretch::{summarize_stretch, texel_stretch};
-use crate::stats::CellStats;
 
 /// Texel-stretch statistics of cell `key` with TIN `tin` and a `texels x texels` ortho
 /// texture over its nominal square (definitions in [`crate::stats`]). For a key without area
@@ -17,17 +17,24 @@ pub fn cell_stats(dem: &Dem, tree: &Quadtree, key: CellKey, tin: &Tin, texels: u
     let (side_x, side_y) = (n as f64 * g.spacing_x, n as f64 * g.spacing_y);
     let base_area = side_x * side_y;
     let Some(rect) = tree.clipped(key) else {
-        return CellStats { base_area, stretch_histogram: summarize_stretch(&[]).histogram, ..CellStats::default() };
+        return CellStats {
+            base_area,
+            stretch_histogram: summarize_stretch(&[]).histogram,
+            ..CellStats::default()
+        };
     };
     let surface = dem_surface(dem, rect);
     let clipped_area = surface.planar_area;
 
     // cell-local frame: origin at the nominal north-west corner sample, x east, y north
-    let positions: Vec<[f64; 3]> = tin.vertices.iter().map(|v| local_position(dem, c0, r0, v[0], v[1])).collect();
+    let positions: Vec<[f64; 3]> =
+        tin.vertices.iter().map(|v| local_position(dem, c0, r0, v[0], v[1])).collect();
     let surface_area_tin: f64 = tin
         .triangles
         .iter()
-        .map(|t| triangle_area_3d(positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]))
+        .map(|t| {
+            triangle_area_3d(positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize])
+        })
         .sum();
     // orthographic parameterization: uv = planar position / nominal extent (v southwards)
     let uvs: Vec<[f64; 2]> = positions.iter().map(|p| [p[0] / side_x, -p[1] / side_y]).collect();
@@ -58,7 +65,9 @@ mod tests {
 
     /// DEM with heights `p * x + q * y` (x east, y north of the origin sample).
     fn plane_dem(w: usize, h: usize, g: GridGeoref, p: f64, q: f64) -> Dem {
-        let z = (0..w * h).map(|k| (p * (k % w) as f64 * g.spacing_x - q * (k / w) as f64 * g.spacing_y) as f32).collect();
+        let z = (0..w * h)
+            .map(|k| (p * (k % w) as f64 * g.spacing_x - q * (k / w) as f64 * g.spacing_y) as f32)
+            .collect();
         Dem::from_heights(w, h, z, g).unwrap()
     }
 
@@ -99,7 +108,10 @@ mod tests {
                 assert!((s.surface_area_dem - s.base_area / cos_a).abs() < 1e-6 * s.base_area);
                 assert!((s.surface_area_tin - s.surface_area_dem).abs() < 1e-6 * s.base_area);
                 assert!((s.max_slope_deg - slope).abs() < 1e-6 && (s.mean_slope_deg - slope).abs() < 1e-6);
-                assert!((s.texel_stretch.p50 - 1.0 / cos_a).abs() < 1e-5 && (s.texel_stretch.max - 1.0 / cos_a).abs() < 1e-5);
+                assert!(
+                    (s.texel_stretch.p50 - 1.0 / cos_a).abs() < 1e-5
+                        && (s.texel_stretch.max - 1.0 / cos_a).abs() < 1e-5
+                );
                 let steep = if slope > 60.0 { 1.0 } else { 0.0 };
                 assert_eq!(s.steep_texel_fraction, steep, "slope {slope}");
             }
@@ -125,7 +137,11 @@ mod tests {
                 clipped_seen += 1;
                 // only the texels over the clipped rectangle are covered
                 let want = want_used * 64.0 * 64.0;
-                assert!((s.covered_texels as f64 - want).abs() <= 2.0 * 64.0 + 1.0, "{key:?}: {} vs {want}", s.covered_texels);
+                assert!(
+                    (s.covered_texels as f64 - want).abs() <= 2.0 * 64.0 + 1.0,
+                    "{key:?}: {} vs {want}",
+                    s.covered_texels
+                );
             }
         }
         assert!(clipped_seen >= 3);

@@ -77,15 +77,22 @@ pub fn write_histogram_png(path: &Path, rel_texels: &[f64], threshold: f64) -> R
     let bins = rel_texel_bins(rel_texels, threshold);
     let (w, h) = SIZE;
     let mut buf = vec![255u8; (w * h * 3) as usize];
-    draw(&mut buf, &bins, rel_texels.len(), threshold).map_err(|e| fail(format!("drawing the histogram: {e}")))?;
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| fail("plot buffer has the wrong size".into()))?;
+    draw(&mut buf, &bins, rel_texels.len(), threshold)
+        .map_err(|e| fail(format!("drawing the histogram: {e}")))?;
+    let img =
+        image::RgbImage::from_raw(w, h, buf).ok_or_else(|| fail("plot buffer has the wrong size".into()))?;
     let mut png = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .map_err(|e| fail(format!("encoding PNG: {e}")))?;
     crate::fsutil::write_atomic(path, &png)
 }
 
-fn draw(buf: &mut [u8], bins: &RelTexelBins, n_cells: usize, threshold: f64) -> std::result::Result<(), Box<dyn std::error::Error>> {
+fn draw(
+    buf: &mut [u8],
+    bins: &RelTexelBins,
+    n_cells: usize,
+    threshold: f64,
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(buf, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
     let width = (bins.hi - bins.lo) / bins.counts.len() as f64;
@@ -119,7 +126,7 @@ fn draw(buf: &mut [u8], bins: &RelTexelBins, n_cells: usize, threshold: f64) -> 
         let over = RGBColor(200, 60, 60);
         chart
             .draw_series([Rectangle::new([(x0, 0), (x0 + width, bins.overflow)], over.mix(0.5).filled())])?
-            .label(format!("overflow: {} cells > {:.3} (p99.5)", bins.overflow, bins.hi))
+            .label(format!("overflow: {} cell(s) > {:.3} (p99.5)", bins.overflow, bins.hi))
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], over.mix(0.5).filled()));
     }
     if threshold.is_finite() && threshold >= bins.lo && threshold <= x_max {
@@ -164,7 +171,8 @@ mod tests {
     fn histogram_png_is_written_and_decodes() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("hist.png");
-        let v: Vec<f64> = (0..500).map(|k| 1.0 + (k as f64 * 0.37).sin().abs() * (k % 7) as f64 * 0.2).collect();
+        let v: Vec<f64> =
+            (0..500).map(|k| 1.0 + (k as f64 * 0.37).sin().abs() * (k % 7) as f64 * 0.2).collect();
         write_histogram_png(&p, &v, 1.5).unwrap();
         let img = image::open(&p).unwrap();
         assert_eq!((img.width(), img.height()), SIZE);

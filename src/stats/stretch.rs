@@ -35,7 +35,13 @@ pub fn stretch_bin_edges() -> Vec<f64> {
 /// Where UV triangles overlap (or share an edge through a texel centre) the first triangle in
 /// `triangles` wins, so the result is deterministic. Triangles of either UV orientation are
 /// accepted; triangles with zero UV area are skipped. Panics on an index out of range.
-pub fn texel_stretch(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64; 2]], texels: u32, base_area: f64) -> Vec<f32> {
+pub fn texel_stretch(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    uvs: &[[f64; 2]],
+    texels: u32,
+    base_area: f64,
+) -> Vec<f32> {
     let t = texels as usize;
     let tf = texels as f64;
     let mut out = vec![f32::NAN; t * t];
@@ -77,7 +83,8 @@ pub fn texel_stretch(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64
             let y = j as f64 + 0.5;
             for i in i0 as usize..=i1 as usize {
                 let x = i as f64 + 0.5;
-                let inside = edges.iter().all(|(s, d, tol)| sign * (d[0] * (y - s[1]) - d[1] * (x - s[0])) >= -tol);
+                let inside =
+                    edges.iter().all(|(s, d, tol)| sign * (d[0] * (y - s[1]) - d[1] * (x - s[0])) >= -tol);
                 let cell = &mut out[j * t + i];
                 if inside && cell.is_nan() {
                     *cell = stretch;

@@ -142,7 +142,11 @@ pub fn summarize(entries: &[CellStatsEntry], threshold: f64) -> StatsSummary {
         cells: entries.len(),
         threshold,
         cells_above,
-        percent_above: if entries.is_empty() { 0.0 } else { 100.0 * cells_above as f64 / entries.len() as f64 },
+        percent_above: if entries.is_empty() {
+            0.0
+        } else {
+            100.0 * cells_above as f64 / entries.len() as f64
+        },
         rel_texel: rel(&all),
         levels,
         covered_texels: covered,
@@ -159,4 +163,94 @@ pub fn stats_json(entries: &[CellStatsEntry], threshold: f64) -> serde_json::Val
         "summary": serde_json::to_value(&summary).unwrap_or(serde_json::Value::Null),
         "cells": serde_json::to_value(entries).unwrap_or(serde_json::Value::Null),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::stretch::stretch_bin_edges;
+
+    fn entry(level: u8, x: u32, rel: f64, hist_bin: usize) -> CellStatsEntry {
+        let mut h = vec![0u64; stretch_bin_edges().len()];
+        h[hist_bin] = 10;
+        let stats = CellStats {
+            rel_texel: rel,
+            max_slope_deg: 10.0 * rel,
+            covered_texels: 10,
+            stretch_histogram: h,
+            ..CellStats::default()
+        };
+        let tin = Tin { triangles: vec![[0, 1, 2]; 3], max_error: 0.25, ..Tin::default() };
+        CellStatsEntry::new(CellKey { level, x, y: 0 }, &tin, stats)
+    }
+
+    #[test]
+    fn summary_counts_and_levels() {
+        let es = vec![entry(0, 0, 1.1, 2), entry(1, 0, 1.0, 2), entry(1, 1, 2.5, 8), entry(1, 2, 1.3, 4)];
+        let s = summarize(&es, 1.2);
+        assert_eq!((s.cells, s.cells_above), (4, 2));
+        assert_eq!(s.percent_above, 50.0);
+        assert_eq!(s.rel_texel.max, 2.5);
+        assert!((s.rel_texel.p50 - 1.2).abs() < 1e-12); // between 1.1 and 1.3
+        assert_eq!(s.levels.len(), 2);
+        assert_eq!((s.levels[0].level, s.levels[0].cells, s.levels[0].cells_above), (0, 1, 0));
+        assert_eq!((s.levels[1].level, s.levels[1].cells, s.levels[1].cells_above), (1, 3, 2));
+        assert!((s.levels[1].fraction_above - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(s.covered_texels, 40);
+        assert_eq!(s.texel_stretch_histogram[2].texels, 20);
+        assert_eq!(s.texel_stretch_histogram[2].fraction, 0.5);
+        assert_eq!(s.texel_stretch_histogram.last().unwrap().hi, None);
+        let empty = summarize(&[], 1.2);
+        assert_eq!((empty.cells, empty.percent_above, empty.rel_texel.max), (0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn stats_json_shape_and_round_trip() {
+        let es = vec![entry(0, 0, 1.1, 2), entry(2, 3, 1.7, 6)];
+        let v = stats_json(&es, 1.5);
+        let obj = v.as_object().unwrap();
+        assert_eq!(obj.len(), 2);
+        let summary = &v["summary"];
+        for k in [
+            "cells",
+            "threshold",
+            "cells_above",
+            "percent_above",
+            "rel_texel",
+            "levels",
+            "texel_stretch_histogram",
+        ] {
+            assert!(summary.get(k).is_some(), "summary lacks {k}");
+        }
+        assert_eq!(summary["cells_above"], 1);
+        for k in ["p50", "p90", "p99", "max"] {
+            assert!(summary["rel_texel"][k].is_number(), "{k}");
+        }
+        let cells = v["cells"].as_array().unwrap();
+        assert_eq!(cells.len(), 2);
+        let c = cells[1].as_object().unwrap();
+        assert_eq!(c["id"], "2-3-0");
+        assert_eq!((c["level"].as_u64(), c["x"].as_u64(), c["y"].as_u64()), (Some(2), Some(3), Some(0)));
+        assert_eq!(c["triangles"], 3);
+        assert_eq!(c["max_error"], 0.25);
+        assert_eq!(c["rel_texel"], 1.7);
+        assert_eq!(c["max_slope_deg"], 17.0);
+        for k in [
+            "surface_area_tin",
+            "surface_area_dem",
+            "base_area",
+            "used_fraction",
+            "mean_slope_deg",
+            "steep_texel_fraction",
+        ] {
+            assert!(c[k].is_number(), "cell lacks {k}");
+        }
+        assert!(c["texel_stretch"]["p99"].is_number());
+        // flat: no nested "stats" object, and it reads back
+        assert!(c.get("stats").is_none());
+        let back: Vec<CellStatsEntry> = serde_json::from_value(v["cells"].clone()).unwrap();
+        assert_eq!(back, es);
+        let s: StatsSummary = serde_json::from_value(v["summary"].clone()).unwrap();
+        assert_eq!(s, summarize(&es, 1.5));
+    }
 }
