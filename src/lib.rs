@@ -14,6 +14,8 @@
 //! - [`stats`]: texel-stretch statistics ([`cell_stats`], [`stats::stats_json`]).
 //! - [`store`]: the on-disk cell store (manifest, meshes, textures).
 //! - [`pipeline`]: the stages composed into the commands' jobs ([`pipeline::build_store`]).
+//! - [`resample`]: resampling a colour source into a new chart with area-weighted
+//!   subtexel filtering ([`resample::resample`]).
 //! - [`scene`]: the embedded procedural demo scene.
 
 #![forbid(unsafe_code)]
@@ -27,6 +29,7 @@ pub mod georef;
 pub mod geotiff;
 pub mod ortho;
 pub mod pipeline;
+pub mod resample;
 pub mod scene;
 pub mod stats;
 pub mod store;

@@ -182,6 +182,8 @@ mod tests {
         assert!(dark > 1000, "{dark} dark pixels");
         // empty input still plots
         write_histogram_png(&p, &[], 1.5).unwrap();
-        assert!(write_histogram_png(&dir.path().join("missing/h.png"), &v, 1.5).is_err());
+        // a parent that is a file cannot hold the PNG: an error, not a panic
+        std::fs::write(dir.path().join("afile"), b"x").unwrap();
+        assert!(write_histogram_png(&dir.path().join("afile/h.png"), &v, 1.5).is_err());
     }
 }
