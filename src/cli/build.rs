@@ -24,13 +24,13 @@ pub struct Args {
     #[arg(long)]
     height: Option<usize>,
     /// Height = stored value * z-scale + z-offset.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     z_scale: Option<f64>,
     /// Height offset added after scaling.
     #[arg(long, allow_hyphen_values = true)]
     z_offset: Option<f64>,
     /// Sample spacing in world units (overrides the file's georeference).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     spacing: Option<f64>,
     /// World X,Y of the centre of the north-west sample (overrides the file's georeference).
     #[arg(long, value_parser = super::parse_pair, allow_hyphen_values = true)]
@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     nodata: Option<f64>,
     /// Finest level's max vertical error in world units; doubles per coarser level.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     max_error: f64,
     /// Texture side in texels per cell (power of two).
     #[arg(long, default_value_t = 256)]
