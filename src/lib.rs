@@ -10,6 +10,7 @@
 //! - [`dem`], [`ortho`]: inputs ([`Dem`], [`Ortho`]), georeferenced in f64.
 //! - [`cells`]: quadtree addressing and TIN simplification ([`Quadtree`], [`Tin`]).
 //! - [`stats`]: texel-stretch statistics.
+//! - [`param`]: per-cell area/angle-preserving reparameterization ([`ParamMesh`] -> [`Chart`]).
 //! - [`store`]: the on-disk cell store (manifest, meshes, textures).
 //! - [`scene`]: the embedded procedural demo scene.
 
@@ -21,9 +22,11 @@ pub mod dem;
 pub mod error;
 pub mod georef;
 pub mod ortho;
+pub mod param;
 
 pub use cells::{CellKey, Quadtree, SampleRect, Tin};
 pub use dem::{Dem, DemFormat, DemLoadOptions, load_dem};
 pub use error::{Error, Result};
 pub use georef::{GridGeoref, WorldRect};
 pub use ortho::{Ortho, OrthoPlacement, load_ortho};
+pub use param::{Chart, ChartMetrics, ParamMesh, ParamOptions, chart_metrics, parameterize};
