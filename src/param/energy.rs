@@ -79,6 +79,22 @@ pub(crate) fn singular_values(j: &[[f64; 2]; 2]) -> (f64, f64) {
     (q + r, (q - r).abs())
 }
 
+/// p^θ, with a fast path for small integer θ (the common settings).
+#[inline]
+fn pow_theta(p: f64, theta: f64) -> f64 {
+    if theta == 0.0 {
+        1.0
+    } else if theta == 1.0 {
+        p
+    } else if theta == 2.0 {
+        p * p
+    } else if theta == 3.0 {
+        p * p * p
+    } else {
+        p.powf(theta)
+    }
+}
+
 /// The Degener energy of one Jacobian for area/angle weight `theta`; +∞ if det <= 0.
 pub(crate) fn energy(j: &[[f64; 2]; 2], theta: f64) -> f64 {
     let d = det2(j);
@@ -87,7 +103,7 @@ pub(crate) fn energy(j: &[[f64; 2]; 2], theta: f64) -> f64 {
     }
     let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
     let p = d + 1.0 / d;
-    (fro / d) * p.powf(theta)
+    (fro / d) * pow_theta(p, theta)
 }
 
 /// The energy and its derivative with respect to J (dE/dJ[r][c]); `None` if det <= 0.
@@ -98,7 +114,7 @@ pub(crate) fn energy_grad(j: &[[f64; 2]; 2], theta: f64) -> Option<(f64, [[f64; 
     }
     let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
     let p = d + 1.0 / d;
-    let pt = p.powf(theta);
+    let pt = pow_theta(p, theta);
     let e = (fro / d) * pt;
     // d det / dJ (cofactor matrix).
     let cof = [[j[1][1], -j[1][0]], [-j[0][1], j[0][0]]];

@@ -119,6 +119,24 @@ pub fn chart_metrics(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64
     Ok(m)
 }
 
+/// The Degener energy Σ A·E / Σ A of the chart (UVs normalised to the 3D area), with
+/// area/angle weight `theta`: 2·2^θ for an isometry, +∞ if any triangle is flipped or
+/// degenerate. Errors if lengths or indices disagree.
+pub fn degener_energy(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64; 2]], theta: f64) -> Result<f64> {
+    let m = chart_metrics(positions, triangles, uvs, None)?;
+    let k = (m.surface_area / m.used_fraction).sqrt();
+    let mut e = 0.0;
+    for t in triangles {
+        let g = FaceGeom::new(positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]);
+        if !(g.area > 0.0) {
+            continue;
+        }
+        let uv = [uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]].map(|p| [p[0] * k, p[1] * k]);
+        e += g.area * super::energy::energy(&g.jacobian(uv), theta);
+    }
+    Ok(e / m.surface_area)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -26,7 +26,7 @@ mod pack;
 mod relax;
 mod split;
 
-pub use metrics::{ChartMetrics, chart_metrics};
+pub use metrics::{ChartMetrics, chart_metrics, degener_energy};
 
 use crate::error::{Error, Result};
 use mesh::{Topo, VertId};

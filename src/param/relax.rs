@@ -83,10 +83,16 @@ impl Relaxer {
         e
     }
 
-    /// Moves `v` to lower its local energy; returns the energy decrease (>= 0).
-    pub fn optimize_vertex(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId) -> f64 {
+    /// Moves `v` to lower its local energy; returns the energy decrease (>= 0) and the
+    /// local energy before the move.
+    pub fn optimize_vertex(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId) -> (f64, f64) {
         let x0 = uvs[v.ix()];
-        let Some((e0, g0)) = self.local_grad(topo, uvs, v, x0) else { return 0.0 };
+        let Some((e0, g0)) = self.local_grad(topo, uvs, v, x0) else { return (0.0, f64::INFINITY) };
+        (self.optimize_from(topo, uvs, v, e0, g0), e0)
+    }
+
+    fn optimize_from(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId, e0: f64, g0: [f64; 2]) -> f64 {
+        let x0 = uvs[v.ix()];
         let gn = (g0[0] * g0[0] + g0[1] * g0[1]).sqrt();
         if !(gn > 0.0) || !gn.is_finite() {
             return 0.0;
@@ -104,6 +110,11 @@ impl Relaxer {
             return 0.0;
         }
         scale /= n as f64;
+        // Already (numerically) at the local minimum: the first-order decrease over a
+        // ring-sized move would be negligible.
+        if gn * scale < 1e-9 * e0 {
+            return 0.0;
+        }
         let h = 1e-6 * scale;
         let gx = self.local_grad(topo, uvs, v, [x0[0] + h, x0[1]]);
         let gy = self.local_grad(topo, uvs, v, [x0[0], x0[1] + h]);
@@ -166,10 +177,11 @@ impl Relaxer {
             let mut dec = 0.0;
             let mut next = Vec::new();
             for &v in &queue {
-                let d = self.optimize_vertex(topo, uvs, v);
+                let (d, e0) = self.optimize_vertex(topo, uvs, v);
                 st.moves += 1;
                 dec += d;
-                if d > 0.0 {
+                // Only a significant local change can make the neighbours worth revisiting.
+                if d > tol * e0 {
                     for &f in &topo.vert_faces[v.ix()] {
                         for &w in &topo.faces[f.ix()] {
                             if mark[w as usize] != st.sweeps {
