@@ -37,7 +37,7 @@ fn near_vertical_walls_unfold() {
         let (max_angle, max_area) = if deg < 89.5 { (1.25, 0.15) } else { (8.0, 0.4) };
         assert!(ch.metrics.angle_distortion_mean < max_angle, "wall {deg}: {:?}", ch.metrics);
         assert!(ch.metrics.area_distortion_mean < max_area, "wall {deg}: {:?}", ch.metrics);
-        assert!(ortho.angle_distortion_mean > 5.0 * ch.metrics.angle_distortion_mean, "wall {deg}: ortho {:?}", ortho);
+        assert!(ortho.angle_distortion_mean > 2.5 * ch.metrics.angle_distortion_mean, "wall {deg}: ortho {:?}", ortho);
         // With a tighter relaxation budget the 89.9° wall unfolds much better.
         if deg > 89.5 {
             let tight = ParamOptions { relax_tolerance: 1e-4, max_sweeps: 32, ..ParamOptions::default() };
