@@ -181,8 +181,48 @@ fn median(mut v: Vec<f64>) -> f64 {
     if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
+/// Reads an OBJ's `v` and `f` lines (1-based, `i/j` accepted) into a mesh.
+fn read_obj(path: &Path) -> anyhow::Result<ParamMesh> {
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let mut m = ParamMesh::default();
+    for (ln, line) in text.lines().enumerate() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let v: Vec<f64> = it.take(3).map(|x| x.parse::<f64>()).collect::<Result<_, _>>()?;
+                anyhow::ensure!(v.len() == 3, "{}:{}: bad vertex", path.display(), ln + 1);
+                m.positions.push([v[0], v[1], v[2]]);
+            }
+            Some("f") => {
+                let f: Vec<u32> = it.take(3).map(|x| x.split('/').next().unwrap_or("").parse::<u32>()).collect::<Result<_, _>>()?;
+                anyhow::ensure!(f.len() == 3 && f.iter().all(|&i| i >= 1), "{}:{}: bad face", path.display(), ln + 1);
+                m.triangles.push([f[0] - 1, f[1] - 1, f[2] - 1]);
+            }
+            _ => {}
+        }
+    }
+    Ok(m)
+}
+
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    // `--time-obj FILE REPS`: time the default options on one OBJ and print JSON (used by
+    // the peer script so that ours and the peers are timed in the same run, same load).
+    if let Some(i) = args.iter().position(|a| a == "--time-obj") {
+        let path = PathBuf::from(args.get(i + 1).ok_or_else(|| anyhow::anyhow!("--time-obj needs a file"))?);
+        let reps: usize = args.get(i + 2).map(|s| s.parse()).transpose()?.unwrap_or(3).max(1);
+        let m = read_obj(&path)?;
+        let mut times = Vec::new();
+        let mut chart = None;
+        for _ in 0..reps {
+            let t = Instant::now();
+            chart = Some(parameterize(&m, &ParamOptions::default())?);
+            times.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let ch = chart.ok_or_else(|| anyhow::anyhow!("no run"))?;
+        println!("{}", serde_json::json!({"ms_median": median(times), "metrics": ch.metrics}));
+        return Ok(());
+    }
     let quick = args.iter().any(|a| a == "--quick");
     let out = args.iter().find(|a| !a.starts_with("--")).map(PathBuf::from).unwrap_or_else(|| std::env::temp_dir().join("cliffmap_param_bench"));
     std::fs::create_dir_all(out.join("cells"))?;

@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
 """Peer benchmark for cliffmap's parameterization: libigl SLIM, ARAP and LSCM.
 
-Usage: python3 benches/peers/param_libigl.py OUT_DIR [--plot docs/param_distortion_time.png]
+Usage: python3 benches/peers/param_libigl.py OUT_DIR [--plot PNG] [--bench PATH_TO_param_bench]
+
+With --bench, our default configuration is also timed per cell inside this run
+(param_bench --time-obj), interleaved with the peers, so machine load affects both alike.
 
 OUT_DIR is the directory written by `cargo run --release --example param_bench -- OUT_DIR`:
 it holds cells/*.obj (v, vt = our chart, f) and ours.json (our timings and metrics).
@@ -17,6 +20,8 @@ import time
 
 import numpy as np
 import igl
+
+BENCH = None
 
 
 def read_obj(path):
@@ -122,6 +127,10 @@ def main():
         print(__doc__)
         sys.exit(2)
     out = sys.argv[1]
+    global BENCH
+    BENCH = None
+    if "--bench" in sys.argv:
+        BENCH = sys.argv[sys.argv.index("--bench") + 1]
     plot = None
     if "--plot" in sys.argv:
         plot = sys.argv[sys.argv.index("--plot") + 1]
@@ -142,6 +151,13 @@ def main():
                 res.append((f"ours {cfg}", r["ms_median"], {"flipped": m["flipped"], "area": m["area_distortion_mean"],
                                                            "angle": m["angle_distortion_mean"], "symd": m["symmetric_dirichlet_mean"]}))
         res.append(("ours default (numpy)", by[(cell, "default")]["ms_median"], metrics(V, F, TC)))
+        if BENCH:
+            # Our default options timed again here, interleaved with the peers (same load).
+            import subprocess
+            o = json.loads(subprocess.run([BENCH, "--time-obj", path, "3"], check=True, capture_output=True, text=True).stdout)
+            m = o["metrics"]
+            res.append(("ours default, same run", o["ms_median"], {"flipped": m["flipped"], "area": m["area_distortion_mean"],
+                                                                  "angle": m["angle_distortion_mean"], "symd": m["symmetric_dirichlet_mean"]}))
         for it in (5, 20, 50):
             ms, uv = timed(lambda: run_slim(V, F, it))
             res.append((f"SLIM {it} it", ms, metrics(V, F, uv)))

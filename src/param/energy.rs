@@ -107,6 +107,8 @@ pub(crate) fn energy(j: &[[f64; 2]; 2], theta: f64) -> f64 {
 }
 
 /// The energy and its derivative with respect to J (dE/dJ[r][c]); `None` if det <= 0.
+/// (Reference for the tests of [`vertex_grad_hess`].)
+#[cfg(test)]
 pub(crate) fn energy_grad(j: &[[f64; 2]; 2], theta: f64) -> Option<(f64, [[f64; 2]; 2])> {
     let d = det2(j);
     if !(d > 0.0) {
@@ -129,10 +131,37 @@ pub(crate) fn energy_grad(j: &[[f64; 2]; 2], theta: f64) -> Option<(f64, [[f64; 
     Some((e, g))
 }
 
-/// Gradient of the energy with respect to the UV of corner `k`, given dE/dJ.
-pub(crate) fn corner_grad(geom: &FaceGeom, de_dj: &[[f64; 2]; 2], k: usize) -> [f64; 2] {
+/// Energy, gradient and Hessian with respect to the UV of corner `k` alone (the other
+/// corners fixed); `None` if det <= 0. J is affine in that UV and det J is linear in it.
+pub(crate) fn vertex_grad_hess(geom: &FaceGeom, j: &[[f64; 2]; 2], k: usize, theta: f64) -> Option<(f64, [f64; 2], [[f64; 2]; 2])> {
+    let d = det2(j);
+    if !(d > 0.0) {
+        return None;
+    }
     let g = geom.grad[k];
-    [de_dj[0][0] * g[0] + de_dj[0][1] * g[1], de_dj[1][0] * g[0] + de_dj[1][1] * g[1]]
+    let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
+    let p = d + 1.0 / d;
+    let q = 1.0 - 1.0 / (d * d);
+    let b = pow_theta(p, theta);
+    let a = fro / d;
+    let jg = [j[0][0] * g[0] + j[0][1] * g[1], j[1][0] * g[0] + j[1][1] * g[1]];
+    let cg = [j[1][1] * g[0] - j[1][0] * g[1], -j[0][1] * g[0] + j[0][0] * g[1]];
+    let gg = g[0] * g[0] + g[1] * g[1];
+    // dA·g, dB·g (A = |J|²/det, B = P^θ).
+    let da = [2.0 * jg[0] / d - fro / (d * d) * cg[0], 2.0 * jg[1] / d - fro / (d * d) * cg[1]];
+    let beta = if theta == 0.0 { 0.0 } else { theta * b / p * q };
+    let db = [beta * cg[0], beta * cg[1]];
+    let gamma = if theta == 0.0 { 0.0 } else { theta * ((theta - 1.0) * b / (p * p) * q * q + 2.0 * b / p / (d * d * d)) };
+    let mut h = [[0.0; 2]; 2];
+    for r in 0..2 {
+        for s in 0..2 {
+            let id = if r == s { 1.0 } else { 0.0 };
+            let d2a = 2.0 * gg / d * id - 2.0 / (d * d) * (jg[r] * cg[s] + cg[r] * jg[s]) + 2.0 * fro / (d * d * d) * cg[r] * cg[s];
+            h[r][s] = b * d2a + da[r] * db[s] + db[r] * da[s] + a * gamma * cg[r] * cg[s];
+        }
+    }
+    let grad = [b * da[0] + a * db[0], b * da[1] + a * db[1]];
+    Some((a * b, grad, h))
 }
 
 /// Derivative of det J with respect to the UV of corner `k` (det J is linear in it).
@@ -177,6 +206,38 @@ mod tests {
                     jm[r][c] -= h;
                     let fd = (energy(&jp, theta) - energy(&jm, theta)) / (2.0 * h);
                     assert!((fd - g[r][c]).abs() < 1e-5 * (1.0 + fd.abs()), "theta {theta} [{r}][{c}]: {fd} vs {}", g[r][c]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn vertex_hessian_matches_finite_differences() {
+        let geom = FaceGeom::new([0.0, 0.0, 0.0], [2.0, 0.1, 0.5], [0.3, 1.5, 2.0]);
+        let uv = [[0.1, 0.2], [1.9, 0.4], [0.5, 2.2]];
+        for theta in [0.0, 0.5, 1.0, 3.0] {
+            for k in 0..3 {
+                let at = |x: [f64; 2]| {
+                    let mut u = uv;
+                    u[k] = x;
+                    vertex_grad_hess(&geom, &geom.jacobian(u), k, theta).unwrap()
+                };
+                let (e, g, h) = at(uv[k]);
+                assert!((e - energy(&geom.jacobian(uv), theta)).abs() < 1e-12 * e);
+                let eps = 1e-6;
+                for s in 0..2 {
+                    let mut xp = uv[k];
+                    xp[s] += eps;
+                    let mut xm = uv[k];
+                    xm[s] -= eps;
+                    let (ep, gp, _) = at(xp);
+                    let (em, gm, _) = at(xm);
+                    let fd = (ep - em) / (2.0 * eps);
+                    assert!((fd - g[s]).abs() < 1e-5 * (1.0 + fd.abs()), "theta {theta} k {k} grad {s}: {fd} vs {}", g[s]);
+                    for r in 0..2 {
+                        let fdh = (gp[r] - gm[r]) / (2.0 * eps);
+                        assert!((fdh - h[r][s]).abs() < 1e-4 * (1.0 + fdh.abs()), "theta {theta} k {k} H[{r}][{s}]: {fdh} vs {}", h[r][s]);
+                    }
                 }
             }
         }

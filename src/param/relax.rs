@@ -1,12 +1,12 @@
 //! Local relaxation: moves one vertex at a time to lower the energy of its 1-ring.
 //!
-//! Each move is a damped Newton step (finite-difference Hessian of the analytic gradient,
-//! gradient direction when that Hessian is not positive definite) with an Armijo
+//! Each move is a Newton step (analytic 2x2 Hessian of the 1-ring energy, gradient
+//! direction when that Hessian is not positive definite) with an Armijo
 //! backtracking line search. The step is first capped where the first incident triangle
 //! would reach det = 0 (det J is linear in one vertex's UV), and every trial point has
 //! finite energy, so a move can never flip a triangle.
 
-use super::energy::{FaceGeom, corner_grad, det2, det_slope, energy, energy_grad};
+use super::energy::{FaceGeom, det2, det_slope, energy, vertex_grad_hess};
 use super::mesh::{Topo, VertId};
 
 /// Relaxation state: per-face 3D geometry (valid for alive faces) and the weight θ.
@@ -56,19 +56,23 @@ impl Relaxer {
         e
     }
 
-    fn local_grad(&self, topo: &Topo, uvs: &[[f64; 2]], v: VertId, x: [f64; 2]) -> Option<(f64, [f64; 2])> {
+    fn local_grad_hess(&self, topo: &Topo, uvs: &[[f64; 2]], v: VertId, x: [f64; 2]) -> Option<(f64, [f64; 2], [[f64; 2]; 2])> {
         let mut e = 0.0;
         let mut gr = [0.0, 0.0];
+        let mut hs = [[0.0; 2]; 2];
         for &f in &topo.vert_faces[v.ix()] {
             let (uv, k) = Self::corners(topo, uvs, f.ix(), v, x);
             let g = &self.geom[f.ix()];
-            let (ef, de) = energy_grad(&g.jacobian(uv), self.theta)?;
-            let cg = corner_grad(g, &de, k);
+            let (ef, gf, hf) = vertex_grad_hess(g, &g.jacobian(uv), k, self.theta)?;
             e += g.area * ef;
-            gr[0] += g.area * cg[0];
-            gr[1] += g.area * cg[1];
+            for r in 0..2 {
+                gr[r] += g.area * gf[r];
+                for c in 0..2 {
+                    hs[r][c] += g.area * hf[r][c];
+                }
+            }
         }
-        Some((e, gr))
+        Some((e, gr, hs))
     }
 
     /// Total area-weighted energy of the alive faces.
@@ -87,11 +91,11 @@ impl Relaxer {
     /// local energy before the move.
     pub fn optimize_vertex(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId) -> (f64, f64) {
         let x0 = uvs[v.ix()];
-        let Some((e0, g0)) = self.local_grad(topo, uvs, v, x0) else { return (0.0, f64::INFINITY) };
-        (self.optimize_from(topo, uvs, v, e0, g0), e0)
+        let Some((e0, g0, h0)) = self.local_grad_hess(topo, uvs, v, x0) else { return (0.0, f64::INFINITY) };
+        (self.optimize_from(topo, uvs, v, e0, g0, h0), e0)
     }
 
-    fn optimize_from(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId, e0: f64, g0: [f64; 2]) -> f64 {
+    fn optimize_from(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId, e0: f64, g0: [f64; 2], h0: [[f64; 2]; 2]) -> f64 {
         let x0 = uvs[v.ix()];
         let gn = (g0[0] * g0[0] + g0[1] * g0[1]).sqrt();
         if !(gn > 0.0) || !gn.is_finite() {
@@ -115,14 +119,11 @@ impl Relaxer {
         if gn * scale < 1e-9 * e0 {
             return 0.0;
         }
-        let h = 1e-6 * scale;
-        let gx = self.local_grad(topo, uvs, v, [x0[0] + h, x0[1]]);
-        let gy = self.local_grad(topo, uvs, v, [x0[0], x0[1] + h]);
         let mut dir = [-g0[0] / gn * 0.25 * scale, -g0[1] / gn * 0.25 * scale];
-        if let (Some((_, gx)), Some((_, gy))) = (gx, gy) {
-            let a = (gx[0] - g0[0]) / h;
-            let d = (gy[1] - g0[1]) / h;
-            let b = 0.5 * ((gx[1] - g0[1]) / h + (gy[0] - g0[0]) / h);
+        {
+            let a = h0[0][0];
+            let d = h0[1][1];
+            let b = 0.5 * (h0[0][1] + h0[1][0]);
             let det = a * d - b * b;
             if a > 0.0 && det > 0.0 {
                 let nd = [-(d * g0[0] - b * g0[1]) / det, -(-b * g0[0] + a * g0[1]) / det];
