@@ -238,7 +238,7 @@ fn main() -> anyhow::Result<()> {
         for theta in [0.0, 0.5, 2.0, 3.0] {
             configs.push((format!("theta={theta}"), ParamOptions { theta, ..def }));
         }
-        for (tol, sweeps) in [(1e-2, 2), (1e-2, 4), (1e-4, 32), (1e-5, 64)] {
+        for (tol, sweeps) in [(1e-2, 2), (1e-2, 4), (1e-3, 8), (1e-5, 64)] {
             configs.push((format!("tol={tol:e},sweeps={sweeps}"), ParamOptions { relax_tolerance: tol, max_sweeps: sweeps, ..def }));
         }
     }

@@ -33,18 +33,18 @@ fn near_vertical_walls_unfold() {
         // A straight wall is developable: the chart should be nearly isometric, while the
         // orthographic map squeezes the wall by cos(deg).
         // At 89.9° the wall triangles are 1 x 573 m and the local relaxation converges
-        // slowly (see docs/parameterization.md): with the default budget only require a
-        // large gain over ortho (whose mean angle distortion there is ~290).
-        let (max_angle, max_area) = if deg < 89.5 { (1.25, 0.15) } else { (30.0, 0.6) };
+        // slowly (see docs/parameterization.md); the ortho map's mean angle distortion
+        // there is ~290.
+        let (max_angle, max_area) = if deg < 89.5 { (1.1, 0.05) } else { (3.0, 0.15) };
         assert!(ch.metrics.angle_distortion_mean < max_angle, "wall {deg}: {:?}", ch.metrics);
         assert!(ch.metrics.area_distortion_mean < max_area, "wall {deg}: {:?}", ch.metrics);
         assert!(ortho.angle_distortion_mean > 2.5 * ch.metrics.angle_distortion_mean, "wall {deg}: ortho {:?}", ortho);
-        // With a tighter relaxation budget the 89.9° wall unfolds much better.
+        // A looser relaxation budget (the pre-1e-4 default) is much worse at 89.9°.
         if deg > 89.5 {
-            let tight = ParamOptions { relax_tolerance: 1e-4, max_sweeps: 32, ..ParamOptions::default() };
-            let ch2 = parameterize(&m, &tight).unwrap();
+            let loose = ParamOptions { relax_tolerance: 1e-3, max_sweeps: 8, ..ParamOptions::default() };
+            let ch2 = parameterize(&m, &loose).unwrap();
             assert_eq!(ch2.metrics.flipped, 0);
-            assert!(ch2.metrics.angle_distortion_mean < 3.0, "{:?}", ch2.metrics);
+            assert!(ch2.metrics.angle_distortion_mean > ch.metrics.angle_distortion_mean, "{:?}", ch2.metrics);
         }
         assert!(ch.metrics.rel_texel.is_finite() && ch.metrics.rel_texel > 1.0);
     }

@@ -47,14 +47,15 @@ pub struct ParamMesh {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParamOptions {
     /// Area/angle balance θ >= 0 of the energy: 0 is purely conformal, larger values
-    /// penalise area distortion more. Default 1: on steep terrain cells it gives the lowest
-    /// symmetric Dirichlet energy of the values measured (0, 0.5, 1, 2, 3; see
-    /// docs/parameterization.md); VCGLib's default 3 trades more angle distortion for area.
+    /// penalise area distortion more. Default 1, where the energy equals the symmetric
+    /// Dirichlet energy; on steep terrain cells it gives the lowest symmetric Dirichlet
+    /// energy of the values measured (0, 0.5, 1, 2, 3; see docs/parameterization.md);
+    /// VCGLib's default 3 trades more angle distortion for less area distortion.
     pub theta: f64,
     /// Relaxation after each refinement round stops when one sweep lowers the total
-    /// energy by less than this fraction (>= 0). Default 1e-3.
+    /// energy by less than this fraction (>= 0). Default 1e-4.
     pub relax_tolerance: f64,
-    /// At most this many relaxation sweeps per refinement round. Default 8.
+    /// At most this many relaxation sweeps per refinement round. Default 32.
     pub max_sweeps: u32,
     /// Empty border, in texels of `texture_size`, kept on every side of the chart
     /// (>= 0, less than half the texture). Default 2.
@@ -65,7 +66,7 @@ pub struct ParamOptions {
 
 impl Default for ParamOptions {
     fn default() -> Self {
-        ParamOptions { theta: 1.0, relax_tolerance: 1e-3, max_sweeps: 8, gutter_texels: 2.0, texture_size: 256 }
+        ParamOptions { theta: 1.0, relax_tolerance: 1e-4, max_sweeps: 32, gutter_texels: 2.0, texture_size: 256 }
     }
 }
 
