@@ -17,6 +17,10 @@
 //! after every round. Finally the chart is rotated to its minimum-area bounding rectangle
 //! and scaled uniformly into the texture square. See docs/parameterization.md.
 
+// `!(x > 0.0)` is deliberate throughout: it also rejects NaN. Small fixed-size
+// matrix loops read better with indices.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
 mod base;
 mod collapse;
 mod energy;
