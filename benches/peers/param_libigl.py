@@ -2,6 +2,7 @@
 """Peer benchmark for cliffmap's parameterization: libigl SLIM, ARAP and LSCM.
 
 Usage: python3 benches/peers/param_libigl.py OUT_DIR [--plot PNG] [--bench PATH_TO_param_bench]
+       python3 benches/peers/param_libigl.py OUT_DIR --replot PNG   (redraw from OUT_DIR/peers.json)
 
 With --bench, our default configuration is also timed per cell inside this run
 (param_bench --time-obj), interleaved with the peers, so machine load affects both alike.
@@ -127,6 +128,10 @@ def main():
         print(__doc__)
         sys.exit(2)
     out = sys.argv[1]
+    if "--replot" in sys.argv:
+        # Only redraw the plot from OUT_DIR/peers.json of an earlier run.
+        make_plot(json.load(open(os.path.join(out, "peers.json"))), sys.argv[sys.argv.index("--replot") + 1])
+        return
     global BENCH
     BENCH = None
     if "--bench" in sys.argv:
@@ -194,28 +199,45 @@ def main():
             summ.append((s, meth, ms, ratio, worst, fl))
             print(f"  {s:>3} {meth:<22} {ms:>8.1f} ms  symD/SLIM50 median {ratio:.3f} worst {worst:.3f}  max flips {fl}")
     if plot:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        fig, axes = plt.subplots(1, len(sizes), figsize=(6 * len(sizes), 4.5))
-        if len(sizes) == 1:
-            axes = [axes]
-        for ax, s in zip(axes, sizes):
-            for (sz, meth, ms, ratio, worst, fl) in summ:
-                if sz != s or meth == "ours default (numpy)":
-                    continue
-                mk = "o" if meth.startswith("ours") else "s"
-                ax.scatter([ms], [ratio], marker=mk, color="tab:blue" if meth.startswith("ours") else "tab:red")
-                ax.annotate(meth.replace("ours ", ""), (ms, ratio), fontsize=7, xytext=(3, 3), textcoords="offset points")
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            ax.set_xlabel("median time per cell [ms]")
-            ax.set_ylabel("median symmetric Dirichlet / SLIM(50 it)")
-            ax.set_title(f"{s}x{s} grid cells ({2 * (int(s) - 1) ** 2} triangles)")
-            ax.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(plot, dpi=110)
-        print(f"wrote {plot}")
+        make_plot(rows, plot)
+
+
+def make_plot(rows, plot):
+    """Median over cells of the excess symmetric Dirichlet energy (symD - 4, 0 = isometric)
+    against the median time, per method, one panel per grid size."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    def size_of(c):
+        return c.split("_")[3] if c.startswith("engabreen") else c.split("_")[-1]
+
+    sizes = sorted({size_of(r["cell"]) for r in rows}, key=int)
+    keep = ["ours default, same run", "ours tol=1e-2,sweeps=2", "ours tol=1e-3,sweeps=8", "ours tol=1e-5,sweeps=64",
+            "ours theta=3", "SLIM 5 it", "SLIM 20 it", "SLIM 50 it", "ARAP 100 it", "LSCM"]
+    fig, axes = plt.subplots(1, len(sizes), figsize=(6.5 * len(sizes), 4.8))
+    if len(sizes) == 1:
+        axes = [axes]
+    for ax, s in zip(axes, sizes):
+        for meth in keep:
+            sel = [r for r in rows if r["method"] == meth and size_of(r["cell"]) == s]
+            if not sel:
+                continue
+            ms = float(np.median([r["ms"] for r in sel]))
+            ex = float(np.median([max(r["symd"] - 4.0, 1e-6) for r in sel]))
+            ours = meth.startswith("ours")
+            ax.scatter([ms], [ex], marker="o" if ours else "s", s=40, color="tab:blue" if ours else "tab:red")
+            ax.annotate(meth.replace("ours ", "ours\n").replace(", same run", ""), (ms, ex), fontsize=7,
+                        xytext=(4, 2), textcoords="offset points")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("median time per cell [ms] (same run, 2-core VM)")
+        ax.set_ylabel("median excess symmetric Dirichlet (symD - 4)")
+        ax.set_title(f"{s}x{s} grid cells ({2 * (int(s) - 1) ** 2} triangles), 6 cells")
+        ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(plot, dpi=110)
+    print(f"wrote {plot}")
 
 
 if __name__ == "__main__":
