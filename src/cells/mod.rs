@@ -11,8 +11,10 @@
 //! [`measure_max_error`] (independent full-resolution check).
 
 mod border;
+mod face_heap;
 mod quadtree;
 mod raster;
+mod tiles;
 mod tin;
 
 pub use border::{LevelBorders, simplify_rect_border};

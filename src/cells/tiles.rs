@@ -1,0 +1,58 @@
+//! A compact, cache-friendly copy of the heights on one sample lattice.
+//!
+//! The lattice samples (every stride-th sample from the lattice origin) are stored in 4x4
+//! tiles of one 64-byte cache line each, so scanning a small triangle touches few cache
+//! lines whatever the DEM width.
+
+use super::raster::Lattice;
+
+/// Sixteen heights, 4 rows of 4, one cache line.
+#[derive(Clone, Copy)]
+#[repr(align(64))]
+pub(crate) struct Tile(pub [f32; 16]);
+
+/// Heights of a [`Lattice`]'s samples from its origin up to `(c_hi, r_hi)`, tiled 4x4.
+pub(crate) struct LatticeTiles {
+    tiles: Vec<Tile>,
+    tiles_x: usize,
+    /// The lattice (origin, stride and bounds) these heights were taken from.
+    pub lat: Lattice,
+}
+
+impl LatticeTiles {
+    /// Copies the lattice samples of a row-major height grid of `width` columns. The
+    /// lattice bounds must lie inside the grid.
+    pub fn new(heights: &[f32], width: usize, lat: Lattice) -> LatticeTiles {
+        let s = lat.stride;
+        let ni = ((lat.c_hi - lat.origin_c).max(0) / s + 1) as usize;
+        let nj = ((lat.r_hi - lat.origin_r).max(0) / s + 1) as usize;
+        let (tiles_x, tiles_y) = (ni.div_ceil(4), nj.div_ceil(4));
+        let mut tiles = vec![Tile([0.0; 16]); tiles_x * tiles_y];
+        for j in 0..nj {
+            let row = (lat.origin_r + j as i64 * s) as usize * width;
+            let (tj, rj) = (j >> 2, (j & 3) * 4);
+            for i in 0..ni {
+                let col = (lat.origin_c + i as i64 * s) as usize;
+                tiles[tj * tiles_x + (i >> 2)].0[rj + (i & 3)] = heights[row + col];
+            }
+        }
+        LatticeTiles { tiles, tiles_x, lat }
+    }
+
+    /// Calls `f(i, h)` for the lattice columns `i0..=i1` (lattice indices) of lattice row
+    /// `j`, in increasing order, with their heights.
+    #[inline]
+    pub fn for_row(&self, j: usize, i0: usize, i1: usize, mut f: impl FnMut(usize, f32)) {
+        let (tj, rj) = (j >> 2, (j & 3) * 4);
+        let row = &self.tiles[tj * self.tiles_x..(tj + 1) * self.tiles_x];
+        let mut i = i0;
+        while i <= i1 {
+            let end = i1.min(i | 3);
+            let t = &row[i >> 2].0[rj..rj + 4];
+            for ii in i..=end {
+                f(ii, t[ii & 3]);
+            }
+            i = end + 1;
+        }
+    }
+}
