@@ -73,6 +73,7 @@ fn load_terrain_rgb_mosaic(paths: &[PathBuf], spacing: f64) -> anyhow::Result<De
 }
 
 struct Peer {
+    version: String,
     ms: f64,
     cpu_ms: f64,
     triangles: u64,
@@ -93,6 +94,7 @@ fn pydelatin(kind: &str, paths: &[PathBuf], runs: usize, err: f64) -> Option<Pee
     let line = String::from_utf8_lossy(&out.stdout).lines().next()?.to_string();
     let v: serde_json::Value = serde_json::from_str(&line).ok()?;
     Some(Peer {
+        version: v["version"].as_str().unwrap_or("?").to_string(),
         ms: v["median_ms"].as_f64()?,
         cpu_ms: v["median_cpu_ms"].as_f64()?,
         triangles: v["triangles"].as_u64()?,
@@ -126,7 +128,10 @@ fn bench_real(name: &str, dem: &Dem, kind: &str, paths: &[PathBuf], errors: &[f6
             ratio(cm, p.as_ref().map(|p| p.cpu_ms))
         );
         if let Some(p) = &p {
-            println!("| {err} | pydelatin 0.2 (C++) | {:.0} | {:.0} | {} | {:.3} | 1 | 1 |", p.ms, p.cpu_ms, p.triangles, p.error);
+            println!(
+                "| {err} | pydelatin {} (C++, 1 thread) | {:.0} | {:.0} | {} | {:.3} | 1 | 1 |",
+                p.version, p.ms, p.cpu_ms, p.triangles, p.error
+            );
         }
         for s in [64u32, 128] {
             let tree = Quadtree::new(dem.width as u32, dem.height as u32, s);

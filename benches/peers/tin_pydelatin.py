@@ -6,6 +6,7 @@ usage: tin_pydelatin.py KIND PATH[,PATH...] RUNS ERR [ERR...]
   four paths = a 2x2 mosaic NW, NE, SW, SE). Errors are in metres (the heights' unit).
 """
 import json
+from importlib.metadata import version
 import statistics
 import sys
 import time
@@ -39,6 +40,7 @@ def main():
             times.append(time.perf_counter() - t0)
         print(json.dumps({
             "max_error": err,
+            "version": version("pydelatin"),
             "width": int(h.shape[1]),
             "height": int(h.shape[0]),
             "median_ms": statistics.median(times) * 1000,

@@ -109,14 +109,14 @@ struct Greedy<'a> {
 }
 
 impl Greedy<'_> {
-    fn corners(&self, f: FixedFaceHandle<InnerTag>) -> ([[i64; 2]; 3], u32) {
+    fn corners(&self, f: FixedFaceHandle<InnerTag>) -> ([[i64; 2]; 3], [u32; 3]) {
         let face = self.tri.face(f);
         let vs = face.vertices();
         let p = vs.map(|v| {
             let q = v.position();
             [q.x as i64, -q.y as i64]
         });
-        (p, vs[0].fix().index() as u32)
+        (p, vs.map(|v| v.fix().index() as u32))
     }
 
     fn rescan(&mut self, f: FixedFaceHandle<InnerTag>, lat: &LatticeTiles) {
@@ -126,10 +126,14 @@ impl Greedy<'_> {
             self.cand.resize(n, [0; 3]);
             self.face_err.resize(n, 0.0);
         }
-        let (p, hint) = self.corners(f);
+        let (p, ids) = self.corners(f);
         let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
         self.face_err[idx] = err.max(0.0);
         if err > self.epsilon {
+            // hint: the face's corner nearest to the candidate, for a short location walk
+            let d2 = |q: [i64; 2]| (q[0] - col).pow(2) + (q[1] - row).pow(2);
+            let k = (0..3).min_by_key(|&k| d2(p[k])).unwrap_or(0);
+            let hint = ids[k];
             self.cand[idx] = [col as u32, row as u32, hint];
             self.heap.set(idx as u32, Some(err));
         } else {
