@@ -15,17 +15,21 @@ pub(crate) struct Tile(pub [f32; 16]);
 pub(crate) struct LatticeTiles {
     tiles: Vec<Tile>,
     tiles_x: usize,
+    /// Stored lattice indices are `0..ni` x `0..nj`.
+    ni: usize,
+    nj: usize,
     /// The lattice (origin, stride and bounds) these heights were taken from.
     pub lat: Lattice,
 }
 
 impl LatticeTiles {
-    /// Copies the lattice samples of a row-major height grid of `width` columns. The
-    /// lattice bounds must lie inside the grid.
-    pub fn new(heights: &[f32], width: usize, lat: Lattice) -> LatticeTiles {
+    /// Copies the lattice samples of a row-major height grid of `width` columns, from the
+    /// lattice origin up to `(store_c_hi, store_c_hi)` (which must lie inside the grid and
+    /// cover `lat`'s bounds).
+    pub fn new(heights: &[f32], width: usize, lat: Lattice, store_c_hi: i64, store_r_hi: i64) -> LatticeTiles {
         let s = lat.stride;
-        let ni = ((lat.c_hi - lat.origin_c).max(0) / s + 1) as usize;
-        let nj = ((lat.r_hi - lat.origin_r).max(0) / s + 1) as usize;
+        let ni = ((store_c_hi.max(lat.c_hi) - lat.origin_c).max(0) / s + 1) as usize;
+        let nj = ((store_r_hi.max(lat.r_hi) - lat.origin_r).max(0) / s + 1) as usize;
         let (tiles_x, tiles_y) = (ni.div_ceil(4), nj.div_ceil(4));
         let mut tiles = vec![Tile([0.0; 16]); tiles_x * tiles_y];
         for j in 0..nj {
@@ -36,7 +40,25 @@ impl LatticeTiles {
                 tiles[tj * tiles_x + (i >> 2)].0[rj + (i & 3)] = heights[row + col];
             }
         }
-        LatticeTiles { tiles, tiles_x, lat }
+        LatticeTiles { tiles, tiles_x, ni, nj, lat }
+    }
+
+    /// Height of sample `(col, row)` if it is a stored lattice sample.
+    #[inline]
+    pub fn get(&self, col: i64, row: i64) -> Option<f32> {
+        let s = self.lat.stride;
+        let (dc, dr) = (col - self.lat.origin_c, row - self.lat.origin_r);
+        if dc < 0 || dr < 0 {
+            return None;
+        }
+        let (i, j) = if s == 1 {
+            (dc as usize, dr as usize)
+        } else if dc % s != 0 || dr % s != 0 {
+            return None;
+        } else {
+            ((dc / s) as usize, (dr / s) as usize)
+        };
+        (i < self.ni && j < self.nj).then(|| self.tiles[(j >> 2) * self.tiles_x + (i >> 2)].0[(j & 3) * 4 + (i & 3)])
     }
 
     /// Calls `f(i, h)` for the lattice columns `i0..=i1` (lattice indices) of lattice row

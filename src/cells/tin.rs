@@ -61,7 +61,8 @@ impl Plane {
 /// come from the full-resolution grid (corners need not be on the lattice).
 #[inline]
 fn worst_sample(heights: &[f32], width: usize, p: [[i64; 2]; 3], grid: &LatticeTiles) -> (f64, i64, i64) {
-    let hz = |q: [i64; 2]| heights[q[1] as usize * width + q[0] as usize] as f64;
+    // corners from the compact copy when stored there (always at stride 1), else the DEM
+    let hz = |q: [i64; 2]| grid.get(q[0], q[1]).unwrap_or_else(|| heights[q[1] as usize * width + q[0] as usize]) as f64;
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
     let lat = &grid.lat;
     let (oc, or, s) = (lat.origin_c, lat.origin_r, lat.stride);
@@ -246,12 +247,12 @@ pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border:
         r_lo: rect.r0 as i64 + 1,
         r_hi: rect.r1 as i64 - 1,
     };
-    let coarse = LatticeTiles::new(&dem.heights, dem.width, interior(stride));
+    let coarse = LatticeTiles::new(&dem.heights, dem.width, interior(stride), rect.c1 as i64, rect.r1 as i64);
     g.rescan_all(&coarse);
     g.run(&coarse);
     drop(coarse);
     if stride > 1 {
-        let fine = LatticeTiles::new(&dem.heights, dem.width, interior(1));
+        let fine = LatticeTiles::new(&dem.heights, dem.width, interior(1), rect.c1 as i64, rect.r1 as i64);
         g.rescan_all(&fine);
         g.run(&fine);
     }
