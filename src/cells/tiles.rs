@@ -78,3 +78,30 @@ impl LatticeTiles {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_return_the_lattice_heights() {
+        let (w, h) = (23usize, 17usize);
+        let heights: Vec<f32> = (0..w * h).map(|i| i as f32 * 0.5).collect();
+        for stride in [1i64, 2, 3, 4] {
+            let lat = Lattice { origin_c: 2, origin_r: 1, stride, c_lo: 3, c_hi: 20, r_lo: 2, r_hi: 14 };
+            let t = LatticeTiles::new(&heights, w, lat, 22, 16);
+            for r in 0..h as i64 {
+                for c in 0..w as i64 {
+                    let on = c >= 2 && r >= 1 && (c - 2) % stride == 0 && (r - 1) % stride == 0;
+                    let want = on.then(|| heights[r as usize * w + c as usize]);
+                    assert_eq!(t.get(c, r), want, "stride {stride} ({c},{r})");
+                }
+            }
+            let mut got = Vec::new();
+            t.for_row(3, 1, 5, |i, v| got.push((i, v)));
+            let row = (1 + 3 * stride) as usize;
+            let want: Vec<_> = (1..=5).map(|i| (i, heights[row * w + (2 + i as i64 * stride) as usize])).collect();
+            assert_eq!(got, want);
+        }
+    }
+}
