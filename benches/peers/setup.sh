@@ -1,4 +1,6 @@
-#!/bin/sh
-# Installs the Python peers for benches/peers/param_libigl.py (never crate dependencies).
-set -e
-pip install libigl numpy scipy matplotlib
+#!/usr/bin/env sh
+# Installs the Python peers used by cliffmap's benchmarks (never crate dependencies):
+# pydelatin (TIN simplification), libigl (SLIM/ARAP/LSCM parameterization), numpy, scipy,
+# pillow and matplotlib for the peer scripts and plots.
+set -eu
+python3 -m pip install --quiet pydelatin libigl numpy scipy pillow matplotlib
