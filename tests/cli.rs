@@ -183,3 +183,71 @@ fn bad_inputs_fail_cleanly_without_output() {
     assert!(!out.exists(), "a failed build must not leave output behind");
     fails_naming(&["stats", s(&t.path().join("nostore"))], "nostore");
 }
+
+#[test]
+fn engabreen_reparam_mixed_mode_and_export() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("eng.store");
+    let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
+    let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
+    ok(&[
+        "build", "--dem", s(&dem), "--width", "507", "--height", "590", "--spacing", "3",
+        "--origin", "445302.17,7396769.45", "--ortho", s(&ortho), "--ortho-same-grid",
+        "--max-error", "1.0", "--cell-texels", "64", "--out", s(&out), "--quiet",
+    ]);
+    ok(&["reparam", s(&out), "--threshold", "1.1", "--quiet"]);
+    let st = Store::open(&out).unwrap();
+    let m = &st.manifest;
+    let re: Vec<_> = m.cells.iter().filter(|c| c.reparam.is_some()).collect();
+    assert!(!re.is_empty());
+    for c in &m.cells {
+        // Exactly the cells above the threshold are reparameterized ("model only what a scene requires").
+        assert_eq!(c.reparam.is_some(), c.stats.rel_texel > 1.1, "cell {}", c.id);
+    }
+    for c in &re {
+        let r = c.reparam.as_ref().unwrap();
+        assert_eq!(r.metrics.flipped, 0, "cell {} has flips", c.id);
+        // The chart spreads texels more evenly than the ortho map: the worst texel is less stretched.
+        assert!(r.texel_stretch.max < c.stats.texel_stretch.max, "cell {}: {} vs {}", c.id, r.texel_stretch.max, c.stats.texel_stretch.max);
+        let mesh = st.read_active_mesh(c).unwrap();
+        let uvs = mesh.uvs.as_ref().unwrap();
+        assert!(uvs.iter().flatten().all(|u| (0.0..=1.0).contains(u)));
+        let tex = st.read_png(&r.files.texture).unwrap();
+        assert_eq!(tex.width(), 64);
+    }
+    // stats --json reports both parameterizations.
+    let o = ok(&["stats", s(&out), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["summary"]["parameterization"]["cells_reparam"].as_u64().unwrap() as usize, re.len());
+    let cell = v["cells"].as_array().unwrap().iter().find(|x| x["id"] == re[0].id.as_str()).unwrap();
+    assert_eq!(cell["parameterization"], "reparam");
+    assert!(cell["reparam"]["metrics"]["angle_distortion_mean"].as_f64().unwrap() >= 1.0);
+
+    // export-obj writes the chart's UVs for a reparameterized cell.
+    let obj = t.path().join("re.obj");
+    ok(&["export-obj", s(&out), "--cell", &re[0].id, "--out", s(&obj)]);
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(text.contains("parameterization reparam"));
+    let vt: Vec<[f32; 2]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("vt "))
+        .map(|l| {
+            let mut it = l.split_whitespace().map(|x| x.parse::<f32>().unwrap());
+            [it.next().unwrap(), it.next().unwrap()]
+        })
+        .collect();
+    let mesh = st.read_active_mesh(re[0]).unwrap();
+    let uv0 = mesh.uvs.as_ref().unwrap()[0];
+    assert!((vt[0][0] - uv0[0]).abs() < 1e-6 && (vt[0][1] - (1.0 - uv0[1])).abs() < 1e-6);
+
+    // Mixed resolution: reparameterized cells get twice the side; a higher threshold chooses
+    // fewer cells and removes the stale reparameterized files of the others.
+    ok(&["reparam", s(&out), "--threshold", "1.5", "--mixed-resolution", "--quiet"]);
+    let st2 = Store::open(&out).unwrap();
+    let re2: Vec<_> = st2.manifest.cells.iter().filter(|c| c.reparam.is_some()).collect();
+    assert!(re2.len() < re.len());
+    assert!(re2.iter().all(|c| c.reparam.as_ref().unwrap().texels == 128));
+    let dropped = re.iter().find(|c| c.stats.rel_texel <= 1.5).unwrap();
+    assert!(!out.join(format!("cells/{}/{}-{}.reparam.png", dropped.level, dropped.x, dropped.y)).exists());
+    fails_naming(&["reparam", s(&out), "--threshold", "-1"], "threshold");
+}

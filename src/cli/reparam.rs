@@ -14,7 +14,7 @@ pub struct Args {
     /// The store directory (made by `cliffmap build`).
     pub store: PathBuf,
     /// Cells whose ortho Rel_texel is above this get the new parameterization.
-    #[arg(long, default_value_t = 1.1)]
+    #[arg(long, default_value_t = 1.1, allow_hyphen_values = true)]
     pub threshold: f64,
     /// Energy exponent: 0 = conformal, larger favours area preservation (1 = symmetric Dirichlet).
     #[arg(long, default_value_t = ParamOptions::default().theta)]

@@ -11,7 +11,7 @@ pub struct Args {
     /// The store directory.
     store: PathBuf,
     /// Rel_texel above which a cell counts as stretched.
-    #[arg(long, default_value_t = 1.1)]
+    #[arg(long, default_value_t = 1.1, allow_hyphen_values = true)]
     threshold: f64,
     /// Print the JSON document on stdout instead of the summary.
     #[arg(long)]
