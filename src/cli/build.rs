@@ -56,6 +56,9 @@ pub struct Args {
     /// World extent MINX,MINY,MAXX,MAXY of the ortho's outer pixel edges.
     #[arg(long, value_parser = parse_extent, allow_hyphen_values = true)]
     ortho_extent: Option<WorldRect>,
+    /// Ortho pixels of exactly this colour R,G,B have no image data (e.g. 0,0,0).
+    #[arg(long, value_parser = parse_colour)]
+    ortho_nodata_colour: Option<[u8; 3]>,
     /// Refuse inputs that would need more memory than this (e.g. 8G).
     #[arg(long, value_parser = super::parse_bytes, default_value = "8G")]
     max_memory: u64,
@@ -68,6 +71,14 @@ pub struct Args {
     /// No progress bars or summary.
     #[arg(long)]
     quiet: bool,
+}
+
+fn parse_colour(s: &str) -> Result<[u8; 3], String> {
+    let v: Vec<u8> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u8>().map_err(|_| format!("not a colour component 0..255: {p:?}")))
+        .collect::<Result<_, _>>()?;
+    <[u8; 3]>::try_from(v).map_err(|_| format!("expected R,G,B, got {s:?}"))
 }
 
 fn parse_extent(s: &str) -> Result<WorldRect, String> {
@@ -110,11 +121,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             } else {
                 OrthoPlacement::FromFile
             };
-            Some(load_ortho(p, placement, &dem, a.max_memory)?)
+            let mut o = load_ortho(p, placement, &dem, a.max_memory)?;
+            if let Some(c) = a.ortho_nodata_colour {
+                let n = o.mask_colour(c);
+                tracing::info!("{}: {n} pixels of colour {c:?} marked as no data", p.display());
+            }
+            Some(o)
         }
         None => None,
     };
-    let fingerprint = format!("{}|{}", file_crc(&a.dem)?, a.ortho.as_deref().map(file_crc).transpose()?.unwrap_or_default());
+    // Everything that shapes the inputs: file contents and how they were read and placed.
+    let fingerprint = format!(
+        "{}|{}|{:?}|{:?}|{:?}|{}",
+        file_crc(&a.dem)?,
+        a.ortho.as_deref().map(file_crc).transpose()?.unwrap_or_default(),
+        dem_opts,
+        a.ortho_extent,
+        a.ortho_nodata_colour,
+        a.ortho_same_grid
+    );
     let inputs = BuildInputs {
         dem: &dem,
         ortho: ortho.as_ref(),
