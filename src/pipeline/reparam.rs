@@ -144,6 +144,8 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
     let chart = parameterize(&ParamMesh { positions: positions.clone(), triangles: triangles.clone() }, &popts)?;
     let base_area = rec.stats.base_area;
     let metrics = chart_metrics(&positions, &triangles, &chart.uvs, Some(base_area))?;
+    // The chart's v axis points up; the store's texture coordinates run down the image rows.
+    let tex_uvs: Vec<[f64; 2]> = chart.uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect();
     if metrics.flipped > 0 {
         return Err(Error::BadOption(format!("chart of cell {} has {} flipped triangles", rec.id, metrics.flipped)));
     }
@@ -152,7 +154,7 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
     let key = |p: &[f32; 3]| (p[0].to_bits(), p[1].to_bits());
     let border: HashMap<(u32, u32), usize> =
         mesh.positions[..ns].iter().enumerate().map(|(i, p)| (key(p), i)).collect();
-    let mut uvs: Vec<[f32; 2]> = chart.uvs.iter().map(|u| [u[0] as f32, u[1] as f32]).collect();
+    let mut uvs: Vec<[f32; 2]> = tex_uvs.iter().map(|u| [u[0] as f32, u[1] as f32]).collect();
     for p in &mesh.positions[ns..] {
         let src = border.get(&key(p)).copied().ok_or_else(|| {
             Error::store(store.dir.join(&rec.files.mesh.path), "skirt vertex without a border vertex")
@@ -171,7 +173,7 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
         spacing_y: e.height() / t_old,
     };
     let to_pixel = PixelMap::from_georef(&tex_georef, [rec.origin[0], rec.origin[1]]);
-    let chart_mesh = ChartMesh { positions: &positions, triangles: &triangles, uvs: &chart.uvs };
+    let chart_mesh = ChartMesh { positions: &positions, triangles: &triangles, uvs: &tex_uvs };
     let ropts = ResampleOptions { texels, ..opts.resample.clone() };
     let colour = store.read_texture(rec)?;
     let col = resample(&chart_mesh, &Source { image: &colour, to_pixel }, &ropts)?;
@@ -188,7 +190,7 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
     };
     // Per-texel stretch relative to an ortho texel (base area / cell_texels²).
     let ratio = texels as f64 / t_old;
-    let stretch = texel_stretch(&positions, &triangles, &chart.uvs, texels, base_area * ratio * ratio);
+    let stretch = texel_stretch(&positions, &triangles, &tex_uvs, texels, base_area * ratio * ratio);
     Ok(ReparamRecord {
         texels,
         files,
