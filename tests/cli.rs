@@ -251,3 +251,39 @@ fn engabreen_reparam_mixed_mode_and_export() {
     assert!(!out.join(format!("cells/{}/{}-{}.reparam.png", dropped.level, dropped.x, dropped.y)).exists());
     fails_naming(&["reparam", s(&out), "--threshold", "-1"], "threshold");
 }
+
+#[test]
+fn geotiff_with_nodata_and_terrain_rgb_build() {
+    let t = tempfile::tempdir().unwrap();
+    // ASTER GeoTIFF, UTM 18S, with -9999 no-data: georeference and CRS come from the file.
+    let out = t.path().join("expl.store");
+    let dem = real_data("misc/exploradores_aster_dem_30m_utm18s.tif");
+    ok(&["build", "--dem", s(&dem), "--max-error", "5", "--cell-texels", "32", "--out", s(&out), "--quiet"]);
+    let m = Store::open(&out).unwrap().manifest;
+    assert_eq!(m.crs.as_deref(), Some("EPSG:32718"));
+    assert!((m.georef.origin_x - 627190.0).abs() < 1e-6 && (m.georef.origin_y - 4852070.0).abs() < 1e-6);
+    assert!(m.dem.void_fraction > 0.02 && m.dem.void_fraction < 0.035, "{}", m.dem.void_fraction);
+    assert!(m.cells.iter().all(|c| c.max_error <= c.epsilon + 1e-6 && c.stats.rel_texel.is_finite()));
+    // Textures over voids are marked unknown (alpha 0) somewhere in the finest level.
+    let st = Store::open(&out).unwrap();
+    let finest = m.quadtree.levels - 1;
+    let unknown: usize = m
+        .cells
+        .iter()
+        .filter(|c| c.level == finest)
+        .map(|c| st.read_texture(c).unwrap().pixels().filter(|p| p.0[3] == 0).count())
+        .sum();
+    assert!(unknown > 0, "voids must show as unknown texels");
+
+    // Terrain-RGB tile with its (palette) map tile as ortho on the same grid.
+    let out2 = t.path().join("gc.store");
+    let terrain = real_data("grand_canyon_tiles/12-758-1608.terrain.png");
+    let sat = real_data("grand_canyon_tiles/12-758-1608.satellite.png");
+    ok(&[
+        "build", "--dem", s(&terrain), "--spacing", "30.9", "--ortho", s(&sat), "--ortho-same-grid",
+        "--max-error", "2", "--cell-texels", "32", "--cell-intervals", "32", "--out", s(&out2), "--quiet",
+    ]);
+    let m2 = Store::open(&out2).unwrap().manifest;
+    assert!(m2.dem.height_min >= 439.0 && m2.dem.height_max <= 2184.5);
+    assert!(m2.cells.iter().any(|c| c.stats.max_slope_deg > 60.0));
+}
