@@ -37,9 +37,6 @@ pub mod scene;
 pub mod stats;
 pub mod store;
 
-#[cfg(test)]
-mod testutil;
-
 /// Test-only TIFF writers shared with the integration tests.
 #[cfg(test)]
 #[path = "../tests/common/tiffgen.rs"]

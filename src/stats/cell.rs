@@ -61,7 +61,7 @@ pub fn cell_stats(dem: &Dem, tree: &Quadtree, key: CellKey, tin: &Tin, texels: u
 mod tests {
     use super::*;
     use crate::georef::GridGeoref;
-    use crate::testutil::grid_tin;
+    use crate::cells::grid_tin;
 
     /// DEM with heights `p * x + q * y` (x east, y north of the origin sample).
     fn plane_dem(w: usize, h: usize, g: GridGeoref, p: f64, q: f64) -> Dem {

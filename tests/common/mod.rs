@@ -24,29 +24,9 @@ pub fn real_data(rel: &str) -> PathBuf {
     panic!("real data directory not found (set CLIFFMAP_SHARED_DATA)");
 }
 
-use cliffmap::{Dem, DemLoadOptions, Ortho, OrthoPlacement, SampleRect, Tin};
+use cliffmap::{Dem, DemLoadOptions, Ortho, OrthoPlacement};
 
-/// A full grid triangulation of `rect` on every `stride`-th sample (plus the last row and
-/// column), two triangles per quad split NW–SE, CCW seen from above in world coordinates.
-pub fn grid_tin(rect: SampleRect, stride: u32) -> Tin {
-    let axis = |a: u32, b: u32| {
-        let mut v: Vec<u32> = (a..b).step_by(stride as usize).collect();
-        v.push(b);
-        v
-    };
-    let (cols, rows) = (axis(rect.c0, rect.c1), axis(rect.r0, rect.r1));
-    let nc = cols.len() as u32;
-    let vertices = rows.iter().flat_map(|&r| cols.iter().map(move |&c| [c, r])).collect();
-    let mut triangles = Vec::new();
-    for j in 0..rows.len() as u32 - 1 {
-        for i in 0..nc - 1 {
-            let (nw, ne, sw, se) = (j * nc + i, j * nc + i + 1, (j + 1) * nc + i, (j + 1) * nc + i + 1);
-            triangles.push([nw, sw, se]);
-            triangles.push([nw, se, ne]);
-        }
-    }
-    Tin { vertices, triangles, max_error: 0.0 }
-}
+pub use cliffmap::cells::grid_tin;
 
 /// The Engabreen DEM (507 x 590 at 3 m, UTM 33N) through the raw f32 reader.
 pub fn engabreen_dem() -> Dem {
