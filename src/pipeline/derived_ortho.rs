@@ -13,7 +13,7 @@ pub fn derived_ortho(dem: &Dem) -> Ortho {
     let span = (hi - lo).max(1e-6) as f64;
     let (w, h) = (dem.width, dem.height);
     let (sx, sy) = (dem.georef.spacing_x, dem.georef.spacing_y);
-    let sun = glam::DVec3::new(-1.0, 1.0, 1.4142135623730951).normalize();
+    let sun = glam::DVec3::new(-1.0, 1.0, std::f64::consts::SQRT_2).normalize();
     let px: Vec<[u8; 4]> = (0..w * h)
         .into_par_iter()
         .map(|i| {

@@ -140,7 +140,7 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
     let ns = mesh.surface_vertices as usize;
     let positions: Vec<[f64; 3]> = mesh.positions[..ns].iter().map(|p| p.map(f64::from)).collect();
     let triangles = mesh.surface().to_vec();
-    let popts = ParamOptions { texture_size: texels, ..opts.param.clone() };
+    let popts = ParamOptions { texture_size: texels, ..opts.param };
     let chart = parameterize(&ParamMesh { positions: positions.clone(), triangles: triangles.clone() }, &popts)?;
     let base_area = rec.stats.base_area;
     let metrics = chart_metrics(&positions, &triangles, &chart.uvs, Some(base_area))?;
@@ -174,7 +174,7 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
     };
     let to_pixel = PixelMap::from_georef(&tex_georef, [rec.origin[0], rec.origin[1]]);
     let chart_mesh = ChartMesh { positions: &positions, triangles: &triangles, uvs: &tex_uvs };
-    let ropts = ResampleOptions { texels, ..opts.resample.clone() };
+    let ropts = ResampleOptions { texels, ..opts.resample };
     let colour = store.read_texture(rec)?;
     let col = resample(&chart_mesh, &Source { image: &colour, to_pixel }, &ropts)?;
     let normal = store.read_normal_map(rec)?;

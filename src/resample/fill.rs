@@ -158,8 +158,8 @@ pub fn fill_pull_push(image: &mut RgbaImage, assigned: &[bool]) -> usize {
                     let (cx, cy) = (2 * x + dx, 2 * y + dy);
                     if cx < l.w && cy < l.h {
                         let i = cy * l.w + cx;
-                        for k in 0..3 {
-                            s[k] += l.a[i] * l.c[i][k];
+                        for (sk, ck) in s.iter_mut().zip(l.c[i]) {
+                            *sk += l.a[i] * ck;
                         }
                         wt += l.a[i];
                     }

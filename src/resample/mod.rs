@@ -313,8 +313,8 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
                     *nfb += tc.fallback as usize;
                     if tc.known {
                         let px = &mut row[i * 4..i * 4 + 4];
-                        for k in 0..3 {
-                            px[k] = tc.rgb[k].round().clamp(0.0, 255.0) as u8;
+                        for (p, c) in px.iter_mut().zip(tc.rgb) {
+                            *p = c.round().clamp(0.0, 255.0) as u8;
                         }
                         px[3] = 255;
                         krow[i] = true;

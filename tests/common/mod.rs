@@ -26,6 +26,7 @@ pub fn real_data(rel: &str) -> PathBuf {
 
 use cliffmap::{Dem, DemLoadOptions, Ortho, OrthoPlacement};
 
+#[allow(unused_imports)]
 pub use cliffmap::cells::grid_tin;
 
 /// The Engabreen DEM (507 x 590 at 3 m, UTM 33N) through the raw f32 reader.
