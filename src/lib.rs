@@ -17,10 +17,12 @@
 //! - [`resample`]: resampling a colour source into a new chart with area-weighted
 //!   subtexel filtering ([`resample::resample`]).
 //! - [`scene`]: the embedded procedural demo scene.
+//! - [`camera`]: pinhole cameras and Camera JSON; [`render`]: the wgpu quadtree renderer.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod cells;
 pub mod dem;
 pub mod error;
@@ -29,6 +31,7 @@ pub mod georef;
 pub mod geotiff;
 pub mod ortho;
 pub mod pipeline;
+pub mod render;
 pub mod resample;
 pub mod scene;
 pub mod stats;
