@@ -67,7 +67,9 @@ fn size(obj: &Map<String, Value>, path: &Path) -> Result<Option<(u32, u32)>> {
 }
 
 fn imgraft(obj: &Map<String, Value>, path: &Path) -> Result<CameraModel> {
-    let xyz_key = obj.keys().find(|k| k.starts_with("camera_xyz")).cloned();
+    // The position is the `camera_xyz...` key holding an array (e.g. `camera_xyz_utm33n_nn1954_m`;
+    // sibling keys such as `camera_xyz_source` are notes).
+    let xyz_key = obj.iter().find(|(k, v)| k.starts_with("camera_xyz") && v.is_array()).map(|(k, _)| k.clone());
     let xyz = match xyz_key {
         Some(k) => nums(obj, &k, 3, path)?.unwrap_or_default(),
         None => return Err(Error::bad_input(path, "ImGRAFT camera without \"camera_xyz...\" position")),
