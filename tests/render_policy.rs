@@ -5,16 +5,27 @@ mod render_support;
 use std::time::Duration;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
-use cliffmap::render::{CellIndex, LruCache, RenderCamera, Streamer, resolve_draw_list, select_cells};
+use cliffmap::render::{
+    CellIndex, LruCache, RenderCamera, Streamer, resolve_draw_list, select_cells,
+};
 use cliffmap::store::CellRecord;
 use glam::DVec3;
 use render_support::{Synth, X0, Y0, records};
 
-const SYNTH: Synth = Synth { levels: 6, size: 4096.0, z: 1000.0, finest_error: 0.05, texels: 4096 };
+const SYNTH: Synth = Synth {
+    levels: 6,
+    size: 4096.0,
+    z: 1000.0,
+    finest_error: 0.05,
+    texels: 4096,
+};
 
 fn camera(pos: DVec3, target: DVec3) -> RenderCamera {
     let r = rotation_look_at(pos, target).unwrap();
-    RenderCamera::new(CameraModel::with_fov(pos, r, 800, 600, 60f64.to_radians()), 0.5)
+    RenderCamera::new(
+        CameraModel::with_fov(pos, r, 800, 600, 60f64.to_radians()),
+        0.5,
+    )
 }
 
 fn contains_xy(rec: &CellRecord, x: f64, y: f64) -> bool {
@@ -32,7 +43,13 @@ fn assert_disjoint(cells: &[CellRecord], sel: &[usize]) {
             let (ka, kb) = (cells[a].key(), cells[b].key());
             let mut k = kb.parent();
             while let Some(p) = k {
-                assert_ne!(p, ka, "{} is selected together with its descendant {}", ka.id(), kb.id());
+                assert_ne!(
+                    p,
+                    ka,
+                    "{} is selected together with its descendant {}",
+                    ka.id(),
+                    kb.id()
+                );
                 k = p.parent();
             }
         }
@@ -47,18 +64,46 @@ fn refines_near_the_camera_and_not_far_away() {
     let cam = camera(pos, DVec3::new(X0 + 4000.0, Y0 - 4000.0, 1000.0));
     let sel = select_cells(&cells, &index, &cam, 0.5);
     assert_disjoint(&cells, &sel.cells);
-    let under: Vec<_> = sel.cells.iter().filter(|&&i| contains_xy(&cells[i], pos.x + 20.0, pos.y - 20.0)).collect();
-    assert_eq!(under.len(), 1, "exactly one cell covers the ground just ahead");
-    assert_eq!(cells[*under[0]].level, SYNTH.levels - 1, "the nearest cell is at the finest level");
-    let far: Vec<_> = sel.cells.iter().filter(|&&i| contains_xy(&cells[i], X0 + 4000.0, Y0 - 4000.0)).collect();
+    let under: Vec<_> = sel
+        .cells
+        .iter()
+        .filter(|&&i| contains_xy(&cells[i], pos.x + 20.0, pos.y - 20.0))
+        .collect();
+    assert_eq!(
+        under.len(),
+        1,
+        "exactly one cell covers the ground just ahead"
+    );
+    assert_eq!(
+        cells[*under[0]].level,
+        SYNTH.levels - 1,
+        "the nearest cell is at the finest level"
+    );
+    let far: Vec<_> = sel
+        .cells
+        .iter()
+        .filter(|&&i| contains_xy(&cells[i], X0 + 4000.0, Y0 - 4000.0))
+        .collect();
     assert_eq!(far.len(), 1);
-    assert!(cells[*far[0]].level < SYNTH.levels - 2, "far cells stay coarse, got level {}", cells[*far[0]].level);
+    assert!(
+        cells[*far[0]].level < SYNTH.levels - 2,
+        "far cells stay coarse, got level {}",
+        cells[*far[0]].level
+    );
     // Levels never increase with distance along the view diagonal.
     let mut last = u8::MAX;
     for t in [0.05, 0.2, 0.4, 0.6, 0.8, 0.97] {
         let (x, y) = (X0 + t * 4096.0, Y0 - t * 4096.0);
-        let l = sel.cells.iter().find(|&&i| contains_xy(&cells[i], x, y)).map(|&i| cells[i].level).unwrap();
-        assert!(l <= last, "level {l} at t={t} exceeds {last} nearer the camera");
+        let l = sel
+            .cells
+            .iter()
+            .find(|&&i| contains_xy(&cells[i], x, y))
+            .map(|&i| cells[i].level)
+            .unwrap();
+        assert!(
+            l <= last,
+            "level {l} at t={t} exceeds {last} nearer the camera"
+        );
         last = l;
     }
 }
@@ -73,7 +118,11 @@ fn culls_cells_behind_the_camera() {
     assert!(sel.culled > 0);
     assert!(!sel.cells.is_empty());
     for &i in &sel.cells {
-        assert!(cells[i].bbox_max[0] > pos.x - 1e-6, "cell {} lies entirely behind the camera", cells[i].id);
+        assert!(
+            cells[i].bbox_max[0] > pos.x - 1e-6,
+            "cell {} lies entirely behind the camera",
+            cells[i].id
+        );
     }
     // Looking straight up sees no terrain at all.
     let up = camera(pos, pos + DVec3::new(0.0, 1.0, 100.0));
@@ -86,18 +135,33 @@ fn threshold_is_monotone() {
     let index = CellIndex::new(&cells);
     let pos = DVec3::new(X0 + 700.0, Y0 - 300.0, 1100.0);
     let cam = camera(pos, DVec3::new(X0 + 3000.0, Y0 - 3500.0, 1000.0));
-    let probes: Vec<(f64, f64)> =
-        (0..64).map(|i| (X0 + 32.0 + 64.0 * (i % 8) as f64 * 8.0, Y0 - 32.0 - 64.0 * (i / 8) as f64 * 8.0)).collect();
+    let probes: Vec<(f64, f64)> = (0..64)
+        .map(|i| {
+            (
+                X0 + 32.0 + 64.0 * (i % 8) as f64 * 8.0,
+                Y0 - 32.0 - 64.0 * (i / 8) as f64 * 8.0,
+            )
+        })
+        .collect();
     let mut prev: Option<(usize, Vec<Option<u8>>)> = None;
     for thr in [0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 16.0, 1e9] {
         let sel = select_cells(&cells, &index, &cam, thr);
         assert_disjoint(&cells, &sel.cells);
         let levels: Vec<Option<u8>> = probes
             .iter()
-            .map(|&(x, y)| sel.cells.iter().find(|&&i| contains_xy(&cells[i], x, y)).map(|&i| cells[i].level))
+            .map(|&(x, y)| {
+                sel.cells
+                    .iter()
+                    .find(|&&i| contains_xy(&cells[i], x, y))
+                    .map(|&i| cells[i].level)
+            })
             .collect();
         if let Some((n, pl)) = &prev {
-            assert!(sel.cells.len() <= *n, "threshold {thr}: {} cells > {n}", sel.cells.len());
+            assert!(
+                sel.cells.len() <= *n,
+                "threshold {thr}: {} cells > {n}",
+                sel.cells.len()
+            );
             for (a, b) in levels.iter().zip(pl) {
                 if let (Some(a), Some(b)) = (a, b) {
                     assert!(a <= b, "threshold {thr}: a probe got finer ({a} > {b})");
@@ -106,7 +170,11 @@ fn threshold_is_monotone() {
         }
         prev = Some((sel.cells.len(), levels));
     }
-    assert_eq!(prev.unwrap().0, 1, "an infinite threshold selects only the root");
+    assert_eq!(
+        prev.unwrap().0,
+        1,
+        "an infinite threshold selects only the root"
+    );
 }
 
 #[test]
@@ -124,7 +192,11 @@ fn lru_evicts_oldest_first_within_budget() {
     assert_eq!(c.used_bytes(), 80);
     c.begin_frame();
     let ev = c.insert(4, "d", 90);
-    assert_eq!(ev.iter().map(|e| e.0).collect::<Vec<_>>(), vec![1, 3], "oldest first");
+    assert_eq!(
+        ev.iter().map(|e| e.0).collect::<Vec<_>>(),
+        vec![1, 3],
+        "oldest first"
+    );
     assert!(c.used_bytes() <= c.budget_bytes());
     // Entries used in the current frame are never evicted: the cache goes over budget instead.
     c.begin_frame();
@@ -143,14 +215,22 @@ fn missing_cells_fall_back_to_the_nearest_loaded_ancestor() {
     let cells = records(&Synth { levels: 3, ..SYNTH });
     let index = CellIndex::new(&cells);
     let id = |s: &str| cells.iter().position(|c| c.id == s).unwrap();
-    let selected = vec![id("2-0-0"), id("2-1-0"), id("1-1-0"), id("1-0-1"), id("1-1-1")];
+    let selected = vec![
+        id("2-0-0"),
+        id("2-1-0"),
+        id("1-1-0"),
+        id("1-0-1"),
+        id("1-1-1"),
+    ];
     let loaded = [id("0-0-0"), id("2-0-0"), id("1-1-0"), id("1-1-1")];
     let dl = resolve_draw_list(&selected, &cells, &index, |i| loaded.contains(&i));
     // 2-1-0 and 1-0-1 are missing: both fall back to the root, which hides everything else.
     assert_eq!(dl.draw, vec![id("0-0-0")]);
     assert_eq!(dl.missing, vec![id("1-0-1"), id("2-1-0")]);
     assert_eq!((dl.substituted, dl.holes), (2, 0));
-    let dl = resolve_draw_list(&selected[2..], &cells, &index, |i| i != id("0-0-0") && i != id("1-0-1"));
+    let dl = resolve_draw_list(&selected[2..], &cells, &index, |i| {
+        i != id("0-0-0") && i != id("1-0-1")
+    });
     assert_eq!(dl.draw, vec![id("1-1-0"), id("1-1-1")]);
     assert_eq!(dl.holes, 1);
 }
@@ -159,17 +239,31 @@ fn missing_cells_fall_back_to_the_nearest_loaded_ancestor() {
 fn streamer_loads_in_the_background_and_reports_errors() {
     let mut s: Streamer<usize> = Streamer::new(2, |i| {
         std::thread::sleep(Duration::from_millis(5));
-        if i == 13 { Err(cliffmap::Error::BadOption("thirteen".into())) } else { Ok(i * 10) }
+        if i == 13 {
+            Err(cliffmap::Error::BadOption("thirteen".into()))
+        } else {
+            Ok(i * 10)
+        }
     });
     assert!(s.request(1) && s.request(13) && s.request(2));
     assert!(!s.request(1), "a pending cell is not requested twice");
-    let mut got: Vec<(usize, Result<usize, String>)> =
-        s.poll().into_iter().map(|(i, r)| (i, r.map_err(|e| e.to_string()))).collect();
+    let mut got: Vec<(usize, Result<usize, String>)> = s
+        .poll()
+        .into_iter()
+        .map(|(i, r)| (i, r.map_err(|e| e.to_string())))
+        .collect();
     while let Some((i, r)) = s.wait_one() {
         got.push((i, r.map_err(|e| e.to_string())));
     }
     got.sort();
-    assert_eq!(got, vec![(1, Ok(10)), (2, Ok(20)), (13, Err("invalid option: thirteen".into()))]);
+    assert_eq!(
+        got,
+        vec![
+            (1, Ok(10)),
+            (2, Ok(20)),
+            (13, Err("invalid option: thirteen".into()))
+        ]
+    );
     assert_eq!(s.pending(), 0);
 }
 
@@ -188,7 +282,12 @@ fn default_flight_visits_the_steepest_cells_at_low_altitude() {
         version: 1,
         generator: "t".into(),
         crs: None,
-        georef: cliffmap::georef::GridGeoref { origin_x: X0, origin_y: Y0, spacing_x: 1.0, spacing_y: 1.0 },
+        georef: cliffmap::georef::GridGeoref {
+            origin_x: X0,
+            origin_y: Y0,
+            spacing_x: 1.0,
+            spacing_y: 1.0,
+        },
         dem: cliffmap::store::DemInfo {
             source: "t".into(),
             width: 2,
@@ -198,7 +297,12 @@ fn default_flight_visits_the_steepest_cells_at_low_altitude() {
             void_fraction: 0.0,
         },
         ortho: None,
-        quadtree: cliffmap::cells::Quadtree { dem_width: 33, dem_height: 33, finest_intervals: 8, levels: 3 },
+        quadtree: cliffmap::cells::Quadtree {
+            dem_width: 33,
+            dem_height: 33,
+            finest_intervals: 8,
+            levels: 3,
+        },
         max_error: 0.05,
         cell_texels: 16,
         build_key: "0".into(),

@@ -16,10 +16,20 @@ pub fn camera_from_json_file(path: &Path, default_size: (u32, u32)) -> Result<Ca
 }
 
 /// Parses camera JSON text; `path` names the source in errors. See [`camera_from_json_file`].
-pub fn camera_from_json_str(text: &str, path: &Path, default_size: (u32, u32)) -> Result<CameraModel> {
-    let v: Value = serde_json::from_str(text).map_err(|e| Error::bad_input(path, format!("invalid JSON: {e}")))?;
-    let obj = v.as_object().ok_or_else(|| Error::bad_input(path, "a camera must be a JSON object"))?;
-    let cam = if obj.keys().any(|k| k.starts_with("camera_xyz") || k.starts_with("viewdir_yaw_pitch_roll")) {
+pub fn camera_from_json_str(
+    text: &str,
+    path: &Path,
+    default_size: (u32, u32),
+) -> Result<CameraModel> {
+    let v: Value = serde_json::from_str(text)
+        .map_err(|e| Error::bad_input(path, format!("invalid JSON: {e}")))?;
+    let obj = v
+        .as_object()
+        .ok_or_else(|| Error::bad_input(path, "a camera must be a JSON object"))?;
+    let cam = if obj
+        .keys()
+        .any(|k| k.starts_with("camera_xyz") || k.starts_with("viewdir_yaw_pitch_roll"))
+    {
         imgraft(obj, path)?
     } else {
         cliffmap(obj, path, default_size)?
@@ -32,16 +42,30 @@ fn num(obj: &Map<String, Value>, key: &str, path: &Path) -> Result<Option<f64>> 
         None | Some(Value::Null) => Ok(None),
         Some(v) => match v.as_f64() {
             Some(x) if x.is_finite() => Ok(Some(x)),
-            _ => Err(Error::bad_input(path, format!("\"{key}\" must be a finite number, got {v}"))),
+            _ => Err(Error::bad_input(
+                path,
+                format!("\"{key}\" must be a finite number, got {v}"),
+            )),
         },
     }
 }
 
 fn nums(obj: &Map<String, Value>, key: &str, n: usize, path: &Path) -> Result<Option<Vec<f64>>> {
-    let Some(v) = obj.get(key) else { return Ok(None) };
-    let bad = || Error::bad_input(path, format!("\"{key}\" must be an array of {n} finite numbers, got {v}"));
+    let Some(v) = obj.get(key) else {
+        return Ok(None);
+    };
+    let bad = || {
+        Error::bad_input(
+            path,
+            format!("\"{key}\" must be an array of {n} finite numbers, got {v}"),
+        )
+    };
     let arr = v.as_array().ok_or_else(bad)?;
-    let out: Vec<f64> = arr.iter().map(|x| x.as_f64().filter(|x| x.is_finite())).collect::<Option<_>>().ok_or_else(bad)?;
+    let out: Vec<f64> = arr
+        .iter()
+        .map(|x| x.as_f64().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
     if out.len() != n {
         return Err(bad());
     }
@@ -54,38 +78,72 @@ fn size(obj: &Map<String, Value>, path: &Path) -> Result<Option<(u32, u32)>> {
         None => match (num(obj, "width", path)?, num(obj, "height", path)?) {
             (Some(w), Some(h)) => Some((w, h)),
             (None, None) => None,
-            _ => return Err(Error::bad_input(path, "give both \"width\" and \"height\" or neither")),
+            _ => {
+                return Err(Error::bad_input(
+                    path,
+                    "give both \"width\" and \"height\" or neither",
+                ));
+            }
         },
     };
     match pair {
         None => Ok(None),
-        Some((w, h)) if w >= 1.0 && h >= 1.0 && w <= 1e6 && h <= 1e6 && w.fract() == 0.0 && h.fract() == 0.0 => {
+        Some((w, h))
+            if w >= 1.0
+                && h >= 1.0
+                && w <= 1e6
+                && h <= 1e6
+                && w.fract() == 0.0
+                && h.fract() == 0.0 =>
+        {
             Ok(Some((w as u32, h as u32)))
         }
-        Some((w, h)) => Err(Error::bad_input(path, format!("image size {w} x {h} must be positive whole pixels"))),
+        Some((w, h)) => Err(Error::bad_input(
+            path,
+            format!("image size {w} x {h} must be positive whole pixels"),
+        )),
     }
 }
 
 fn imgraft(obj: &Map<String, Value>, path: &Path) -> Result<CameraModel> {
     // The position is the `camera_xyz...` key holding an array (e.g. `camera_xyz_utm33n_nn1954_m`;
     // sibling keys such as `camera_xyz_source` are notes).
-    let xyz_key = obj.iter().find(|(k, v)| k.starts_with("camera_xyz") && v.is_array()).map(|(k, _)| k.clone());
+    let xyz_key = obj
+        .iter()
+        .find(|(k, v)| k.starts_with("camera_xyz") && v.is_array())
+        .map(|(k, _)| k.clone());
     let xyz = match xyz_key {
         Some(k) => nums(obj, &k, 3, path)?.unwrap_or_default(),
-        None => return Err(Error::bad_input(path, "ImGRAFT camera without \"camera_xyz...\" position")),
+        None => {
+            return Err(Error::bad_input(
+                path,
+                "ImGRAFT camera without \"camera_xyz...\" position",
+            ));
+        }
     };
     let angles = if let Some(r) = nums(obj, "viewdir_yaw_pitch_roll_rad", 3, path)? {
         r
     } else if let Some(d) = nums(obj, "viewdir_yaw_pitch_roll_deg", 3, path)? {
         d.iter().map(|a| a.to_radians()).collect()
     } else {
-        return Err(Error::bad_input(path, "ImGRAFT camera needs \"viewdir_yaw_pitch_roll_rad\" or \"_deg\""));
+        return Err(Error::bad_input(
+            path,
+            "ImGRAFT camera needs \"viewdir_yaw_pitch_roll_rad\" or \"_deg\"",
+        ));
     };
-    let (w, h) = size(obj, path)?.ok_or_else(|| Error::bad_input(path, "ImGRAFT camera needs \"image_size_wh\""))?;
+    let (w, h) = size(obj, path)?
+        .ok_or_else(|| Error::bad_input(path, "ImGRAFT camera needs \"image_size_wh\""))?;
     let (fx, fy) = match obj.get("f_px") {
-        Some(Value::Array(_)) => nums(obj, "f_px", 2, path)?.map(|f| (f[0], f[1])).unwrap_or_default(),
+        Some(Value::Array(_)) => nums(obj, "f_px", 2, path)?
+            .map(|f| (f[0], f[1]))
+            .unwrap_or_default(),
         Some(_) => num(obj, "f_px", path)?.map(|f| (f, f)).unwrap_or_default(),
-        None => return Err(Error::bad_input(path, "ImGRAFT camera needs \"f_px\" (focal length in pixels)")),
+        None => {
+            return Err(Error::bad_input(
+                path,
+                "ImGRAFT camera needs \"f_px\" (focal length in pixels)",
+            ));
+        }
     };
     let (cx, cy) = if let Some(c) = nums(obj, "c_px_0based", 2, path)? {
         (c[0], c[1])
@@ -108,9 +166,14 @@ fn imgraft(obj: &Map<String, Value>, path: &Path) -> Result<CameraModel> {
     })
 }
 
-fn cliffmap(obj: &Map<String, Value>, path: &Path, default_size: (u32, u32)) -> Result<CameraModel> {
-    let p = nums(obj, "position", 3, path)?
-        .ok_or_else(|| Error::bad_input(path, "camera needs \"position\": [x, y, z] (world metres)"))?;
+fn cliffmap(
+    obj: &Map<String, Value>,
+    path: &Path,
+    default_size: (u32, u32),
+) -> Result<CameraModel> {
+    let p = nums(obj, "position", 3, path)?.ok_or_else(|| {
+        Error::bad_input(path, "camera needs \"position\": [x, y, z] (world metres)")
+    })?;
     let position = DVec3::new(p[0], p[1], p[2]);
     let rotation = if let Some(t) = nums(obj, "look_at", 3, path)? {
         rotation_look_at(position, DVec3::new(t[0], t[1], t[2]))
@@ -134,13 +197,19 @@ fn cliffmap(obj: &Map<String, Value>, path: &Path, default_size: (u32, u32)) -> 
     let fov = num(obj, "fov_y_deg", path)?;
     if let Some(f) = fov {
         if !(f > 0.0 && f < 180.0) {
-            return Err(Error::bad_input(path, format!("\"fov_y_deg\" must be in (0, 180), got {f}")));
+            return Err(Error::bad_input(
+                path,
+                format!("\"fov_y_deg\" must be in (0, 180), got {f}"),
+            ));
         }
     }
     let (fx, fy) = (num(obj, "fx", path)?, num(obj, "fy", path)?);
     let mut cam = match (fx.or(fy), fov) {
         (Some(_), _) if explicit.is_none() => {
-            return Err(Error::bad_input(path, "\"fx\"/\"fy\" are in pixels: give \"width\" and \"height\" too"));
+            return Err(Error::bad_input(
+                path,
+                "\"fx\"/\"fy\" are in pixels: give \"width\" and \"height\" too",
+            ));
         }
         (Some(f), _) => {
             let mut c = CameraModel::with_fov(position, rotation, w, h, 1.0);
@@ -149,7 +218,12 @@ fn cliffmap(obj: &Map<String, Value>, path: &Path, default_size: (u32, u32)) -> 
             c
         }
         (None, Some(f)) => CameraModel::with_fov(position, rotation, w, h, f.to_radians()),
-        (None, None) => return Err(Error::bad_input(path, "camera needs \"fov_y_deg\" (or \"fx\" with width/height)")),
+        (None, None) => {
+            return Err(Error::bad_input(
+                path,
+                "camera needs \"fov_y_deg\" (or \"fx\" with width/height)",
+            ));
+        }
     };
     if let Some(cx) = num(obj, "cx", path)? {
         cam.cx = cx;
@@ -164,7 +238,13 @@ fn cliffmap(obj: &Map<String, Value>, path: &Path, default_size: (u32, u32)) -> 
 
 fn validate(c: CameraModel, path: &Path) -> Result<CameraModel> {
     if !(c.fx > 0.0 && c.fy > 0.0) {
-        return Err(Error::bad_input(path, format!("focal lengths must be positive, got fx {} fy {}", c.fx, c.fy)));
+        return Err(Error::bad_input(
+            path,
+            format!(
+                "focal lengths must be positive, got fx {} fy {}",
+                c.fx, c.fy
+            ),
+        ));
     }
     if !c.position.is_finite() || !c.world_to_camera.is_finite() {
         return Err(Error::bad_input(path, "camera pose is not finite"));
@@ -182,14 +262,18 @@ mod tests {
 
     #[test]
     fn cliffmap_forms() {
-        let a = parse(r#"{"position":[1,2,3],"yaw_deg":90,"pitch_deg":10,"fov_y_deg":60}"#).unwrap();
+        let a =
+            parse(r#"{"position":[1,2,3],"yaw_deg":90,"pitch_deg":10,"fov_y_deg":60}"#).unwrap();
         assert_eq!((a.width, a.height), (640, 480));
         assert!((a.fov_y().to_degrees() - 60.0).abs() < 1e-9);
         assert!((a.forward().y - 10f64.to_radians().cos()).abs() < 1e-12);
         let b = parse(r#"{"position":[0,0,10],"look_at":[0,100,10],"fov_y_deg":45,"width":200,"height":100,"k1":-0.1}"#)
             .unwrap();
         assert_eq!((b.width, b.height, b.k1), (200, 100, -0.1));
-        let c = parse(r#"{"position":[0,0,0],"look_at":[1,0,0],"fx":100,"width":200,"height":100,"cx":90}"#).unwrap();
+        let c = parse(
+            r#"{"position":[0,0,0],"look_at":[1,0,0],"fx":100,"width":200,"height":100,"cx":90}"#,
+        )
+        .unwrap();
         assert_eq!((c.fx, c.fy, c.cx), (100.0, 100.0, 90.0));
     }
 

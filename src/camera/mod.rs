@@ -62,7 +62,10 @@ pub fn rotation_from_yaw_pitch_roll(yaw: f64, pitch: f64, roll: f64) -> DMat3 {
 /// the two points coincide or are not finite.
 pub fn rotation_look_at(position: DVec3, target: DVec3) -> Option<DMat3> {
     let forward = (target - position).try_normalize()?;
-    let right = forward.cross(DVec3::Z).try_normalize().or_else(|| forward.cross(DVec3::Y).try_normalize())?;
+    let right = forward
+        .cross(DVec3::Z)
+        .try_normalize()
+        .or_else(|| forward.cross(DVec3::Y).try_normalize())?;
     let down = forward.cross(right);
     Some(DMat3::from_cols(right, down, forward).transpose())
 }
@@ -70,7 +73,13 @@ pub fn rotation_look_at(position: DVec3, target: DVec3) -> Option<DMat3> {
 impl CameraModel {
     /// A distortion-free camera for a `width × height` image with vertical field of view
     /// `fov_y` (radians, in (0, π)), square pixels and the principal point at the image centre.
-    pub fn with_fov(position: DVec3, world_to_camera: DMat3, width: u32, height: u32, fov_y: f64) -> CameraModel {
+    pub fn with_fov(
+        position: DVec3,
+        world_to_camera: DMat3,
+        width: u32,
+        height: u32,
+        fov_y: f64,
+    ) -> CameraModel {
         let f = height as f64 / 2.0 / (fov_y / 2.0).tan();
         CameraModel {
             position,
@@ -151,7 +160,11 @@ mod tests {
         let yaw = 0.7f64;
         let pitch = 0.2f64;
         let a = rotation_from_yaw_pitch_roll(yaw, pitch, 0.0);
-        let dir = DVec3::new(pitch.cos() * yaw.cos(), pitch.cos() * yaw.sin(), -pitch.sin());
+        let dir = DVec3::new(
+            pitch.cos() * yaw.cos(),
+            pitch.cos() * yaw.sin(),
+            -pitch.sin(),
+        );
         let b = rotation_look_at(DVec3::ZERO, dir).unwrap();
         assert!((a.row(0) - b.row(0)).length() < 1e-12 && (a.row(1) - b.row(1)).length() < 1e-12);
     }

@@ -69,10 +69,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         None => FlightPath::default_for(&scene.store().manifest)?,
     };
     let cams = path.cameras(a.frames.max(2), w, h);
-    eprintln!("adapter: {}; {} frames at {w}x{h}, mode {name}", scene.gpu().describe(), cams.len());
+    eprintln!(
+        "adapter: {}; {} frames at {w}x{h}, mode {name}",
+        scene.gpu().describe(),
+        cams.len()
+    );
     let report = fly(&mut scene, &cams, name, a.sse, a.budget)?;
     let text = serde_json::to_string_pretty(&report)?;
-    write_atomic(&a.out, text.as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
+    write_atomic(&a.out, text.as_bytes())
+        .with_context(|| format!("writing {}", a.out.display()))?;
     println!("{text}");
     Ok(())
 }

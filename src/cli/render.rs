@@ -34,11 +34,20 @@ pub struct Args {
 
 /// Parses `WxH` into positive pixel counts.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
-    let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| (1..=16384).contains(&n));
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+    };
     match (p(w), p(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(format!("expected WIDTHxHEIGHT with each side in 1..=16384, got {s:?}")),
+        _ => Err(format!(
+            "expected WIDTHxHEIGHT with each side in 1..=16384, got {s:?}"
+        )),
     }
 }
 
@@ -49,7 +58,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = SceneOptions {
         sse_px: a.sse,
         uv_mode: UvMode::Mixed,
-        frame: FrameOptions { lit: !a.unlit, level_overlay: a.levels, ..Default::default() },
+        frame: FrameOptions {
+            lit: !a.unlit,
+            level_overlay: a.levels,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;

@@ -24,7 +24,12 @@ struct Entry<V> {
 impl<V> LruCache<V> {
     /// An empty cache holding at most `budget_bytes` (except as described on the type).
     pub fn new(budget_bytes: u64) -> LruCache<V> {
-        LruCache { entries: HashMap::new(), budget: budget_bytes, used: 0, frame: 0 }
+        LruCache {
+            entries: HashMap::new(),
+            budget: budget_bytes,
+            used: 0,
+            frame: 0,
+        }
     }
 
     /// Starts a new frame: entries used from now on are protected from eviction until the next call.
@@ -72,7 +77,14 @@ impl<V> LruCache<V> {
             }
         }
         self.used += bytes;
-        self.entries.insert(key, Entry { value, bytes, last_used: self.frame });
+        self.entries.insert(
+            key,
+            Entry {
+                value,
+                bytes,
+                last_used: self.frame,
+            },
+        );
         evicted
     }
 

@@ -21,7 +21,14 @@ pub struct RenderCamera {
 impl RenderCamera {
     /// A render camera with near plane `near` metres (clamped to at least 1 mm).
     pub fn new(model: CameraModel, near: f64) -> RenderCamera {
-        RenderCamera { model, near: if near.is_finite() { near.max(1e-3) } else { 0.1 } }
+        RenderCamera {
+            model,
+            near: if near.is_finite() {
+                near.max(1e-3)
+            } else {
+                0.1
+            },
+        }
     }
 
     /// Projection from the camera frame (x right, y down, z forward) to clip space.
@@ -40,14 +47,20 @@ impl RenderCamera {
     /// Maps camera-relative world coordinates (world − position, metres) to clip space.
     pub fn view_proj_relative(&self) -> DMat4 {
         let r = self.model.world_to_camera;
-        let view = DMat4::from_cols(r.x_axis.extend(0.0), r.y_axis.extend(0.0), r.z_axis.extend(0.0), DVec4::W);
+        let view = DMat4::from_cols(
+            r.x_axis.extend(0.0),
+            r.y_axis.extend(0.0),
+            r.z_axis.extend(0.0),
+            DVec4::W,
+        );
         self.projection() * view
     }
 
     /// Model-view-projection (f32) for a mesh whose local frame has its origin at world `origin`:
     /// the offset `origin − position` is taken in f64 before rounding.
     pub fn mvp_for_origin(&self, origin: DVec3) -> Mat4 {
-        (self.view_proj_relative() * DMat4::from_translation(origin - self.model.position)).as_mat4()
+        (self.view_proj_relative() * DMat4::from_translation(origin - self.model.position))
+            .as_mat4()
     }
 
     /// The view frustum in camera-relative world coordinates.
@@ -77,9 +90,15 @@ mod tests {
         let local = glam::Vec3::new(12.25, -3.5, 40.0);
         let clip = cam.mvp_for_origin(origin) * local.extend(1.0);
         let ndc = clip.truncate() / clip.w;
-        let px = [(ndc.x as f64 + 1.0) / 2.0 * 320.0 - 0.5, (1.0 - ndc.y as f64) / 2.0 * 200.0 - 0.5];
+        let px = [
+            (ndc.x as f64 + 1.0) / 2.0 * 320.0 - 0.5,
+            (1.0 - ndc.y as f64) / 2.0 * 200.0 - 0.5,
+        ];
         let want = model.project(origin + local.as_dvec3()).unwrap();
-        assert!((px[0] - want[0]).abs() < 1e-3 && (px[1] - want[1]).abs() < 1e-3, "{px:?} vs {want:?}");
+        assert!(
+            (px[0] - want[0]).abs() < 1e-3 && (px[1] - want[1]).abs() < 1e-3,
+            "{px:?} vs {want:?}"
+        );
         assert!(ndc.z > 0.0 && ndc.z < 1.0);
     }
 }

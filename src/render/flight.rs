@@ -33,15 +33,18 @@ impl FlightPath {
     /// Reads a path file (`{"fov_y_deg": 60, "keys": [{"position": [...], "look_at": [...]}, ...]}`).
     pub fn from_json_file(path: &Path) -> Result<FlightPath> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let p: FlightPath =
-            serde_json::from_str(&text).map_err(|e| Error::bad_input(path, format!("invalid flight path: {e}")))?;
+        let p: FlightPath = serde_json::from_str(&text)
+            .map_err(|e| Error::bad_input(path, format!("invalid flight path: {e}")))?;
         p.validate().map_err(|m| Error::bad_input(path, m))?;
         Ok(p)
     }
 
     fn validate(&self) -> std::result::Result<(), String> {
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
-            return Err(format!("fov_y_deg must be in (0, 180), got {}", self.fov_y_deg));
+            return Err(format!(
+                "fov_y_deg must be in (0, 180), got {}",
+                self.fov_y_deg
+            ));
         }
         if self.keys.len() < 2 {
             return Err("a flight path needs at least two keys".into());
@@ -49,7 +52,9 @@ impl FlightPath {
         for (i, k) in self.keys.iter().enumerate() {
             let (p, t) = (DVec3::from(k.position), DVec3::from(k.look_at));
             if !p.is_finite() || !t.is_finite() || (p - t).length() < 1e-6 {
-                return Err(format!("key {i}: position and look_at must be finite and distinct"));
+                return Err(format!(
+                    "key {i}: position and look_at must be finite and distinct"
+                ));
             }
         }
         Ok(())
@@ -60,19 +65,33 @@ impl FlightPath {
     /// greedy nearest-neighbour order starting with the steepest, at half a finest cell width
     /// above each cell's highest point, looking at the next cell.
     pub fn default_for(m: &Manifest) -> Result<FlightPath> {
-        let finest = m.cells.iter().map(|c| c.level).max().ok_or_else(|| Error::BadOption("store has no cells".into()))?;
+        let finest = m
+            .cells
+            .iter()
+            .map(|c| c.level)
+            .max()
+            .ok_or_else(|| Error::BadOption("store has no cells".into()))?;
         let mut cand: Vec<(f64, usize)> = m
             .cells
             .iter()
             .enumerate()
             .filter(|(_, c)| c.level == finest)
-            .map(|(i, c)| ((c.bbox_max[2] - c.bbox_min[2]) / c.extent.width().abs().max(1e-9), i))
+            .map(|(i, c)| {
+                (
+                    (c.bbox_max[2] - c.bbox_min[2]) / c.extent.width().abs().max(1e-9),
+                    i,
+                )
+            })
             .collect();
         cand.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         cand.truncate(12);
         let centre = |i: usize| {
             let c = &m.cells[i];
-            DVec3::new((c.extent.min_x + c.extent.max_x) / 2.0, (c.extent.min_y + c.extent.max_y) / 2.0, c.bbox_max[2])
+            DVec3::new(
+                (c.extent.min_x + c.extent.max_x) / 2.0,
+                (c.extent.min_y + c.extent.max_y) / 2.0,
+                c.bbox_max[2],
+            )
         };
         let mut order = vec![cand[0].1];
         let mut rest: Vec<usize> = cand[1..].iter().map(|c| c.1).collect();
@@ -81,27 +100,49 @@ impl FlightPath {
             let (k, _) = rest
                 .iter()
                 .enumerate()
-                .min_by(|a, b| (centre(*a.1) - last).length().total_cmp(&(centre(*b.1) - last).length()))
+                .min_by(|a, b| {
+                    (centre(*a.1) - last)
+                        .length()
+                        .total_cmp(&(centre(*b.1) - last).length())
+                })
                 .unwrap_or((0, &0));
             order.push(rest.remove(k));
         }
         let width = m.cells[order[0]].extent.width().abs();
         let clearance = 0.5 * width;
-        let mut pts: Vec<DVec3> = order.iter().map(|&i| centre(i) + DVec3::new(0.0, 0.0, clearance)).collect();
+        let mut pts: Vec<DVec3> = order
+            .iter()
+            .map(|&i| centre(i) + DVec3::new(0.0, 0.0, clearance))
+            .collect();
         if pts.len() < 2 {
             // A single cell: fly across it from west to east.
             let p = pts[0];
-            pts = vec![p - DVec3::new(width, 0.0, 0.0), p + DVec3::new(width, 0.0, 0.0)];
+            pts = vec![
+                p - DVec3::new(width, 0.0, 0.0),
+                p + DVec3::new(width, 0.0, 0.0),
+            ];
         }
         let keys = (0..pts.len())
             .map(|i| {
-                let dir = if i + 1 < pts.len() { pts[i + 1] - pts[i] } else { pts[i] - pts[i - 1] };
-                let flat = DVec3::new(dir.x, dir.y, 0.0).try_normalize().unwrap_or(DVec3::X);
+                let dir = if i + 1 < pts.len() {
+                    pts[i + 1] - pts[i]
+                } else {
+                    pts[i] - pts[i - 1]
+                };
+                let flat = DVec3::new(dir.x, dir.y, 0.0)
+                    .try_normalize()
+                    .unwrap_or(DVec3::X);
                 let target = pts[i] + flat * width - DVec3::new(0.0, 0.0, clearance * 1.5);
-                FlightKey { position: pts[i].to_array(), look_at: target.to_array() }
+                FlightKey {
+                    position: pts[i].to_array(),
+                    look_at: target.to_array(),
+                }
             })
             .collect();
-        let p = FlightPath { fov_y_deg: 60.0, keys };
+        let p = FlightPath {
+            fov_y_deg: 60.0,
+            keys,
+        };
         p.validate().map_err(Error::BadOption)?;
         Ok(p)
     }
@@ -118,10 +159,20 @@ impl FlightPath {
         let total = cum[cum.len() - 1];
         (0..frames)
             .map(|f| {
-                let s = if frames > 1 { total * f as f64 / (frames - 1) as f64 } else { 0.0 };
-                let seg = (1..cum.len()).find(|&j| cum[j] >= s).unwrap_or(cum.len() - 1);
+                let s = if frames > 1 {
+                    total * f as f64 / (frames - 1) as f64
+                } else {
+                    0.0
+                };
+                let seg = (1..cum.len())
+                    .find(|&j| cum[j] >= s)
+                    .unwrap_or(cum.len() - 1);
                 let len = cum[seg] - cum[seg - 1];
-                let t = if len > 0.0 { ((s - cum[seg - 1]) / len).clamp(0.0, 1.0) } else { 0.0 };
+                let t = if len > 0.0 {
+                    ((s - cum[seg - 1]) / len).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 let p = pts[seg - 1].lerp(pts[seg], t);
                 let mut target = tgs[seg - 1].lerp(tgs[seg], t);
                 if (target - p).length() < 1e-6 {
@@ -194,8 +245,16 @@ pub fn percentile(v: &[f64], q: f64) -> f64 {
 
 /// Flies `cams`: the first camera is a warm-up frame that waits for its cells; the others
 /// never wait for loads. `mode` and `budget` are copied into the report.
-pub fn fly(scene: &mut TerrainScene, cams: &[CameraModel], mode: &str, sse_px: f64, budget: u64) -> Result<FlyReport> {
-    let (first, rest) = cams.split_first().ok_or_else(|| Error::BadOption("a flight needs at least 2 frames".into()))?;
+pub fn fly(
+    scene: &mut TerrainScene,
+    cams: &[CameraModel],
+    mode: &str,
+    sse_px: f64,
+    budget: u64,
+) -> Result<FlyReport> {
+    let (first, rest) = cams
+        .split_first()
+        .ok_or_else(|| Error::BadOption("a flight needs at least 2 frames".into()))?;
     if rest.is_empty() {
         return Err(Error::BadOption("a flight needs at least 2 frames".into()));
     }
@@ -220,11 +279,28 @@ pub fn fly(scene: &mut TerrainScene, cams: &[CameraModel], mode: &str, sse_px: f
         fps_p5: percentile(&fps, 0.05),
         frame_ms_median: percentile(&ms, 0.5),
         frame_ms_p95: percentile(&ms, 0.95),
-        triangles_per_frame_median: percentile(&reports.iter().map(|r| r.triangles as f64).collect::<Vec<_>>(), 0.5),
-        cells_per_frame_median: percentile(&reports.iter().map(|r| r.drawn as f64).collect::<Vec<_>>(), 0.5),
-        gpu_bytes_max: reports.iter().map(|r| r.gpu_bytes).chain([warm.gpu_bytes]).max().unwrap_or(0),
+        triangles_per_frame_median: percentile(
+            &reports
+                .iter()
+                .map(|r| r.triangles as f64)
+                .collect::<Vec<_>>(),
+            0.5,
+        ),
+        cells_per_frame_median: percentile(
+            &reports.iter().map(|r| r.drawn as f64).collect::<Vec<_>>(),
+            0.5,
+        ),
+        gpu_bytes_max: reports
+            .iter()
+            .map(|r| r.gpu_bytes)
+            .chain([warm.gpu_bytes])
+            .max()
+            .unwrap_or(0),
         gpu_budget_bytes: budget,
-        load_stall_frames: reports.iter().filter(|r| r.substituted + r.holes > 0).count(),
+        load_stall_frames: reports
+            .iter()
+            .filter(|r| r.substituted + r.holes > 0)
+            .count(),
         substituted_cells: reports.iter().map(|r| r.substituted).sum(),
         hole_cells: reports.iter().map(|r| r.holes).sum(),
         uploads: reports.iter().map(|r| r.uploads).sum(),

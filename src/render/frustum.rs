@@ -19,7 +19,15 @@ impl Frustum {
             let l = p.truncate().length();
             if l > 0.0 { p / l } else { p }
         };
-        Frustum { planes: [norm(r3 + r0), norm(r3 - r0), norm(r3 + r1), norm(r3 - r1), norm(r3 - r2)] }
+        Frustum {
+            planes: [
+                norm(r3 + r0),
+                norm(r3 - r0),
+                norm(r3 + r1),
+                norm(r3 - r1),
+                norm(r3 - r2),
+            ],
+        }
     }
 
     /// True if the axis-aligned box `[min, max]` may intersect the frustum (conservative:
@@ -37,7 +45,9 @@ impl Frustum {
 
     /// True if `p` is inside all planes.
     pub fn contains_point(&self, p: DVec3) -> bool {
-        self.planes.iter().all(|pl| pl.truncate().dot(p) + pl.w >= 0.0)
+        self.planes
+            .iter()
+            .all(|pl| pl.truncate().dot(p) + pl.w >= 0.0)
     }
 }
 

@@ -31,7 +31,8 @@ impl GpuContext {
     /// Opens the default adapter without a window (backends from `WGPU_BACKEND` if set).
     /// Errors name what is missing (e.g. Mesa's lavapipe/llvmpipe drivers on a machine without GPU).
     pub fn new() -> Result<GpuContext> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()
@@ -52,13 +53,26 @@ impl GpuContext {
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))
-        .map_err(|e| Error::Gpu(format!("cannot open device on {} ({:?}): {e}", info.name, info.backend)))?;
-        Ok(GpuContext { adapter, device, queue, info })
+        .map_err(|e| {
+            Error::Gpu(format!(
+                "cannot open device on {} ({:?}): {e}",
+                info.name, info.backend
+            ))
+        })?;
+        Ok(GpuContext {
+            adapter,
+            device,
+            queue,
+            info,
+        })
     }
 
     /// "name (backend, device type)" for reports.
     pub fn describe(&self) -> String {
-        format!("{} ({:?}, {:?})", self.info.name, self.info.backend, self.info.device_type)
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
     }
 }
 
@@ -91,14 +105,29 @@ pub enum UvMode {
 impl CellData {
     /// Builds upload data: generates the mip chains (Triangle filter, each level half the
     /// previous, at least 1 texel) and the UV stream `mode` calls for.
-    pub fn new(rec: &CellRecord, mesh: CellMesh, colour: image::RgbaImage, normal: image::RgbImage, mode: UvMode) -> CellData {
+    pub fn new(
+        rec: &CellRecord,
+        mesh: CellMesh,
+        colour: image::RgbaImage,
+        normal: image::RgbImage,
+        mode: UvMode,
+    ) -> CellData {
         let uvs = match (mode, rec.parameterization) {
             (UvMode::Ortho, _) => None,
             (UvMode::Mixed, Parameterization::Ortho) => None,
-            _ => Some((0..mesh.positions.len()).map(|i| texcoord(rec, &mesh, i)).collect()),
+            _ => Some(
+                (0..mesh.positions.len())
+                    .map(|i| texcoord(rec, &mesh, i))
+                    .collect(),
+            ),
         };
         let normal = image::DynamicImage::ImageRgb8(normal).to_rgba8();
-        CellData { mesh, uvs, colour_mips: mip_chain(colour), normal_mips: mip_chain(normal) }
+        CellData {
+            mesh,
+            uvs,
+            colour_mips: mip_chain(colour),
+            normal_mips: mip_chain(normal),
+        }
     }
 }
 
@@ -111,7 +140,12 @@ pub fn mip_chain(img: image::RgbaImage) -> Vec<image::RgbaImage> {
         if w <= 1 && h <= 1 {
             return out;
         }
-        let next = image::imageops::resize(last, (w / 2).max(1), (h / 2).max(1), image::imageops::FilterType::Triangle);
+        let next = image::imageops::resize(
+            last,
+            (w / 2).max(1),
+            (h / 2).max(1),
+            image::imageops::FilterType::Triangle,
+        );
         out.push(next);
     }
 }
@@ -184,7 +218,11 @@ pub struct TerrainRenderer {
 
 fn srgb_to_linear(c: u8) -> f64 {
     let c = c as f64 / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 fn level_tint(level: u8) -> [f32; 4] {
@@ -211,7 +249,9 @@ impl TerrainRenderer {
     pub fn new(ctx: GpuContext, width: u32, height: u32) -> Result<TerrainRenderer> {
         let max = ctx.device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
-            return Err(Error::BadOption(format!("frame size {width}x{height} must be within 1..={max} per side")));
+            return Err(Error::BadOption(format!(
+                "frame size {width}x{height} must be within 1..={max} per side"
+            )));
         }
         let device = &ctx.device;
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -263,12 +303,20 @@ impl TerrainRenderer {
         let pos_layout = wgpu::VertexBufferLayout {
             array_stride: 12,
             step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x3, offset: 0, shader_location: 0 }],
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x3,
+                offset: 0,
+                shader_location: 0,
+            }],
         };
         let uv_layout = wgpu::VertexBufferLayout {
             array_stride: 8,
             step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &[wgpu::VertexAttribute { format: wgpu::VertexFormat::Float32x2, offset: 0, shader_location: 1 }],
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x2,
+                offset: 0,
+                shader_location: 1,
+            }],
         };
         let make = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout>]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -348,8 +396,16 @@ impl TerrainRenderer {
         })
     }
 
-    fn targets(device: &wgpu::Device, width: u32, height: u32) -> (wgpu::Texture, wgpu::TextureView, wgpu::TextureView) {
-        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+    fn targets(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+    ) -> (wgpu::Texture, wgpu::TextureView, wgpu::TextureView) {
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
         let colour = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("colour target"),
             size,
@@ -394,7 +450,10 @@ impl TerrainRenderer {
             label: Some("frame"),
             layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                },
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -417,11 +476,20 @@ impl TerrainRenderer {
         self.height
     }
 
-    fn texture(&self, label: &str, mips: &[image::RgbaImage], format: wgpu::TextureFormat) -> (wgpu::Texture, u64) {
+    fn texture(
+        &self,
+        label: &str,
+        mips: &[image::RgbaImage],
+        format: wgpu::TextureFormat,
+    ) -> (wgpu::Texture, u64) {
         let (w, h) = mips[0].dimensions();
         let tex = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
-            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
             mip_level_count: mips.len() as u32,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -440,8 +508,16 @@ impl TerrainRenderer {
                     aspect: wgpu::TextureAspect::All,
                 },
                 img.as_raw(),
-                wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * mw), rows_per_image: Some(mh) },
-                wgpu::Extent3d { width: mw, height: mh, depth_or_array_layers: 1 },
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(4 * mw),
+                    rows_per_image: Some(mh),
+                },
+                wgpu::Extent3d {
+                    width: mw,
+                    height: mh,
+                    depth_or_array_layers: 1,
+                },
             );
             bytes += img.as_raw().len() as u64;
         }
@@ -451,10 +527,16 @@ impl TerrainRenderer {
     /// Uploads a cell. Fails on an empty mesh or texture, or a texture over the device limit.
     pub fn upload(&self, rec: &CellRecord, data: &CellData) -> Result<GpuCell> {
         let max = self.ctx.device.limits().max_texture_dimension_2d;
-        for (what, mips) in [("texture", &data.colour_mips), ("normal map", &data.normal_mips)] {
+        for (what, mips) in [
+            ("texture", &data.colour_mips),
+            ("normal map", &data.normal_mips),
+        ] {
             let (w, h) = mips.first().map(|m| m.dimensions()).unwrap_or((0, 0));
             if w == 0 || h == 0 || w > max || h > max {
-                return Err(Error::Gpu(format!("cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})", rec.id)));
+                return Err(Error::Gpu(format!(
+                    "cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})",
+                    rec.id
+                )));
             }
         }
         if data.mesh.triangles.is_empty() {
@@ -462,7 +544,13 @@ impl TerrainRenderer {
         }
         let device = &self.ctx.device;
         let pos: Vec<f32> = data.mesh.positions.iter().flatten().copied().collect();
-        let idx: Vec<u8> = data.mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+        let idx: Vec<u8> = data
+            .mesh
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
         let positions = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("positions"),
             contents: &f32_bytes(&pos),
@@ -481,22 +569,40 @@ impl TerrainRenderer {
             contents: &idx,
             usage: wgpu::BufferUsages::INDEX,
         });
-        let (colour, cb) = self.texture("colour", &data.colour_mips, wgpu::TextureFormat::Rgba8UnormSrgb);
-        let (normal, nb) = self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
+        let (colour, cb) = self.texture(
+            "colour",
+            &data.colour_mips,
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        );
+        let (normal, nb) =
+            self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
         let cv = colour.create_view(&Default::default());
         let nv = normal.create_view(&Default::default());
         let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&rec.id),
             layout: &self.cell_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&cv) },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&nv) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&cv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
             ],
         });
         let origin = DVec3::from(rec.origin);
         let e = rec.extent;
-        let bytes = pos.len() as u64 * 4 + idx.len() as u64 + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8) + cb + nb;
+        let bytes = pos.len() as u64 * 4
+            + idx.len() as u64
+            + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+            + cb
+            + nb;
         Ok(GpuCell {
             positions,
             uvs,
@@ -518,7 +624,12 @@ impl TerrainRenderer {
 
     /// Renders `cells` seen from `cam` into the target and waits until the GPU is done.
     /// `cam` must have the target's size. Returns the number of triangles drawn.
-    pub fn render(&mut self, cam: &RenderCamera, cells: &[&GpuCell], opts: &FrameOptions) -> Result<u64> {
+    pub fn render(
+        &mut self,
+        cam: &RenderCamera,
+        cells: &[&GpuCell],
+        opts: &FrameOptions,
+    ) -> Result<u64> {
         if cam.model.width != self.width || cam.model.height != self.height {
             return Err(Error::BadOption(format!(
                 "camera is {}x{} but the target is {}x{}",
@@ -529,11 +640,23 @@ impl TerrainRenderer {
         if cells.len() as u64 > self.draw_capacity {
             self.draw_capacity = (cells.len() as u64).next_power_of_two();
             self.draw_buf = Self::draw_buffer(device, self.draw_capacity);
-            self.frame_group = Self::frame_group(device, &self.frame_layout, &self.frame_buf, &self.draw_buf);
+            self.frame_group =
+                Self::frame_group(device, &self.frame_layout, &self.frame_buf, &self.draw_buf);
         }
         let sun = opts.sun_dir.try_normalize().unwrap_or(DVec3::Z).as_vec3();
-        let frame = [sun.x, sun.y, sun.z, 0.0, f32::from(u8::from(opts.lit)), opts.ambient.clamp(0.0, 1.0), f32::from(u8::from(opts.level_overlay)), 0.0];
-        self.ctx.queue.write_buffer(&self.frame_buf, 0, &f32_bytes(&frame));
+        let frame = [
+            sun.x,
+            sun.y,
+            sun.z,
+            0.0,
+            f32::from(u8::from(opts.lit)),
+            opts.ambient.clamp(0.0, 1.0),
+            f32::from(u8::from(opts.level_overlay)),
+            0.0,
+        ];
+        self.ctx
+            .queue
+            .write_buffer(&self.frame_buf, 0, &f32_bytes(&frame));
         if !cells.is_empty() {
             let mut draws = vec![0u8; cells.len() * DRAW_STRIDE as usize];
             for (i, c) in cells.iter().enumerate() {
@@ -541,12 +664,15 @@ impl TerrainRenderer {
                 v.extend_from_slice(&c.extent_rel);
                 v.extend_from_slice(&level_tint(c.level));
                 let b = f32_bytes(&v);
-                draws[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()].copy_from_slice(&b);
+                draws[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
+                    .copy_from_slice(&b);
             }
             self.ctx.queue.write_buffer(&self.draw_buf, 0, &draws);
         }
         let sky = opts.sky.map(srgb_to_linear);
-        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
         let mut triangles = 0u64;
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -556,13 +682,21 @@ impl TerrainRenderer {
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color { r: sky[0], g: sky[1], b: sky[2], a: 1.0 }),
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: sky[0],
+                            g: sky[1],
+                            b: sky[2],
+                            a: 1.0,
+                        }),
                         store: wgpu::StoreOp::Store,
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.depth_view,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Discard }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: None,
@@ -596,14 +730,17 @@ impl TerrainRenderer {
     pub fn read_rgba(&self) -> Result<image::RgbaImage> {
         let device = &self.ctx.device;
         let row = 4 * self.width;
-        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded =
+            row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: padded as u64 * self.height as u64,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
         enc.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
                 texture: &self.colour,
@@ -613,9 +750,17 @@ impl TerrainRenderer {
             },
             wgpu::TexelCopyBufferInfo {
                 buffer: &buf,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(self.height) },
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(self.height),
+                },
             },
-            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
         );
         self.ctx.queue.submit([enc.finish()]);
         let (tx, rx) = std::sync::mpsc::channel();
@@ -630,12 +775,17 @@ impl TerrainRenderer {
             .map_err(|e| Error::Gpu(format!("cannot map the readback buffer: {e}")))?;
         let mut out = Vec::with_capacity((row * self.height) as usize);
         {
-            let view = buf.get_mapped_range(..).map_err(|e| Error::Gpu(format!("cannot read the readback buffer: {e}")))?;
+            let view = buf
+                .get_mapped_range(..)
+                .map_err(|e| Error::Gpu(format!("cannot read the readback buffer: {e}")))?;
             for r in 0..self.height as usize {
-                out.extend_from_slice(&view[r * padded as usize..r * padded as usize + row as usize]);
+                out.extend_from_slice(
+                    &view[r * padded as usize..r * padded as usize + row as usize],
+                );
             }
         }
         buf.unmap();
-        image::RgbaImage::from_raw(self.width, self.height, out).ok_or_else(|| Error::Gpu("readback size mismatch".into()))
+        image::RgbaImage::from_raw(self.width, self.height, out)
+            .ok_or_else(|| Error::Gpu("readback size mismatch".into()))
     }
 }

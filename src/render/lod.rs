@@ -19,8 +19,17 @@ pub struct CellIndex {
 impl CellIndex {
     /// Indexes `cells` (a manifest's cell list). Roots are the level-0 cells.
     pub fn new(cells: &[CellRecord]) -> CellIndex {
-        let by_key: HashMap<CellKey, usize> = cells.iter().enumerate().map(|(i, c)| (c.key(), i)).collect();
-        let roots = cells.iter().enumerate().filter(|(_, c)| c.level == 0).map(|(i, _)| i).collect();
+        let by_key: HashMap<CellKey, usize> = cells
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.key(), i))
+            .collect();
+        let roots = cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.level == 0)
+            .map(|(i, _)| i)
+            .collect();
         CellIndex { by_key, roots }
     }
 
@@ -40,7 +49,11 @@ impl CellIndex {
     }
 
     /// Index of the nearest ancestor of `key` that satisfies `pred`, if any.
-    pub fn ancestor_where(&self, key: CellKey, mut pred: impl FnMut(usize) -> bool) -> Option<usize> {
+    pub fn ancestor_where(
+        &self,
+        key: CellKey,
+        mut pred: impl FnMut(usize) -> bool,
+    ) -> Option<usize> {
         let mut k = key.parent();
         while let Some(p) = k {
             if let Some(i) = self.get(p).filter(|&i| pred(i)) {
@@ -56,8 +69,16 @@ impl CellIndex {
 /// (`max_error`, or `epsilon` if that is not a finite non-negative number) and half a texel
 /// of its texture (the texture's own approximation error).
 pub fn cell_error(rec: &CellRecord) -> f64 {
-    let geo = if rec.max_error.is_finite() && rec.max_error >= 0.0 { rec.max_error } else { rec.epsilon.max(0.0) };
-    let texel = if rec.texels > 0 { rec.extent.width().abs() / rec.texels as f64 } else { 0.0 };
+    let geo = if rec.max_error.is_finite() && rec.max_error >= 0.0 {
+        rec.max_error
+    } else {
+        rec.epsilon.max(0.0)
+    };
+    let texel = if rec.texels > 0 {
+        rec.extent.width().abs() / rec.texels as f64
+    } else {
+        0.0
+    };
     geo.max(0.5 * texel)
 }
 
@@ -71,7 +92,11 @@ pub fn distance_to_bbox(rec: &CellRecord, p: DVec3) -> f64 {
 /// `error · viewport_height / (2 · distance · tan(fov_y / 2))`; infinite inside the box.
 pub fn screen_space_error(rec: &CellRecord, cam: &RenderCamera) -> f64 {
     let d = distance_to_bbox(rec, cam.model.position);
-    if d <= 0.0 { f64::INFINITY } else { cell_error(rec) * cam.pixels_per_metre(d) }
+    if d <= 0.0 {
+        f64::INFINITY
+    } else {
+        cell_error(rec) * cam.pixels_per_metre(d)
+    }
 }
 
 /// Result of one LOD traversal.
@@ -88,7 +113,12 @@ pub struct LodSelection {
 /// Traverses the quadtree from its roots: a visible cell whose screen-space error exceeds
 /// `threshold_px` is replaced by its existing children; other visible cells are selected.
 /// Cells whose bounding box (extended down by the skirt) is outside the frustum are dropped.
-pub fn select_cells(cells: &[CellRecord], index: &CellIndex, cam: &RenderCamera, threshold_px: f64) -> LodSelection {
+pub fn select_cells(
+    cells: &[CellRecord],
+    index: &CellIndex,
+    cam: &RenderCamera,
+    threshold_px: f64,
+) -> LodSelection {
     let frustum = cam.frustum();
     let eye = cam.model.position;
     let mut out = LodSelection::default();
@@ -104,7 +134,13 @@ pub fn select_cells(cells: &[CellRecord], index: &CellIndex, cam: &RenderCamera,
         out.visited += 1;
         let before = stack.len();
         if screen_space_error(rec, cam) > threshold_px {
-            stack.extend(index.children(rec.key()).collect::<Vec<_>>().into_iter().rev());
+            stack.extend(
+                index
+                    .children(rec.key())
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .rev(),
+            );
         }
         if stack.len() == before {
             out.cells.push(i);

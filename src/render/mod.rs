@@ -15,7 +15,9 @@ mod stream;
 pub use cache::LruCache;
 pub use camera::RenderCamera;
 pub use frustum::Frustum;
-pub use lod::{CellIndex, LodSelection, cell_error, distance_to_bbox, screen_space_error, select_cells};
+pub use lod::{
+    CellIndex, LodSelection, cell_error, distance_to_bbox, screen_space_error, select_cells,
+};
 pub use stream::{DrawList, Streamer, resolve_draw_list};
 
 pub mod gpu;

@@ -77,13 +77,24 @@ pub struct TerrainScene {
 
 impl TerrainScene {
     /// Opens `store_dir` and a headless GPU target of `width × height`.
-    pub fn open(store_dir: &Path, width: u32, height: u32, opts: SceneOptions) -> Result<TerrainScene> {
+    pub fn open(
+        store_dir: &Path,
+        width: u32,
+        height: u32,
+        opts: SceneOptions,
+    ) -> Result<TerrainScene> {
         if !(opts.sse_px.is_finite() && opts.sse_px > 0.0) {
-            return Err(Error::BadOption(format!("screen-space error threshold must be > 0 px, got {}", opts.sse_px)));
+            return Err(Error::BadOption(format!(
+                "screen-space error threshold must be > 0 px, got {}",
+                opts.sse_px
+            )));
         }
         let store = Arc::new(Store::open(store_dir)?);
         if store.manifest.cells.iter().all(|c| c.level != 0) {
-            return Err(Error::store(store_dir.join("manifest.json"), "no root (level 0) cell"));
+            return Err(Error::store(
+                store_dir.join("manifest.json"),
+                "no root (level 0) cell",
+            ));
         }
         let renderer = TerrainRenderer::new(GpuContext::new()?, width, height)?;
         let index = CellIndex::new(&store.manifest.cells);
@@ -96,7 +107,14 @@ impl TerrainScene {
             let normal = loader_store.read_normal_map(rec)?;
             Ok(CellData::new(rec, mesh, colour, normal, mode))
         });
-        Ok(TerrainScene { store, index, renderer, cache: LruCache::new(opts.budget_bytes), streamer, opts })
+        Ok(TerrainScene {
+            store,
+            index,
+            renderer,
+            cache: LruCache::new(opts.budget_bytes),
+            streamer,
+            opts,
+        })
     }
 
     /// The opened store.
@@ -118,8 +136,20 @@ impl TerrainScene {
     /// (half the distance to the root bounding boxes, at least 0.25 m).
     pub fn render_camera(&self, model: &CameraModel) -> RenderCamera {
         let cells = &self.store.manifest.cells;
-        let d = self.index.roots().iter().map(|&i| distance_to_bbox(&cells[i], model.position)).fold(f64::INFINITY, f64::min);
-        RenderCamera::new(*model, if d.is_finite() { (0.5 * d).max(0.25) } else { 0.25 })
+        let d = self
+            .index
+            .roots()
+            .iter()
+            .map(|&i| distance_to_bbox(&cells[i], model.position))
+            .fold(f64::INFINITY, f64::min);
+        RenderCamera::new(
+            *model,
+            if d.is_finite() {
+                (0.5 * d).max(0.25)
+            } else {
+                0.25
+            },
+        )
     }
 
     fn accept(&mut self, i: usize, data: Result<CellData>) -> Result<()> {
@@ -143,7 +173,11 @@ impl TerrainScene {
         for &i in &sel.cells {
             self.cache.get(i);
         }
-        let mut report = FrameReport { selected: sel.cells.len(), culled: sel.culled, ..Default::default() };
+        let mut report = FrameReport {
+            selected: sel.cells.len(),
+            culled: sel.culled,
+            ..Default::default()
+        };
         for (i, data) in self.streamer.poll() {
             self.accept(i, data)?;
             report.uploads += 1;
@@ -154,16 +188,25 @@ impl TerrainScene {
             }
         }
         let eye = model.position;
-        let mut missing: Vec<usize> = sel.cells.iter().copied().filter(|&i| !self.cache.contains(i)).collect();
+        let mut missing: Vec<usize> = sel
+            .cells
+            .iter()
+            .copied()
+            .filter(|&i| !self.cache.contains(i))
+            .collect();
         missing.sort_by(|&a, &b| {
-            distance_to_bbox(&cells[a], eye).total_cmp(&distance_to_bbox(&cells[b], eye)).then(a.cmp(&b))
+            distance_to_bbox(&cells[a], eye)
+                .total_cmp(&distance_to_bbox(&cells[b], eye))
+                .then(a.cmp(&b))
         });
         for &i in &missing {
             self.streamer.request(i);
         }
         if complete {
             while missing.iter().any(|&i| !self.cache.contains(i)) {
-                let Some((i, data)) = self.streamer.wait_one() else { break };
+                let Some((i, data)) = self.streamer.wait_one() else {
+                    break;
+                };
                 self.accept(i, data)?;
                 report.uploads += 1;
             }

@@ -49,7 +49,12 @@ impl<T: Send + 'static> Streamer<T> {
                 })
             })
             .collect();
-        Streamer { requests: Some(req_tx), results: res_rx, pending: HashSet::new(), workers }
+        Streamer {
+            requests: Some(req_tx),
+            results: res_rx,
+            pending: HashSet::new(),
+            workers,
+        }
     }
 
     /// Asks for cell `i`; returns false if it is already pending.
@@ -145,7 +150,11 @@ pub fn resolve_draw_list(
     out.draw = set
         .iter()
         .copied()
-        .filter(|&i| index.ancestor_where(cells[i].key(), |a| set.contains(&a)).is_none())
+        .filter(|&i| {
+            index
+                .ancestor_where(cells[i].key(), |a| set.contains(&a))
+                .is_none()
+        })
         .collect();
     out.missing.sort_unstable();
     out

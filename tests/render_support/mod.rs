@@ -8,8 +8,8 @@ use std::path::Path;
 use cliffmap::cells::{CellKey, Quadtree, SampleRect};
 use cliffmap::georef::{GridGeoref, WorldRect};
 use cliffmap::store::{
-    CellFiles, CellMesh, CellRecord, DemInfo, FileRef, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION,
-    cell_stem, write_file,
+    CellFiles, CellMesh, CellRecord, DemInfo, FileRef, Manifest, Parameterization, STORE_FORMAT,
+    STORE_VERSION, cell_stem, write_file,
 };
 
 /// World x of the root's west edge.
@@ -36,14 +36,23 @@ pub struct Synth {
 pub const S: u32 = 8;
 
 fn file(path: String) -> FileRef {
-    FileRef { path, bytes: 0, crc32: "00000000".into() }
+    FileRef {
+        path,
+        bytes: 0,
+        crc32: "00000000".into(),
+    }
 }
 
 /// The record of `key` (files not written: sizes/checksums zero).
 pub fn record(s: &Synth, key: CellKey) -> CellRecord {
     let side = s.size / (1u64 << key.level) as f64;
     let (min_x, max_y) = (X0 + key.x as f64 * side, Y0 - key.y as f64 * side);
-    let extent = WorldRect { min_x, min_y: max_y - side, max_x: min_x + side, max_y };
+    let extent = WorldRect {
+        min_x,
+        min_y: max_y - side,
+        max_x: min_x + side,
+        max_y,
+    };
     let n = S << (s.levels - 1 - key.level);
     let stem = cell_stem(key.level, key.x, key.y);
     CellRecord {
@@ -51,7 +60,12 @@ pub fn record(s: &Synth, key: CellKey) -> CellRecord {
         level: key.level,
         x: key.x,
         y: key.y,
-        rect: SampleRect { c0: key.x * n, r0: key.y * n, c1: (key.x + 1) * n, r1: (key.y + 1) * n },
+        rect: SampleRect {
+            c0: key.x * n,
+            r0: key.y * n,
+            c1: (key.x + 1) * n,
+            r1: (key.y + 1) * n,
+        },
         origin: [min_x + side / 2.0, max_y - side / 2.0, s.z.round()],
         extent,
         bbox_min: [extent.min_x, extent.min_y, s.z],
@@ -90,9 +104,16 @@ pub fn flat_mesh(rec: &CellRecord, uvs: bool) -> CellMesh {
     let e = rec.extent;
     let o = rec.origin;
     let z = (rec.bbox_min[2] - o[2]) as f32;
-    let corners = [[e.min_x, e.max_y], [e.max_x, e.max_y], [e.max_x, e.min_y], [e.min_x, e.min_y]];
-    let mut positions: Vec<[f32; 3]> =
-        corners.iter().map(|c| [(c[0] - o[0]) as f32, (c[1] - o[1]) as f32, z]).collect();
+    let corners = [
+        [e.min_x, e.max_y],
+        [e.max_x, e.max_y],
+        [e.max_x, e.min_y],
+        [e.min_x, e.min_y],
+    ];
+    let mut positions: Vec<[f32; 3]> = corners
+        .iter()
+        .map(|c| [(c[0] - o[0]) as f32, (c[1] - o[1]) as f32, z])
+        .collect();
     let mut triangles = vec![[0, 3, 2], [0, 2, 1]];
     let d = rec.skirt_depth as f32;
     for i in 0..4u32 {
@@ -110,11 +131,20 @@ pub fn flat_mesh(rec: &CellRecord, uvs: bool) -> CellMesh {
             .map(|p| {
                 let x = p[0] as f64 + o[0];
                 let y = p[1] as f64 + o[1];
-                [((x - e.min_x) / e.width()) as f32, ((e.max_y - y) / e.height()) as f32]
+                [
+                    ((x - e.min_x) / e.width()) as f32,
+                    ((e.max_y - y) / e.height()) as f32,
+                ]
             })
             .collect()
     });
-    CellMesh { positions, uvs: uv, triangles, surface_vertices: 4, surface_triangles: 2 }
+    CellMesh {
+        positions,
+        uvs: uv,
+        triangles,
+        surface_vertices: 4,
+        surface_triangles: 2,
+    }
 }
 
 /// Writes a complete store to `dir`: every cell flat, textured with `colour(record)` (uniform
@@ -128,7 +158,11 @@ pub fn write_store(
     let mut cells = records(s);
     for rec in &mut cells {
         let rp = reparam(rec);
-        rec.parameterization = if rp { Parameterization::Reparam } else { Parameterization::Ortho };
+        rec.parameterization = if rp {
+            Parameterization::Reparam
+        } else {
+            Parameterization::Ortho
+        };
         let mesh = flat_mesh(rec, rp);
         let stem = cell_stem(rec.level, rec.x, rec.y);
         let tex = image::RgbaImage::from_pixel(s.texels, s.texels, image::Rgba(colour(rec)));
@@ -151,7 +185,12 @@ pub fn write_store(
         version: STORE_VERSION,
         generator: "render test".into(),
         crs: None,
-        georef: GridGeoref { origin_x: X0, origin_y: Y0, spacing_x: spacing, spacing_y: spacing },
+        georef: GridGeoref {
+            origin_x: X0,
+            origin_y: Y0,
+            spacing_x: spacing,
+            spacing_y: spacing,
+        },
         dem: DemInfo {
             source: "synthetic".into(),
             width: n + 1,
@@ -161,7 +200,12 @@ pub fn write_store(
             void_fraction: 0.0,
         },
         ortho: None,
-        quadtree: Quadtree { dem_width: n + 1, dem_height: n + 1, finest_intervals: S, levels: s.levels },
+        quadtree: Quadtree {
+            dem_width: n + 1,
+            dem_height: n + 1,
+            finest_intervals: S,
+            levels: s.levels,
+        },
         max_error: s.finest_error,
         cell_texels: s.texels,
         build_key: "00000000".into(),
