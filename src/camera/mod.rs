@@ -131,7 +131,7 @@ impl CameraModel {
     /// `None` if the point is not in front of the camera. The pixel may lie outside the image.
     pub fn project(&self, world: DVec3) -> Option<[f64; 2]> {
         let c = self.to_camera(world);
-        if !(c.z > 0.0) {
+        if c.z.is_nan() || c.z <= 0.0 {
             return None;
         }
         let (x, y) = (c.x / c.z, c.y / c.z);
