@@ -13,6 +13,8 @@
 //!   [`cells::build_tin`]) and per-cell images ([`ortho_texture`], [`normal_map`]).
 //! - [`stats`]: texel-stretch statistics ([`cell_stats`], [`stats::stats_json`]).
 //! - [`store`]: the on-disk cell store (manifest, meshes, textures).
+//! - [`param`]: area/angle-preserving parameterization of a cell (Degener et al. 2003,
+//!   [`param::parameterize`]) and chart metrics.
 //! - [`pipeline`]: the stages composed into the commands' jobs ([`pipeline::build_store`]).
 //! - [`resample`]: resampling a colour source into a new chart with area-weighted
 //!   subtexel filtering ([`resample::resample`]).
@@ -30,6 +32,7 @@ pub mod fsutil;
 pub mod georef;
 pub mod geotiff;
 pub mod ortho;
+pub mod param;
 pub mod pipeline;
 pub mod render;
 pub mod resample;
@@ -51,3 +54,4 @@ pub use error::{Error, Result};
 pub use georef::{GridGeoref, WorldRect};
 pub use ortho::{Ortho, OrthoPlacement, load_ortho};
 pub use stats::{CellStats, CellStatsEntry, StatsSummary, cell_stats};
+pub use param::{Chart, ChartMetrics, ParamMesh, ParamOptions, chart_metrics, parameterize};

@@ -36,7 +36,8 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
 }
 
-fn all_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+/// Every file under `dir` (relative name, CRC-32 of its content), sorted by name.
+fn all_files(dir: &Path) -> Vec<(String, u32)> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
@@ -45,7 +46,7 @@ fn all_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
             if p.is_dir() {
                 stack.push(p);
             } else {
-                out.push((p.strip_prefix(dir).unwrap().display().to_string(), std::fs::read(&p).unwrap()));
+                out.push((p.strip_prefix(dir).unwrap().display().to_string(), crc32fast::hash(&std::fs::read(&p).unwrap())));
             }
         }
     }
@@ -131,6 +132,7 @@ fn engabreen_build_stats_export_and_resume() {
     fails_naming(&["export-obj", s(&out), "--cell", "99-0-0", "--out", s(&obj)], "99-0-0");
 
     // Resume: delete one cell's files and its record; a rerun restores them identically.
+    ok(&["stats", s(&out), "--threshold", "1.1"]);
     let before = all_files(&out);
     let stem = out.join(format!("cells/{}/{}-{}", c.level, c.x, c.y));
     std::fs::remove_file(stem.with_extension("png")).unwrap();
@@ -180,4 +182,108 @@ fn bad_inputs_fail_cleanly_without_output() {
     );
     assert!(!out.exists(), "a failed build must not leave output behind");
     fails_naming(&["stats", s(&t.path().join("nostore"))], "nostore");
+}
+
+#[test]
+fn engabreen_reparam_mixed_mode_and_export() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("eng.store");
+    let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
+    let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
+    ok(&[
+        "build", "--dem", s(&dem), "--width", "507", "--height", "590", "--spacing", "3",
+        "--origin", "445302.17,7396769.45", "--ortho", s(&ortho), "--ortho-same-grid",
+        "--max-error", "1.0", "--cell-texels", "64", "--out", s(&out), "--quiet",
+    ]);
+    ok(&["reparam", s(&out), "--threshold", "1.1", "--quiet"]);
+    let st = Store::open(&out).unwrap();
+    let m = &st.manifest;
+    let re: Vec<_> = m.cells.iter().filter(|c| c.reparam.is_some()).collect();
+    assert!(!re.is_empty());
+    for c in &m.cells {
+        // Exactly the cells above the threshold are reparameterized ("model only what a scene requires").
+        assert_eq!(c.reparam.is_some(), c.stats.rel_texel > 1.1, "cell {}", c.id);
+    }
+    for c in &re {
+        let r = c.reparam.as_ref().unwrap();
+        assert_eq!(r.metrics.flipped, 0, "cell {} has flips", c.id);
+        // The chart spreads texels more evenly than the ortho map: the worst texel is less stretched.
+        assert!(r.texel_stretch.max < c.stats.texel_stretch.max, "cell {}: {} vs {}", c.id, r.texel_stretch.max, c.stats.texel_stretch.max);
+        let mesh = st.read_active_mesh(c).unwrap();
+        let uvs = mesh.uvs.as_ref().unwrap();
+        assert!(uvs.iter().flatten().all(|u| (0.0..=1.0).contains(u)));
+        let tex = st.read_png(&r.files.texture).unwrap();
+        assert_eq!(tex.width(), 64);
+    }
+    // stats --json reports both parameterizations.
+    let o = ok(&["stats", s(&out), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["summary"]["parameterization"]["cells_reparam"].as_u64().unwrap() as usize, re.len());
+    let cell = v["cells"].as_array().unwrap().iter().find(|x| x["id"] == re[0].id.as_str()).unwrap();
+    assert_eq!(cell["parameterization"], "reparam");
+    assert!(cell["reparam"]["metrics"]["angle_distortion_mean"].as_f64().unwrap() >= 1.0);
+
+    // export-obj writes the chart's UVs for a reparameterized cell.
+    let obj = t.path().join("re.obj");
+    ok(&["export-obj", s(&out), "--cell", &re[0].id, "--out", s(&obj)]);
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(text.contains("parameterization reparam"));
+    let vt: Vec<[f32; 2]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("vt "))
+        .map(|l| {
+            let mut it = l.split_whitespace().map(|x| x.parse::<f32>().unwrap());
+            [it.next().unwrap(), it.next().unwrap()]
+        })
+        .collect();
+    let mesh = st.read_active_mesh(re[0]).unwrap();
+    let uv0 = mesh.uvs.as_ref().unwrap()[0];
+    assert!((vt[0][0] - uv0[0]).abs() < 1e-6 && (vt[0][1] - (1.0 - uv0[1])).abs() < 1e-6);
+
+    // Mixed resolution: reparameterized cells get twice the side; a higher threshold chooses
+    // fewer cells and removes the stale reparameterized files of the others.
+    ok(&["reparam", s(&out), "--threshold", "1.5", "--mixed-resolution", "--quiet"]);
+    let st2 = Store::open(&out).unwrap();
+    let re2: Vec<_> = st2.manifest.cells.iter().filter(|c| c.reparam.is_some()).collect();
+    assert!(re2.len() < re.len());
+    assert!(re2.iter().all(|c| c.reparam.as_ref().unwrap().texels == 128));
+    let dropped = re.iter().find(|c| c.stats.rel_texel <= 1.5).unwrap();
+    assert!(!out.join(format!("cells/{}/{}-{}.reparam.png", dropped.level, dropped.x, dropped.y)).exists());
+    fails_naming(&["reparam", s(&out), "--threshold", "-1"], "threshold");
+}
+
+#[test]
+fn geotiff_with_nodata_and_terrain_rgb_build() {
+    let t = tempfile::tempdir().unwrap();
+    // ASTER GeoTIFF, UTM 18S, with -9999 no-data: georeference and CRS come from the file.
+    let out = t.path().join("expl.store");
+    let dem = real_data("misc/exploradores_aster_dem_30m_utm18s.tif");
+    ok(&["build", "--dem", s(&dem), "--max-error", "5", "--cell-texels", "32", "--out", s(&out), "--quiet"]);
+    let m = Store::open(&out).unwrap().manifest;
+    assert_eq!(m.crs.as_deref(), Some("EPSG:32718"));
+    assert!((m.georef.origin_x - 627190.0).abs() < 1e-6 && (m.georef.origin_y - 4852070.0).abs() < 1e-6);
+    assert!(m.dem.void_fraction > 0.02 && m.dem.void_fraction < 0.035, "{}", m.dem.void_fraction);
+    assert!(m.cells.iter().all(|c| c.max_error <= c.epsilon + 1e-6 && c.stats.rel_texel.is_finite()));
+    // Textures over voids are marked unknown (alpha 0) somewhere in the finest level.
+    let st = Store::open(&out).unwrap();
+    let finest = m.quadtree.levels - 1;
+    let unknown: usize = m
+        .cells
+        .iter()
+        .filter(|c| c.level == finest)
+        .map(|c| st.read_texture(c).unwrap().pixels().filter(|p| p.0[3] == 0).count())
+        .sum();
+    assert!(unknown > 0, "voids must show as unknown texels");
+
+    // Terrain-RGB tile with its (palette) map tile as ortho on the same grid.
+    let out2 = t.path().join("gc.store");
+    let terrain = real_data("grand_canyon_tiles/12-758-1608.terrain.png");
+    let sat = real_data("grand_canyon_tiles/12-758-1608.satellite.png");
+    ok(&[
+        "build", "--dem", s(&terrain), "--spacing", "30.9", "--ortho", s(&sat), "--ortho-same-grid",
+        "--max-error", "2", "--cell-texels", "32", "--cell-intervals", "32", "--out", s(&out2), "--quiet",
+    ]);
+    let m2 = Store::open(&out2).unwrap().manifest;
+    assert!(m2.dem.height_min >= 439.0 && m2.dem.height_max <= 2184.5);
+    assert!(m2.cells.iter().any(|c| c.stats.max_slope_deg > 60.0));
 }

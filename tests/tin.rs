@@ -40,7 +40,7 @@ fn field(w: usize, h: usize, kind: u8, seed: u64) -> Vec<f32> {
                 }
                 3 => (x * 0.21 + a).sin() * 40.0 + (y * 0.13 + b).cos() * 25.0 + x * 0.5,
                 4 => 123.5,
-                5 => (2.0 * x - 3.0 * y) as f64,
+                5 => 2.0 * x - 3.0 * y,
                 _ => ((x * 0.17).sin() * 4.0 + (y * 0.11).cos() * 4.0).round() * 10.0,
             };
             out.push(v as f32);

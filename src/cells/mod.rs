@@ -14,11 +14,13 @@
 
 mod border;
 mod extent;
+mod face_heap;
 pub mod normals;
 mod quadtree;
 mod raster;
 mod taps;
 pub mod texture;
+mod tiles;
 mod tin;
 
 pub use border::{LevelBorders, simplify_rect_border};

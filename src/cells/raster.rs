@@ -6,7 +6,7 @@
 
 /// A set of sample positions `(col, row)`: columns `origin_c + k * stride` within
 /// `[c_lo, c_hi]` and rows `origin_r + k * stride` within `[r_lo, r_hi]` (inclusive, any
-/// integer k).
+/// k >= 0). Invariant: `c_lo >= origin_c` and `r_lo >= origin_r`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Lattice {
     pub origin_c: i64,
@@ -27,15 +27,22 @@ fn snap_up(v: i64, origin: i64, s: i64) -> i64 {
 /// `ceil(n / d)` for `d > 0`.
 #[inline]
 fn ceil_div(n: i64, d: i64) -> i64 {
-    -((-n).div_euclid(d))
+    -floor_div(-n, d)
 }
 
-/// Calls `f(row, first_col, last_col)` for every lattice row that has lattice samples
-/// inside the closed triangle `tri` (`[col, row]` vertices, any orientation); the span's
-/// columns are `first_col, first_col + stride, ..` up to `last_col` (inclusive, all on the
-/// lattice). Rows are visited in increasing order. Degenerate triangles visit nothing.
+/// `floor(n / d)` for `d > 0`; a shift for powers of two.
 #[inline]
-pub(crate) fn for_each_span(tri: [[i64; 2]; 3], lat: &Lattice, mut f: impl FnMut(i64, i64, i64)) {
+fn floor_div(n: i64, d: i64) -> i64 {
+    if d & (d - 1) == 0 { n >> d.trailing_zeros() } else { n.div_euclid(d) }
+}
+
+/// Calls `f(row, j, i0, i1)` for every lattice row that has lattice samples inside the
+/// closed triangle `tri` (`[col, row]` vertices, any orientation): `j` is the row's lattice
+/// index (`row = origin_r + j * stride`) and the inside samples are the lattice columns
+/// `i0..=i1` (`col = origin_c + i * stride`). Rows are visited in increasing order.
+/// Degenerate triangles visit nothing.
+#[inline]
+pub(crate) fn for_each_span(tri: [[i64; 2]; 3], lat: &Lattice, mut f: impl FnMut(i64, usize, usize, usize)) {
     let [a, mut b, mut c] = tri;
     let orient = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     if orient == 0 {
@@ -51,6 +58,7 @@ pub(crate) fn for_each_span(tri: [[i64; 2]; 3], lat: &Lattice, mut f: impl FnMut
     let ymin = a[1].min(b[1]).min(c[1]).max(lat.r_lo);
     let ymax = a[1].max(b[1]).max(c[1]).min(lat.r_hi);
     let mut y = snap_up(ymin, lat.origin_r, s);
+    let mut j = ((y - lat.origin_r) / s) as usize;
     let mut ax = [0i64; 3];
     let mut k = [0i64; 3];
     let mut dk = [0i64; 3];
@@ -59,31 +67,51 @@ pub(crate) fn for_each_span(tri: [[i64; 2]; 3], lat: &Lattice, mut f: impl FnMut
         k[i] = (q[0] - p[0]) * (y - p[1]) + (q[1] - p[1]) * p[0];
         dk[i] = (q[0] - p[0]) * s;
     }
+    let inv = ax.map(|a| if a != 0 { 1.0 / a.abs() as f64 } else { 0.0 });
     while y <= ymax {
         let mut lo = lat.c_lo;
         let mut hi = lat.c_hi;
         let mut empty = false;
         for i in 0..3 {
             let (axi, ki) = (ax[i], k[i]);
+            // Bound of ax * x + k >= 0, estimated in f64 then made exact in integers.
             if axi > 0 {
-                lo = lo.max(ceil_div(-ki, axi));
+                let mut x = ((-ki) as f64 * inv[i]) as i64; // truncation, fixed below
+                while axi * x + ki < 0 {
+                    x += 1;
+                }
+                while axi * (x - 1) + ki >= 0 {
+                    x -= 1;
+                }
+                lo = lo.max(x);
             } else if axi < 0 {
-                hi = hi.min(ki.div_euclid(-axi));
+                let mut x = (ki as f64 * inv[i]) as i64; // truncation, fixed below
+                while axi * x + ki < 0 {
+                    x -= 1;
+                }
+                while axi * (x + 1) + ki >= 0 {
+                    x += 1;
+                }
+                hi = hi.min(x);
             } else if ki < 0 {
                 empty = true;
             }
         }
-        if !empty {
-            let first = snap_up(lo, lat.origin_c, s);
-            if first <= hi {
-                let last = first + (hi - first) / s * s;
-                f(y, first, last);
+        if !empty && lo <= hi {
+            let (i0, i1) = if s == 1 {
+                (lo - lat.origin_c, hi - lat.origin_c)
+            } else {
+                (ceil_div(lo - lat.origin_c, s), floor_div(hi - lat.origin_c, s))
+            };
+            if i0 <= i1 {
+                f(y, j, i0 as usize, i1 as usize);
             }
         }
         for i in 0..3 {
             k[i] += dk[i];
         }
         y += s;
+        j += 1;
     }
 }
 
@@ -126,21 +154,21 @@ mod tests {
         for _ in 0..3000 {
             let tri = [[rnd(30), rnd(30)], [rnd(30), rnd(30)], [rnd(30), rnd(30)]];
             let stride = 1 + rnd(4);
+            let (origin_c, origin_r) = (rnd(5), rnd(5));
             let lat = Lattice {
-                origin_c: rnd(5),
-                origin_r: rnd(5),
+                origin_c,
+                origin_r,
                 stride,
-                c_lo: rnd(8),
+                c_lo: origin_c + rnd(4),
                 c_hi: 20 + rnd(10),
-                r_lo: rnd(8),
+                r_lo: origin_r + rnd(4),
                 r_hi: 20 + rnd(10),
             };
             let mut got = Vec::new();
-            for_each_span(tri, &lat, |y, x0, x1| {
-                let mut x = x0;
-                while x <= x1 {
-                    got.push((y, x));
-                    x += stride;
+            for_each_span(tri, &lat, |y, j, i0, i1| {
+                assert_eq!(y, lat.origin_r + j as i64 * stride);
+                for i in i0..=i1 {
+                    got.push((y, lat.origin_c + i as i64 * stride));
                 }
             });
             assert_eq!(got, brute(tri, &lat), "{tri:?} {lat:?}");

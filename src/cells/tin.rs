@@ -8,14 +8,14 @@
 //! holds for every DEM sample of the cell. Work is in integer grid coordinates, exact for
 //! spade's predicates (spade x = column, spade y = -row, so spade's CCW is world CCW).
 
-use std::collections::BinaryHeap;
-
 use rayon::prelude::*;
 use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{DelaunayTriangulation, Point2, Triangulation};
 
 use super::border::{LevelBorders, border_error, check_epsilon, check_tree, simplify_rect_border};
+use super::face_heap::FaceHeap;
 use super::raster::{Lattice, for_each_span};
+use super::tiles::LatticeTiles;
 use super::{CellKey, Quadtree, SampleRect, Tin};
 use crate::dem::Dem;
 use crate::error::{Error, Result};
@@ -57,39 +57,34 @@ impl Plane {
 }
 
 /// The worst lattice sample of a triangle that is not one of its corners:
-/// `(error, col, row)`, or error -1 if the triangle holds no such sample.
+/// `(error, col, row)`, or error -1 if the triangle holds no such sample. Corner heights
+/// come from the full-resolution grid (corners need not be on the lattice).
 #[inline]
-fn worst_sample(heights: &[f32], width: usize, p: [[i64; 2]; 3], lat: &Lattice) -> (f64, i64, i64) {
-    let hz = |q: [i64; 2]| heights[q[1] as usize * width + q[0] as usize] as f64;
+fn worst_sample(heights: &[f32], width: usize, p: [[i64; 2]; 3], grid: &LatticeTiles) -> (f64, i64, i64) {
+    // corners from the compact copy when stored there (always at stride 1), else the DEM
+    let hz = |q: [i64; 2]| grid.get(q[0], q[1]).unwrap_or_else(|| heights[q[1] as usize * width + q[0] as usize]) as f64;
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
+    let lat = &grid.lat;
+    let (oc, or, s) = (lat.origin_c, lat.origin_r, lat.stride);
     let mut best = (-1.0f64, -1i64, -1i64);
-    let s = lat.stride;
-    for_each_span(p, lat, |y, x0, x1| {
+    let _ = or;
+    for_each_span(p, lat, |y, j, i0, i1| {
         let (base, a) = plane.row(y);
-        let start = y as usize * width;
-        let row = &heights[start + x0 as usize..=start + x1 as usize];
-        let mut found = -1i64;
+        // z at lattice column index i: base + a * (oc + i * s)
+        let (base_i, a_i) = (base + a * oc as f64, a * s as f64);
+        let corner_row = p.iter().any(|q| q[1] == y);
         let mut err = best.0;
-        if s == 1 {
-            for (i, &h) in row.iter().enumerate() {
-                let e = (h as f64 - (base + a * (x0 + i as i64) as f64)).abs();
-                if e > err && !is_corner(p, x0 + i as i64, y) {
-                    err = e;
-                    found = x0 + i as i64;
-                }
+        let mut found = usize::MAX;
+        grid.for_row(j, i0, i1, |i, h| {
+            // i < 2^32 always (a DEM side is u32); u32 -> f64 is one cheap conversion
+            let e = (h as f64 - (base_i + a_i * (i as u32) as f64)).abs();
+            if e > err && !(corner_row && is_corner(p, oc + i as i64 * s, y)) {
+                err = e;
+                found = i;
             }
-        } else {
-            for (i, &h) in row.iter().step_by(s as usize).enumerate() {
-                let x = x0 + i as i64 * s;
-                let e = (h as f64 - (base + a * x as f64)).abs();
-                if e > err && !is_corner(p, x, y) {
-                    err = e;
-                    found = x;
-                }
-            }
-        }
-        if found >= 0 {
-            best = (err, found, y);
+        });
+        if found != usize::MAX {
+            best = (err, oc + found as i64 * s, y);
         }
     });
     best
@@ -100,64 +95,54 @@ fn is_corner(p: [[i64; 2]; 3], x: i64, y: i64) -> bool {
     p.iter().any(|q| q[0] == x && q[1] == y)
 }
 
-/// One queued refinement: a face's worst sample, valid while `generation` is current.
-#[derive(PartialEq, Eq, PartialOrd, Ord)]
-struct Entry {
-    /// Error bits (non-negative f64 bits order like the values).
-    err: u64,
-    face: u32,
-    generation: u32,
-    col: u32,
-    row: u32,
-    hint: u32,
-}
-
+/// Greedy refinement state: the triangulation and, per spade face index, the face's worst
+/// sample (candidate) and error; faces whose error exceeds epsilon are in `heap`.
 struct Greedy<'a> {
     heights: &'a [f32],
     width: usize,
     epsilon: f64,
     tri: DelaunayTriangulation<Point2<f64>>,
-    generation: Vec<u32>,
+    /// Per face index: worst non-corner sample `[col, row]`, and a vertex of the face (hint).
+    cand: Vec<[u32; 3]>,
     face_err: Vec<f64>,
-    heap: BinaryHeap<Entry>,
+    heap: FaceHeap,
     star: Vec<FixedFaceHandle<InnerTag>>,
 }
 
 impl Greedy<'_> {
-    fn corners(&self, f: FixedFaceHandle<InnerTag>) -> ([[i64; 2]; 3], u32) {
+    fn corners(&self, f: FixedFaceHandle<InnerTag>) -> ([[i64; 2]; 3], [u32; 3]) {
         let face = self.tri.face(f);
         let vs = face.vertices();
         let p = vs.map(|v| {
             let q = v.position();
             [q.x as i64, -q.y as i64]
         });
-        (p, vs[0].fix().index() as u32)
+        (p, vs.map(|v| v.fix().index() as u32))
     }
 
-    fn rescan(&mut self, f: FixedFaceHandle<InnerTag>, lat: &Lattice) {
+    fn rescan(&mut self, f: FixedFaceHandle<InnerTag>, lat: &LatticeTiles) {
         let idx = f.index();
-        if idx >= self.generation.len() {
+        if idx >= self.cand.len() {
             let n = self.tri.num_all_faces().max(idx + 1);
-            self.generation.resize(n, 0);
+            self.cand.resize(n, [0; 3]);
             self.face_err.resize(n, 0.0);
         }
-        self.generation[idx] = self.generation[idx].wrapping_add(1);
-        let (p, hint) = self.corners(f);
+        let (p, ids) = self.corners(f);
         let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
         self.face_err[idx] = err.max(0.0);
         if err > self.epsilon {
-            self.heap.push(Entry {
-                err: err.to_bits(),
-                face: idx as u32,
-                generation: self.generation[idx],
-                col: col as u32,
-                row: row as u32,
-                hint,
-            });
+            // hint: the face's corner nearest to the candidate, for a short location walk
+            let d2 = |q: [i64; 2]| (q[0] - col).pow(2) + (q[1] - row).pow(2);
+            let k = (0..3).min_by_key(|&k| d2(p[k])).unwrap_or(0);
+            let hint = ids[k];
+            self.cand[idx] = [col as u32, row as u32, hint];
+            self.heap.set(idx as u32, Some(err));
+        } else {
+            self.heap.set(idx as u32, None);
         }
     }
 
-    fn rescan_all(&mut self, lat: &Lattice) {
+    fn rescan_all(&mut self, lat: &LatticeTiles) {
         self.heap.clear();
         let faces: Vec<_> = self.tri.fixed_inner_faces().collect();
         for f in faces {
@@ -165,17 +150,22 @@ impl Greedy<'_> {
         }
     }
 
-    fn run(&mut self, lat: &Lattice) {
-        while let Some(e) = self.heap.pop() {
-            if self.generation[e.face as usize] != e.generation {
-                continue;
-            }
-            let point = Point2::new(e.col as f64, -(e.row as f64));
+    fn run(&mut self, lat: &LatticeTiles) {
+        while let Some((_, face)) = self.heap.peek() {
+            let [col, row, hint] = self.cand[face as usize];
+            let point = Point2::new(col as f64, -(row as f64));
+            let before = self.tri.num_vertices();
             // Integer coordinates are always valid spade input; stop (and report the
             // measured error honestly) if that ever changes.
-            let Ok(v) = self.tri.insert_with_hint(point, FixedVertexHandle::from_index(e.hint as usize)) else {
+            let Ok(v) = self.tri.insert_with_hint(point, FixedVertexHandle::from_index(hint as usize)) else {
                 break;
             };
+            if self.tri.num_vertices() == before {
+                // Already a vertex (cannot happen: corners are never candidates); drop the
+                // face rather than loop.
+                self.heap.set(face, None);
+                continue;
+            }
             self.star.clear();
             for edge in self.tri.vertex(v).out_edges() {
                 if let Some(f) = edge.face().as_inner() {
@@ -243,9 +233,9 @@ pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border:
         width: dem.width,
         epsilon,
         tri,
-        generation: Vec::new(),
+        cand: Vec::new(),
         face_err: Vec::new(),
-        heap: BinaryHeap::new(),
+        heap: FaceHeap::default(),
         star: Vec::new(),
     };
     let interior = |s: u32| Lattice {
@@ -257,11 +247,12 @@ pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border:
         r_lo: rect.r0 as i64 + 1,
         r_hi: rect.r1 as i64 - 1,
     };
-    let coarse = interior(stride);
+    let coarse = LatticeTiles::new(&dem.heights, dem.width, interior(stride), rect.c1 as i64, rect.r1 as i64);
     g.rescan_all(&coarse);
     g.run(&coarse);
+    drop(coarse);
     if stride > 1 {
-        let fine = interior(1);
+        let fine = LatticeTiles::new(&dem.heights, dem.width, interior(1), rect.c1 as i64, rect.r1 as i64);
         g.rescan_all(&fine);
         g.run(&fine);
     }
@@ -344,9 +335,9 @@ pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
             hz[k] = dem.at(v[1] as usize, v[0] as usize) as f64;
         }
         let plane = Plane::new(p, hz);
-        for_each_span(p, &lat, |y, x0, x1| {
+        for_each_span(p, &lat, |y, _, x0, x1| {
             let (base, a) = plane.row(y);
-            for x in x0..=x1 {
+            for x in x0 as i64..=x1 as i64 {
                 let e = (dem.at(y as usize, x as usize) as f64 - (base + a * x as f64)).abs();
                 worst = worst.max(e);
                 covered[(y - rect.r0 as i64) as usize * w + (x - rect.c0 as i64) as usize] = true;

@@ -24,13 +24,13 @@ pub struct Args {
     #[arg(long)]
     height: Option<usize>,
     /// Height = stored value * z-scale + z-offset.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     z_scale: Option<f64>,
     /// Height offset added after scaling.
     #[arg(long, allow_hyphen_values = true)]
     z_offset: Option<f64>,
     /// Sample spacing in world units (overrides the file's georeference).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     spacing: Option<f64>,
     /// World X,Y of the centre of the north-west sample (overrides the file's georeference).
     #[arg(long, value_parser = super::parse_pair, allow_hyphen_values = true)]
@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     nodata: Option<f64>,
     /// Finest level's max vertical error in world units; doubles per coarser level.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     max_error: f64,
     /// Texture side in texels per cell (power of two).
     #[arg(long, default_value_t = 256)]
@@ -56,6 +56,9 @@ pub struct Args {
     /// World extent MINX,MINY,MAXX,MAXY of the ortho's outer pixel edges.
     #[arg(long, value_parser = parse_extent, allow_hyphen_values = true)]
     ortho_extent: Option<WorldRect>,
+    /// Ortho pixels of exactly this colour R,G,B have no image data (e.g. 0,0,0).
+    #[arg(long, value_parser = parse_colour)]
+    ortho_nodata_colour: Option<[u8; 3]>,
     /// Refuse inputs that would need more memory than this (e.g. 8G).
     #[arg(long, value_parser = super::parse_bytes, default_value = "8G")]
     max_memory: u64,
@@ -68,6 +71,14 @@ pub struct Args {
     /// No progress bars or summary.
     #[arg(long)]
     quiet: bool,
+}
+
+fn parse_colour(s: &str) -> Result<[u8; 3], String> {
+    let v: Vec<u8> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u8>().map_err(|_| format!("not a colour component 0..255: {p:?}")))
+        .collect::<Result<_, _>>()?;
+    <[u8; 3]>::try_from(v).map_err(|_| format!("expected R,G,B, got {s:?}"))
 }
 
 fn parse_extent(s: &str) -> Result<WorldRect, String> {
@@ -110,11 +121,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             } else {
                 OrthoPlacement::FromFile
             };
-            Some(load_ortho(p, placement, &dem, a.max_memory)?)
+            let mut o = load_ortho(p, placement, &dem, a.max_memory)?;
+            if let Some(c) = a.ortho_nodata_colour {
+                let n = o.mask_colour(c);
+                tracing::info!("{}: {n} pixels of colour {c:?} marked as no data", p.display());
+            }
+            Some(o)
         }
         None => None,
     };
-    let fingerprint = format!("{}|{}", file_crc(&a.dem)?, a.ortho.as_deref().map(file_crc).transpose()?.unwrap_or_default());
+    // Everything that shapes the inputs: file contents and how they were read and placed.
+    let fingerprint = format!(
+        "{}|{}|{:?}|{:?}|{:?}|{}",
+        file_crc(&a.dem)?,
+        a.ortho.as_deref().map(file_crc).transpose()?.unwrap_or_default(),
+        dem_opts,
+        a.ortho_extent,
+        a.ortho_nodata_colour,
+        a.ortho_same_grid
+    );
     let inputs = BuildInputs {
         dem: &dem,
         ortho: ortho.as_ref(),

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use cliffmap::fsutil::write_png_atomic;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
 use cliffmap::scene::DemoScene;
 
 use super::stats::print_summary;
@@ -48,7 +48,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let manifest = build_store(&inputs, &opts, &store)?;
     if !a.quiet {
         println!("demo scene: {} cells in {} levels -> {}", manifest.cells.len(), manifest.quadtree.levels, store.display());
-        print_summary(&store, &manifest, 1.1)?;
+    }
+    let reparam = ReparamOptions { quiet: a.quiet, ..ReparamOptions::default() };
+    let st = reparam_store(&store, &reparam)?;
+    if !a.quiet {
+        let n = st.manifest.cells.iter().filter(|c| c.reparam.is_some()).count();
+        println!("reparameterized {n} stretched cells (Rel_texel > {})", reparam.threshold);
+        print_summary(&store, &st.manifest, reparam.threshold)?;
     }
     Ok(())
 }

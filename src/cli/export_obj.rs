@@ -25,7 +25,7 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let store = Store::open(&a.store)?;
     let rec = store.cell(&a.cell)?;
-    let mesh = store.read_mesh(rec)?;
+    let mesh = store.read_active_mesh(rec)?;
     write_atomic(&a.out, obj_text(rec, &mesh, a.world).as_bytes())?;
     Ok(())
 }

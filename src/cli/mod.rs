@@ -6,6 +6,7 @@ mod demo;
 mod export_obj;
 mod fly;
 mod render;
+mod reparam;
 mod stats;
 
 use std::process::ExitCode;
@@ -29,6 +30,8 @@ enum Command {
     Demo(demo::Args),
     /// Build a cell store from a DEM (and an ortho image).
     Build(build::Args),
+    /// Reparameterize stretched cells (Degener et al. 2003) and resample their textures.
+    Reparam(reparam::Args),
     /// Texel-stretch statistics of a store: summary, stats.json and a histogram PNG.
     Stats(stats::Args),
     /// Write one cell's TIN with texture coordinates as Wavefront OBJ.
@@ -58,6 +61,7 @@ pub fn run() -> ExitCode {
     let result = match cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Build(a) => build::run(a),
+        Command::Reparam(a) => reparam::run(a),
         Command::Stats(a) => stats::run(a),
         Command::ExportObj(a) => export_obj::run(a),
         Command::Render(a) => render::run(a),

@@ -11,7 +11,7 @@ pub struct Args {
     /// The store directory.
     store: PathBuf,
     /// Rel_texel above which a cell counts as stretched.
-    #[arg(long, default_value_t = 1.1)]
+    #[arg(long, default_value_t = 1.1, allow_hyphen_values = true)]
     threshold: f64,
     /// Print the JSON document on stdout instead of the summary.
     #[arg(long)]
@@ -58,6 +58,22 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
             l["cells_above"].as_u64().unwrap_or(0),
             f(&l["rel_texel"]["p50"]),
             f(&l["rel_texel"]["max"])
+        );
+    }
+    let p = &s["parameterization"];
+    if p["cells_reparam"].as_u64().unwrap_or(0) > 0 {
+        let m = &p["texture_memory"];
+        let mib = |v: &serde_json::Value| v.as_f64().unwrap_or(0.0) / (1u64 << 20) as f64;
+        println!(
+            "reparameterized {} cells: Rel_texel max {:.3} -> {:.3}, texel stretch max {:.2} -> {:.2}; texture memory ortho {:.1} MiB, reparam {:.1} MiB, mixed {:.1} MiB",
+            p["cells_reparam"],
+            f(&p["rel_texel_before"]["max"]),
+            f(&p["rel_texel_after"]["max"]),
+            f(&p["texel_stretch_max_before"]),
+            f(&p["texel_stretch_max_after"]),
+            mib(&m["ortho_bytes"]),
+            mib(&m["reparam_bytes"]),
+            mib(&m["mixed_bytes"])
         );
     }
     println!("wrote {} and {}", dir.join("stats.json").display(), dir.join("stats_histogram.png").display());

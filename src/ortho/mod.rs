@@ -40,6 +40,19 @@ pub struct Ortho {
 }
 
 impl Ortho {
+    /// Marks every pixel of exactly the colour `rgb` as unknown (alpha 0), for orthos that
+    /// encode missing coverage as a colour (often black); returns the number of pixels marked.
+    pub fn mask_colour(&mut self, rgb: [u8; 3]) -> usize {
+        let mut n = 0;
+        for p in self.image.pixels_mut() {
+            if p.0[..3] == rgb && p.0[3] != 0 {
+                p.0[3] = 0;
+                n += 1;
+            }
+        }
+        n
+    }
+
     /// World rectangle covered by the image's outer pixel edges.
     pub fn extent(&self) -> WorldRect {
         let g = &self.georef;

@@ -153,6 +153,7 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
         cell_texels: opts.cell_texels,
         build_key,
         cells: records,
+        reparam: None,
     };
     write_stats(out, &manifest, 1.1)?;
     write_atomic(
@@ -178,7 +179,8 @@ pub fn write_stats(out: &Path, manifest: &Manifest, threshold: f64) -> Result<se
             stats: c.stats.clone(),
         })
         .collect();
-    let json = stats::stats_json(&entries, threshold);
+    let mut json = stats::stats_json(&entries, threshold);
+    add_parameterization(&mut json, manifest);
     write_atomic(
         &out.join("stats.json"),
         &serde_json::to_vec_pretty(&json).map_err(|e| Error::store(out, e.to_string()))?,
@@ -186,6 +188,49 @@ pub fn write_stats(out: &Path, manifest: &Manifest, threshold: f64) -> Result<se
     let rel: Vec<f64> = manifest.cells.iter().map(|c| c.stats.rel_texel).collect();
     stats::write_histogram_png(&out.join("stats_histogram.png"), &rel, threshold)?;
     Ok(json)
+}
+
+/// Adds each cell's parameterization (and its chart metrics and Rel_texel after
+/// reparameterization) to the `stats.json` document, and a per-mode summary: Rel_texel
+/// before (ortho) and after (the parameterization each cell uses), texture memory per mode.
+fn add_parameterization(json: &mut serde_json::Value, manifest: &Manifest) {
+    use serde_json::json;
+    let mut after = Vec::with_capacity(manifest.cells.len());
+    if let Some(cells) = json["cells"].as_array_mut() {
+        for (c, v) in manifest.cells.iter().zip(cells.iter_mut()) {
+            v["parameterization"] = json!(c.parameterization);
+            v["rel_texel_ortho"] = json!(c.stats.rel_texel);
+            let eff = c.reparam.as_ref().map_or(c.stats.rel_texel, |r| r.rel_texel);
+            v["rel_texel_effective"] = json!(eff);
+            after.push(eff);
+            if let Some(r) = &c.reparam {
+                v["reparam"] = json!({
+                    "texels": r.texels,
+                    "rel_texel": r.rel_texel,
+                    "texel_stretch": r.texel_stretch,
+                    "metrics": r.metrics,
+                    "bilinear_fallbacks": r.bilinear_fallbacks,
+                });
+            }
+        }
+    }
+    let before: Vec<f64> = manifest.cells.iter().map(|c| c.stats.rel_texel).collect();
+    let pct = |v: &[f64]| {
+        let mut v = v.to_vec();
+        serde_json::to_value(stats::Percentiles::of(&mut v)).unwrap_or_default()
+    };
+    let worst = |f: &dyn Fn(&crate::store::CellRecord) -> f64| {
+        manifest.cells.iter().map(f).fold(0.0f64, f64::max)
+    };
+    json["summary"]["parameterization"] = json!({
+        "cells_reparam": manifest.cells.iter().filter(|c| c.reparam.is_some()).count(),
+        "settings": manifest.reparam,
+        "rel_texel_before": pct(&before),
+        "rel_texel_after": pct(&after),
+        "texel_stretch_max_before": worst(&|c| c.stats.texel_stretch.max),
+        "texel_stretch_max_after": worst(&|c| c.reparam.as_ref().map_or(c.stats.texel_stretch.max, |r| r.texel_stretch.max)),
+        "texture_memory": super::texture_memory(&manifest.cells, manifest.cell_texels),
+    });
 }
 
 /// Makes sure `out` can hold this build: absent or empty, or a cliffmap store of the same
@@ -277,6 +322,7 @@ fn build_cell(
         texels: opts.cell_texels,
         files: CellFiles { mesh: mesh_ref, texture: tex_ref, normal: nrm_ref },
         stats: cell_stats,
+        reparam: None,
     };
     write_atomic(
         &out.join(format!("{stem}.json")),
@@ -285,7 +331,7 @@ fn build_cell(
     Ok(rec)
 }
 
-fn write_png<P, C>(out: &Path, rel: &str, img: &image::ImageBuffer<P, C>) -> Result<store::FileRef>
+pub(crate) fn write_png<P, C>(out: &Path, rel: &str, img: &image::ImageBuffer<P, C>) -> Result<store::FileRef>
 where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,

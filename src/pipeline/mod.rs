@@ -1,15 +1,21 @@
-//! Orchestration of the stages into the commands' jobs. Data in: a [`Dem`] and optionally
-//! an [`Ortho`] with [`BuildOptions`]; data out: a cell store on disk and its [`Manifest`].
+//! Orchestration of the stages into the commands' jobs.
+//!
+//! - [`build_store`]: a [`Dem`] and optionally an [`Ortho`] with [`BuildOptions`] in, a cell
+//!   store on disk and its [`Manifest`] out.
+//! - [`reparam_store`]: a store and [`ReparamOptions`] in; stretched cells gain a
+//!   [`crate::store::ReparamRecord`] (chart, resampled texture, metrics).
 
 mod build;
 mod derived_ortho;
 mod mesh;
 mod progress;
+mod reparam;
 
 pub use build::{BuildInputs, BuildOptions, build_store, write_stats};
 pub use derived_ortho::derived_ortho;
 pub use mesh::{LocalMesh, local_mesh};
 pub use progress::progress_bar;
+pub use reparam::{ReparamOptions, TextureMemory, reparam_store, texture_memory};
 
 #[allow(unused_imports)]
 use crate::{dem::Dem, ortho::Ortho, store::Manifest};

@@ -82,8 +82,45 @@ pub struct CellRecord {
     pub texels: u32,
     /// The cell's files.
     pub files: CellFiles,
-    /// Texel-stretch statistics of the cell.
+    /// Texel-stretch statistics of the cell (orthographic parameterization).
     pub stats: crate::stats::CellStats,
+    /// The reparameterized variant, if `cliffmap reparam` chose this cell.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reparam: Option<ReparamRecord>,
+}
+
+/// A cell's reparameterized variant: mesh with texture coordinates, resampled texture and
+/// normal map, and the chart's distortion metrics.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReparamRecord {
+    /// Texture side in texels (twice the store's in mixed-resolution mode).
+    pub texels: u32,
+    /// Mesh (same vertices and triangles as the ortho mesh, plus UVs), texture, normal map.
+    pub files: CellFiles,
+    /// Distortion metrics of the chart (base area = the cell's nominal square).
+    pub metrics: crate::param::ChartMetrics,
+    /// Rel_texel of the chart at the store's texel density: `metrics.rel_texel *
+    /// (cell_texels / texels)²`, comparable with `stats.rel_texel` of the ortho map.
+    pub rel_texel: f64,
+    /// Per-texel stretch of the chart, relative to an ortho texel's base area.
+    pub texel_stretch: crate::stats::Percentiles,
+    /// Texels where the resampling fell back to bilinear filtering (collapsed footprints).
+    pub bilinear_fallbacks: u64,
+}
+
+/// Settings of the last `cliffmap reparam` run on the store.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReparamSettings {
+    /// Cells with ortho Rel_texel above this were reparameterized.
+    pub threshold: f64,
+    /// Energy exponent theta.
+    pub theta: f64,
+    /// Reparameterized cells got textures of twice the side.
+    pub mixed_resolution: bool,
+    /// Resampling filter, e.g. "subtexel:4".
+    pub resample: String,
+    /// Cells whose parameterization failed and that kept the ortho map.
+    pub failed_cells: Vec<String>,
 }
 
 impl CellRecord {
@@ -137,6 +174,9 @@ pub struct Manifest {
     pub build_key: String,
     /// All cells, root first, row-major within a level.
     pub cells: Vec<CellRecord>,
+    /// Settings of the last `cliffmap reparam` run, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reparam: Option<ReparamSettings>,
 }
 
 impl Manifest {

@@ -23,7 +23,8 @@ use std::path::{Path, PathBuf};
 
 pub use files::{crc32_hex, is_intact, read_verified, write_file};
 pub use manifest::{
-    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION,
+    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, ReparamRecord, ReparamSettings, STORE_FORMAT,
+    STORE_VERSION,
 };
 pub use mesh::CellMesh;
 pub use obj::obj_text;
@@ -59,10 +60,20 @@ impl Store {
         })
     }
 
-    /// Reads and verifies a cell's mesh.
+    /// Reads and verifies a cell's (orthographic) mesh.
     pub fn read_mesh(&self, rec: &CellRecord) -> Result<CellMesh> {
-        let bytes = read_verified(&self.dir, &rec.files.mesh)?;
-        CellMesh::from_bytes(&bytes, &self.dir.join(&rec.files.mesh.path))
+        self.read_mesh_file(&rec.files.mesh)
+    }
+
+    /// Reads and verifies the mesh the cell currently uses: the reparameterized one (with
+    /// texture coordinates) if the cell has it, else the orthographic one.
+    pub fn read_active_mesh(&self, rec: &CellRecord) -> Result<CellMesh> {
+        self.read_mesh_file(rec.reparam.as_ref().map_or(&rec.files.mesh, |r| &r.files.mesh))
+    }
+
+    fn read_mesh_file(&self, f: &FileRef) -> Result<CellMesh> {
+        let bytes = read_verified(&self.dir, f)?;
+        CellMesh::from_bytes(&bytes, &self.dir.join(&f.path))
     }
 
     /// Reads and verifies a cell's colour texture.
@@ -75,7 +86,13 @@ impl Store {
         self.read_png(&rec.files.normal).map(|i| i.to_rgb8())
     }
 
-    fn read_png(&self, f: &FileRef) -> Result<image::DynamicImage> {
+    /// Reads and verifies one of the store's files by its record.
+    pub fn read_file(&self, f: &FileRef) -> Result<Vec<u8>> {
+        read_verified(&self.dir, f)
+    }
+
+    /// Reads, verifies and decodes a PNG of the store.
+    pub fn read_png(&self, f: &FileRef) -> Result<image::DynamicImage> {
         let bytes = read_verified(&self.dir, f)?;
         image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
             .map_err(|e| Error::store(self.dir.join(&f.path), format!("cannot decode PNG: {e}")))

@@ -1,0 +1,277 @@
+//! Per-cell area/angle-preserving parameterization (Degener, Meseth & Klein 2003).
+//!
+//! Data types:
+//! - [`ParamMesh`]: one cell's triangulated surface in a cell-local f64 frame (metres),
+//!   a consistently oriented manifold disc, triangles counter-clockwise seen from +z.
+//! - [`ParamOptions`]: the energy's area/angle balance θ, the relaxation budget and the
+//!   texture size/gutter used for packing.
+//! - [`Chart`]: one UV per input vertex, inside [0,1]², plus the similarity that placed
+//!   the chart in the square and its [`ChartMetrics`].
+//!
+//! Method: the mesh is simplified by rounds of independent half-edge collapses down to one
+//! triangle, which is laid out with its 3D shape; the rounds are then undone in reverse
+//! order, each re-inserted vertex placed inside the kernel of its 1-ring, and after each
+//! round the vertices are relaxed one at a time against the energy
+//! E = (s1/s2 + s2/s1)·(s1·s2 + 1/(s1·s2))^θ (area-weighted, +∞ for flipped
+//! triangles), so no step can create a flip. The UV area is kept equal to the 3D area
+//! after every round. Finally the chart is rotated to its minimum-area bounding rectangle
+//! and scaled uniformly into the texture square. See docs/parameterization.md.
+
+// `!(x > 0.0)` is deliberate throughout: it also rejects NaN. Small fixed-size
+// matrix loops read better with indices.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
+mod base;
+mod collapse;
+mod energy;
+mod mesh;
+mod metrics;
+mod pack;
+mod relax;
+mod split;
+
+pub use metrics::{ChartMetrics, chart_metrics, degener_energy};
+
+use crate::error::{Error, Result};
+use mesh::{Topo, VertId};
+use relax::Relaxer;
+
+/// A cell's surface: positions in a cell-local frame (f64, metres; any offset is
+/// accepted and removed internally) and triangles with indices into `positions`,
+/// counter-clockwise seen from above (+z), forming one manifold disc.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParamMesh {
+    /// Vertex positions (x east, y north, z up), metres.
+    pub positions: Vec<[f64; 3]>,
+    /// Triangles as vertex indices, counter-clockwise seen from +z.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Parameters of [`parameterize`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamOptions {
+    /// Area/angle balance θ >= 0 of the energy: 0 is purely conformal, larger values
+    /// penalise area distortion more. Default 1, where the energy equals the symmetric
+    /// Dirichlet energy; on steep terrain cells it gives the lowest symmetric Dirichlet
+    /// energy of the values measured (0, 0.5, 1, 2, 3; see docs/parameterization.md);
+    /// VCGLib's default 3 trades more angle distortion for less area distortion.
+    pub theta: f64,
+    /// Relaxation after each refinement round stops when one sweep lowers the total
+    /// energy by less than this fraction (>= 0). Default 1e-4.
+    pub relax_tolerance: f64,
+    /// At most this many relaxation sweeps per refinement round. Default 32.
+    pub max_sweeps: u32,
+    /// Empty border, in texels of `texture_size`, kept on every side of the chart
+    /// (>= 0, less than half the texture). Default 2.
+    pub gutter_texels: f64,
+    /// Texture edge length in texels the chart is packed for (>= 1). Default 256.
+    pub texture_size: u32,
+}
+
+impl Default for ParamOptions {
+    fn default() -> Self {
+        ParamOptions { theta: 1.0, relax_tolerance: 1e-4, max_sweeps: 32, gutter_texels: 2.0, texture_size: 256 }
+    }
+}
+
+impl ParamOptions {
+    /// Checks every field's range; errors name the option.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.theta.is_finite() && self.theta >= 0.0) {
+            return Err(Error::BadOption(format!("theta must be finite and >= 0, got {}", self.theta)));
+        }
+        if !(self.relax_tolerance.is_finite() && self.relax_tolerance >= 0.0) {
+            return Err(Error::BadOption(format!("relax tolerance must be finite and >= 0, got {}", self.relax_tolerance)));
+        }
+        if self.texture_size == 0 {
+            return Err(Error::BadOption("texture size must be at least 1 texel".into()));
+        }
+        if !(self.gutter_texels.is_finite() && self.gutter_texels >= 0.0 && 2.0 * self.gutter_texels < self.texture_size as f64) {
+            return Err(Error::BadOption(format!(
+                "gutter must be >= 0 texels and less than half the texture ({} texels), got {}",
+                self.texture_size, self.gutter_texels
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A parameterized cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chart {
+    /// One texture coordinate per input vertex, inside [0,1]² (u right, v up), with no
+    /// flipped triangle unless `metrics.flipped` says otherwise.
+    pub uvs: Vec<[f64; 2]>,
+    /// Distortion of the final chart (see [`ChartMetrics`]; base area = xy bounding
+    /// rectangle of the input).
+    pub metrics: ChartMetrics,
+    /// Rotation (radians, counter-clockwise) applied to the area-preserving layout (whose
+    /// UV area equals the 3D area, in metres) before scaling.
+    pub rotation: f64,
+    /// Texture units per metre of the area-preserving layout: uv = offset + scale·R·w.
+    pub scale: f64,
+    /// Translation of the packed chart in texture units.
+    pub offset: [f64; 2],
+    /// Number of simplification rounds (hierarchy depth).
+    pub rounds: usize,
+    /// True if simplification stopped above one triangle and the base mesh was laid out
+    /// by a Tutte embedding instead (see docs/parameterization.md).
+    pub tutte_base: bool,
+}
+
+/// Computes a flip-free, area/angle-balanced chart of `mesh` packed into the unit square.
+/// Deterministic for the same input. Errors only on invalid options or a mesh that is not
+/// a valid disc (the error says which triangle/vertex is wrong).
+pub fn parameterize(mesh: &ParamMesh, opts: &ParamOptions) -> Result<Chart> {
+    opts.validate()?;
+    mesh::validate(mesh)?;
+    run(mesh, opts, usize::MAX)
+}
+
+/// The pipeline; `max_rounds` caps the simplification (tests use it to exercise the
+/// Tutte base).
+fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart> {
+    let n = mesh.positions.len();
+    // Local frame: subtract the centroid (UTM-sized coordinates lose precision otherwise).
+    let mut c = [0.0; 3];
+    for p in &mesh.positions {
+        for k in 0..3 {
+            c[k] += p[k] / n as f64;
+        }
+    }
+    let pos: Vec<[f64; 3]> = mesh.positions.iter().map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]]).collect();
+
+    let mut topo = Topo::new(mesh);
+    let mut hier = collapse::simplify_capped(&mut topo, &pos, max_rounds);
+    let mut uvs = vec![[0.0f64; 2]; n];
+    let mut rx = Relaxer { geom: Vec::new(), theta: opts.theta };
+    let tutte_base = topo.alive_faces > 1;
+    if tutte_base {
+        base::tutte(&topo, &pos, &mut uvs);
+        rx.refresh(&topo, &pos);
+        normalize_area(&topo, &rx, &mut uvs);
+        let all: Vec<VertId> = (0..n as u32).map(VertId).filter(|v| topo.vert_alive[v.ix()]).collect();
+        rx.relax(&topo, &mut uvs, all, opts.relax_tolerance, opts.max_sweeps);
+    } else {
+        base::triangle(&topo, &pos, &mut uvs);
+    }
+    let rounds = hier.rounds.len();
+    while let Some(round) = hier.rounds.pop() {
+        let mut inserted = Vec::with_capacity(round.len());
+        for col in round.iter().rev() {
+            split::undo(&mut topo, col);
+            let p = split::place(&topo, &pos, &uvs, col.u).unwrap_or_else(|| fallback_place(&topo, &uvs, col));
+            uvs[col.u.ix()] = p;
+            inserted.push(col.u);
+        }
+        rx.refresh(&topo, &pos);
+        normalize_area(&topo, &rx, &mut uvs);
+        let mut start: Vec<VertId> = Vec::new();
+        for &u in &inserted {
+            start.push(u);
+            start.extend(topo.neighbours(u));
+        }
+        start.sort_unstable();
+        start.dedup();
+        rx.relax(&topo, &mut uvs, start, opts.relax_tolerance, opts.max_sweeps);
+    }
+    rx.refresh(&topo, &pos);
+    normalize_area(&topo, &rx, &mut uvs);
+    let fit = pack::fit(&mut uvs, opts.gutter_texels / opts.texture_size as f64);
+    let metrics = chart_metrics(&mesh.positions, &mesh.triangles, &uvs, None)?;
+    Ok(Chart { uvs, metrics, rotation: fit.rotation, scale: fit.scale, offset: fit.offset, rounds, tutte_base })
+}
+
+/// Last resort when the 1-ring kernel is numerically empty: a point just off `v` towards
+/// the centroid of the ring (the relaxation cannot repair flips, so this is reported by
+/// the metrics if it ever happens).
+fn fallback_place(topo: &Topo, uvs: &[[f64; 2]], col: &collapse::Collapse) -> [f64; 2] {
+    let nb = topo.neighbours(col.u);
+    let mut c = [0.0, 0.0];
+    for w in &nb {
+        c[0] += uvs[w.ix()][0] / nb.len() as f64;
+        c[1] += uvs[w.ix()][1] / nb.len() as f64;
+    }
+    let v = uvs[col.v.ix()];
+    [v[0] + 1e-3 * (c[0] - v[0]), v[1] + 1e-3 * (c[1] - v[1])]
+}
+
+/// Scales the alive UVs about their centroid so the UV area equals the 3D area.
+fn normalize_area(topo: &Topo, rx: &Relaxer, uvs: &mut [[f64; 2]]) {
+    let (mut a3, mut auv) = (0.0, 0.0);
+    for (f, t) in topo.faces.iter().enumerate() {
+        if !topo.face_alive[f] {
+            continue;
+        }
+        a3 += rx.geom[f].area;
+        let (a, b, c) = (uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]);
+        auv += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+    }
+    if !(auv > 0.0 && a3 > 0.0) {
+        return;
+    }
+    let k = (a3 / auv).sqrt();
+    let mut cen = [0.0, 0.0];
+    let mut cnt = 0.0;
+    for (v, uv) in uvs.iter().enumerate() {
+        if topo.vert_alive[v] {
+            cen[0] += uv[0];
+            cen[1] += uv[1];
+            cnt += 1.0;
+        }
+    }
+    cen = [cen[0] / cnt, cen[1] / cnt];
+    for (v, uv) in uvs.iter_mut().enumerate() {
+        if topo.vert_alive[v] {
+            *uv = [(uv[0] - cen[0]) * k, (uv[1] - cen[1]) * k];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize, f: impl Fn(f64, f64) -> f64) -> ParamMesh {
+        let mut positions = Vec::new();
+        for r in 0..n {
+            for c in 0..n {
+                positions.push([c as f64, r as f64, f(c as f64, r as f64)]);
+            }
+        }
+        let mut triangles = Vec::new();
+        for r in 0..n - 1 {
+            for c in 0..n - 1 {
+                let a = (r * n + c) as u32;
+                triangles.push([a, a + 1, a + 1 + n as u32]);
+                triangles.push([a, a + 1 + n as u32, a + n as u32]);
+            }
+        }
+        ParamMesh { positions, triangles }
+    }
+
+    #[test]
+    fn tutte_base_path_gives_valid_chart() {
+        let m = grid(12, |x, y| if x > 5.5 { 8.0 } else { 0.0 } + 0.1 * y);
+        for cap in [0, 1, 3] {
+            let ch = run(&m, &ParamOptions::default(), cap).unwrap();
+            assert!(ch.tutte_base);
+            assert_eq!(ch.metrics.flipped, 0, "cap {cap}");
+            assert!(ch.metrics.angle_distortion_mean < 2.0, "cap {cap}: {:?}", ch.metrics);
+        }
+    }
+
+    #[test]
+    fn options_are_validated() {
+        let m = grid(3, |_, _| 0.0);
+        for o in [
+            ParamOptions { theta: -1.0, ..Default::default() },
+            ParamOptions { theta: f64::NAN, ..Default::default() },
+            ParamOptions { relax_tolerance: -1.0, ..Default::default() },
+            ParamOptions { texture_size: 0, ..Default::default() },
+            ParamOptions { gutter_texels: 200.0, ..Default::default() },
+        ] {
+            assert!(matches!(parameterize(&m, &o), Err(Error::BadOption(_))), "{o:?}");
+        }
+    }
+}
