@@ -6,7 +6,7 @@ use wgpu::util::DeviceExt;
 
 use super::camera::RenderCamera;
 use crate::error::{Error, Result};
-use crate::store::{CellMesh, CellRecord, Parameterization, texcoord};
+use crate::store::{CellMesh, CellRecord, texcoord};
 
 /// Colour target format: sRGB, so unlit output bytes equal the texture's bytes.
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -92,13 +92,13 @@ pub struct CellData {
 /// How texture coordinates are produced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum UvMode {
-    /// Per cell: orthographic cells derive UVs in the vertex shader, reparameterized cells use
-    /// their stored UVs (correct rendering).
+    /// Per cell: the reparameterized variant (stored UVs) where the cell has one, else the
+    /// orthographic files with UVs derived in the vertex shader (correct rendering).
     Mixed,
-    /// Every cell derives UVs from x, y (reparameterized textures appear wrongly mapped: a
-    /// performance baseline).
+    /// Every cell uses its orthographic files, UVs derived from x, y (the baseline).
     Ortho,
-    /// Every cell reads a UV vertex stream (computed on the CPU for orthographic cells).
+    /// Like `Mixed`, but every cell reads a UV vertex stream (computed on the CPU for cells
+    /// without stored UVs).
     Reparam,
 }
 
@@ -112,14 +112,10 @@ impl CellData {
         normal: image::RgbImage,
         mode: UvMode,
     ) -> CellData {
-        let uvs = match (mode, rec.parameterization) {
-            (UvMode::Ortho, _) => None,
-            (UvMode::Mixed, Parameterization::Ortho) => None,
-            _ => Some(
-                (0..mesh.positions.len())
-                    .map(|i| texcoord(rec, &mesh, i))
-                    .collect(),
-            ),
+        let uvs = match mode {
+            UvMode::Ortho => None,
+            UvMode::Mixed => mesh.uvs.clone(),
+            UvMode::Reparam => Some((0..mesh.positions.len()).map(|k| texcoord(rec, &mesh, k)).collect()),
         };
         let normal = image::DynamicImage::ImageRgb8(normal).to_rgba8();
         CellData {

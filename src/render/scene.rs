@@ -13,7 +13,7 @@ use super::lod::{CellIndex, distance_to_bbox, select_cells};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
-use crate::store::Store;
+use crate::store::{CellMesh, Store};
 
 /// How a scene renders.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,9 +102,16 @@ impl TerrainScene {
         let mode = opts.uv_mode;
         let streamer = Streamer::new(opts.loader_threads, move |i| {
             let rec = &loader_store.manifest.cells[i];
-            let mesh = loader_store.read_mesh(rec)?;
-            let colour = loader_store.read_texture(rec)?;
-            let normal = loader_store.read_normal_map(rec)?;
+            // The reparameterized variant where the cell has one, unless the baseline
+            // orthographic rendering is asked for.
+            let files = match (&rec.reparam, mode) {
+                (Some(r), UvMode::Mixed | UvMode::Reparam) => &r.files,
+                _ => &rec.files,
+            };
+            let bytes = loader_store.read_file(&files.mesh)?;
+            let mesh = CellMesh::from_bytes(&bytes, &loader_store.dir.join(&files.mesh.path))?;
+            let colour = loader_store.read_png(&files.texture)?.to_rgba8();
+            let normal = loader_store.read_png(&files.normal)?.to_rgb8();
             Ok(CellData::new(rec, mesh, colour, normal, mode))
         });
         Ok(TerrainScene {

@@ -83,6 +83,7 @@ pub fn record(s: &Synth, key: CellKey) -> CellRecord {
             normal: file(format!("{stem}.normal.png")),
         },
         stats: Default::default(),
+        reparam: None,
     }
 }
 
@@ -208,6 +209,7 @@ pub fn write_store(
         },
         max_error: s.finest_error,
         cell_texels: s.texels,
+        reparam: None,
         build_key: "00000000".into(),
         cells,
     };
