@@ -46,6 +46,9 @@ pub enum Error {
         /// What is wrong.
         msg: String,
     },
+    /// The GPU (wgpu adapter, device or a GPU operation) failed or is unavailable.
+    #[error("GPU: {0}")]
+    Gpu(String),
 }
 
 impl Error {

@@ -19,6 +19,7 @@
 //! - [`resample`]: resampling a colour source into a new chart with area-weighted
 //!   subtexel filtering ([`resample::resample`]).
 //! - [`scene`]: the embedded procedural demo scene.
+//! - [`camera`]: pinhole cameras and Camera JSON; [`render`]: the wgpu quadtree renderer.
 //!
 //! Guarantees: georeferenced coordinates are f64 (cell meshes are f32 relative to an f64
 //! cell origin, so UTM-sized coordinates keep millimetre precision); every TIN is within its
@@ -44,6 +45,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod cells;
 pub mod dem;
 pub mod error;
@@ -53,6 +55,7 @@ pub mod geotiff;
 pub mod ortho;
 pub mod param;
 pub mod pipeline;
+pub mod render;
 pub mod resample;
 pub mod scene;
 pub mod stats;

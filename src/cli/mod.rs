@@ -4,6 +4,8 @@
 mod build;
 mod demo;
 mod export_obj;
+mod fly;
+mod render;
 mod reparam;
 mod stats;
 
@@ -34,6 +36,10 @@ enum Command {
     Stats(stats::Args),
     /// Write one cell's TIN with texture coordinates as Wavefront OBJ.
     ExportObj(export_obj::Args),
+    /// Render one frame of a store from a camera (headless GPU) to PNG.
+    Render(render::Args),
+    /// Timed fly-through over a store (headless GPU); writes a JSON report.
+    Fly(fly::Args),
 }
 
 /// Parses arguments, runs the command, prints errors as `error: ...` and maps them to exit codes.
@@ -58,6 +64,8 @@ pub fn run() -> ExitCode {
         Command::Reparam(a) => reparam::run(a),
         Command::Stats(a) => stats::run(a),
         Command::ExportObj(a) => export_obj::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Fly(a) => fly::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

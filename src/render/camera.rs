@@ -1,0 +1,104 @@
+//! The render camera: a [`CameraModel`] plus a near plane, with matrices computed relative to
+//! the camera position in f64 and only then rounded to f32 (no jitter at UTM magnitudes).
+//!
+//! Clip space is wgpu's (x right, y up, depth in [0, 1]) with **reverse-Z and an infinite far
+//! plane**: depth = near / distance-along-axis, 1 at the near plane, → 0 at infinity.
+
+use glam::{DMat4, DVec3, DVec4, Mat4};
+
+use super::frustum::Frustum;
+use crate::camera::CameraModel;
+
+/// A camera ready for rendering at `model.width × model.height` pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderCamera {
+    /// Pose and intrinsics (distortion is ignored by the rasterizer).
+    pub model: CameraModel,
+    /// Near plane distance along the optical axis, metres (> 0).
+    pub near: f64,
+}
+
+impl RenderCamera {
+    /// A render camera with near plane `near` metres (clamped to at least 1 mm).
+    pub fn new(model: CameraModel, near: f64) -> RenderCamera {
+        RenderCamera {
+            model,
+            near: if near.is_finite() {
+                near.max(1e-3)
+            } else {
+                0.1
+            },
+        }
+    }
+
+    /// Projection from the camera frame (x right, y down, z forward) to clip space.
+    pub fn projection(&self) -> DMat4 {
+        let m = &self.model;
+        let (w, h) = (m.width as f64, m.height as f64);
+        let rows = [
+            [2.0 * m.fx / w, 0.0, 2.0 * (m.cx + 0.5) / w - 1.0, 0.0],
+            [0.0, -2.0 * m.fy / h, 1.0 - 2.0 * (m.cy + 0.5) / h, 0.0],
+            [0.0, 0.0, 0.0, self.near],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        DMat4::from_cols_array_2d(&rows).transpose()
+    }
+
+    /// Maps camera-relative world coordinates (world − position, metres) to clip space.
+    pub fn view_proj_relative(&self) -> DMat4 {
+        let r = self.model.world_to_camera;
+        let view = DMat4::from_cols(
+            r.x_axis.extend(0.0),
+            r.y_axis.extend(0.0),
+            r.z_axis.extend(0.0),
+            DVec4::W,
+        );
+        self.projection() * view
+    }
+
+    /// Model-view-projection (f32) for a mesh whose local frame has its origin at world `origin`:
+    /// the offset `origin − position` is taken in f64 before rounding.
+    pub fn mvp_for_origin(&self, origin: DVec3) -> Mat4 {
+        (self.view_proj_relative() * DMat4::from_translation(origin - self.model.position))
+            .as_mat4()
+    }
+
+    /// The view frustum in camera-relative world coordinates.
+    pub fn frustum(&self) -> Frustum {
+        Frustum::from_view_proj(&self.view_proj_relative())
+    }
+
+    /// Pixels covered by one metre seen face-on at `distance` metres (vertical focal length / d).
+    pub fn pixels_per_metre(&self, distance: f64) -> f64 {
+        self.model.fy / distance.max(1e-9)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::rotation_look_at;
+
+    #[test]
+    fn projects_like_the_camera_model_at_utm_magnitudes() {
+        let pos = DVec3::new(446_722.0, 7_396_671.0, 770.0);
+        let r = rotation_look_at(pos, pos + DVec3::new(-1.0, -0.8, -0.1)).unwrap();
+        let mut model = CameraModel::with_fov(pos, r, 320, 200, 0.9);
+        model.cx = 150.0;
+        let cam = RenderCamera::new(model, 1.0);
+        let origin = DVec3::new(446_000.0, 7_396_000.0, 600.0);
+        let local = glam::Vec3::new(12.25, -3.5, 40.0);
+        let clip = cam.mvp_for_origin(origin) * local.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        let px = [
+            (ndc.x as f64 + 1.0) / 2.0 * 320.0 - 0.5,
+            (1.0 - ndc.y as f64) / 2.0 * 200.0 - 0.5,
+        ];
+        let want = model.project(origin + local.as_dvec3()).unwrap();
+        assert!(
+            (px[0] - want[0]).abs() < 1e-3 && (px[1] - want[1]).abs() < 1e-3,
+            "{px:?} vs {want:?}"
+        );
+        assert!(ndc.z > 0.0 && ndc.z < 1.0);
+    }
+}

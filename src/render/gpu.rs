@@ -1,0 +1,787 @@
+//! Headless wgpu: device set-up, cell uploads (vertex/index buffers, mipmapped colour
+//! texture and normal map), the terrain pipelines, offscreen frames and PNG readback.
+
+use glam::DVec3;
+use wgpu::util::DeviceExt;
+
+use super::camera::RenderCamera;
+use crate::error::{Error, Result};
+use crate::store::{CellMesh, CellRecord, texcoord};
+
+/// Colour target format: sRGB, so unlit output bytes equal the texture's bytes.
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Depth format (reverse-Z: cleared to 0, closer = larger).
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Byte stride of the per-draw uniform slots (the dynamic-offset alignment wgpu guarantees).
+const DRAW_STRIDE: u64 = 256;
+
+/// The wgpu device and what it runs on.
+pub struct GpuContext {
+    /// The adapter in use.
+    pub adapter: wgpu::Adapter,
+    /// The logical device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Adapter name, backend, device type, driver.
+    pub info: wgpu::AdapterInfo,
+}
+
+impl GpuContext {
+    /// Opens the default adapter without a window (backends from `WGPU_BACKEND` if set).
+    /// Errors name what is missing (e.g. Mesa's lavapipe/llvmpipe drivers on a machine without GPU).
+    pub fn new() -> Result<GpuContext> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| {
+            Error::Gpu(format!(
+                "no graphics adapter ({e}); without a GPU install Mesa's software drivers: \
+                 apt-get install mesa-vulkan-drivers libegl1 libegl-mesa0 libgl1-mesa-dri"
+            ))
+        })?;
+        let info = adapter.get_info();
+        let limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("cliffmap"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits,
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| {
+            Error::Gpu(format!(
+                "cannot open device on {} ({:?}): {e}",
+                info.name, info.backend
+            ))
+        })?;
+        Ok(GpuContext {
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// "name (backend, device type)" for reports.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+}
+
+/// A cell's data ready for upload, produced off the render thread.
+#[derive(Clone, Debug)]
+pub struct CellData {
+    /// The mesh (positions cell-local f32).
+    pub mesh: CellMesh,
+    /// Per-vertex texture coordinates when drawn with the UV pipeline, else `None`.
+    pub uvs: Option<Vec<[f32; 2]>>,
+    /// Colour texture, full mip chain (level 0 first, down to 1×1), sRGB RGBA8.
+    pub colour_mips: Vec<image::RgbaImage>,
+    /// Normal map (RGB in the cell-local frame, n·0.5+0.5; A = 255), full mip chain.
+    pub normal_mips: Vec<image::RgbaImage>,
+}
+
+/// How texture coordinates are produced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UvMode {
+    /// Per cell: the reparameterized variant (stored UVs) where the cell has one, else the
+    /// orthographic files with UVs derived in the vertex shader (correct rendering).
+    Mixed,
+    /// Every cell uses its orthographic files, UVs derived from x, y (the baseline).
+    Ortho,
+    /// Like `Mixed`, but every cell reads a UV vertex stream (computed on the CPU for cells
+    /// without stored UVs).
+    Reparam,
+}
+
+impl CellData {
+    /// Builds upload data: generates the mip chains (Triangle filter, each level half the
+    /// previous, at least 1 texel) and the UV stream `mode` calls for.
+    pub fn new(
+        rec: &CellRecord,
+        mesh: CellMesh,
+        colour: image::RgbaImage,
+        normal: image::RgbImage,
+        mode: UvMode,
+    ) -> CellData {
+        let uvs = match mode {
+            UvMode::Ortho => None,
+            UvMode::Mixed => mesh.uvs.clone(),
+            UvMode::Reparam => Some((0..mesh.positions.len()).map(|k| texcoord(rec, &mesh, k)).collect()),
+        };
+        let normal = image::DynamicImage::ImageRgb8(normal).to_rgba8();
+        CellData {
+            mesh,
+            uvs,
+            colour_mips: mip_chain(colour),
+            normal_mips: mip_chain(normal),
+        }
+    }
+}
+
+/// The full mip chain of `img` (level 0 = `img`).
+pub fn mip_chain(img: image::RgbaImage) -> Vec<image::RgbaImage> {
+    let mut out = vec![img];
+    loop {
+        let last = &out[out.len() - 1];
+        let (w, h) = last.dimensions();
+        if w <= 1 && h <= 1 {
+            return out;
+        }
+        let next = image::imageops::resize(
+            last,
+            (w / 2).max(1),
+            (h / 2).max(1),
+            image::imageops::FilterType::Triangle,
+        );
+        out.push(next);
+    }
+}
+
+/// A cell resident on the GPU.
+pub struct GpuCell {
+    positions: wgpu::Buffer,
+    uvs: Option<wgpu::Buffer>,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    textures: wgpu::BindGroup,
+    /// World origin of the cell-local frame.
+    pub origin: DVec3,
+    /// (min_x − origin_x, max_y − origin_y, width, height) of the nominal square, metres.
+    pub extent_rel: [f32; 4],
+    /// Quadtree level (for the overlay).
+    pub level: u8,
+    /// Triangles drawn (surface + skirt).
+    pub triangles: u32,
+    /// GPU bytes held (buffers and textures with mips).
+    pub bytes: u64,
+}
+
+/// Options of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameOptions {
+    /// Lighting from the normal maps (false: texture colour only).
+    pub lit: bool,
+    /// Direction towards the sun, world (need not be unit).
+    pub sun_dir: DVec3,
+    /// Ambient fraction of lit shading, in [0, 1].
+    pub ambient: f32,
+    /// Sky colour, sRGB 8-bit.
+    pub sky: [u8; 3],
+    /// Tint cells by quadtree level.
+    pub level_overlay: bool,
+}
+
+impl Default for FrameOptions {
+    fn default() -> Self {
+        FrameOptions {
+            lit: true,
+            sun_dir: DVec3::new(-0.5, 0.6, 0.62),
+            ambient: 0.35,
+            sky: [170, 200, 235],
+            level_overlay: false,
+        }
+    }
+}
+
+/// Pipelines, uniforms and an offscreen colour + depth target of fixed size.
+pub struct TerrainRenderer {
+    /// The device.
+    pub ctx: GpuContext,
+    width: u32,
+    height: u32,
+    colour: wgpu::Texture,
+    depth_view: wgpu::TextureView,
+    colour_view: wgpu::TextureView,
+    pipeline_ortho: wgpu::RenderPipeline,
+    pipeline_uv: wgpu::RenderPipeline,
+    cell_layout: wgpu::BindGroupLayout,
+    frame_layout: wgpu::BindGroupLayout,
+    frame_buf: wgpu::Buffer,
+    draw_buf: wgpu::Buffer,
+    draw_capacity: u64,
+    frame_group: wgpu::BindGroup,
+    sampler: wgpu::Sampler,
+}
+
+fn srgb_to_linear(c: u8) -> f64 {
+    let c = c as f64 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn level_tint(level: u8) -> [f32; 4] {
+    const T: [[f32; 3]; 8] = [
+        [0.9, 0.1, 0.1],
+        [0.9, 0.6, 0.1],
+        [0.8, 0.9, 0.1],
+        [0.2, 0.8, 0.2],
+        [0.1, 0.8, 0.8],
+        [0.2, 0.3, 0.9],
+        [0.6, 0.2, 0.9],
+        [0.9, 0.2, 0.7],
+    ];
+    let t = T[level as usize % T.len()];
+    [t[0], t[1], t[2], 1.0]
+}
+
+fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+impl TerrainRenderer {
+    /// Creates pipelines and a `width × height` target (each in 1..=max texture size).
+    pub fn new(ctx: GpuContext, width: u32, height: u32) -> Result<TerrainRenderer> {
+        let max = ctx.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(Error::BadOption(format!(
+                "frame size {width}x{height} must be within 1..={max} per side"
+            )));
+        }
+        let device = &ctx.device;
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("terrain.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/terrain.wgsl").into()),
+        });
+        let uniform = |binding, dynamic: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: dynamic,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame"),
+            entries: &[uniform(0, false), uniform(1, true)],
+        });
+        let tex = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let cell_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cell"),
+            entries: &[
+                tex(0),
+                tex(1),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("terrain"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&cell_layout)],
+            immediate_size: 0,
+        });
+        let pos_layout = wgpu::VertexBufferLayout {
+            array_stride: 12,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x3,
+                offset: 0,
+                shader_location: 0,
+            }],
+        };
+        let uv_layout = wgpu::VertexBufferLayout {
+            array_stride: 8,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32x2,
+                offset: 0,
+                shader_location: 1,
+            }],
+        };
+        let make = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout>]| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &shader,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &shader,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: COLOR_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipeline_ortho = make("vs_ortho", &[Some(pos_layout.clone())]);
+        let pipeline_uv = make("vs_uv", &[Some(pos_layout), Some(uv_layout)]);
+        let frame_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame uniforms"),
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("terrain"),
+            address_mode_u: wgpu::AddressMode::ClampToEdge,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: 8,
+            ..Default::default()
+        });
+        let (colour, colour_view, depth_view) = Self::targets(device, width, height);
+        let draw_capacity = 64;
+        let draw_buf = Self::draw_buffer(device, draw_capacity);
+        let frame_group = Self::frame_group(device, &frame_layout, &frame_buf, &draw_buf);
+        Ok(TerrainRenderer {
+            ctx,
+            width,
+            height,
+            colour,
+            depth_view,
+            colour_view,
+            pipeline_ortho,
+            pipeline_uv,
+            cell_layout,
+            frame_layout,
+            frame_buf,
+            draw_buf,
+            draw_capacity,
+            frame_group,
+            sampler,
+        })
+    }
+
+    fn targets(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+    ) -> (wgpu::Texture, wgpu::TextureView, wgpu::TextureView) {
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let colour = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("colour target"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: COLOR_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth target"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let cv = colour.create_view(&Default::default());
+        let dv = depth.create_view(&Default::default());
+        (colour, cv, dv)
+    }
+
+    fn draw_buffer(device: &wgpu::Device, capacity: u64) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("draw uniforms"),
+            size: capacity * DRAW_STRIDE,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    fn frame_group(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        frame: &wgpu::Buffer,
+        draw: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: draw,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(96),
+                    }),
+                },
+            ],
+        })
+    }
+
+    /// Target width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Target height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    fn texture(
+        &self,
+        label: &str,
+        mips: &[image::RgbaImage],
+        format: wgpu::TextureFormat,
+    ) -> (wgpu::Texture, u64) {
+        let (w, h) = mips[0].dimensions();
+        let tex = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: mips.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let mut bytes = 0;
+        for (level, img) in mips.iter().enumerate() {
+            let (mw, mh) = img.dimensions();
+            self.ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &tex,
+                    mip_level: level as u32,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                img.as_raw(),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(4 * mw),
+                    rows_per_image: Some(mh),
+                },
+                wgpu::Extent3d {
+                    width: mw,
+                    height: mh,
+                    depth_or_array_layers: 1,
+                },
+            );
+            bytes += img.as_raw().len() as u64;
+        }
+        (tex, bytes)
+    }
+
+    /// Uploads a cell. Fails on an empty mesh or texture, or a texture over the device limit.
+    pub fn upload(&self, rec: &CellRecord, data: &CellData) -> Result<GpuCell> {
+        let max = self.ctx.device.limits().max_texture_dimension_2d;
+        for (what, mips) in [
+            ("texture", &data.colour_mips),
+            ("normal map", &data.normal_mips),
+        ] {
+            let (w, h) = mips.first().map(|m| m.dimensions()).unwrap_or((0, 0));
+            if w == 0 || h == 0 || w > max || h > max {
+                return Err(Error::Gpu(format!(
+                    "cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})",
+                    rec.id
+                )));
+            }
+        }
+        if data.mesh.triangles.is_empty() {
+            return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
+        }
+        let device = &self.ctx.device;
+        let pos: Vec<f32> = data.mesh.positions.iter().flatten().copied().collect();
+        let idx: Vec<u8> = data
+            .mesh
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let positions = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("positions"),
+            contents: &f32_bytes(&pos),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uvs = data.uvs.as_ref().map(|uv| {
+            let flat: Vec<f32> = uv.iter().flatten().copied().collect();
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("uvs"),
+                contents: &f32_bytes(&flat),
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("indices"),
+            contents: &idx,
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let (colour, cb) = self.texture(
+            "colour",
+            &data.colour_mips,
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        );
+        let (normal, nb) =
+            self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
+        let cv = colour.create_view(&Default::default());
+        let nv = normal.create_view(&Default::default());
+        let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&rec.id),
+            layout: &self.cell_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&cv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        let origin = DVec3::from(rec.origin);
+        let e = rec.extent;
+        let bytes = pos.len() as u64 * 4
+            + idx.len() as u64
+            + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+            + cb
+            + nb;
+        Ok(GpuCell {
+            positions,
+            uvs,
+            indices,
+            index_count: data.mesh.triangles.len() as u32 * 3,
+            textures,
+            origin,
+            extent_rel: [
+                (e.min_x - origin.x) as f32,
+                (e.max_y - origin.y) as f32,
+                e.width() as f32,
+                e.height() as f32,
+            ],
+            level: rec.level,
+            triangles: data.mesh.triangles.len() as u32,
+            bytes,
+        })
+    }
+
+    /// Renders `cells` seen from `cam` into the target and waits until the GPU is done.
+    /// `cam` must have the target's size. Returns the number of triangles drawn.
+    pub fn render(
+        &mut self,
+        cam: &RenderCamera,
+        cells: &[&GpuCell],
+        opts: &FrameOptions,
+    ) -> Result<u64> {
+        if cam.model.width != self.width || cam.model.height != self.height {
+            return Err(Error::BadOption(format!(
+                "camera is {}x{} but the target is {}x{}",
+                cam.model.width, cam.model.height, self.width, self.height
+            )));
+        }
+        let device = &self.ctx.device;
+        if cells.len() as u64 > self.draw_capacity {
+            self.draw_capacity = (cells.len() as u64).next_power_of_two();
+            self.draw_buf = Self::draw_buffer(device, self.draw_capacity);
+            self.frame_group =
+                Self::frame_group(device, &self.frame_layout, &self.frame_buf, &self.draw_buf);
+        }
+        let sun = opts.sun_dir.try_normalize().unwrap_or(DVec3::Z).as_vec3();
+        let frame = [
+            sun.x,
+            sun.y,
+            sun.z,
+            0.0,
+            f32::from(u8::from(opts.lit)),
+            opts.ambient.clamp(0.0, 1.0),
+            f32::from(u8::from(opts.level_overlay)),
+            0.0,
+        ];
+        self.ctx
+            .queue
+            .write_buffer(&self.frame_buf, 0, &f32_bytes(&frame));
+        if !cells.is_empty() {
+            let mut draws = vec![0u8; cells.len() * DRAW_STRIDE as usize];
+            for (i, c) in cells.iter().enumerate() {
+                let mut v: Vec<f32> = cam.mvp_for_origin(c.origin).to_cols_array().to_vec();
+                v.extend_from_slice(&c.extent_rel);
+                v.extend_from_slice(&level_tint(c.level));
+                let b = f32_bytes(&v);
+                draws[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
+                    .copy_from_slice(&b);
+            }
+            self.ctx.queue.write_buffer(&self.draw_buf, 0, &draws);
+        }
+        let sky = opts.sky.map(srgb_to_linear);
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
+        let mut triangles = 0u64;
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("terrain"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.colour_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: sky[0],
+                            g: sky[1],
+                            b: sky[2],
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            for (i, c) in cells.iter().enumerate() {
+                match &c.uvs {
+                    Some(uv) => {
+                        pass.set_pipeline(&self.pipeline_uv);
+                        pass.set_vertex_buffer(1, uv.slice(..));
+                    }
+                    None => pass.set_pipeline(&self.pipeline_ortho),
+                }
+                pass.set_bind_group(0, &self.frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
+                pass.set_bind_group(1, &c.textures, &[]);
+                pass.set_vertex_buffer(0, c.positions.slice(..));
+                pass.set_index_buffer(c.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..c.index_count, 0, 0..1);
+                triangles += c.triangles as u64;
+            }
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the frame failed: {e}")))?;
+        Ok(triangles)
+    }
+
+    /// Copies the last rendered frame back (256-byte aligned rows, unpadded here).
+    pub fn read_rgba(&self) -> Result<image::RgbaImage> {
+        let device = &self.ctx.device;
+        let row = 4 * self.width;
+        let padded =
+            row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: padded as u64 * self.height as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.colour,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buf,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.ctx.queue.submit([enc.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        buf.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the readback failed: {e}")))?;
+        rx.recv()
+            .map_err(|_| Error::Gpu("readback was cancelled".into()))?
+            .map_err(|e| Error::Gpu(format!("cannot map the readback buffer: {e}")))?;
+        let mut out = Vec::with_capacity((row * self.height) as usize);
+        {
+            let view = buf
+                .get_mapped_range(..)
+                .map_err(|e| Error::Gpu(format!("cannot read the readback buffer: {e}")))?;
+            for r in 0..self.height as usize {
+                out.extend_from_slice(
+                    &view[r * padded as usize..r * padded as usize + row as usize],
+                );
+            }
+        }
+        buf.unmap();
+        image::RgbaImage::from_raw(self.width, self.height, out)
+            .ok_or_else(|| Error::Gpu("readback size mismatch".into()))
+    }
+}

@@ -1,0 +1,30 @@
+//! The quadtree renderer over a cell store.
+//!
+//! Policy (plain Rust, no GPU): [`RenderCamera`] (f64 camera-relative matrices, reverse-Z),
+//! [`Frustum`], LOD selection by screen-space error ([`select_cells`]), an LRU cache with a
+//! byte budget ([`LruCache`]) and background loading with ancestor fallback ([`Streamer`],
+//! [`resolve_draw_list`]). GPU side: [`gpu`] (headless wgpu: cell uploads, pipelines,
+//! offscreen frames, PNG readback) and [`TerrainScene`] (a store with cache, loaders and frames).
+
+mod cache;
+mod camera;
+mod frustum;
+mod lod;
+mod stream;
+
+pub use cache::LruCache;
+pub use camera::RenderCamera;
+pub use frustum::Frustum;
+pub use lod::{
+    CellIndex, LodSelection, cell_error, distance_to_bbox, screen_space_error, select_cells,
+};
+pub use stream::{DrawList, Streamer, resolve_draw_list};
+
+pub mod gpu;
+mod scene;
+
+pub use gpu::{CellData, FrameOptions, GpuCell, GpuContext, TerrainRenderer, UvMode};
+pub use scene::{FrameReport, SceneOptions, TerrainScene};
+mod flight;
+
+pub use flight::{FlightKey, FlightPath, FlyReport, fly, percentile};

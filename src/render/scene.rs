@@ -1,0 +1,246 @@
+//! A store opened for rendering: LOD selection, streaming, GPU cache and frames.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::DVec3;
+
+use super::cache::LruCache;
+use super::camera::RenderCamera;
+use super::gpu::{CellData, FrameOptions, GpuCell, GpuContext, TerrainRenderer, UvMode};
+use super::lod::{CellIndex, distance_to_bbox, select_cells};
+use super::stream::{Streamer, resolve_draw_list};
+use crate::camera::CameraModel;
+use crate::error::{Error, Result};
+use crate::store::{CellMesh, Store};
+
+/// How a scene renders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneOptions {
+    /// Screen-space error threshold in pixels (refine while above).
+    pub sse_px: f64,
+    /// GPU memory budget for cached cells, bytes.
+    pub budget_bytes: u64,
+    /// Texture-coordinate mode.
+    pub uv_mode: UvMode,
+    /// Background loader threads (≥ 1).
+    pub loader_threads: usize,
+    /// Shading.
+    pub frame: FrameOptions,
+}
+
+impl Default for SceneOptions {
+    fn default() -> Self {
+        SceneOptions {
+            sse_px: 0.5,
+            budget_bytes: 512 << 20,
+            uv_mode: UvMode::Mixed,
+            loader_threads: 1,
+            frame: FrameOptions::default(),
+        }
+    }
+}
+
+/// What one frame did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameReport {
+    /// Cells chosen by the LOD traversal.
+    pub selected: usize,
+    /// Cells drawn (after ancestor fallback).
+    pub drawn: usize,
+    /// Cells culled by the frustum.
+    pub culled: usize,
+    /// Triangles drawn (surface + skirt).
+    pub triangles: u64,
+    /// Selected cells drawn through a loaded ancestor because they were not loaded yet.
+    pub substituted: usize,
+    /// Selected cells with nothing loaded to draw.
+    pub holes: usize,
+    /// Loads that finished and were uploaded during this frame.
+    pub uploads: usize,
+    /// Wall time of the frame (upload, draw, GPU completion), milliseconds.
+    pub frame_ms: f64,
+    /// GPU bytes held by cached cells after the frame.
+    pub gpu_bytes: u64,
+}
+
+/// A store with a GPU renderer, a cell cache and background loaders.
+pub struct TerrainScene {
+    store: Arc<Store>,
+    index: CellIndex,
+    renderer: TerrainRenderer,
+    cache: LruCache<GpuCell>,
+    streamer: Streamer<CellData>,
+    opts: SceneOptions,
+}
+
+impl TerrainScene {
+    /// Opens `store_dir` and a headless GPU target of `width × height`.
+    pub fn open(
+        store_dir: &Path,
+        width: u32,
+        height: u32,
+        opts: SceneOptions,
+    ) -> Result<TerrainScene> {
+        if !(opts.sse_px.is_finite() && opts.sse_px > 0.0) {
+            return Err(Error::BadOption(format!(
+                "screen-space error threshold must be > 0 px, got {}",
+                opts.sse_px
+            )));
+        }
+        let store = Arc::new(Store::open(store_dir)?);
+        if store.manifest.cells.iter().all(|c| c.level != 0) {
+            return Err(Error::store(
+                store_dir.join("manifest.json"),
+                "no root (level 0) cell",
+            ));
+        }
+        let renderer = TerrainRenderer::new(GpuContext::new()?, width, height)?;
+        let index = CellIndex::new(&store.manifest.cells);
+        let loader_store = Arc::clone(&store);
+        let mode = opts.uv_mode;
+        let streamer = Streamer::new(opts.loader_threads, move |i| {
+            let rec = &loader_store.manifest.cells[i];
+            // The reparameterized variant where the cell has one, unless the baseline
+            // orthographic rendering is asked for.
+            let files = match (&rec.reparam, mode) {
+                (Some(r), UvMode::Mixed | UvMode::Reparam) => &r.files,
+                _ => &rec.files,
+            };
+            let bytes = loader_store.read_file(&files.mesh)?;
+            let mesh = CellMesh::from_bytes(&bytes, &loader_store.dir.join(&files.mesh.path))?;
+            let colour = loader_store.read_png(&files.texture)?.to_rgba8();
+            let normal = loader_store.read_png(&files.normal)?.to_rgb8();
+            Ok(CellData::new(rec, mesh, colour, normal, mode))
+        });
+        Ok(TerrainScene {
+            store,
+            index,
+            renderer,
+            cache: LruCache::new(opts.budget_bytes),
+            streamer,
+            opts,
+        })
+    }
+
+    /// The opened store.
+    pub fn store(&self) -> &Store {
+        &self.store
+    }
+
+    /// The GPU in use.
+    pub fn gpu(&self) -> &GpuContext {
+        &self.renderer.ctx
+    }
+
+    /// GPU bytes held by cached cells.
+    pub fn gpu_bytes(&self) -> u64 {
+        self.cache.used_bytes()
+    }
+
+    /// A render camera for `model` with a near plane suited to its distance from the terrain
+    /// (half the distance to the root bounding boxes, at least 0.25 m).
+    pub fn render_camera(&self, model: &CameraModel) -> RenderCamera {
+        let cells = &self.store.manifest.cells;
+        let d = self
+            .index
+            .roots()
+            .iter()
+            .map(|&i| distance_to_bbox(&cells[i], model.position))
+            .fold(f64::INFINITY, f64::min);
+        RenderCamera::new(
+            *model,
+            if d.is_finite() {
+                (0.5 * d).max(0.25)
+            } else {
+                0.25
+            },
+        )
+    }
+
+    fn accept(&mut self, i: usize, data: Result<CellData>) -> Result<()> {
+        let rec = &self.store.manifest.cells[i];
+        let cell = self.renderer.upload(rec, &data?)?;
+        let bytes = cell.bytes;
+        drop(self.cache.insert(i, cell, bytes));
+        Ok(())
+    }
+
+    /// Renders one frame from `model` (whose size must be the target's). With `complete`,
+    /// waits until every selected cell is loaded (for stills); otherwise never waits for the
+    /// disk: missing cells are requested and drawn through their nearest loaded ancestor.
+    pub fn frame(&mut self, model: &CameraModel, complete: bool) -> Result<FrameReport> {
+        let start = Instant::now();
+        let cam = self.render_camera(model);
+        let store = Arc::clone(&self.store);
+        let cells = &store.manifest.cells;
+        let sel = select_cells(cells, &self.index, &cam, self.opts.sse_px);
+        self.cache.begin_frame();
+        for &i in &sel.cells {
+            self.cache.get(i);
+        }
+        let mut report = FrameReport {
+            selected: sel.cells.len(),
+            culled: sel.culled,
+            ..Default::default()
+        };
+        for (i, data) in self.streamer.poll() {
+            self.accept(i, data)?;
+            report.uploads += 1;
+        }
+        for &r in self.index.roots() {
+            if !self.cache.contains(r) {
+                self.streamer.request(r);
+            }
+        }
+        let eye = model.position;
+        let mut missing: Vec<usize> = sel
+            .cells
+            .iter()
+            .copied()
+            .filter(|&i| !self.cache.contains(i))
+            .collect();
+        missing.sort_by(|&a, &b| {
+            distance_to_bbox(&cells[a], eye)
+                .total_cmp(&distance_to_bbox(&cells[b], eye))
+                .then(a.cmp(&b))
+        });
+        for &i in &missing {
+            self.streamer.request(i);
+        }
+        if complete {
+            while missing.iter().any(|&i| !self.cache.contains(i)) {
+                let Some((i, data)) = self.streamer.wait_one() else {
+                    break;
+                };
+                self.accept(i, data)?;
+                report.uploads += 1;
+            }
+        }
+        let dl = resolve_draw_list(&sel.cells, cells, &self.index, |i| self.cache.contains(i));
+        for &i in &dl.draw {
+            self.cache.get(i);
+        }
+        let draw: Vec<&GpuCell> = dl.draw.iter().filter_map(|&i| self.cache.peek(i)).collect();
+        report.drawn = draw.len();
+        report.substituted = dl.substituted;
+        report.holes = dl.holes;
+        report.triangles = self.renderer.render(&cam, &draw, &self.opts.frame)?;
+        report.gpu_bytes = self.cache.used_bytes();
+        report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(report)
+    }
+
+    /// The last frame's pixels (sRGB RGBA8, row 0 at the top).
+    pub fn read_rgba(&self) -> Result<image::RgbaImage> {
+        self.renderer.read_rgba()
+    }
+
+    /// World position of the centre of the store's root bounding box (for default views).
+    pub fn centre(&self) -> DVec3 {
+        let cells = &self.store.manifest.cells;
+        let r = &cells[self.index.roots()[0]];
+        (DVec3::from(r.bbox_min) + DVec3::from(r.bbox_max)) / 2.0
+    }
+}
