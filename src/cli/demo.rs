@@ -8,6 +8,18 @@ use cliffmap::scene::DemoScene;
 
 use super::stats::print_summary;
 
+/// Renders the middle camera of the store's default flight to `out` (960x540, lit).
+fn render_view(store: &std::path::Path, m: &cliffmap::store::Manifest, out: &std::path::Path) -> anyhow::Result<String> {
+    use cliffmap::render::{FlightPath, SceneOptions, TerrainScene};
+    let (w, h) = (960, 540);
+    let cams = FlightPath::default_for(m)?.cameras(9, w, h);
+    let cam = cams.get(4).ok_or_else(|| anyhow::anyhow!("empty default flight"))?;
+    let mut scene = TerrainScene::open(store, w, h, SceneOptions::default())?;
+    let r = scene.frame(cam, true)?;
+    write_png_atomic(out, &scene.read_rgba()?)?;
+    Ok(format!("rendered {} ({} cells, {} triangles) on {}", out.display(), r.drawn, r.triangles, scene.gpu().describe()))
+}
+
 /// Flags of `cliffmap demo`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -55,6 +67,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let n = st.manifest.cells.iter().filter(|c| c.reparam.is_some()).count();
         println!("reparameterized {n} stretched cells (Rel_texel > {})", reparam.threshold);
         print_summary(&store, &st.manifest, reparam.threshold)?;
+    }
+    // Render a view along the default flight (needs a GPU or Mesa's software drivers).
+    match render_view(&store, &st.manifest, &a.out.join("frame.png")) {
+        Ok(msg) if !a.quiet => println!("{msg}"),
+        Ok(_) => {}
+        Err(e) => eprintln!("warning: no frame rendered ({e:#}); install a GPU driver or Mesa (see README)"),
     }
     Ok(())
 }
