@@ -181,30 +181,9 @@ pub(crate) fn apply(topo: &mut Topo, u: VertId, v: VertId) -> Collapse {
 
 #[cfg(test)]
 mod tests {
-    use super::super::ParamMesh;
     use super::super::mesh::Topo;
+    use super::super::tests::grid;
     use super::*;
-
-    fn grid(n: usize, f: impl Fn(f64, f64) -> f64) -> ParamMesh {
-        let mut positions = Vec::new();
-        for r in 0..n {
-            for c in 0..n {
-                positions.push([c as f64, r as f64, f(c as f64, r as f64)]);
-            }
-        }
-        let mut triangles = Vec::new();
-        for r in 0..n - 1 {
-            for c in 0..n - 1 {
-                let a = (r * n + c) as u32;
-                let b = a + 1;
-                let d = a + n as u32;
-                let e = d + 1;
-                triangles.push([a, b, e]);
-                triangles.push([a, e, d]);
-            }
-        }
-        ParamMesh { positions, triangles }
-    }
 
     #[test]
     fn collapses_to_one_triangle_and_undo_restores() {

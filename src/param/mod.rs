@@ -229,10 +229,11 @@ fn normalize_area(topo: &Topo, rx: &Relaxer, uvs: &mut [[f64; 2]]) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn grid(n: usize, f: impl Fn(f64, f64) -> f64) -> ParamMesh {
+    /// An n x n unit grid with heights f(x, y), two CCW triangles per quad.
+    pub(crate) fn grid(n: usize, f: impl Fn(f64, f64) -> f64) -> ParamMesh {
         let mut positions = Vec::new();
         for r in 0..n {
             for c in 0..n {
