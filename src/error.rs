@@ -10,12 +10,12 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// An I/O error while reading or writing `path`.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file involved.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying error (already part of the message, so not a separate source).
+        error: std::io::Error,
     },
     /// The file exists but its content is not acceptable (truncated, NaN heights, bad tags...).
     #[error("{path}: {msg}")]
@@ -54,7 +54,7 @@ pub enum Error {
 impl Error {
     /// Wraps an I/O error with the path it concerns.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
-        Error::Io { path: path.as_ref().to_path_buf(), source }
+        Error::Io { path: path.as_ref().to_path_buf(), error: source }
     }
     /// A content problem in `path`.
     pub fn bad_input(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
