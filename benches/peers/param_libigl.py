@@ -2,6 +2,8 @@
 """Peer benchmark for cliffmap's parameterization: libigl SLIM, ARAP and LSCM.
 
 Usage: python3 benches/peers/param_libigl.py OUT_DIR [--plot PNG] [--bench PATH_TO_param_bench]
+       (OUT_DIR from examples/param_bench.rs, grid cells, or examples/param_store_bench.rs,
+       real TIN cells read from stores: cells named tin_<store>_<cell id>, grouped per store)
        python3 benches/peers/param_libigl.py OUT_DIR --replot PNG   (redraw from OUT_DIR/peers.json)
 
 With --bench, our default configuration is also timed per cell inside this run
@@ -23,6 +25,17 @@ import numpy as np
 import igl
 
 BENCH = None
+
+
+def group_of(c):
+    """Summary group of a cell: the store for TIN cells (tin_<store>_<id>), else the grid size."""
+    if c.startswith("tin_"):
+        return c.split("_")[1]
+    return c.split("_")[3] if c.startswith("engabreen") else c.split("_")[-1]
+
+
+def group_key(s):
+    return (0, int(s), s) if s.isdigit() else (1, 0, s)
 
 
 def read_obj(path):
@@ -142,7 +155,7 @@ def main():
     ours = json.load(open(os.path.join(out, "ours.json")))
     by = {(r["cell"], r["config"]): r for r in ours}
     rows = []
-    hdr = f"{'cell':<32} {'method':<22} {'ms':>8} {'flip':>5} {'|logA|':>8} {'s1/s2':>8} {'symD':>8} {'symD/SLIM':>9}"
+    hdr = f"{'cell':<32} {'tris':>6} {'method':<22} {'ms':>8} {'flip':>5} {'|logA|':>8} {'s1/s2':>8} {'symD':>8} {'symD/SLIM':>9}"
     print(hdr)
     for path in sorted(glob.glob(os.path.join(out, "cells", "*.obj"))):
         cell = os.path.basename(path)[:-4]
@@ -172,15 +185,14 @@ def main():
         res.append(("LSCM", ms, metrics(V, F, uv)))
         ref = [r for r in res if r[0] == "SLIM 50 it"][0][2]["symd"]
         for name, ms, m in res:
-            print(f"{cell:<32} {name:<22} {ms:>8.1f} {m['flipped']:>5} {m['area']:>8.4f} {m['angle']:>8.4f} {m['symd']:>8.3f} {m['symd'] / ref:>9.3f}")
-            rows.append({"cell": cell, "method": name, "ms": ms, **m})
+            print(f"{cell:<32} {len(F):>6} {name:<22} {ms:>8.1f} {m['flipped']:>5} {m['area']:>8.4f} {m['angle']:>8.4f} {m['symd']:>8.3f} {m['symd'] / ref:>9.3f}")
+            rows.append({"cell": cell, "triangles": int(len(F)), "method": name, "ms": ms, **m})
         print()
     json.dump(rows, open(os.path.join(out, "peers.json"), "w"), indent=1)
     # Summary: per method and size, median time and median symD ratio to SLIM 50 it.
     print("summary (median over cells): method, size, ms, symD/SLIM50, max flips")
-    sizes = sorted({r["cell"].split("_")[-1] if not r["cell"].startswith("engabreen") else r["cell"].split("_")[3] for r in rows})
-    def size_of(c):
-        return c.split("_")[3] if c.startswith("engabreen") else c.split("_")[-1]
+    sizes = sorted({group_of(r["cell"]) for r in rows}, key=group_key)
+    size_of = group_of
     ref = {r["cell"]: r["symd"] for r in rows if r["method"] == "SLIM 50 it"}
     methods = []
     for r in rows:
@@ -209,10 +221,8 @@ def make_plot(rows, plot):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    def size_of(c):
-        return c.split("_")[3] if c.startswith("engabreen") else c.split("_")[-1]
-
-    sizes = sorted({size_of(r["cell"]) for r in rows}, key=int)
+    size_of = group_of
+    sizes = sorted({size_of(r["cell"]) for r in rows}, key=group_key)
     keep = ["ours default, same run", "ours tol=1e-2,sweeps=2", "ours tol=1e-3,sweeps=8", "ours tol=1e-5,sweeps=64",
             "ours theta=3", "SLIM 5 it", "SLIM 20 it", "SLIM 50 it", "ARAP 100 it", "LSCM"]
     fig, axes = plt.subplots(1, len(sizes), figsize=(6.5 * len(sizes), 4.8))
@@ -233,7 +243,11 @@ def make_plot(rows, plot):
         ax.set_yscale("log")
         ax.set_xlabel("median time per cell [ms] (same run, 2-core VM)")
         ax.set_ylabel("median excess symmetric Dirichlet (symD - 4)")
-        ax.set_title(f"{s}x{s} grid cells ({2 * (int(s) - 1) ** 2} triangles), 6 cells")
+        ncell = len({r["cell"] for r in rows if size_of(r["cell"]) == s})
+        if s.isdigit():
+            ax.set_title(f"{s}x{s} grid cells ({2 * (int(s) - 1) ** 2} triangles), {ncell} cells")
+        else:
+            ax.set_title(f"TIN cells of the {s} store, {ncell} cells")
         ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     fig.savefig(plot, dpi=110)

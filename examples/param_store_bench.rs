@@ -1,0 +1,206 @@
+//! Benchmark of `cliffmap::parameterize` on real TIN cells taken from cell stores.
+//!
+//! Usage: cargo run --release --example param_store_bench -- [OUT_DIR] [--per-store N]
+//!
+//! Builds four stores with the library (`pipeline::build_store`, orthos derived from the
+//! DEM): Engabreen (3 m, max error 0.5 m), Mount St Helens (10 m, max error 2 m), one Grand
+//! Canyon Terrain-RGB tile (30.9 m, max error 2 m) and the demo scene (2 m, 0.5 m). From each
+//! it takes the N (default 3) finest-level cells with the highest ortho `rel_texel` plus the
+//! finest cell with the highest `max_slope_deg` (if not among them), reads
+//! their surface meshes back from the store (`Store::read_mesh`, cell-local f32 -> f64,
+//! skirts dropped) and times `parameterize` with the default options (median of 5 runs).
+//! Writes each cell as OBJ (v, vt = our default chart, f) into OUT_DIR/cells and the results
+//! into OUT_DIR/ours.json, in the layout benches/peers/param_libigl.py reads.
+//!
+//! Real data: env CLIFFMAP_SHARED_DATA, else $CARGO_MANIFEST_DIR/../shared/data/real, else
+//! /work/shared/data/real.
+
+use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+use cliffmap::scene::DemoScene;
+use cliffmap::store::Store;
+use cliffmap::{Dem, DemLoadOptions, ParamMesh, ParamOptions, chart_metrics, load_dem, parameterize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn shared_data(rel: &str) -> PathBuf {
+    if let Some(d) = std::env::var_os("CLIFFMAP_SHARED_DATA") {
+        return PathBuf::from(d).join(rel);
+    }
+    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real")).join(rel);
+    if p.exists() { p } else { PathBuf::from("/work/shared/data/real").join(rel) }
+}
+
+fn write_obj(path: &Path, m: &ParamMesh, uvs: &[[f64; 2]]) -> std::io::Result<()> {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    for p in &m.positions {
+        writeln!(f, "v {:.6} {:.6} {:.6}", p[0], p[1], p[2])?;
+    }
+    for uv in uvs {
+        writeln!(f, "vt {:.9} {:.9}", uv[0], uv[1])?;
+    }
+    for t in &m.triangles {
+        writeln!(f, "f {}/{} {}/{} {}/{}", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1)?;
+    }
+    f.flush()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// One store to build: name, DEM, a description of its source, the finest max error.
+struct StoreSpec {
+    name: &'static str,
+    dem: Dem,
+    source: String,
+    max_error: f64,
+}
+
+fn load(rel: &str, opts: DemLoadOptions) -> anyhow::Result<(Dem, String)> {
+    let path = shared_data(rel);
+    let dem = load_dem(&path, &opts).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok((dem, path.display().to_string()))
+}
+
+fn specs() -> anyhow::Result<Vec<StoreSpec>> {
+    let (eng, eng_src) = load(
+        "engabreen/engabreen_dem_3m_507x590.f32",
+        DemLoadOptions {
+            width: Some(507),
+            height: Some(590),
+            spacing: Some(3.0),
+            origin: Some((445_302.17, 7_396_769.45)),
+            ..DemLoadOptions::default()
+        },
+    )?;
+    let (sth, sth_src) = load(
+        "argudo_glaciers/sthelens_10m.png",
+        DemLoadOptions { z_scale: Some(0.1), spacing: Some(10.0), ..DemLoadOptions::default() },
+    )?;
+    let (gc, gc_src) = load(
+        "grand_canyon_tiles/12-758-1608.terrain.png",
+        DemLoadOptions { spacing: Some(30.9), ..DemLoadOptions::default() },
+    )?;
+    let scene = DemoScene::default();
+    let (demo, _) = scene.generate()?;
+    Ok(vec![
+        StoreSpec { name: "engabreen", dem: eng, source: eng_src, max_error: 0.5 },
+        StoreSpec { name: "sthelens", dem: sth, source: sth_src, max_error: 2.0 },
+        StoreSpec { name: "grandcanyon", dem: gc, source: gc_src, max_error: 2.0 },
+        StoreSpec {
+            name: "demo",
+            dem: demo,
+            source: format!("demo:seed={},samples={}", scene.seed, scene.samples),
+            max_error: 0.5,
+        },
+    ])
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let per_store: usize = match args.iter().position(|a| a == "--per-store") {
+        Some(i) => args.get(i + 1).ok_or_else(|| anyhow::anyhow!("--per-store needs a number"))?.parse()?,
+        None => 3,
+    };
+    let out = args
+        .iter()
+        .enumerate()
+        .find(|(i, a)| !a.starts_with("--") && (*i == 0 || args[i - 1] != "--per-store"))
+        .map(|(_, a)| PathBuf::from(a))
+        .unwrap_or_else(|| std::env::temp_dir().join("cliffmap_param_store_bench"));
+    std::fs::create_dir_all(out.join("cells"))?;
+    let def = ParamOptions::default();
+    println!(
+        "{:<34} {:>6} {:>6} {:>7} {:>7} {:>9} {:>5} {:>8} {:>8} {:>8} {:>7} {:>7}",
+        "cell", "verts", "tris", "slope", "maxslp", "ms(med)", "flip", "|logA|", "s1/s2", "symD", "ortho", "reltex"
+    );
+    let mut json = Vec::new();
+    for spec in specs()? {
+        let dir = out.join("stores").join(spec.name);
+        let opts = BuildOptions { max_error: spec.max_error, quiet: true, force: true, ..BuildOptions::default() };
+        let inputs = BuildInputs {
+            dem: &spec.dem,
+            ortho: None,
+            dem_source: spec.source.clone(),
+            ortho_source: None,
+            fingerprint: format!("param_store_bench:{}", spec.source),
+        };
+        let t = Instant::now();
+        build_store(&inputs, &opts, &dir)?;
+        let build_s = t.elapsed().as_secs_f64();
+        let store = Store::open(&dir)?;
+        let finest = store.manifest.quadtree.levels.saturating_sub(1);
+        let mut recs: Vec<_> = store.manifest.cells.iter().filter(|c| c.level as u32 == finest as u32).collect();
+        recs.sort_by(|a, b| b.stats.rel_texel.total_cmp(&a.stats.rel_texel).then(a.id.cmp(&b.id)));
+        eprintln!("{}: built {} cells in {build_s:.1} s; {} finest", spec.name, store.manifest.cells.len(), recs.len());
+        // The N steepest by ortho rel_texel, plus the cell with the steepest single triangle
+        // (max slope) if not among them: on the demo scene that is a box-plateau wall cell,
+        // while the rel_texel ranking picks the long canyon walls.
+        let mut chosen: Vec<_> = recs.iter().take(per_store).copied().collect();
+        if let Some(wall) = recs
+            .iter()
+            .max_by(|a, b| a.stats.max_slope_deg.total_cmp(&b.stats.max_slope_deg).then(b.id.cmp(&a.id)))
+            && !chosen.iter().any(|c| c.id == wall.id)
+        {
+            chosen.push(wall);
+        }
+        for rec in chosen {
+            let cm = store.read_mesh(rec)?;
+            let nv = cm.surface_vertices as usize;
+            let m = ParamMesh {
+                positions: cm.positions[..nv].iter().map(|p| [p[0] as f64, p[1] as f64, p[2] as f64]).collect(),
+                triangles: cm.surface().to_vec(),
+            };
+            let name = format!("tin_{}_{}", spec.name, rec.id);
+            // The orthographic chart (x, y scaled into the unit square) for reference.
+            let ext = m.positions.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |a, p| {
+                [a[0].min(p[0].min(p[1])), a[1].max(p[0].max(p[1]))]
+            });
+            let ortho: Vec<[f64; 2]> = m
+                .positions
+                .iter()
+                .map(|p| [(p[0] - ext[0]) / (ext[1] - ext[0]), (p[1] - ext[0]) / (ext[1] - ext[0])])
+                .collect();
+            let om = chart_metrics(&m.positions, &m.triangles, &ortho, None)?;
+            let mut times = Vec::new();
+            let mut chart = None;
+            for _ in 0..5 {
+                let t = Instant::now();
+                let ch = parameterize(&m, &def)?;
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+                chart = Some(ch);
+            }
+            let ch = chart.ok_or_else(|| anyhow::anyhow!("no run"))?;
+            let ms = median(times);
+            let mm = ch.metrics;
+            println!(
+                "{:<34} {:>6} {:>6} {:>7.1} {:>7.1} {:>9.2} {:>5} {:>8.4} {:>8.4} {:>8.3} {:>7.3} {:>7.2}",
+                name,
+                nv,
+                mm.triangles,
+                rec.stats.mean_slope_deg,
+                rec.stats.max_slope_deg,
+                ms,
+                mm.flipped,
+                mm.area_distortion_mean,
+                mm.angle_distortion_mean,
+                mm.symmetric_dirichlet_mean,
+                om.symmetric_dirichlet_mean,
+                rec.stats.rel_texel
+            );
+            json.push(serde_json::json!({"cell": name, "config": "orthographic", "triangles": om.triangles, "metrics": om}));
+            json.push(serde_json::json!({"cell": name, "config": "default", "store": spec.name, "id": rec.id,
+                "vertices": nv, "triangles": mm.triangles, "mean_slope_deg": rec.stats.mean_slope_deg,
+                "max_slope_deg": rec.stats.max_slope_deg, "store_rel_texel": rec.stats.rel_texel,
+                "theta": def.theta, "relax_tolerance": def.relax_tolerance, "max_sweeps": def.max_sweeps,
+                "ms_median": ms, "metrics": mm, "rounds": ch.rounds, "tutte_base": ch.tutte_base}));
+            write_obj(&out.join("cells").join(format!("{name}.obj")), &m, &ch.uvs)?;
+        }
+    }
+    std::fs::write(out.join("ours.json"), serde_json::to_string_pretty(&json)?)?;
+    println!("\nwrote {} and {}", out.join("cells").display(), out.join("ours.json").display());
+    Ok(())
+}
