@@ -9,9 +9,12 @@
 
 use cliffmap::param::degener_energy;
 use cliffmap::{ParamMesh, ParamOptions, chart_metrics, parameterize};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+use bench_util::{median, shared_data, write_obj};
 
 fn grid(n: usize, spacing: f64, z: impl Fn(usize, usize) -> f64) -> ParamMesh {
     let mut positions = Vec::with_capacity(n * n);
@@ -103,13 +106,6 @@ fn synthetic(n: usize) -> Vec<(String, ParamMesh)> {
     ]
 }
 
-fn shared_data(rel: &str) -> PathBuf {
-    if let Some(d) = std::env::var_os("CLIFFMAP_SHARED_DATA") {
-        return PathBuf::from(d).join(rel);
-    }
-    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real")).join(rel);
-    if p.exists() { p } else { PathBuf::from("/work/shared/data/real").join(rel) }
-}
 
 /// The `count` steepest non-overlapping n x n patches of the Engabreen DEM (by mean slope).
 fn engabreen(n: usize, count: usize) -> anyhow::Result<Vec<(String, ParamMesh)>> {
@@ -161,25 +157,7 @@ fn engabreen(n: usize, count: usize) -> anyhow::Result<Vec<(String, ParamMesh)>>
         .collect())
 }
 
-fn write_obj(path: &Path, m: &ParamMesh, uvs: &[[f64; 2]]) -> std::io::Result<()> {
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
-    for p in &m.positions {
-        writeln!(f, "v {:.6} {:.6} {:.6}", p[0], p[1], p[2])?;
-    }
-    for uv in uvs {
-        writeln!(f, "vt {:.9} {:.9}", uv[0], uv[1])?;
-    }
-    for t in &m.triangles {
-        writeln!(f, "f {}/{} {}/{} {}/{}", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1)?;
-    }
-    Ok(())
-}
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-}
 
 /// Reads an OBJ's `v` and `f` lines (1-based, `i/j` accepted) into a mesh.
 fn read_obj(path: &Path) -> anyhow::Result<ParamMesh> {

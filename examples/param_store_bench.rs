@@ -19,37 +19,15 @@ use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
 use cliffmap::store::Store;
 use cliffmap::{Dem, DemLoadOptions, ParamMesh, ParamOptions, chart_metrics, load_dem, parameterize};
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-fn shared_data(rel: &str) -> PathBuf {
-    if let Some(d) = std::env::var_os("CLIFFMAP_SHARED_DATA") {
-        return PathBuf::from(d).join(rel);
-    }
-    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real")).join(rel);
-    if p.exists() { p } else { PathBuf::from("/work/shared/data/real").join(rel) }
-}
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+use bench_util::{median, shared_data, write_obj};
 
-fn write_obj(path: &Path, m: &ParamMesh, uvs: &[[f64; 2]]) -> std::io::Result<()> {
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
-    for p in &m.positions {
-        writeln!(f, "v {:.6} {:.6} {:.6}", p[0], p[1], p[2])?;
-    }
-    for uv in uvs {
-        writeln!(f, "vt {:.9} {:.9}", uv[0], uv[1])?;
-    }
-    for t in &m.triangles {
-        writeln!(f, "f {}/{} {}/{} {}/{}", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1)?;
-    }
-    f.flush()
-}
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-}
+
 
 /// One store to build: name, DEM, a description of its source, the finest max error.
 struct StoreSpec {
