@@ -14,31 +14,14 @@ use std::time::Instant;
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;
+#[path = "../tests/param_util/mod.rs"]
+mod param_util;
 use bench_util::{median, shared_data, write_obj};
 
+/// An n x n grid with `spacing` and heights z(r, c) (the tests' triangulation).
 fn grid(n: usize, spacing: f64, z: impl Fn(usize, usize) -> f64) -> ParamMesh {
-    let mut positions = Vec::with_capacity(n * n);
-    for r in 0..n {
-        for c in 0..n {
-            positions.push([c as f64 * spacing, r as f64 * spacing, z(r, c)]);
-        }
-    }
-    let mut triangles = Vec::new();
-    for r in 0..n - 1 {
-        for c in 0..n - 1 {
-            let a = (r * n + c) as u32;
-            let (b, d) = (a + 1, a + n as u32);
-            let e = d + 1;
-            if (r + c) % 2 == 0 {
-                triangles.push([a, b, e]);
-                triangles.push([a, e, d]);
-            } else {
-                triangles.push([a, b, d]);
-                triangles.push([b, e, d]);
-            }
-        }
-    }
-    ParamMesh { positions, triangles }
+    let xs: Vec<f64> = (0..n).map(|i| i as f64 * spacing).collect();
+    param_util::grid_mesh(&xs, &xs, z, [0.0; 3])
 }
 
 /// Deterministic value noise (hash of lattice points), for the fractal hills.
