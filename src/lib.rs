@@ -18,6 +18,8 @@
 //! - [`pipeline`]: the stages composed into the commands' jobs ([`pipeline::build_store`]).
 //! - [`resample`]: resampling a colour source into a new chart with area-weighted
 //!   subtexel filtering ([`resample::resample`]).
+//! - [`photo`]: ground-photo projection into the cell textures (BVH ray casts through
+//!   pixel corners, footprints, area-weighted splatting, multi-photo blending).
 //! - [`scene`]: the embedded procedural demo scene.
 //! - [`camera`]: pinhole cameras and Camera JSON; [`render`]: the wgpu quadtree renderer.
 //!
@@ -54,6 +56,7 @@ pub mod georef;
 pub mod geotiff;
 pub mod ortho;
 pub mod param;
+pub mod photo;
 pub mod pipeline;
 pub mod render;
 pub mod resample;

@@ -306,6 +306,7 @@ fn default_flight_visits_the_steepest_cells_at_low_altitude() {
         max_error: 0.05,
         cell_texels: 16,
         reparam: None,
+        photos: None,
         build_key: "0".into(),
         cells,
     };

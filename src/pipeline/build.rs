@@ -154,6 +154,7 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
         build_key,
         cells: records,
         reparam: None,
+        photos: None,
     };
     write_stats(out, &manifest, 1.1)?;
     write_atomic(
@@ -323,6 +324,7 @@ fn build_cell(
         files: CellFiles { mesh: mesh_ref, texture: tex_ref, normal: nrm_ref },
         stats: cell_stats,
         reparam: None,
+        photo: None,
     };
     write_atomic(
         &out.join(format!("{stem}.json")),

@@ -87,6 +87,27 @@ pub struct CellRecord {
     /// The reparameterized variant, if `cliffmap reparam` chose this cell.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reparam: Option<ReparamRecord>,
+    /// The photo-enhanced texture, if `cliffmap project` wrote one for this cell.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub photo: Option<PhotoCellRecord>,
+}
+
+/// A cell's photo-enhanced texture: the active parameterization's texture (reparameterized
+/// if the cell has one, else orthographic) with photo colour merged in, and its confidence.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhotoCellRecord {
+    /// Texture side in texels (equal to the active texture's).
+    pub texels: u32,
+    /// RGBA8 PNG enhanced colour texture, same layout as the active texture.
+    pub texture: FileRef,
+    /// 8-bit greyscale PNG: per texel, the weight of photo colour in the result (0..255 = 0..1).
+    pub confidence: FileRef,
+    /// Texels whose colour now comes mainly from photos (photo weight > 0.5).
+    pub photo_texels: u64,
+    /// Covered texels whose surface slope exceeds 60 degrees.
+    pub steep_texels: u64,
+    /// Steep texels whose colour now comes mainly from photos.
+    pub steep_photo_texels: u64,
 }
 
 /// A cell's reparameterized variant: mesh with texture coordinates, resampled texture and
@@ -177,6 +198,45 @@ pub struct Manifest {
     /// Settings of the last `cliffmap reparam` run, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reparam: Option<ReparamSettings>,
+    /// Settings and per-photo results of the last `cliffmap project` run, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub photos: Option<PhotoSettings>,
+}
+
+/// Settings of the last `cliffmap project` run and what each photo contributed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhotoSettings {
+    /// How photo colours were combined per texel: "blend" (by confidence) or "best".
+    pub blend: String,
+    /// Whether footprints with missing corners were reconstructed.
+    pub reconstruct: bool,
+    /// Whether per-photo colour leveling towards the ortho was applied.
+    pub level_colours: bool,
+    /// BVH build preset used for the ray casts.
+    pub bvh_quality: String,
+    /// One report per photo, in input order.
+    pub photos: Vec<PhotoReport>,
+}
+
+/// What one photo contributed to the store (summed over all levels).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhotoReport {
+    /// Name of the photo (its file name).
+    pub name: String,
+    /// Image path as given.
+    pub image: String,
+    /// Texels that received colour from this photo.
+    pub texels_written: u64,
+    /// Pixels whose centre ray hit the terrain.
+    pub pixels_hit: u64,
+    /// Pixels rejected because their footprint crossed a silhouette edge.
+    pub rejected_silhouette: u64,
+    /// Footprints completed by reconstructing missing corners.
+    pub reconstructed_footprints: u64,
+    /// Per-channel colour gain applied to the photo (1 = unchanged).
+    pub colour_gain: [f64; 3],
+    /// Per-channel colour offset applied to the photo (0..1 scale; 0 = unchanged).
+    pub colour_offset: [f64; 3],
 }
 
 impl Manifest {

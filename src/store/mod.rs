@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 pub use files::{crc32_hex, is_intact, read_verified, write_file};
 pub use manifest::{
-    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, ReparamRecord, ReparamSettings, STORE_FORMAT,
+    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
     STORE_VERSION,
 };
 pub use mesh::CellMesh;

@@ -84,6 +84,7 @@ pub fn record(s: &Synth, key: CellKey) -> CellRecord {
         },
         stats: Default::default(),
         reparam: None,
+        photo: None,
     }
 }
 
@@ -210,6 +211,7 @@ pub fn write_store(
         max_error: s.finest_error,
         cell_texels: s.texels,
         reparam: None,
+        photos: None,
         build_key: "00000000".into(),
         cells,
     };

@@ -1,0 +1,53 @@
+//! Ground-photo projection: photos taken from known camera poses are merged into the cells'
+//! textures, so that walls get real detail instead of a smeared ortho image.
+//!
+//! Data types (the stage's plain data, shared by its files):
+//! - [`TriangleBvh`] / [`TriHit`]: nearest-hit ray casting (`obvhs` CWBVH) over f32
+//!   triangles in a local frame; [`BvhQuality`] is the build preset.
+//! - [`PixelFootprint`]: one photo pixel's footprint in one cell's texture: the four pixel
+//!   corners' texture positions (texel units of the cell's active texture), with the view
+//!   cosine and distance at the pixel centre. [`FootprintSet`] holds every footprint of one
+//!   photo on one quadtree level, plus the counts of rejected and reconstructed pixels.
+//!
+//! Texture positions are in texel units of the cell's *active* texture (the reparameterized
+//! one if the cell has it, else the orthographic one): x right, y down, texel `(i, j)`
+//! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
+
+mod bvh;
+
+pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
+
+/// One photo pixel's footprint in one cell's texture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelFootprint {
+    /// Index of the cell in the manifest's `cells` list.
+    pub cell: u32,
+    /// The photo pixel `[column, row]` whose colour this footprint carries (pixel of the
+    /// image the footprints were cast for).
+    pub pixel: [u32; 2],
+    /// Texture positions (texel units, x right, y down) of the pixel's corners, in the
+    /// order (col, row), (col+1, row), (col+1, row+1), (col, row+1).
+    pub corners: [[f32; 2]; 4],
+    /// |cos| of the angle between the ray through the pixel centre and the surface normal,
+    /// in (0, 1].
+    pub cos_view: f32,
+    /// Distance from the camera centre to the surface at the pixel centre, metres.
+    pub distance: f32,
+    /// How many of the four corners were reconstructed (0 = all four hit this cell).
+    pub reconstructed: u8,
+}
+
+/// All footprints of one photo on one quadtree level, and what happened to the rest.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FootprintSet {
+    /// Footprints sorted by (cell, row, column); at most one per pixel.
+    pub footprints: Vec<PixelFootprint>,
+    /// Pixels whose centre ray hit the terrain.
+    pub pixels_hit: u64,
+    /// Pixels rejected because their footprint crosses a silhouette edge.
+    pub rejected_silhouette: u64,
+    /// Footprints with at least one reconstructed corner.
+    pub reconstructed: u64,
+    /// Pixels that hit the terrain but whose footprint could not be completed (dropped).
+    pub dropped: u64,
+}
