@@ -4,6 +4,10 @@
 //! Data types (the stage's plain data, shared by its files):
 //! - [`TriangleBvh`] / [`TriHit`]: nearest-hit ray casting (`obvhs` CWBVH) over f32
 //!   triangles in a local frame; [`BvhQuality`] is the build preset.
+//! - [`PhotoInput`]: a decoded photo and its [`crate::camera::CameraModel`] (world frame).
+//! - [`LevelScene`]: all cells of one quadtree level ([`SceneCell`]: surface triangles,
+//!   texture positions) in one f32 frame near the camera, with a BVH;
+//!   [`photo_footprints`] casts a photo's pixel-corner rays against it.
 //! - [`PixelFootprint`]: one photo pixel's footprint in one cell's texture: the four pixel
 //!   corners' texture positions (texel units of the cell's active texture), with the view
 //!   cosine and distance at the pixel centre. [`FootprintSet`] holds every footprint of one
@@ -14,8 +18,27 @@
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
 mod bvh;
+mod footprint;
+mod scene;
 
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
+pub use footprint::{photo_footprints, FootprintOptions};
+pub use scene::{LevelScene, SceneCell};
+
+use std::path::PathBuf;
+
+/// A photo with its camera, ready to project.
+#[derive(Clone, Debug)]
+pub struct PhotoInput {
+    /// Short name for reports (the image's file name).
+    pub name: String,
+    /// The image file it was read from.
+    pub image_path: PathBuf,
+    /// The photo's pixels (sRGB).
+    pub image: image::RgbImage,
+    /// The camera, in the store's georeferenced frame, for an image of exactly this size.
+    pub camera: crate::camera::CameraModel,
+}
 
 /// One photo pixel's footprint in one cell's texture.
 #[derive(Clone, Copy, Debug, PartialEq)]
