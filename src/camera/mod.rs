@@ -6,10 +6,13 @@
 //! centre of the top-left pixel is (0, 0)) and ImGRAFT radial distortion `k1`, `k2`.
 //! [`CameraModel::from_json_file`] reads the "Camera JSON" of docs/formats.md: either a
 //! cliffmap camera or an ImGRAFT-style description (e.g. the Engabreen camera file).
+//! [`CameraModel::pixel_ray`] inverts the projection (undistorting first) for ray casting.
 
 mod json;
+mod undistort;
 
 pub use json::{camera_from_json_file, camera_from_json_str};
+pub(crate) use undistort::RayCaster;
 
 use glam::{DMat3, DVec3};
 

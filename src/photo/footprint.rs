@@ -1,9 +1,47 @@
-//! Pixel footprints of a photo in the cells' textures (owned by the raycast work;
-//! signatures fixed, bodies to be written).
+//! Pixel footprints of a photo in the cells' textures.
+//!
+//! One ray per pixel corner (`(W+1)·(H+1)` rays, [`super::corners`]), nearest front-face hit
+//! → texture position `Σ b_i·t_i` in the hit triangle's cell. Per pixel:
+//! 1. **Cell**: the cell hit by most of the pixel's four corners; ties go to the lowest
+//!    manifest index. Corners that hit another cell or nothing are *missing*.
+//! 2. **Occlusion boundary**: a corner that hit another cell at a distance outside
+//!    `[d_min·(1 − j) − 2s, d_max·(1 + j) + 2s]`, where `d_min`, `d_max` are the distances of
+//!    the pixel's own corners, `s = d_max − d_min` their spread (so grazing views, where the
+//!    distance changes fast from corner to corner, do not trigger it) and `j` =
+//!    [`FootprintOptions::max_depth_jump`], means the pixel straddles a depth discontinuity
+//!    between cells (a silhouette whose two sides lie in different cells): it is rejected as
+//!    a silhouette pixel.
+//! 3. **Silhouette** (unless all corners hit one triangle): for each edge of the polygon of
+//!    the present corners whose ends lie in different triangles, walk the cell's mesh in
+//!    texture space ([`super::silhouette`]); crossing an edge between a front- and a
+//!    back-facing triangle rejects the pixel.
+//! 4. **Reconstruction** ([`super::reconstruct`], switchable): missing corners from the
+//!    parallelogram rule or from the adjacent footprints' corners in the same cell. A
+//!    reconstructed corner is also walked to from a present one, so a completion reaching
+//!    over a silhouette (e.g. a ridge against the sky) rejects the pixel instead.
+//!    Silhouette pixels are never reconstructed; pixels that cannot be completed are dropped.
+//! 5. **Size guard**: footprints with a non-finite corner, an area above
+//!    [`FootprintOptions::max_area`] texels² or a side/diagonal longer than
+//!    [`FootprintOptions::max_extent`] texels (grazing rays) are dropped.
+//!
+//! `cos_view` and `distance` are the means over the pixel's present corners (no extra
+//! centre ray: that would double the ray count for a quantity that varies little within a
+//! pixel). Rows are processed in bands in parallel (each band casts its own corner rows
+//! plus one above and below, for the adjacent-footprint rule), collected in order, so the
+//! result does not depend on the thread count.
 
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::corners::{cast_corner_row, CornerHit};
+use super::reconstruct::{reconstruct, CORNER_OFFSETS};
 use super::scene::LevelScene;
-use super::FootprintSet;
-use crate::camera::CameraModel;
+use super::silhouette::crosses_silhouette;
+use super::{FootprintSet, PixelFootprint};
+use crate::camera::{CameraModel, RayCaster};
+
+/// Pixel rows per parallel band.
+const BAND_ROWS: u32 = 64;
 
 /// How footprints are formed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -12,16 +50,279 @@ pub struct FootprintOptions {
     pub reconstruct: bool,
     /// Reject pixels whose footprint crosses a silhouette edge.
     pub reject_silhouettes: bool,
+    /// Largest footprint area kept, texels² of the cell's texture (larger ones, from rays
+    /// grazing the surface, are dropped). Default 256 (a pixel over 16 × 16 texels).
+    pub max_area: f32,
+    /// Longest footprint side or diagonal kept, texels. Default 64.
+    pub max_extent: f32,
+    /// Relative distance jump between a pixel's corners in its cell and a corner in
+    /// another cell above which the pixel is rejected as a silhouette (step 2 of the module
+    /// docs); `f32::INFINITY` disables it. Default 0.1. Only with `reject_silhouettes`.
+    pub max_depth_jump: f32,
 }
 
 impl Default for FootprintOptions {
     fn default() -> Self {
-        FootprintOptions { reconstruct: true, reject_silhouettes: true }
+        FootprintOptions { reconstruct: true, reject_silhouettes: true, max_area: 256.0, max_extent: 64.0, max_depth_jump: 0.1 }
     }
 }
 
 /// Casts rays through every pixel corner of `camera`'s image (undistorted) against `scene`
 /// and returns every pixel's footprint in the texture of the cell it belongs to.
-pub fn photo_footprints(_scene: &LevelScene, _camera: &CameraModel, _opts: &FootprintOptions) -> FootprintSet {
-    todo!("raycast work")
+pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &FootprintOptions) -> FootprintSet {
+    let (w, h) = (camera.width, camera.height);
+    let origin = (camera.position - scene.frame_origin).as_vec3();
+    if w == 0 || h == 0 || scene.bvh.is_empty() || !origin.is_finite() {
+        return FootprintSet::default();
+    }
+    // Output buckets: scene cells ordered by manifest index (then scene order).
+    let mut order: Vec<usize> = (0..scene.cells.len()).collect();
+    order.sort_by_key(|&i| (scene.cells[i].cell, i));
+    let mut bucket = vec![0u32; scene.cells.len()];
+    for (b, &i) in order.iter().enumerate() {
+        bucket[i] = b as u32;
+    }
+    let ctx = Ctx { scene, rays: camera.ray_caster(), origin, w, h, opts: *opts, bucket: &bucket };
+    let bands: Vec<BandOut> = (0..h.div_ceil(BAND_ROWS)).into_par_iter().map(|b| ctx.band(b)).collect();
+
+    let mut set = FootprintSet::default();
+    let mut counts = vec![0usize; scene.cells.len() + 1];
+    for b in &bands {
+        set.pixels_hit += b.pixels_hit;
+        set.rejected_silhouette += b.rejected_silhouette;
+        set.reconstructed += b.reconstructed;
+        set.dropped += b.dropped;
+        for &k in &b.buckets {
+            counts[k as usize + 1] += 1;
+        }
+    }
+    for k in 1..counts.len() {
+        counts[k] += counts[k - 1];
+    }
+    let total = counts[scene.cells.len()];
+    let mut out = vec![EMPTY; total];
+    for b in &bands {
+        for (fp, &k) in b.footprints.iter().zip(&b.buckets) {
+            out[counts[k as usize]] = *fp;
+            counts[k as usize] += 1;
+        }
+    }
+    set.footprints = out;
+    set
+}
+
+const EMPTY: PixelFootprint =
+    PixelFootprint { cell: 0, pixel: [0, 0], corners: [[0.0; 2]; 4], cos_view: 0.0, distance: 0.0, reconstructed: 0 };
+
+/// One band's footprints (row-major) with their output buckets, and its counts.
+#[derive(Default)]
+struct BandOut {
+    footprints: Vec<PixelFootprint>,
+    buckets: Vec<u32>,
+    pixels_hit: u64,
+    rejected_silhouette: u64,
+    reconstructed: u64,
+    dropped: u64,
+}
+
+/// What became of one pixel.
+enum Outcome {
+    Miss,
+    Silhouette,
+    Dropped,
+    Footprint(PixelFootprint, u32),
+}
+
+struct Ctx<'a> {
+    scene: &'a LevelScene,
+    rays: RayCaster,
+    origin: Vec3,
+    w: u32,
+    h: u32,
+    opts: FootprintOptions,
+    bucket: &'a [u32],
+}
+
+/// The corner rows a band cast: rows `j_lo..=j_hi`, `stride` = W + 1 corners each.
+struct CornerRows {
+    hits: Vec<CornerHit>,
+    j_lo: i64,
+    j_hi: i64,
+    stride: i64,
+}
+
+impl CornerRows {
+    #[inline]
+    fn get(&self, i: i64, j: i64) -> Option<&CornerHit> {
+        if i < 0 || i >= self.stride || j < self.j_lo || j > self.j_hi {
+            return None;
+        }
+        self.hits.get(((j - self.j_lo) * self.stride + i) as usize)
+    }
+}
+
+impl Ctx<'_> {
+    fn band(&self, b: u32) -> BandOut {
+        let r0 = b * BAND_ROWS;
+        let r1 = (r0 + BAND_ROWS).min(self.h);
+        let j_lo = r0.saturating_sub(1);
+        let j_hi = (r1 + 1).min(self.h);
+        let stride = self.w as usize + 1;
+        let mut hits = vec![CornerHit::MISS; (j_hi - j_lo + 1) as usize * stride];
+        for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
+            cast_corner_row(self.scene, &self.rays, self.origin, j, row);
+        }
+        let rows = CornerRows { hits, j_lo: j_lo as i64, j_hi: j_hi as i64, stride: stride as i64 };
+        let mut out = BandOut::default();
+        for r in r0..r1 {
+            for c in 0..self.w {
+                match self.pixel(&rows, c, r) {
+                    Outcome::Miss => continue,
+                    Outcome::Silhouette => out.rejected_silhouette += 1,
+                    Outcome::Dropped => out.dropped += 1,
+                    Outcome::Footprint(fp, bucket) => {
+                        out.reconstructed += u64::from(fp.reconstructed > 0);
+                        out.footprints.push(fp);
+                        out.buckets.push(bucket);
+                    }
+                }
+                out.pixels_hit += 1;
+            }
+        }
+        out
+    }
+
+    fn pixel(&self, rows: &CornerRows, c: u32, r: u32) -> Outcome {
+        let scene = self.scene;
+        let (i0, j0) = (c as i64, r as i64);
+        let q: [CornerHit; 4] = CORNER_OFFSETS.map(|[a, b]| rows.get(i0 + a, j0 + b).copied().unwrap_or(CornerHit::MISS));
+        // 1. The pixel's cell: most corners, ties to the lowest manifest index.
+        let cells: [u32; 4] = q.map(|h| if h.is_hit() { scene.cell_of(h.tri) } else { u32::MAX });
+        let mut best: Option<(usize, u32)> = None; // (votes, scene cell)
+        for &ck in cells.iter().filter(|&&x| x != u32::MAX) {
+            let votes = cells.iter().filter(|&&x| x == ck).count();
+            let better = match best {
+                None => true,
+                Some((bv, bc)) => votes > bv || (votes == bv && self.bucket[ck as usize] < self.bucket[bc as usize]),
+            };
+            if better {
+                best = Some((votes, ck));
+            }
+        }
+        let Some((_, cell)) = best else { return Outcome::Miss };
+        let present: [bool; 4] = cells.map(|x| x == cell);
+
+        let (mut d_min, mut d_max, mut d_sum, mut cos_sum, mut n) = (f32::INFINITY, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for k in (0..4).filter(|&k| present[k]) {
+            d_min = d_min.min(q[k].t);
+            d_max = d_max.max(q[k].t);
+            d_sum += q[k].t;
+            cos_sum += q[k].cos;
+            n += 1.0;
+        }
+        if self.opts.reject_silhouettes {
+            // 2. Depth discontinuity towards another cell.
+            let j = self.opts.max_depth_jump;
+            if j.is_finite() {
+                let spread = 2.0 * (d_max - d_min);
+                let (lo, hi) = (d_min * (1.0 - j) - spread, d_max * (1.0 + j) + spread);
+                if (0..4).any(|k| q[k].is_hit() && !present[k] && (q[k].t < lo || q[k].t > hi)) {
+                    return Outcome::Silhouette;
+                }
+            }
+            // 3. Silhouette edges between the present corners.
+            let first = (0..4).find(|&k| present[k]).unwrap_or(0);
+            let same_tri = (0..4).all(|k| !present[k] || q[k].tri == q[first].tri);
+            if !same_tri {
+                let mut ring = [0usize; 4];
+                let mut m = 0;
+                for k in (0..4).filter(|&k| present[k]) {
+                    ring[m] = k;
+                    m += 1;
+                }
+                let pairs = if m == 2 { 1 } else { m };
+                for e in 0..pairs {
+                    let (a, b) = (q[ring[e]], q[ring[(e + 1) % m]]);
+                    if a.tri != b.tri && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex) {
+                        return Outcome::Silhouette;
+                    }
+                }
+            }
+        }
+        // 4. Reconstruction.
+        let mut corners: [Option<[f32; 2]>; 4] = [0, 1, 2, 3].map(|k| present[k].then_some(q[k].tex));
+        let mut made = 0u8;
+        if !present.iter().all(|&p| p) {
+            if !self.opts.reconstruct {
+                return Outcome::Dropped;
+            }
+            let grid = |i: i64, j: i64| rows.get(i, j).filter(|h| h.is_hit() && scene.cell_of(h.tri) == cell).map(|h| h.tex);
+            let Some(m) = reconstruct(&mut corners, i0, j0, grid) else { return Outcome::Dropped };
+            made = m;
+            if self.opts.reject_silhouettes {
+                for k in (0..4).filter(|&k| !present[k]) {
+                    // Walk from a present neighbour along the footprint (else any present corner).
+                    let from = [(k + 1) % 4, (k + 3) % 4, (k + 2) % 4].into_iter().find(|&a| present[a]).unwrap_or(first_present(&present));
+                    let target = corners[k].unwrap_or(q[from].tex);
+                    if crosses_silhouette(scene, self.origin, q[from].tri, q[from].tex, super::scene::NO_TRI, target) {
+                        return Outcome::Silhouette;
+                    }
+                }
+            }
+        }
+        let corners = corners.map(|c| c.unwrap_or([f32::NAN; 2]));
+        // 5. Size guard.
+        if !footprint_ok(&corners, self.opts.max_area, self.opts.max_extent) {
+            return Outcome::Dropped;
+        }
+        let fp = PixelFootprint {
+            cell: scene.cells[cell as usize].cell,
+            pixel: [c, r],
+            corners,
+            cos_view: (cos_sum / n).clamp(f32::MIN_POSITIVE, 1.0),
+            distance: d_sum / n,
+            reconstructed: made,
+        };
+        Outcome::Footprint(fp, self.bucket[cell as usize])
+    }
+}
+
+fn first_present(present: &[bool; 4]) -> usize {
+    (0..4).find(|&k| present[k]).unwrap_or(0)
+}
+
+/// `true` if every corner is finite, the quad's area is at most `max_area` and no side or
+/// diagonal is longer than `max_extent`.
+pub(crate) fn footprint_ok(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool {
+    if !c.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
+        return false;
+    }
+    let mut twice_area = 0.0f32;
+    for k in 0..4 {
+        let (a, b) = (c[k], c[(k + 1) % 4]);
+        twice_area += a[0] * b[1] - b[0] * a[1];
+    }
+    if !(0.5 * twice_area.abs() <= max_area) {
+        return false;
+    }
+    let len2 = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+    let m2 = max_extent * max_extent;
+    (0..4).all(|k| len2(c[k], c[(k + 1) % 4]) <= m2) && len2(c[0], c[2]) <= m2 && len2(c[1], c[3]) <= m2
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn size_guard() {
+        let unit = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert!(footprint_ok(&unit, 1.0, 1.5));
+        assert!(!footprint_ok(&unit, 0.99, 1.5));
+        assert!(!footprint_ok(&unit, 1.0, 1.4)); // diagonal √2
+        let sliver = [[0.0, 0.0], [100.0, 0.0], [100.0, 0.01], [0.0, 0.01]];
+        assert!(!footprint_ok(&sliver, 256.0, 64.0));
+        let nan = [[0.0, 0.0], [f32::NAN, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert!(!footprint_ok(&nan, 256.0, 64.0));
+    }
 }

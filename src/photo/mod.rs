@@ -18,8 +18,11 @@
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
 mod bvh;
+mod corners;
 mod footprint;
+mod reconstruct;
 mod scene;
+mod silhouette;
 
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
 pub use footprint::{photo_footprints, FootprintOptions};
@@ -65,7 +68,8 @@ pub struct PixelFootprint {
 pub struct FootprintSet {
     /// Footprints sorted by (cell, row, column); at most one per pixel.
     pub footprints: Vec<PixelFootprint>,
-    /// Pixels whose centre ray hit the terrain.
+    /// Pixels with at least one corner ray hitting the terrain's front face (= footprints +
+    /// rejected_silhouette + dropped).
     pub pixels_hit: u64,
     /// Pixels rejected because their footprint crosses a silhouette edge.
     pub rejected_silhouette: u64,

@@ -1,11 +1,20 @@
-//! The terrain of one quadtree level as one ray-castable triangle set (owned by the raycast
-//! work; signatures fixed, bodies to be written).
+//! The terrain of one quadtree level as one ray-castable triangle set.
+//!
+//! Every cell's surface triangles go into one f32 frame relative to `frame_origin`
+//! (`cell origin − frame origin` in f64 first, then the cell-local offsets added in f64 and
+//! the sum rounded to f32), so UTM-sized coordinates keep millimetre precision near the
+//! camera. Per BVH triangle the scene keeps its cell, its local index, its plane (for the
+//! facing test and view cosine) and its neighbours across each edge within its cell (for
+//! the silhouette walk).
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 use super::{BvhQuality, TriangleBvh};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::store::Store;
+
+/// Marks "no triangle" in adjacency and lookups.
+pub(crate) const NO_TRI: u32 = u32::MAX;
 
 /// One cell's surface (skirts excluded) with its texture coordinates.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,6 +34,10 @@ pub struct SceneCell {
 }
 
 /// All cells of one level, as triangles in an f32 frame centred on `frame_origin`, with a BVH.
+///
+/// Triangles are one-sided for the photo stage: the front face is the one the vertices
+/// run counter-clockwise around (seen from above for terrain). Triangles with an index
+/// out of range of their cell's positions or texcoords are left out.
 pub struct LevelScene {
     /// World position (f64) the BVH's f32 frame is relative to (near the camera).
     pub frame_origin: DVec3,
@@ -32,17 +45,192 @@ pub struct LevelScene {
     pub cells: Vec<SceneCell>,
     /// BVH over every cell's triangles.
     pub bvh: TriangleBvh,
+    /// Per BVH triangle: `[index into cells, local triangle index]`.
+    tri_ref: Vec<[u32; 2]>,
+    /// Per BVH triangle: unit normal (frame) and plane offset `n·v0`.
+    planes: Vec<[f32; 4]>,
+    /// Per BVH triangle: the BVH triangle across edge k (`v[k] → v[k+1]`) in the same cell,
+    /// or [`NO_TRI`].
+    adjacency: Vec<[u32; 3]>,
 }
 
 impl LevelScene {
     /// Builds the scene from in-memory cells.
-    pub fn new(_cells: Vec<SceneCell>, _frame_origin: DVec3, _quality: BvhQuality) -> LevelScene {
-        todo!("raycast work")
+    pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, quality: BvhQuality) -> LevelScene {
+        let mut tris: Vec<[Vec3; 3]> = Vec::new();
+        let mut tri_ref = Vec::new();
+        let mut planes = Vec::new();
+        let mut adjacency = Vec::new();
+        for (ci, c) in cells.iter().enumerate() {
+            let offset = c.origin - frame_origin;
+            let local = |i: u32| {
+                let p = c.positions[i as usize];
+                offset + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+            };
+            let first = tris.len() as u32;
+            let mut kept: Vec<[u32; 3]> = Vec::new();
+            for (ti, t) in c.triangles.iter().enumerate() {
+                let n = c.positions.len().min(c.texcoords.len());
+                if t.iter().any(|&i| i as usize >= n) {
+                    continue;
+                }
+                let p = [local(t[0]), local(t[1]), local(t[2])];
+                if !p.iter().all(|q| q.is_finite()) {
+                    continue;
+                }
+                let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+                planes.push([normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32]);
+                tris.push(p.map(|q| q.as_vec3()));
+                tri_ref.push([ci as u32, ti as u32]);
+                kept.push(*t);
+            }
+            adjacency.extend(cell_adjacency(&kept).into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
+        }
+        let bvh = TriangleBvh::build(&tris, quality);
+        LevelScene { frame_origin, cells, bvh, tri_ref, planes, adjacency }
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of
     /// `level` in the store.
-    pub fn from_store(_store: &Store, _level: u8, _frame_origin: DVec3, _quality: BvhQuality) -> Result<LevelScene> {
-        todo!("raycast work")
+    pub fn from_store(store: &Store, level: u8, frame_origin: DVec3, quality: BvhQuality) -> Result<LevelScene> {
+        let levels = store.manifest.quadtree.levels;
+        if u32::from(level) >= u32::from(levels) {
+            return Err(Error::BadOption(format!(
+                "level {level} is not in store {} (it has levels 0..{})",
+                store.dir.display(),
+                levels
+            )));
+        }
+        if !frame_origin.is_finite() {
+            return Err(Error::BadOption(format!("frame origin {frame_origin} is not finite")));
+        }
+        let mut cells = Vec::new();
+        for (index, rec) in store.manifest.cells.iter().enumerate().filter(|(_, r)| r.level == level) {
+            let mesh = store.read_active_mesh(rec)?;
+            let texels = rec.reparam.as_ref().map_or(rec.texels, |r| r.texels);
+            let nv = (mesh.surface_vertices as usize).min(mesh.positions.len());
+            let tx = texels as f32;
+            let texcoords = (0..nv)
+                .map(|i| {
+                    let uv = crate::store::texcoord(rec, &mesh, i);
+                    [uv[0] * tx, uv[1] * tx]
+                })
+                .collect();
+            cells.push(SceneCell {
+                cell: index as u32,
+                origin: DVec3::from_array(rec.origin),
+                positions: mesh.positions[..nv].to_vec(),
+                triangles: mesh.surface().to_vec(),
+                texcoords,
+                texels,
+            });
+        }
+        Ok(LevelScene::new(cells, frame_origin, quality))
+    }
+
+    /// Number of triangles in the BVH.
+    pub fn triangle_count(&self) -> usize {
+        self.tri_ref.len()
+    }
+
+    /// `(index into cells, local triangle index)` of BVH triangle `tri`.
+    pub fn triangle_source(&self, tri: u32) -> Option<(usize, usize)> {
+        self.tri_ref.get(tri as usize).map(|r| (r[0] as usize, r[1] as usize))
+    }
+
+    /// Index into `cells` of BVH triangle `tri` (in range).
+    #[inline]
+    pub(crate) fn cell_of(&self, tri: u32) -> u32 {
+        self.tri_ref[tri as usize][0]
+    }
+
+    /// Texture positions (texel units) of the three vertices of BVH triangle `tri`.
+    #[inline]
+    pub(crate) fn tri_texcoords(&self, tri: u32) -> [[f32; 2]; 3] {
+        let [ci, ti] = self.tri_ref[tri as usize];
+        let c = &self.cells[ci as usize];
+        let t = c.triangles[ti as usize];
+        t.map(|i| c.texcoords[i as usize])
+    }
+
+    /// Unit normal (frame) and plane offset of BVH triangle `tri`.
+    #[inline]
+    pub(crate) fn plane(&self, tri: u32) -> [f32; 4] {
+        self.planes[tri as usize]
+    }
+
+    /// Neighbours of BVH triangle `tri` across its edges (see the field).
+    #[inline]
+    pub(crate) fn neighbours(&self, tri: u32) -> [u32; 3] {
+        self.adjacency[tri as usize]
+    }
+}
+
+/// For each triangle, the triangle sharing edge k (`v[k] → v[k+1]`), or [`NO_TRI`] on the
+/// boundary and at non-manifold edges (more than two triangles).
+fn cell_adjacency(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut edges: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(tris.len() * 3);
+    for (ti, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a != b {
+                edges.push((a.min(b), a.max(b), ti as u32, k as u8));
+            }
+        }
+    }
+    edges.sort_unstable();
+    let mut adj = vec![[NO_TRI; 3]; tris.len()];
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && (edges[j].0, edges[j].1) == (edges[i].0, edges[i].1) {
+            j += 1;
+        }
+        if j - i == 2 {
+            let (x, y) = (edges[i], edges[i + 1]);
+            adj[x.2 as usize][x.3 as usize] = y.2;
+            adj[y.2 as usize][y.3 as usize] = x.2;
+        }
+        i = j;
+    }
+    adj
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adjacency_pairs_shared_edges_only() {
+        // Two triangles sharing edge 1-2, a third sharing 0-1 with the first.
+        let t = [[0, 1, 2], [2, 1, 3], [1, 0, 4]];
+        let a = cell_adjacency(&t);
+        assert_eq!(a[0], [2, 1, NO_TRI]);
+        assert_eq!(a[1], [0, NO_TRI, NO_TRI]);
+        assert_eq!(a[2], [0, NO_TRI, NO_TRI]);
+        // A non-manifold edge gets no neighbour.
+        let a = cell_adjacency(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]);
+        assert_eq!(a[0][0], NO_TRI);
+    }
+
+    #[test]
+    fn scene_frame_keeps_precision_and_skips_bad_triangles() {
+        let cell = SceneCell {
+            cell: 7,
+            origin: DVec3::new(431_000.25, 6_878_000.5, 600.0),
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2], [2, 1, 3], [0, 1, 9]],
+            texcoords: vec![[0.0, 8.0], [8.0, 8.0], [0.0, 0.0], [8.0, 0.0]],
+            texels: 8,
+        };
+        let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), BvhQuality::Fast);
+        assert_eq!(s.triangle_count(), 2);
+        assert_eq!(s.triangle_source(1), Some((0, 1)));
+        assert_eq!(s.neighbours(0)[1], 1);
+        let h = s.bvh.nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
+        assert_eq!(h.triangle, 0);
+        assert!((h.t - 10.0).abs() < 1e-5);
+        let p = s.plane(0);
+        assert!((p[2] - 1.0).abs() < 1e-6 && p[3].abs() < 1e-6);
     }
 }
