@@ -186,3 +186,140 @@ impl CellAccum {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(crate) fn fp(pixel: [u32; 2], corners: [[f32; 2]; 4], cos_view: f32) -> PixelFootprint {
+        PixelFootprint { cell: 0, pixel, corners, cos_view, distance: 10.0, reconstructed: 0 }
+    }
+
+    fn square(x: f32, y: f32, s: f32) -> [[f32; 2]; 4] {
+        [[x, y], [x + s, y], [x + s, y + s], [x, y + s]]
+    }
+
+    /// No feather: every pixel of the small test images counts fully.
+    fn params() -> ConfidenceParams {
+        ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() }
+    }
+
+    #[test]
+    fn constant_colour_stays_constant_under_any_footprints() {
+        let img = RgbImage::from_pixel(40, 40, image::Rgb([200, 40, 90]));
+        // a sheared, rotated, non-uniform grid of quads (a perspective-like map) over 8x8 texels
+        let map = |c: f32, r: f32| {
+            let (u, v) = (c / 40.0, r / 40.0);
+            [0.3 + 7.2 * u + 0.4 * v * v, 0.2 + 7.5 * v + 0.6 * u * v]
+        };
+        let fps: Vec<PixelFootprint> = (0..40)
+            .flat_map(|r| (0..40).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                let (cf, rf) = (c as f32, r as f32);
+                fp([c, r], [map(cf, rf), map(cf + 1.0, rf), map(cf + 1.0, rf + 1.0), map(cf, rf + 1.0)], 0.8)
+            })
+            .collect();
+        let mut a = PhotoAccum::new(8);
+        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
+        let want = [200.0 / 255.0, 40.0 / 255.0, 90.0 / 255.0];
+        let mut n = 0;
+        for t in 0..64 {
+            if let Some(c) = a.colour_at(t) {
+                n += 1;
+                for k in 0..3 {
+                    assert!((c[k] - want[k]).abs() < 1e-5, "texel {t}: {c:?}");
+                }
+                let q = a.confidence(t);
+                assert!((0.0..=0.8 + 1e-6).contains(&q), "{q}");
+            }
+        }
+        assert!(n >= 49, "{n} texels coloured");
+        // interior texels are fully covered: confidence = the view cosine
+        assert!((a.confidence(3 * 8 + 3) - 0.8).abs() < 1e-4);
+    }
+
+    #[test]
+    fn texel_aligned_and_finer_footprints_reproduce_a_texture() {
+        let tex = RgbImage::from_fn(6, 6, |x, y| image::Rgb([(x * 40) as u8, (y * 40) as u8, ((x * y) * 7) as u8]));
+        // one photo pixel per texel, exactly covering it
+        let fps: Vec<PixelFootprint> =
+            (0..6).flat_map(|r| (0..6).map(move |c| fp([c, r], square(c as f32, r as f32, 1.0), 1.0))).collect();
+        let mut a = PhotoAccum::new(6);
+        a.add_all(&fps, &tex, &ColourTransform::IDENTITY, &params());
+        for (x, y, p) in tex.enumerate_pixels() {
+            let c = a.colour_at((y * 6 + x) as usize).unwrap();
+            for k in 0..3 {
+                assert!((c[k] * 255.0 - p.0[k] as f32).abs() < 1e-3);
+            }
+            assert!((a.confidence((y * 6 + x) as usize) - 1.0).abs() < 1e-6);
+        }
+        // 2x2 photo pixels per texel: each texel gets the box average of its four pixels
+        let fine = RgbImage::from_fn(12, 12, |x, y| image::Rgb([(x * 20) as u8, (y * 20) as u8, ((x + y) % 3 * 50) as u8]));
+        let fps: Vec<PixelFootprint> = (0..12)
+            .flat_map(|r| (0..12).map(move |c| fp([c, r], square(c as f32 * 0.5, r as f32 * 0.5, 0.5), 1.0)))
+            .collect();
+        let mut a = PhotoAccum::new(6);
+        a.add_all(&fps, &fine, &ColourTransform::IDENTITY, &params());
+        for j in 0..6u32 {
+            for i in 0..6u32 {
+                let c = a.colour_at((j * 6 + i) as usize).unwrap();
+                for k in 0..3 {
+                    let mean: f32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|(dx, dy)| fine.get_pixel(2 * i + dx, 2 * j + dy).0[k] as f32)
+                        .sum::<f32>()
+                        / 4.0;
+                    assert!((c[k] * 255.0 - mean).abs() < 1e-3, "texel {i},{j} ch {k}: {} vs {mean}", c[k] * 255.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_footprints_give_no_nan() {
+        let img = RgbImage::from_pixel(4, 1, image::Rgb([10, 20, 30]));
+        let fps = [
+            fp([0, 0], [[1.0, 1.0]; 4], 1.0),
+            fp([1, 0], [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]], 0.0),
+            fp([2, 0], [[f32::NAN, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]], f32::NAN),
+            fp([3, 0], [[0.5, 0.5], [3.5, 3.5], [3.5, 0.5], [0.5, 3.5]], 1.0),
+        ];
+        let mut a = PhotoAccum::new(4);
+        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
+        for t in 0..16 {
+            assert!(a.confidence(t).is_finite());
+            assert!(a.colour[t].iter().chain([&a.weight[t], &a.coverage[t]]).all(|v| v.is_finite()));
+            if let Some(c) = a.colour_at(t) {
+                assert!(c.iter().all(|v| v.is_finite()));
+            }
+        }
+        assert_eq!(a.kinds[2], 1); // the NaN footprint
+    }
+
+    #[test]
+    fn blend_and_best_view() {
+        let red = RgbImage::from_pixel(1, 1, image::Rgb([255, 0, 0]));
+        let blue = RgbImage::from_pixel(1, 1, image::Rgb([0, 0, 255]));
+        let one = |cos: f32, img: &RgbImage| {
+            let mut a = PhotoAccum::new(1);
+            a.add_all(&[fp([0, 0], square(0.0, 0.0, 1.0), cos)], img, &ColourTransform::IDENTITY, &params());
+            a
+        };
+        let (a, b) = (one(0.9, &red), one(0.3, &blue));
+        for (mode, first_red) in [(BlendMode::Confidence, true), (BlendMode::Best, true), (BlendMode::Best, false)] {
+            let mut acc = CellAccum::new(1, mode);
+            let written = if first_red { acc.merge(&a) + acc.merge(&b) } else { acc.merge(&b) + acc.merge(&a) };
+            assert_eq!(written, 2);
+            let c = acc.colour_at(0).unwrap();
+            assert!((acc.confidence[0] - 0.9).abs() < 1e-6);
+            match mode {
+                BlendMode::Confidence => {
+                    assert!((c[0] - 0.75).abs() < 1e-6 && (c[2] - 0.25).abs() < 1e-6, "{c:?}")
+                }
+                BlendMode::Best => assert_eq!(c, [1.0, 0.0, 0.0]),
+            }
+        }
+        let empty = CellAccum::new(1, BlendMode::Best);
+        assert!(empty.colour_at(0).is_none());
+    }
+}

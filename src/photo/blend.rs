@@ -65,3 +65,63 @@ pub fn blend_cell(existing: &RgbaImage, acc: &CellAccum, params: &ConfidencePara
     }
     Blended { texture, confidence: conf, photo_texels, steep_texels, steep_photo_texels }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photo::{BlendMode, ColourTransform, PhotoAccum, PixelFootprint};
+    use image::RgbImage;
+
+    #[test]
+    fn photo_where_confident_existing_where_not_smooth_between() {
+        // 32 x 1 texels; the photo's view cosine falls from 1 to 0 along x
+        let n = 32u32;
+        let img = RgbImage::from_pixel(n, 1, image::Rgb([250, 250, 250]));
+        let params = ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() };
+        let fps: Vec<PixelFootprint> = (0..n)
+            .map(|i| {
+                let x = i as f32;
+                PixelFootprint {
+                    cell: 0,
+                    pixel: [i, 0],
+                    corners: [[x, 0.0], [x + 1.0, 0.0], [x + 1.0, 1.0], [x, 1.0]],
+                    cos_view: 1.0 - i as f32 / (n - 1) as f32,
+                    distance: 5.0,
+                    reconstructed: 0,
+                }
+            })
+            .collect();
+        let mut pa = PhotoAccum::new(n);
+        pa.add_all(&fps, &img, &ColourTransform::IDENTITY, &params);
+        let mut acc = CellAccum::new(n, BlendMode::Confidence);
+        acc.merge(&pa);
+        let mut existing = RgbaImage::from_pixel(n, n, image::Rgba([10, 10, 10, 255]));
+        // an unknown existing texel that the photo sees with low confidence
+        existing.put_pixel(29, 0, image::Rgba([0, 0, 0, 0]));
+        let covered = vec![true; (n * n) as usize];
+        let steep: Vec<bool> = (0..n * n).map(|t| t % 2 == 0).collect();
+        let b = blend_cell(&existing, &acc, &params, &covered, &steep);
+        let r: Vec<u8> = (0..n).map(|i| b.texture.get_pixel(i, 0).0[0]).collect();
+        let s: Vec<u8> = (0..n).map(|i| b.confidence.get_pixel(i, 0).0[0]).collect();
+        // confident texels: photo colour, confidence 255
+        assert_eq!((r[0], s[0]), (250, 255));
+        // no confidence: existing colour, untouched
+        assert_eq!((r[30], s[30]), (10, 0));
+        assert_eq!(b.texture.get_pixel(30, 0).0, [10, 10, 10, 255]);
+        // in between: monotone and without jumps larger than the ramp allows
+        for i in 0..28 {
+            assert!(r[i + 1] <= r[i] && r[i] - r[i + 1] <= 40, "{r:?}");
+        }
+        assert!(r.iter().any(|&v| v > 10 && v < 250), "no ramp: {r:?}");
+        // the unknown existing texel takes the photo colour wherever the photo has weight
+        if params.blend_weight(acc.confidence[29] as f64) > 0.0 {
+            assert_eq!((r[29], s[29]), (250, 255));
+        }
+        // rows the photo did not reach are unchanged
+        assert_eq!(b.texture.get_pixel(5, 3).0, [10, 10, 10, 255]);
+        assert_eq!(b.steep_texels, (n * n / 2) as u64);
+        let photo = s.iter().filter(|&&v| v > 127).count() as u64;
+        assert_eq!(b.photo_texels, photo);
+        assert_eq!(b.steep_photo_texels, s.iter().step_by(2).filter(|&&v| v > 127).count() as u64);
+    }
+}
