@@ -5,6 +5,7 @@ mod build;
 mod demo;
 mod export_obj;
 mod fly;
+mod project;
 mod render;
 mod reparam;
 mod stats;
@@ -32,6 +33,8 @@ enum Command {
     Build(build::Args),
     /// Reparameterize stretched cells (Degener et al. 2003) and resample their textures.
     Reparam(reparam::Args),
+    /// Merge ground photos (known camera poses) into the cell textures of every level.
+    Project(project::Args),
     /// Texel-stretch statistics of a store: summary, stats.json and a histogram PNG.
     Stats(stats::Args),
     /// Write one cell's TIN with texture coordinates as Wavefront OBJ.
@@ -62,6 +65,7 @@ pub fn run() -> ExitCode {
         Command::Demo(a) => demo::run(a),
         Command::Build(a) => build::run(a),
         Command::Reparam(a) => reparam::run(a),
+        Command::Project(a) => project::run(a),
         Command::Stats(a) => stats::run(a),
         Command::ExportObj(a) => export_obj::run(a),
         Command::Render(a) => render::run(a),

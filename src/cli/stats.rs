@@ -76,6 +76,14 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
             mib(&m["mixed_bytes"])
         );
     }
+    if let Some(photos) = s["photos"].as_array().filter(|p| !p.is_empty()) {
+        println!(
+            "photos: {} projected; steep texels (> 60°) now mainly from photos: {:.1}% on the finest level, {:.1}% over all levels",
+            photos.len(),
+            100.0 * f(&s["photo_improved_steep_fraction"]),
+            100.0 * f(&s["photo_improved_steep_fraction_all_levels"])
+        );
+    }
     println!("wrote {} and {}", dir.join("stats.json").display(), dir.join("stats_histogram.png").display());
     Ok(())
 }

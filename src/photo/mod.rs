@@ -13,20 +13,39 @@
 //!   cosine and distance at the pixel centre. [`FootprintSet`] holds every footprint of one
 //!   photo on one quadtree level, plus the counts of rejected and reconstructed pixels.
 //!
+//! - Splatting, blending and leveling (docs/projection.md): [`splat_footprint`] deposits a
+//!   footprint into the texels it covers by exact overlap area; [`PhotoAccum`] /
+//!   [`CellAccum`] accumulate colour and confidence ([`ConfidenceParams`]) per texel and
+//!   photo / over photos ([`BlendMode`]); [`blend_cell`] merges the result with the existing
+//!   texture; [`fit_colour_transform`] levels a photo's colours to the ortho
+//!   ([`ColourTransform`]); [`PhotoPyramid`] halves photos for coarser levels.
+//!
 //! Texture positions are in texel units of the cell's *active* texture (the reparameterized
 //! one if the cell has it, else the orthographic one): x right, y down, texel `(i, j)`
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
+mod accumulate;
+mod blend;
 mod bvh;
+mod confidence;
 mod corners;
 mod footprint;
+mod level;
+mod pyramid;
 mod reconstruct;
 mod scene;
 mod silhouette;
+mod splat;
 
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
 pub use footprint::{photo_footprints, FootprintOptions};
 pub use scene::{LevelScene, SceneCell};
+pub use accumulate::{BlendMode, CellAccum, PhotoAccum};
+pub use blend::{Blended, blend_cell};
+pub use confidence::{ConfidenceParams, smoothstep};
+pub use level::{ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform, normal_cos_slope};
+pub use pyramid::{PhotoPyramid, downsample2, half_camera};
+pub use splat::{MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint};
 
 use std::path::PathBuf;
 

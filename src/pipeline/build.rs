@@ -182,6 +182,7 @@ pub fn write_stats(out: &Path, manifest: &Manifest, threshold: f64) -> Result<se
         .collect();
     let mut json = stats::stats_json(&entries, threshold);
     add_parameterization(&mut json, manifest);
+    super::photo_stats::add_photos(&mut json, manifest);
     write_atomic(
         &out.join("stats.json"),
         &serde_json::to_vec_pretty(&json).map_err(|e| Error::store(out, e.to_string()))?,

@@ -4,17 +4,23 @@
 //!   store on disk and its [`Manifest`] out.
 //! - [`reparam_store`]: a store and [`ReparamOptions`] in; stretched cells gain a
 //!   [`crate::store::ReparamRecord`] (chart, resampled texture, metrics).
+//! - [`project_store`]: a store, [`crate::photo::PhotoInput`]s and [`ProjectOptions`] in;
+//!   cells the photos see gain a [`crate::store::PhotoCellRecord`] (enhanced texture,
+//!   confidence map, steep-texel counts).
 
 mod build;
 mod derived_ortho;
 mod mesh;
+mod photo_stats;
 mod progress;
+mod project;
 mod reparam;
 
 pub use build::{BuildInputs, BuildOptions, build_store, write_stats};
 pub use derived_ortho::derived_ortho;
 pub use mesh::{LocalMesh, local_mesh};
 pub use progress::progress_bar;
+pub use project::{ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store};
 pub use reparam::{ReparamOptions, TextureMemory, reparam_store, texture_memory};
 
 #[allow(unused_imports)]

@@ -71,7 +71,9 @@ pub fn texture_memory(cells: &[CellRecord], cell_texels: u32) -> TextureMemory {
 /// resamples its texture and normal map into the chart, records metrics, and rewrites
 /// `stats.json` and `manifest.json` (atomically, manifest last). A cell whose
 /// parameterization fails keeps the ortho map and is listed in `failed_cells`.
-/// Re-running with other options starts again from the orthographic originals.
+/// Re-running with other options starts again from the orthographic originals. Photo
+/// textures of an earlier `project` run are dropped (records and files): their layout
+/// follows the old texture coordinates; run `project` again.
 pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     if !(opts.threshold.is_finite() && opts.threshold > 0.0) {
         return Err(Error::BadOption(format!("--threshold must be a positive number, got {}", opts.threshold)));
@@ -96,7 +98,10 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     for c in &mut store.manifest.cells {
         c.reparam = None;
         c.parameterization = Parameterization::Ortho;
+        // photo textures were laid out in the old texture coordinates: drop them
+        c.photo = None;
     }
+    store.manifest.photos = None;
     for (i, r) in results {
         let c = &mut store.manifest.cells[i];
         match r {
@@ -132,6 +137,7 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
             let _ = std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
         }
     }
+    super::project::remove_stale_photo_files(dir, &store.manifest.cells);
     Ok(store)
 }
 

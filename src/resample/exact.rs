@@ -3,8 +3,9 @@
 
 use super::footprint::Footprint;
 
-/// Most vertices a convex quadrilateral can have after clipping by four half-planes is 8.
-const CAP: usize = 12;
+/// Vertex capacity of a clipped polygon: a convex 8-gon gains at most one vertex per
+/// half-plane (12); the margin covers the non-convex quads of photo footprints.
+const CAP: usize = 16;
 
 /// A small polygon on the stack.
 #[derive(Clone, Copy)]
@@ -47,15 +48,21 @@ fn clip(p: &Poly, axis: usize, c: f64, s: f64) -> Poly {
 
 /// Exact area (source pixels²) of `fp` ∩ the pixel square centred on `(col, row)`.
 pub(crate) fn area(fp: &Footprint, col: f64, row: f64) -> f64 {
-    let mut p = Poly {
-        v: [[0.0; 2]; CAP],
-        n: 4,
-    };
-    p.v[..4].copy_from_slice(&fp.corners());
-    p = clip(&p, 0, col - 0.5, -1.0);
-    p = clip(&p, 0, col + 0.5, 1.0);
-    p = clip(&p, 1, row - 0.5, -1.0);
-    p = clip(&p, 1, row + 0.5, 1.0);
+    polygon_box_area(&fp.corners(), [col - 0.5, row - 0.5, col + 0.5, row + 0.5])
+}
+
+/// Exact area of the simple polygon `poly` (either orientation, convex or not, at most 8
+/// vertices; extra vertices are ignored) inside the axis-aligned box
+/// `[x0, y0, x1, y1]`, by Sutherland-Hodgman clipping against the box's four sides (correct
+/// for non-convex subject polygons since the clip region is convex; the spurious edges it
+/// adds along the box enclose no area). 0 for degenerate input; never NaN for finite input.
+pub(crate) fn polygon_box_area(poly: &[[f64; 2]], bx: [f64; 4]) -> f64 {
+    let mut p = Poly { v: [[0.0; 2]; CAP], n: poly.len().min(8) };
+    p.v[..p.n].copy_from_slice(&poly[..p.n]);
+    p = clip(&p, 0, bx[0], -1.0);
+    p = clip(&p, 0, bx[2], 1.0);
+    p = clip(&p, 1, bx[1], -1.0);
+    p = clip(&p, 1, bx[3], 1.0);
     let mut a2 = 0.0;
     for k in 0..p.n {
         let (a, b) = (p.v[k], p.v[(k + 1) % p.n]);

@@ -216,9 +216,29 @@ pub struct PhotoSettings {
     pub bvh_quality: String,
     /// One report per photo, in input order.
     pub photos: Vec<PhotoReport>,
+    /// Per quadtree level (root first): texel counts over all cells of the level.
+    #[serde(default)]
+    pub levels: Vec<PhotoLevelReport>,
 }
 
-/// What one photo contributed to the store (summed over all levels).
+/// Texel counts of one quadtree level after `cliffmap project` (all cells of the level,
+/// with or without photo colour; "covered" = texel centre on the cell's surface).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PhotoLevelReport {
+    /// Quadtree level.
+    pub level: u8,
+    /// Cells of the level that got a photo texture.
+    pub cells_with_photo: u64,
+    /// Covered texels whose colour now comes mainly from photos (photo share > 0.5).
+    pub photo_texels: u64,
+    /// Covered texels whose surface slope (from the normal map) exceeds 60 degrees.
+    pub steep_texels: u64,
+    /// Steep covered texels whose colour now comes mainly from photos.
+    pub steep_photo_texels: u64,
+}
+
+/// What one photo contributed to the store. `texels_written` is summed over all levels; the
+/// pixel counts refer to the photo at full resolution (the finest level's ray casts).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhotoReport {
     /// Name of the photo (its file name).
@@ -237,6 +257,10 @@ pub struct PhotoReport {
     pub colour_gain: [f64; 3],
     /// Per-channel colour offset applied to the photo (0..1 scale; 0 = unchanged).
     pub colour_offset: [f64; 3],
+    /// Texels the colour leveling was fitted on (0 = leveling off or too few samples:
+    /// identity).
+    #[serde(default)]
+    pub colour_samples: u64,
 }
 
 impl Manifest {

@@ -10,6 +10,8 @@
 //! STORE/cells/{level}/{x}-{y}.png         RGBA8 colour texture
 //! STORE/cells/{level}/{x}-{y}.normal.png  RGB8 normal map
 //! STORE/cells/{level}/{x}-{y}.json        CellRecord of a finished cell (resume marker)
+//! STORE/cells/{level}/{x}-{y}.photo.png       RGBA8 photo-enhanced texture (`cliffmap project`)
+//! STORE/cells/{level}/{x}-{y}.photo.conf.png  L8 photo share per texel
 //! ```
 //! Every file is written atomically; every cell file's size and CRC-32 are recorded and
 //! verified on read.
@@ -23,7 +25,7 @@ use std::path::{Path, PathBuf};
 
 pub use files::{crc32_hex, is_intact, read_verified, write_file};
 pub use manifest::{
-    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
+    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
     STORE_VERSION,
 };
 pub use mesh::CellMesh;
@@ -81,6 +83,18 @@ impl Store {
         self.read_png(&rec.files.texture).map(|i| i.to_rgba8())
     }
 
+    /// Reads and verifies the colour texture of the cell's active parameterization (the
+    /// reparameterized one if present, else the orthographic one); photo textures excluded.
+    pub fn read_active_texture(&self, rec: &CellRecord) -> Result<image::RgbaImage> {
+        self.read_png(rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture)).map(|i| i.to_rgba8())
+    }
+
+    /// Reads and verifies the normal map of the cell's active parameterization (same
+    /// layout as [`Store::read_active_texture`]).
+    pub fn read_active_normal_map(&self, rec: &CellRecord) -> Result<image::RgbImage> {
+        self.read_png(rec.reparam.as_ref().map_or(&rec.files.normal, |r| &r.files.normal)).map(|i| i.to_rgb8())
+    }
+
     /// Reads and verifies a cell's normal map.
     pub fn read_normal_map(&self, rec: &CellRecord) -> Result<image::RgbImage> {
         self.read_png(&rec.files.normal).map(|i| i.to_rgb8())
@@ -97,6 +111,11 @@ impl Store {
         image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
             .map_err(|e| Error::store(self.dir.join(&f.path), format!("cannot decode PNG: {e}")))
     }
+}
+
+/// Side in texels of the cell's active texture (reparameterized if present, else ortho).
+pub fn active_texels(rec: &CellRecord) -> u32 {
+    rec.reparam.as_ref().map_or(rec.texels, |r| r.texels)
 }
 
 /// Relative path stem of a cell's files: `cells/{level}/{x}-{y}`.

@@ -1,0 +1,87 @@
+//! `cliffmap project`: merge ground photos into a store's cell textures.
+
+use std::path::PathBuf;
+
+use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput};
+use cliffmap::pipeline::{ProjectOptions, project_store};
+
+use super::stats::print_summary;
+
+/// Flags of `cliffmap project`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The store directory (made by `cliffmap build`, optionally `cliffmap reparam`).
+    pub store: PathBuf,
+    /// Photo list: {"photos": [{"image": "A.jpg", "camera": "A.json"} | {"image": ..., "imgraft": ...}]}.
+    #[arg(long, required_unless_present = "colmap", conflicts_with = "colmap")]
+    pub photos: Option<PathBuf>,
+    /// COLMAP text model directory (cameras.txt, images.txt) instead of --photos.
+    #[arg(long)]
+    pub colmap: Option<PathBuf>,
+    /// Per texel: blend photos by confidence, or take the most confident photo.
+    #[arg(long, default_value = "confidence", value_parser = ["confidence", "best"])]
+    pub blend: String,
+    /// Do not reconstruct missing footprint corners (pixels at cell borders are dropped).
+    #[arg(long)]
+    pub no_reconstruct: bool,
+    /// Do not level photo colours (gain/offset per channel) to the existing textures.
+    #[arg(long)]
+    pub no_level_colours: bool,
+    /// BVH build preset for the ray casts.
+    #[arg(long, default_value = "medium", value_parser = ["fastest", "fast", "medium", "slow", "very-slow"])]
+    pub bvh: String,
+    /// No progress bars or summary.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// The library options these flags describe.
+pub fn options(a: &Args) -> ProjectOptions {
+    ProjectOptions {
+        blend: if a.blend == "best" { BlendMode::Best } else { BlendMode::Confidence },
+        footprint: FootprintOptions { reconstruct: !a.no_reconstruct, ..FootprintOptions::default() },
+        level_colours: !a.no_level_colours,
+        bvh: BvhQuality::parse(&a.bvh).unwrap_or_default(),
+        quiet: a.quiet,
+        ..ProjectOptions::default()
+    }
+}
+
+/// Reads the photos and their cameras from `--photos` or `--colmap`.
+///
+/// Merge point: the readers (`cliffmap::photo::read_photo_list(&Path)` and
+/// `cliffmap::photo::read_colmap(&Path)`, both `Result<Vec<PhotoInput>>`) are written on
+/// another branch; connect them here.
+fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
+    match (&a.photos, &a.colmap) {
+        (Some(p), _) => anyhow::bail!("{}: reading photo lists is not part of this build yet", p.display()),
+        (None, Some(d)) => anyhow::bail!("{}: reading COLMAP models is not part of this build yet", d.display()),
+        (None, None) => anyhow::bail!("give --photos PHOTOS.json or --colmap DIR"),
+    }
+}
+
+/// Runs `project`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let photos = load_photos(&a)?;
+    let report = project_store(&a.store, &photos, &options(&a))?;
+    if !a.quiet {
+        println!("photo textures for {} cells", report.cells_written);
+        for p in &report.settings.photos {
+            println!(
+                "{}: {} texels written, {} pixels hit, {} silhouette pixels rejected, {} footprints reconstructed, gain {:.3?}, offset {:.3?} ({} samples)",
+                p.name,
+                p.texels_written,
+                p.pixels_hit,
+                p.rejected_silhouette,
+                p.reconstructed_footprints,
+                p.colour_gain,
+                p.colour_offset,
+                p.colour_samples
+            );
+        }
+        let store = cliffmap::store::Store::open(&a.store)?;
+        let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);
+        print_summary(&a.store, &store.manifest, threshold)?;
+    }
+    Ok(())
+}

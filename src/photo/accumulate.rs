@@ -1,0 +1,325 @@
+//! Per-texel accumulation of photo colour: one photo's deposits in one cell
+//! ([`PhotoAccum`]) and all photos of a run in one cell ([`CellAccum`], by confidence-weighted
+//! blend or best view).
+//!
+//! Colours are accumulated as sRGB-encoded values in [0, 1] (the encoding the photos, the
+//! ortho textures and the resampling stage use), not in linear light: the stores' textures
+//! are averaged in sRGB everywhere else too, so photo and ortho colours stay comparable
+//! (and the per-photo colour leveling is an affine map in the same space).
+//!
+//! Per texel `t` and photo `p`, with footprints `f` depositing area `a_ft` (texels²) and
+//! confidence `q_f` ([`super::ConfidenceParams`]):
+//! `A = Σ a_ft` (coverage), `Q = Σ a_ft q_f`, `C = Σ a_ft q_f c_f`; the photo's colour at
+//! the texel is `C / Q` and its confidence `Q / max(1, A)` (a texel only partly covered
+//! counts only partly). Sums are f32 and formed in footprint order, so results do not
+//! depend on threads.
+
+use image::RgbImage;
+
+use super::confidence::ConfidenceParams;
+use super::level::ColourTransform;
+use super::splat::{SplatKind, footprint_area, splat_footprint};
+use super::PixelFootprint;
+
+/// How several photos' colours combine in a texel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BlendMode {
+    /// Average of the photos' colours weighted by their confidence-weighted coverage `Q`.
+    #[default]
+    Confidence,
+    /// The colour of the photo with the highest texel confidence (first photo on ties).
+    Best,
+}
+
+impl BlendMode {
+    /// The name stored in the manifest: "blend" or "best".
+    pub fn name(self) -> &'static str {
+        match self {
+            BlendMode::Confidence => "blend",
+            BlendMode::Best => "best",
+        }
+    }
+}
+
+/// One photo's deposits in one `texels × texels` cell texture (row-major per texel).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotoAccum {
+    /// Texture side in texels.
+    pub texels: u32,
+    /// `A`: deposited footprint area per texel (texels²).
+    pub coverage: Vec<f32>,
+    /// `Q`: confidence-weighted area per texel.
+    pub weight: Vec<f32>,
+    /// `C`: confidence-weighted area times colour (sRGB 0..1) per texel.
+    pub colour: Vec<[f32; 3]>,
+    /// Footprints deposited exactly / by the bilinear fallback / skipped.
+    pub kinds: [u64; 3],
+}
+
+impl PhotoAccum {
+    /// An empty accumulator.
+    pub fn new(texels: u32) -> PhotoAccum {
+        let n = texels as usize * texels as usize;
+        PhotoAccum { texels, coverage: vec![0.0; n], weight: vec![0.0; n], colour: vec![[0.0; 3]; n], kinds: [0; 3] }
+    }
+
+    /// Deposits a footprint of colour `rgb` (sRGB 0..1) and confidence `conf(area)` (given
+    /// the footprint's area in texels², see [`footprint_area`]).
+    pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], conf: impl FnOnce(f64) -> f64) {
+        let q = conf(footprint_area(&fp.corners)) as f32;
+        let (coverage, weight, colour) = (&mut self.coverage, &mut self.weight, &mut self.colour);
+        let s = splat_footprint(&fp.corners, self.texels, |i, w| {
+            let w = w as f32;
+            coverage[i] += w;
+            let wq = w * q;
+            weight[i] += wq;
+            for k in 0..3 {
+                colour[i][k] += wq * rgb[k];
+            }
+        });
+        self.kinds[match s.kind {
+            SplatKind::Exact => 0,
+            SplatKind::Bilinear => 1,
+            SplatKind::Skipped => 2,
+        }] += 1;
+    }
+
+    /// Deposits every footprint of `footprints` (all of this accumulator's cell) with the
+    /// colour of its pixel in `image` (the image the footprints were cast for) mapped by
+    /// `transform`, and confidence from `params`.
+    pub fn add_all(
+        &mut self,
+        footprints: &[PixelFootprint],
+        image: &RgbImage,
+        transform: &ColourTransform,
+        params: &ConfidenceParams,
+    ) {
+        let (w, h) = image.dimensions();
+        for fp in footprints {
+            let [c, r] = fp.pixel;
+            if c >= w || r >= h {
+                continue;
+            }
+            let px = image.get_pixel(c, r).0;
+            let rgb = transform.apply([px[0], px[1], px[2]].map(|v| v as f32 / 255.0));
+            self.add(fp, rgb, |area| params.footprint_confidence(fp.cos_view as f64, area, fp.pixel, w, h));
+        }
+    }
+
+    /// The photo's confidence at texel `t`: `Q / max(1, A)`, in [0, 1].
+    #[inline]
+    pub fn confidence(&self, t: usize) -> f32 {
+        (self.weight[t] / self.coverage[t].max(1.0)).clamp(0.0, 1.0)
+    }
+
+    /// The photo's colour (sRGB 0..1) at texel `t`, if any confident deposit reached it.
+    #[inline]
+    pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
+        let q = self.weight[t];
+        (q > 0.0).then(|| self.colour[t].map(|c| (c / q).clamp(0.0, 1.0)))
+    }
+}
+
+/// All photos' contributions to one cell texture on one level.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellAccum {
+    /// Blend mode.
+    pub mode: BlendMode,
+    /// Texture side in texels.
+    pub texels: u32,
+    /// Per texel: the highest single-photo confidence ([`PhotoAccum::confidence`]), in [0, 1].
+    pub confidence: Vec<f32>,
+    /// Per texel: some photo gave it colour.
+    pub has_colour: Vec<bool>,
+    /// Blend mode: `Σ_p Q`; best mode: empty.
+    weight: Vec<f32>,
+    /// Blend mode: `Σ_p C`; best mode: the best photo's colour.
+    colour: Vec<[f32; 3]>,
+}
+
+impl CellAccum {
+    /// An empty accumulator.
+    pub fn new(texels: u32, mode: BlendMode) -> CellAccum {
+        let n = texels as usize * texels as usize;
+        let weight = if mode == BlendMode::Confidence { vec![0.0; n] } else { Vec::new() };
+        CellAccum { mode, texels, confidence: vec![0.0; n], has_colour: vec![false; n], weight, colour: vec![[0.0; 3]; n] }
+    }
+
+    /// Adds one photo's deposits (same texture size); returns how many texels it gave colour.
+    pub fn merge(&mut self, p: &PhotoAccum) -> u64 {
+        let mut written = 0;
+        for t in 0..self.confidence.len().min(p.weight.len()) {
+            let Some(c) = p.colour_at(t) else { continue };
+            written += 1;
+            let conf = p.confidence(t);
+            match self.mode {
+                BlendMode::Confidence => {
+                    self.weight[t] += p.weight[t];
+                    for k in 0..3 {
+                        self.colour[t][k] += p.colour[t][k];
+                    }
+                }
+                BlendMode::Best => {
+                    // the first photo with colour, then any strictly more confident one
+                    if !self.has_colour[t] || conf > self.confidence[t] {
+                        self.colour[t] = c;
+                    }
+                }
+            }
+            self.confidence[t] = self.confidence[t].max(conf);
+            self.has_colour[t] = true;
+        }
+        written
+    }
+
+    /// The combined photo colour (sRGB 0..1) at texel `t`, if any photo gave it colour.
+    pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
+        if !self.has_colour[t] {
+            return None;
+        }
+        Some(match self.mode {
+            BlendMode::Confidence => {
+                let q = self.weight[t];
+                self.colour[t].map(|c| (c / q).clamp(0.0, 1.0))
+            }
+            BlendMode::Best => self.colour[t],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(crate) fn fp(pixel: [u32; 2], corners: [[f32; 2]; 4], cos_view: f32) -> PixelFootprint {
+        PixelFootprint { cell: 0, pixel, corners, cos_view, distance: 10.0, reconstructed: 0 }
+    }
+
+    fn square(x: f32, y: f32, s: f32) -> [[f32; 2]; 4] {
+        [[x, y], [x + s, y], [x + s, y + s], [x, y + s]]
+    }
+
+    /// No feather: every pixel of the small test images counts fully.
+    fn params() -> ConfidenceParams {
+        ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() }
+    }
+
+    #[test]
+    fn constant_colour_stays_constant_under_any_footprints() {
+        let img = RgbImage::from_pixel(40, 40, image::Rgb([200, 40, 90]));
+        // a sheared, rotated, non-uniform grid of quads (a perspective-like map) over 8x8 texels
+        let map = |c: f32, r: f32| {
+            let (u, v) = (c / 40.0, r / 40.0);
+            [0.3 + 7.2 * u + 0.4 * v * v, 0.2 + 7.5 * v + 0.6 * u * v]
+        };
+        let fps: Vec<PixelFootprint> = (0..40)
+            .flat_map(|r| (0..40).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                let (cf, rf) = (c as f32, r as f32);
+                fp([c, r], [map(cf, rf), map(cf + 1.0, rf), map(cf + 1.0, rf + 1.0), map(cf, rf + 1.0)], 0.8)
+            })
+            .collect();
+        let mut a = PhotoAccum::new(8);
+        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
+        let want = [200.0 / 255.0, 40.0 / 255.0, 90.0 / 255.0];
+        let mut n = 0;
+        for t in 0..64 {
+            if let Some(c) = a.colour_at(t) {
+                n += 1;
+                for k in 0..3 {
+                    assert!((c[k] - want[k]).abs() < 1e-5, "texel {t}: {c:?}");
+                }
+                let q = a.confidence(t);
+                assert!((0.0..=0.8 + 1e-6).contains(&q), "{q}");
+            }
+        }
+        assert!(n >= 49, "{n} texels coloured");
+        // interior texels are fully covered: confidence = the view cosine
+        assert!((a.confidence(3 * 8 + 3) - 0.8).abs() < 1e-4);
+    }
+
+    #[test]
+    fn texel_aligned_and_finer_footprints_reproduce_a_texture() {
+        let tex = RgbImage::from_fn(6, 6, |x, y| image::Rgb([(x * 40) as u8, (y * 40) as u8, ((x * y) * 7) as u8]));
+        // one photo pixel per texel, exactly covering it
+        let fps: Vec<PixelFootprint> =
+            (0..6).flat_map(|r| (0..6).map(move |c| fp([c, r], square(c as f32, r as f32, 1.0), 1.0))).collect();
+        let mut a = PhotoAccum::new(6);
+        a.add_all(&fps, &tex, &ColourTransform::IDENTITY, &params());
+        for (x, y, p) in tex.enumerate_pixels() {
+            let c = a.colour_at((y * 6 + x) as usize).unwrap();
+            for k in 0..3 {
+                assert!((c[k] * 255.0 - p.0[k] as f32).abs() < 1e-3);
+            }
+            assert!((a.confidence((y * 6 + x) as usize) - 1.0).abs() < 1e-6);
+        }
+        // 2x2 photo pixels per texel: each texel gets the box average of its four pixels
+        let fine = RgbImage::from_fn(12, 12, |x, y| image::Rgb([(x * 20) as u8, (y * 20) as u8, ((x + y) % 3 * 50) as u8]));
+        let fps: Vec<PixelFootprint> = (0..12)
+            .flat_map(|r| (0..12).map(move |c| fp([c, r], square(c as f32 * 0.5, r as f32 * 0.5, 0.5), 1.0)))
+            .collect();
+        let mut a = PhotoAccum::new(6);
+        a.add_all(&fps, &fine, &ColourTransform::IDENTITY, &params());
+        for j in 0..6u32 {
+            for i in 0..6u32 {
+                let c = a.colour_at((j * 6 + i) as usize).unwrap();
+                for k in 0..3 {
+                    let mean: f32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|(dx, dy)| fine.get_pixel(2 * i + dx, 2 * j + dy).0[k] as f32)
+                        .sum::<f32>()
+                        / 4.0;
+                    assert!((c[k] * 255.0 - mean).abs() < 1e-3, "texel {i},{j} ch {k}: {} vs {mean}", c[k] * 255.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_footprints_give_no_nan() {
+        let img = RgbImage::from_pixel(4, 1, image::Rgb([10, 20, 30]));
+        let fps = [
+            fp([0, 0], [[1.0, 1.0]; 4], 1.0),
+            fp([1, 0], [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]], 0.0),
+            fp([2, 0], [[f32::NAN, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]], f32::NAN),
+            fp([3, 0], [[0.5, 0.5], [3.5, 3.5], [3.5, 0.5], [0.5, 3.5]], 1.0),
+        ];
+        let mut a = PhotoAccum::new(4);
+        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
+        for t in 0..16 {
+            assert!(a.confidence(t).is_finite());
+            assert!(a.colour[t].iter().chain([&a.weight[t], &a.coverage[t]]).all(|v| v.is_finite()));
+            if let Some(c) = a.colour_at(t) {
+                assert!(c.iter().all(|v| v.is_finite()));
+            }
+        }
+        assert_eq!(a.kinds[2], 1); // the NaN footprint
+    }
+
+    #[test]
+    fn blend_and_best_view() {
+        let red = RgbImage::from_pixel(1, 1, image::Rgb([255, 0, 0]));
+        let blue = RgbImage::from_pixel(1, 1, image::Rgb([0, 0, 255]));
+        let one = |cos: f32, img: &RgbImage| {
+            let mut a = PhotoAccum::new(1);
+            a.add_all(&[fp([0, 0], square(0.0, 0.0, 1.0), cos)], img, &ColourTransform::IDENTITY, &params());
+            a
+        };
+        let (a, b) = (one(0.9, &red), one(0.3, &blue));
+        for (mode, first_red) in [(BlendMode::Confidence, true), (BlendMode::Best, true), (BlendMode::Best, false)] {
+            let mut acc = CellAccum::new(1, mode);
+            let written = if first_red { acc.merge(&a) + acc.merge(&b) } else { acc.merge(&b) + acc.merge(&a) };
+            assert_eq!(written, 2);
+            let c = acc.colour_at(0).unwrap();
+            assert!((acc.confidence[0] - 0.9).abs() < 1e-6);
+            match mode {
+                BlendMode::Confidence => {
+                    assert!((c[0] - 0.75).abs() < 1e-6 && (c[2] - 0.25).abs() < 1e-6, "{c:?}")
+                }
+                BlendMode::Best => assert_eq!(c, [1.0, 0.0, 0.0]),
+            }
+        }
+        let empty = CellAccum::new(1, BlendMode::Best);
+        assert!(empty.colour_at(0).is_none());
+    }
+}

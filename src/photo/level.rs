@@ -1,0 +1,290 @@
+//! Colour leveling: a per-photo, per-channel affine map `ortho ≈ gain · photo + offset`
+//! (sRGB values in [0, 1]) that brings a photo's exposure and white balance to the existing
+//! (ortho-derived) texture before blending.
+//!
+//! Samples are texels where both colours are trustworthy and comparable: the photo's texel
+//! confidence is at least `min_confidence`, the existing texel is fully known (alpha 255),
+//! the surface is flat (normal-map slope below `max_slope_deg`, where the top-down ortho
+//! sees the same surface as the photo) and well lit (luminance of both colours inside
+//! `luminance`, i.e. neither in deep shadow nor clipped). With fewer than `min_samples`
+//! samples the photo keeps the identity map. Per channel the line is fitted by iteratively
+//! reweighted least squares with Huber weights (scale from the median absolute deviation),
+//! which ignores the minority of samples where photo and ortho show different things
+//! (misregistration, shadows that moved, snow). A channel whose photo values barely vary
+//! (standard deviation below `min_spread`) only gets an offset (the median difference);
+//! a fitted gain outside `gain_range` is implausible and that channel keeps the identity.
+
+use image::{RgbImage, RgbaImage};
+
+use super::accumulate::PhotoAccum;
+
+/// A per-channel affine colour map on sRGB values in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ColourTransform {
+    /// Per-channel gain (1 = unchanged).
+    pub gain: [f64; 3],
+    /// Per-channel offset in [0, 1] units (0 = unchanged).
+    pub offset: [f64; 3],
+}
+
+impl ColourTransform {
+    /// The identity map.
+    pub const IDENTITY: ColourTransform = ColourTransform { gain: [1.0; 3], offset: [0.0; 3] };
+
+    /// `gain · rgb + offset`, clamped to [0, 1].
+    #[inline]
+    pub fn apply(&self, rgb: [f32; 3]) -> [f32; 3] {
+        std::array::from_fn(|k| (self.gain[k] as f32 * rgb[k] + self.offset[k] as f32).clamp(0.0, 1.0))
+    }
+}
+
+/// Which texels serve as leveling samples and how the fit is guarded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelingParams {
+    /// Fewest samples for a fit (default 500); fewer gives the identity.
+    pub min_samples: usize,
+    /// Samples beyond this are thinned with a deterministic stride (default 200 000).
+    pub max_samples: usize,
+    /// Steepest surface slope of a sample, degrees from horizontal (default 30).
+    pub max_slope_deg: f64,
+    /// Lowest photo texel confidence of a sample (default 0.5).
+    pub min_confidence: f32,
+    /// Luminance range (0..1) both colours must lie in (default [0.04, 0.96]).
+    pub luminance: [f32; 2],
+    /// Below this standard deviation of a channel's photo values only an offset is fitted
+    /// (default 0.02).
+    pub min_spread: f64,
+    /// Plausible gains (default [0.25, 4]).
+    pub gain_range: [f64; 2],
+}
+
+impl Default for LevelingParams {
+    fn default() -> Self {
+        LevelingParams {
+            min_samples: 500,
+            max_samples: 200_000,
+            max_slope_deg: 30.0,
+            min_confidence: 0.5,
+            luminance: [0.04, 0.96],
+            min_spread: 0.02,
+            gain_range: [0.25, 4.0],
+        }
+    }
+}
+
+/// Corresponding colours: the photo's (untransformed) and the existing texture's, sRGB 0..1.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ColourPairs {
+    /// Photo colours.
+    pub photo: Vec<[f32; 3]>,
+    /// Existing texture colours at the same texels.
+    pub existing: Vec<[f32; 3]>,
+}
+
+#[inline]
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Decoded `n_z` (cosine of the slope) of a normal-map texel (`n * 0.5 + 0.5` encoding).
+#[inline]
+pub fn normal_cos_slope(px: [u8; 3]) -> f64 {
+    let n = px.map(|v| v as f64 / 255.0 * 2.0 - 1.0);
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 { n[2] / len } else { 1.0 }
+}
+
+/// Appends the sample texels of one cell: photo deposits `acc` (untransformed colours),
+/// the cell's existing texture and its normal map (both of the accumulator's size; on a
+/// size mismatch nothing is added). Returns the number of samples added.
+pub fn collect_pairs(
+    acc: &PhotoAccum,
+    existing: &RgbaImage,
+    normals: &RgbImage,
+    params: &LevelingParams,
+    out: &mut ColourPairs,
+) -> usize {
+    let t = acc.texels;
+    if existing.dimensions() != (t, t) || normals.dimensions() != (t, t) {
+        return 0;
+    }
+    let before = out.photo.len();
+    let cos_max = params.max_slope_deg.to_radians().cos();
+    for (i, (e, n)) in existing.pixels().zip(normals.pixels()).enumerate() {
+        if e.0[3] != 255 || acc.confidence(i) < params.min_confidence || normal_cos_slope(n.0) < cos_max {
+            continue;
+        }
+        let Some(p) = acc.colour_at(i) else { continue };
+        let e = [e.0[0], e.0[1], e.0[2]].map(|v| v as f32 / 255.0);
+        let lum = params.luminance;
+        if [luminance(p), luminance(e)].iter().all(|&l| l >= lum[0] && l <= lum[1]) {
+            out.photo.push(p);
+            out.existing.push(e);
+        }
+    }
+    out.photo.len() - before
+}
+
+/// Median of `v` (reorders it); 0 for an empty slice.
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let k = v.len() / 2;
+    let (_, m, _) = v.select_nth_unstable_by(k, f64::total_cmp);
+    *m
+}
+
+/// Weighted least-squares line `y = g x + o`; `None` if `x` has (numerically) no spread.
+fn weighted_line(x: &[f64], y: &[f64], w: &[f64]) -> Option<(f64, f64)> {
+    let sw: f64 = w.iter().sum();
+    if sw <= 0.0 {
+        return None;
+    }
+    let mx = x.iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / sw;
+    let my = y.iter().zip(w).map(|(a, b)| a * b).sum::<f64>() / sw;
+    let (mut sxx, mut sxy) = (0.0, 0.0);
+    for ((a, b), c) in x.iter().zip(y).zip(w) {
+        sxx += c * (a - mx) * (a - mx);
+        sxy += c * (a - mx) * (b - my);
+    }
+    if sxx <= 1e-12 * sw {
+        return None;
+    }
+    let g = sxy / sxx;
+    Some((g, my - g * mx))
+}
+
+/// Robust (Huber IRLS) fit of `y ≈ g x + o` for one channel; see the [module docs](self).
+fn fit_channel(x: &[f64], y: &[f64], params: &LevelingParams) -> (f64, f64) {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    let sd = (x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+    if sd < params.min_spread {
+        let mut d: Vec<f64> = x.iter().zip(y).map(|(a, b)| b - a).collect();
+        return (1.0, median(&mut d));
+    }
+    let mut w = vec![1.0; x.len()];
+    let Some(mut line) = weighted_line(x, y, &w) else { return (1.0, 0.0) };
+    let mut r = vec![0.0; x.len()];
+    for _ in 0..20 {
+        for k in 0..x.len() {
+            r[k] = y[k] - (line.0 * x[k] + line.1);
+        }
+        let mut tmp = r.clone();
+        let med = median(&mut tmp);
+        for v in tmp.iter_mut() {
+            *v = (*v - med).abs();
+        }
+        let scale = (1.4826 * median(&mut tmp)).max(1e-4);
+        let c = 1.345 * scale;
+        for k in 0..x.len() {
+            let a = r[k].abs();
+            w[k] = if a <= c { 1.0 } else { c / a };
+        }
+        let Some(next) = weighted_line(x, y, &w) else { break };
+        let done = (next.0 - line.0).abs() < 1e-7 && (next.1 - line.1).abs() < 1e-7;
+        line = next;
+        if done {
+            break;
+        }
+    }
+    if line.0.is_finite() && line.1.is_finite() && line.0 >= params.gain_range[0] && line.0 <= params.gain_range[1] {
+        line
+    } else {
+        (1.0, 0.0)
+    }
+}
+
+/// Fits the photo → existing colour map from `pairs`; returns it and the number of samples
+/// used (0 and the identity when there are fewer than `min_samples`). Deterministic.
+pub fn fit_colour_transform(pairs: &ColourPairs, params: &LevelingParams) -> (ColourTransform, usize) {
+    let n = pairs.photo.len().min(pairs.existing.len());
+    if n < params.min_samples.max(2) {
+        return (ColourTransform::IDENTITY, 0);
+    }
+    let stride = n.div_ceil(params.max_samples.max(params.min_samples).max(2));
+    let idx: Vec<usize> = (0..n).step_by(stride.max(1)).collect();
+    let mut t = ColourTransform::IDENTITY;
+    for k in 0..3 {
+        let x: Vec<f64> = idx.iter().map(|&i| pairs.photo[i][k] as f64).collect();
+        let y: Vec<f64> = idx.iter().map(|&i| pairs.existing[i][k] as f64).collect();
+        let (g, o) = fit_channel(&x, &y, params);
+        t.gain[k] = g;
+        t.offset[k] = o;
+    }
+    (t, idx.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic pseudo-random value in [0, 1).
+    fn hash01(i: u64) -> f64 {
+        let mut z = i.wrapping_add(0x9e3779b97f4a7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn recovers_gain_and_offset_despite_outliers() {
+        let truth = ColourTransform { gain: [0.8, 1.1, 1.3], offset: [0.05, -0.02, 0.01] };
+        let mut pairs = ColourPairs::default();
+        for i in 0..5000u64 {
+            let p: [f32; 3] = std::array::from_fn(|k| (0.1 + 0.6 * hash01(3 * i + k as u64)) as f32);
+            let mut e = truth.apply(p);
+            // small noise everywhere, gross outliers on 15 % of the samples
+            for (k, v) in e.iter_mut().enumerate() {
+                *v += (0.01 * (hash01(7919 * i + k as u64) - 0.5)) as f32;
+            }
+            if hash01(104729 * i) < 0.15 {
+                e = [0.9, 0.05, 0.5];
+            }
+            pairs.photo.push(p);
+            pairs.existing.push(e);
+        }
+        let (t, used) = fit_colour_transform(&pairs, &LevelingParams::default());
+        assert_eq!(used, 5000);
+        for k in 0..3 {
+            assert!((t.gain[k] - truth.gain[k]).abs() < 0.02, "gain {k}: {:?}", t);
+            assert!((t.offset[k] - truth.offset[k]).abs() < 0.01, "offset {k}: {:?}", t);
+        }
+        // too few samples: identity
+        let few = ColourPairs { photo: pairs.photo[..100].to_vec(), existing: pairs.existing[..100].to_vec() };
+        assert_eq!(fit_colour_transform(&few, &LevelingParams::default()), (ColourTransform::IDENTITY, 0));
+    }
+
+    #[test]
+    fn flat_photo_channel_gets_only_an_offset() {
+        let mut pairs = ColourPairs::default();
+        for i in 0..1000u64 {
+            let v = (0.2 + 0.5 * hash01(i)) as f32;
+            pairs.photo.push([v, 0.5, v]);
+            pairs.existing.push([v, 0.6, v]);
+        }
+        let (t, _) = fit_colour_transform(&pairs, &LevelingParams::default());
+        assert_eq!(t.gain[1], 1.0);
+        assert!((t.offset[1] - 0.1).abs() < 1e-6);
+        assert!((t.gain[0] - 1.0).abs() < 1e-6 && t.offset[0].abs() < 1e-6);
+    }
+
+    #[test]
+    fn collects_only_flat_bright_confident_texels() {
+        let mut acc = PhotoAccum::new(2);
+        // texel 0: confident; texel 1: confident but steep; texel 2: dark; texel 3: no photo
+        for (t, c) in [(0usize, 0.5f32), (1, 0.5), (2, 0.01)] {
+            acc.coverage[t] = 1.0;
+            acc.weight[t] = 1.0;
+            acc.colour[t] = [c; 3];
+        }
+        let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
+        let mut normals = RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]));
+        normals.put_pixel(1, 0, image::Rgb([255, 128, 128])); // horizontal normal: vertical wall
+        let mut pairs = ColourPairs::default();
+        assert_eq!(collect_pairs(&acc, &existing, &normals, &LevelingParams::default(), &mut pairs), 1);
+        assert_eq!(pairs.photo, vec![[0.5; 3]]);
+        assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &normals, &LevelingParams::default(), &mut pairs), 0);
+    }
+}

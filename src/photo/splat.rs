@@ -1,0 +1,231 @@
+//! Splatting one photo pixel's footprint into a cell texture: which texels the footprint
+//! quad covers and by how much.
+//!
+//! The footprint is the quad of the pixel's four corner positions in texel units (x right,
+//! y down, texel `(i, j)` = `[i, i+1] × [j, j+1]`). It may be non-convex or, where a corner
+//! was reconstructed or the surface folds, self-intersecting; a self-intersecting quad is
+//! replaced by the convex hull of its corners. Each texel receives the exact area
+//! (texels²) of quad ∩ texel square (Sutherland-Hodgman clipping, shared with the
+//! resampling reference [`crate::resample`]'s exact mode). A *collapsed* footprint, of area
+//! below [`MIN_SPLAT_AREA`] texels², deposits its area at its centre with bilinear weights
+//! over the four nearest texel centres (the weights of a one-texel box around the centre,
+//! as in the resampling fallback). Deposits outside the texture are dropped (they belong
+//! to a neighbouring cell). Non-finite corners and footprints whose bounding box exceeds
+//! [`MAX_SPLAT_BBOX`] texels² deposit nothing. Never produces NaN.
+
+use crate::resample::polygon_box_area;
+
+/// Footprints with a smaller area (texels²) use the bilinear fallback.
+pub const MIN_SPLAT_AREA: f64 = 0.1;
+
+/// Footprints whose bounding box is larger than this (texels²) are skipped: a single pixel
+/// smeared over thousands of texels carries no usable detail (grazing views).
+pub const MAX_SPLAT_BBOX: f64 = 4096.0;
+
+/// How a footprint was deposited.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SplatKind {
+    /// Exact area-weighted deposit into every covered texel.
+    Exact,
+    /// Collapsed footprint: bilinear deposit at its centre.
+    Bilinear,
+    /// Nothing deposited (non-finite corners, or bounding box above [`MAX_SPLAT_BBOX`]).
+    Skipped,
+}
+
+/// The outcome of [`splat_footprint`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    /// Area of the footprint in texels² (of the convex hull for a self-intersecting quad);
+    /// finite and >= 0, 0 when skipped.
+    pub area: f64,
+    /// How it was deposited.
+    pub kind: SplatKind,
+}
+
+/// Twice the signed area of triangle `a, b, c`.
+#[inline]
+fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// The polygon to clip (the quad itself if simple, else its convex hull) and its area.
+pub(crate) fn footprint_polygon(q: &[[f64; 2]; 4]) -> ([[f64; 2]; 4], f64) {
+    let (s012, s023) = (cross(q[0], q[1], q[2]), cross(q[0], q[2], q[3]));
+    let (s123, s130) = (cross(q[1], q[2], q[3]), cross(q[1], q[3], q[0]));
+    if s012 * s023 >= 0.0 || s123 * s130 >= 0.0 {
+        // simple (convex or with one reflex corner): the shoelace area
+        return (*q, 0.5 * (s012 + s023).abs());
+    }
+    // Self-intersecting: all four corners lie on the hull; the hull is the vertex order
+    // with the largest area.
+    let orders = [[0, 2, 1, 3], [0, 1, 3, 2]];
+    let mut best = (*q, 0.0);
+    for o in orders {
+        let p = o.map(|k| q[k]);
+        let a = 0.5 * (cross(p[0], p[1], p[2]) + cross(p[0], p[2], p[3])).abs();
+        if a > best.1 {
+            best = (p, a);
+        }
+    }
+    best
+}
+
+/// Area in texels² of the footprint with corners `corners` (of the convex hull if the quad
+/// is self-intersecting); 0 for non-finite corners. The area [`splat_footprint`] reports.
+pub fn footprint_area(corners: &[[f32; 2]; 4]) -> f64 {
+    let q = corners.map(|c| [c[0] as f64, c[1] as f64]);
+    if !q.iter().flatten().all(|v| v.is_finite()) {
+        return 0.0;
+    }
+    let a = footprint_polygon(&q).1;
+    if a.is_finite() { a } else { 0.0 }
+}
+
+/// Deposits the footprint with corners `corners` (texel units, in order around the pixel)
+/// into a `texels × texels` texture: calls `deposit(texel_index, weight)` (row-major index
+/// `j * texels + i`, weight in texels², > 0) for every texel it covers, as described in the
+/// [module docs](self). The weights sum to the footprint's area minus what falls outside
+/// the texture.
+pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
+    const SKIP: Splat = Splat { area: 0.0, kind: SplatKind::Skipped };
+    let q = corners.map(|c| [c[0] as f64, c[1] as f64]);
+    if !q.iter().flatten().all(|v| v.is_finite()) || texels == 0 {
+        return SKIP;
+    }
+    let (poly, area) = footprint_polygon(&q);
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &poly {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    if (hi[0] - lo[0]) * (hi[1] - lo[1]) > MAX_SPLAT_BBOX || !area.is_finite() {
+        return SKIP;
+    }
+    let t = texels as f64;
+    let n = texels as usize;
+    if area < MIN_SPLAT_AREA {
+        if area > 0.0 {
+            let c = [0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5, 0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5];
+            let (i0, j0) = (c[0].floor(), c[1].floor());
+            let (fx, fy) = (c[0] - i0, c[1] - j0);
+            for (di, dj, w) in
+                [(0.0, 0.0, (1.0 - fx) * (1.0 - fy)), (1.0, 0.0, fx * (1.0 - fy)), (0.0, 1.0, (1.0 - fx) * fy), (1.0, 1.0, fx * fy)]
+            {
+                let (i, j) = (i0 + di, j0 + dj);
+                if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
+                    deposit(j as usize * n + i as usize, w * area);
+                }
+            }
+        }
+        return Splat { area, kind: SplatKind::Bilinear };
+    }
+    let i0 = lo[0].floor().max(0.0);
+    let i1 = hi[0].ceil().min(t);
+    let j0 = lo[1].floor().max(0.0);
+    let j1 = hi[1].ceil().min(t);
+    if i1 <= i0 || j1 <= j0 {
+        return Splat { area, kind: SplatKind::Exact };
+    }
+    let (i0, i1, j0, j1) = (i0 as usize, i1 as usize, j0 as usize, j1 as usize);
+    if i1 - i0 == 1 && j1 - j0 == 1 && lo[0] >= i0 as f64 && lo[1] >= j0 as f64 && hi[0] <= i1 as f64 && hi[1] <= j1 as f64 {
+        // wholly inside one texel: no clipping needed
+        deposit(j0 * n + i0, area);
+        return Splat { area, kind: SplatKind::Exact };
+    }
+    for j in j0..j1 {
+        for i in i0..i1 {
+            let w = polygon_box_area(&poly, [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0]);
+            if w > 0.0 {
+                deposit(j * n + i, w);
+            }
+        }
+    }
+    Splat { area, kind: SplatKind::Exact }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn collect(c: [[f32; 2]; 4], texels: u32) -> (Splat, Vec<(usize, f64)>) {
+        let mut v = Vec::new();
+        let s = splat_footprint(&c, texels, |i, w| v.push((i, w)));
+        (s, v)
+    }
+
+    #[test]
+    fn unit_texel_goes_to_that_texel() {
+        let (s, v) = collect([[2.0, 1.0], [3.0, 1.0], [3.0, 2.0], [2.0, 2.0]], 4);
+        assert_eq!(s.kind, SplatKind::Exact);
+        assert_eq!(v, vec![(4 + 2, 1.0)]);
+    }
+
+    #[test]
+    fn straddling_square_splits_by_area() {
+        // 1x1 square at [1.5, 2.5] x [1.25, 2.25]: quarters 0.5*0.75 etc.
+        let (s, v) = collect([[1.5, 1.25], [2.5, 1.25], [2.5, 2.25], [1.5, 2.25]], 4);
+        assert!((s.area - 1.0).abs() < 1e-12);
+        let total: f64 = v.iter().map(|x| x.1).sum();
+        assert!((total - 1.0).abs() < 1e-12);
+        let get = |i: usize| v.iter().find(|x| x.0 == i).map_or(0.0, |x| x.1);
+        assert!((get(4 + 1) - 0.375).abs() < 1e-12);
+        assert!((get(8 + 2) - 0.125).abs() < 1e-12);
+    }
+
+    #[test]
+    fn non_convex_and_bowtie_quads() {
+        // dart: reflex corner at (1, 1) inside the triangle (0,0),(2,0),(1,2)... order 0,1,2,3
+        let dart = [[0.0, 0.0], [2.0, 0.0], [1.0, 2.0], [1.0, 0.5]].map(|p: [f32; 2]| [p[0] + 0.3, p[1] + 0.2]);
+        let (s, v) = collect(dart, 8);
+        // area = triangle (0,0),(2,0),(1,2) = 2 minus triangle (0,0),(1,0.5),(1,2)... via shoelace
+        let expect = 0.5 * ((0.0f64 * 0.0 - 2.0 * 0.0) + (2.0 * 2.0 - 1.0 * 0.0) + (1.0 * 0.5 - 1.0 * 2.0) + (1.0 * 0.0 - 0.0 * 0.5)).abs();
+        assert!((s.area - expect).abs() < 1e-6, "{} {expect}", s.area);
+        let total: f64 = v.iter().map(|x| x.1).sum();
+        assert!((total - expect).abs() < 1e-6);
+        // bow-tie: hull is the unit square scaled by 2
+        let (s, v) = collect([[0.0, 0.0], [2.0, 2.0], [2.0, 0.0], [0.0, 2.0]], 4);
+        assert!((s.area - 4.0).abs() < 1e-9);
+        assert_eq!(v.len(), 4);
+        assert!(v.iter().all(|x| (x.1 - 1.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn degenerate_quads_never_nan() {
+        let cases: [[[f32; 2]; 4]; 5] = [
+            [[1.0, 1.0]; 4],
+            [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]],
+            [[0.5, 0.5], [3.5, 0.5], [3.5, 0.5], [0.5, 0.5]],
+            [[f32::NAN, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            [[0.0, 0.0], [1e30, 0.0], [1e30, 1e30], [0.0, 1e30]],
+        ];
+        for c in cases {
+            let (s, v) = collect(c, 4);
+            assert!(s.area.is_finite() && s.area >= 0.0);
+            assert!(v.iter().all(|x| x.1.is_finite() && x.1 > 0.0));
+        }
+        // collinear: area 0, bilinear with nothing deposited
+        let (s, v) = collect([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]], 4);
+        assert_eq!((s.kind, s.area, v.len()), (SplatKind::Bilinear, 0.0, 0));
+    }
+
+    #[test]
+    fn small_footprint_is_bilinear_at_centre() {
+        // 0.2 x 0.2 square centred on (2.0, 1.5): halfway between texel centres 1.5 and 2.5 in x
+        let (s, v) = collect([[1.9, 1.4], [2.1, 1.4], [2.1, 1.6], [1.9, 1.6]], 4);
+        assert_eq!(s.kind, SplatKind::Bilinear);
+        let total: f64 = v.iter().map(|x| x.1).sum();
+        assert!((total - 0.04).abs() < 1e-7);
+        assert_eq!(v.len(), 2);
+        assert!(v.iter().all(|x| (x.1 - 0.02).abs() < 1e-7));
+    }
+
+    #[test]
+    fn outside_parts_are_dropped() {
+        let (s, v) = collect([[-0.5, 0.0], [0.5, 0.0], [0.5, 1.0], [-0.5, 1.0]], 2);
+        assert!((s.area - 1.0).abs() < 1e-12);
+        assert_eq!(v, vec![(0, 0.5)]);
+    }
+}

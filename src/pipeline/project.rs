@@ -1,0 +1,370 @@
+//! `project`: ground photos merged into the cell textures of every quadtree level
+//! (docs/projection.md, "Splatting, blending and leveling").
+//!
+//! Per photo, the colour leveling (if on) is fitted first on a coarse level (the pyramid
+//! step whose image has at most `leveling_max_pixels`; if that gives too few samples, once
+//! more at full resolution). Then per level, per photo in input order: the level's cells
+//! become a ray-castable scene near the camera, the photo's pyramid image for the level
+//! (halved once per level above the finest) is cast into footprints, which are splatted
+//! per cell in parallel into that photo's accumulator and merged into the level's
+//! per-cell accumulators. Finally every cell of the level that received photo colour gets
+//! `{stem}.photo.png` (the active texture blended with photo colour) and
+//! `{stem}.photo.conf.png` (the photo share), and every cell's steep texels are counted.
+//! Each run starts from the active textures (never from earlier photo textures), so the
+//! same photos give byte-identical files; records and files of an earlier run that this
+//! run does not write are removed. The manifest is written last.
+
+use std::ops::Range;
+use std::path::Path;
+
+use indicatif::{MultiProgress, ProgressBar};
+use rayon::prelude::*;
+
+use super::build::write_png;
+use super::{progress_bar, write_stats};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::photo::{
+    BlendMode, BvhQuality, CellAccum, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, LevelScene,
+    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, PixelFootprint, blend_cell, collect_pairs,
+    fit_colour_transform, normal_cos_slope, photo_footprints,
+};
+use crate::stats::texel_stretch;
+use crate::store::{
+    CellRecord, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, Store, active_texels, cell_stem,
+    texcoord,
+};
+
+/// Texels steeper than this (degrees from horizontal) count as steep.
+pub const STEEP_SLOPE_DEG: f64 = 60.0;
+
+/// Options of `project`.
+#[derive(Clone, Debug)]
+pub struct ProjectOptions {
+    /// How photos combine per texel.
+    pub blend: BlendMode,
+    /// Footprint formation (reconstruction, silhouette rejection).
+    pub footprint: FootprintOptions,
+    /// Fit and apply a per-photo colour transform towards the existing texture.
+    pub level_colours: bool,
+    /// BVH build preset for the ray casts.
+    pub bvh: BvhQuality,
+    /// Confidence terms and blend ramp.
+    pub confidence: ConfidenceParams,
+    /// Leveling sample selection and guards.
+    pub leveling: LevelingParams,
+    /// The leveling is fitted on the first pyramid image with at most this many pixels.
+    pub leveling_max_pixels: u64,
+    /// Hide progress bars.
+    pub quiet: bool,
+}
+
+impl Default for ProjectOptions {
+    fn default() -> Self {
+        ProjectOptions {
+            blend: BlendMode::Confidence,
+            footprint: FootprintOptions::default(),
+            level_colours: true,
+            bvh: BvhQuality::default(),
+            confidence: ConfidenceParams::default(),
+            leveling: LevelingParams::default(),
+            leveling_max_pixels: 1 << 20,
+            quiet: false,
+        }
+    }
+}
+
+/// What a `project` run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProjectReport {
+    /// The settings and per-photo / per-level reports, as stored in the manifest.
+    pub settings: PhotoSettings,
+    /// Cells (all levels) that got a photo texture.
+    pub cells_written: usize,
+}
+
+/// Runs `project` on the store in `dir` with `photos` (see the [module docs](self)).
+/// Errors on an unreadable store, a photo whose image size differs from its camera's, or a
+/// failed write; a photo that sees no terrain only logs a warning.
+pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -> Result<ProjectReport> {
+    opts.confidence.validate()?;
+    let mut store = Store::open(dir)?;
+    for p in photos {
+        if p.image.dimensions() != (p.camera.width, p.camera.height) {
+            return Err(Error::bad_input(
+                &p.image_path,
+                format!(
+                    "image is {}x{} pixels but its camera is for {}x{}",
+                    p.image.width(),
+                    p.image.height(),
+                    p.camera.width,
+                    p.camera.height
+                ),
+            ));
+        }
+    }
+    let ncells = store.manifest.cells.len();
+    let levels = store.manifest.quadtree.levels as usize;
+    let finest = levels.saturating_sub(1);
+    let pyramids: Vec<PhotoPyramid> = photos.iter().map(|p| PhotoPyramid::new(&p.image, p.camera, finest)).collect();
+
+    let multi = MultiProgress::new();
+    let steps = levels as u64 + opts.level_colours as u64;
+    let bars: Vec<ProgressBar> = photos
+        .iter()
+        .map(|p| {
+            let pb = progress_bar(steps, &p.name, opts.quiet);
+            if opts.quiet { pb } else { multi.add(pb) }
+        })
+        .collect();
+
+    let mut reports: Vec<PhotoReport> = photos
+        .iter()
+        .map(|p| PhotoReport {
+            name: p.name.clone(),
+            image: p.image_path.display().to_string(),
+            texels_written: 0,
+            pixels_hit: 0,
+            rejected_silhouette: 0,
+            reconstructed_footprints: 0,
+            colour_gain: [1.0; 3],
+            colour_offset: [0.0; 3],
+            colour_samples: 0,
+        })
+        .collect();
+
+    let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    if opts.level_colours {
+        for (i, pyr) in pyramids.iter().enumerate() {
+            let (t, n) = estimate_leveling(&store, pyr, finest, opts)?;
+            transforms[i] = t;
+            reports[i].colour_gain = t.gain;
+            reports[i].colour_offset = t.offset;
+            reports[i].colour_samples = n as u64;
+            bars[i].inc(1);
+        }
+    }
+
+    let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
+    let mut level_reports = Vec::with_capacity(levels);
+    for level in 0..levels {
+        let step = finest - level;
+        let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
+        for (pi, pyr) in pyramids.iter().enumerate() {
+            let (img, cam) = pyr.level(step);
+            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.bvh)?;
+            let fs = photo_footprints(&scene, &cam, &opts.footprint);
+            drop(scene);
+            if level == finest {
+                let r = &mut reports[pi];
+                r.pixels_hit = fs.pixels_hit;
+                r.rejected_silhouette = fs.rejected_silhouette;
+                r.reconstructed_footprints = fs.reconstructed;
+            }
+            let groups = group_by_cell(&fs.footprints, &store.manifest.cells, level as u8);
+            let cells = &store.manifest.cells;
+            let (transform, conf) = (&transforms[pi], &opts.confidence);
+            let written: Vec<u64> = accs
+                .par_iter_mut()
+                .zip(groups.par_iter())
+                .enumerate()
+                .map(|(ci, (acc, range))| {
+                    let Some(range) = range else { return 0 };
+                    let texels = active_texels(&cells[ci]);
+                    let mut pa = PhotoAccum::new(texels);
+                    pa.add_all(&fs.footprints[range.clone()], img, transform, conf);
+                    acc.get_or_insert_with(|| CellAccum::new(texels, opts.blend)).merge(&pa)
+                })
+                .collect();
+            reports[pi].texels_written += written.iter().sum::<u64>();
+            bars[pi].inc(1);
+        }
+        let level_cells: Vec<usize> = (0..ncells).filter(|&i| store.manifest.cells[i].level as usize == level).collect();
+        let results: Vec<Result<CellOutcome>> =
+            level_cells.par_iter().map(|&ci| finish_cell(&store, &store.manifest.cells[ci], accs[ci].as_ref(), opts)).collect();
+        let mut lr = PhotoLevelReport { level: level as u8, ..PhotoLevelReport::default() };
+        for (&ci, r) in level_cells.iter().zip(results) {
+            let o = r?;
+            lr.steep_texels += o.steep_texels;
+            if let Some(rec) = o.record {
+                lr.cells_with_photo += 1;
+                lr.photo_texels += rec.photo_texels;
+                lr.steep_photo_texels += rec.steep_photo_texels;
+                records[ci] = Some(rec);
+            }
+        }
+        level_reports.push(lr);
+    }
+    for pb in &bars {
+        pb.finish_and_clear();
+    }
+    for r in &reports {
+        if r.texels_written == 0 {
+            tracing::warn!("photo {}: it sees no terrain of the store (no texels written)", r.name);
+        }
+    }
+
+    let cells_written = records.iter().filter(|r| r.is_some()).count();
+    for (c, r) in store.manifest.cells.iter_mut().zip(records) {
+        c.photo = r;
+    }
+    let settings = PhotoSettings {
+        blend: opts.blend.name().to_string(),
+        reconstruct: opts.footprint.reconstruct,
+        level_colours: opts.level_colours,
+        bvh_quality: opts.bvh.name().to_string(),
+        photos: reports,
+        levels: level_reports,
+    };
+    store.manifest.photos = Some(settings.clone());
+    let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);
+    write_stats(dir, &store.manifest, threshold)?;
+    write_atomic(
+        &dir.join("manifest.json"),
+        &serde_json::to_vec_pretty(&store.manifest).map_err(|e| Error::store(dir, e.to_string()))?,
+    )?;
+    remove_stale_photo_files(dir, &store.manifest.cells);
+    Ok(ProjectReport { settings, cells_written })
+}
+
+/// Removes the photo textures of cells without a photo record (left by an earlier run).
+pub(crate) fn remove_stale_photo_files(dir: &Path, cells: &[CellRecord]) {
+    for c in cells.iter().filter(|c| c.photo.is_none()) {
+        for ext in ["photo.png", "photo.conf.png"] {
+            let _ = std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
+        }
+    }
+}
+
+/// Per manifest cell, the range of `footprints` (sorted by cell) that lies in it; cells not
+/// on `level` (a footprint set from a foreign scene) get none.
+fn group_by_cell(footprints: &[PixelFootprint], cells: &[CellRecord], level: u8) -> Vec<Option<Range<usize>>> {
+    let mut out = vec![None; cells.len()];
+    let mut k = 0;
+    while k < footprints.len() {
+        let cell = footprints[k].cell as usize;
+        let start = k;
+        while k < footprints.len() && footprints[k].cell as usize == cell {
+            k += 1;
+        }
+        if cell < cells.len() && cells[cell].level == level {
+            match &mut out[cell] {
+                // footprints are documented as sorted by cell; tolerate a split run by
+                // ignoring the later part rather than mixing orders
+                Some(_) => tracing::warn!("footprints of cell {} are not contiguous; later run ignored", cells[cell].id),
+                slot => *slot = Some(start..k),
+            }
+        }
+    }
+    out
+}
+
+/// The leveling transform of one photo and its sample count (see the module docs).
+fn estimate_leveling(
+    store: &Store,
+    pyr: &PhotoPyramid,
+    finest: usize,
+    opts: &ProjectOptions,
+) -> Result<(ColourTransform, usize)> {
+    let (w, h) = pyr.level(0).0.dimensions();
+    let mut k_est = 0;
+    while k_est < finest && (w as u64 >> k_est) * (h as u64 >> k_est) > opts.leveling_max_pixels {
+        k_est += 1;
+    }
+    let attempts: Vec<usize> = if k_est > 0 { vec![k_est, 0] } else { vec![0] };
+    for step in attempts {
+        let level = finest - step;
+        let (img, cam) = pyr.level(step);
+        let scene = LevelScene::from_store(store, level as u8, cam.position, opts.bvh)?;
+        let fs = photo_footprints(&scene, &cam, &opts.footprint);
+        drop(scene);
+        let cells = &store.manifest.cells;
+        let groups = group_by_cell(&fs.footprints, cells, level as u8);
+        let parts: Vec<Result<ColourPairs>> = groups
+            .par_iter()
+            .enumerate()
+            .filter_map(|(ci, g)| g.clone().map(|r| (ci, r)))
+            .map(|(ci, range)| {
+                let rec = &cells[ci];
+                let mut pa = PhotoAccum::new(active_texels(rec));
+                pa.add_all(&fs.footprints[range], img, &ColourTransform::IDENTITY, &opts.confidence);
+                let existing = store.read_active_texture(rec)?;
+                let normals = store.read_active_normal_map(rec)?;
+                check_size(store, rec, existing.dimensions(), normals.dimensions())?;
+                let mut pairs = ColourPairs::default();
+                collect_pairs(&pa, &existing, &normals, &opts.leveling, &mut pairs);
+                Ok(pairs)
+            })
+            .collect();
+        let mut all = ColourPairs::default();
+        for p in parts {
+            let p = p?;
+            all.photo.extend(p.photo);
+            all.existing.extend(p.existing);
+        }
+        let (t, n) = fit_colour_transform(&all, &opts.leveling);
+        if n > 0 {
+            return Ok((t, n));
+        }
+    }
+    Ok((ColourTransform::IDENTITY, 0))
+}
+
+/// Errors unless the active texture and normal map have the cell's active texture size.
+fn check_size(store: &Store, rec: &CellRecord, tex: (u32, u32), nrm: (u32, u32)) -> Result<()> {
+    let t = active_texels(rec);
+    if tex != (t, t) || nrm != (t, t) {
+        let f = rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture);
+        return Err(Error::store(
+            store.dir.join(&f.path),
+            format!("texture {tex:?} or normal map {nrm:?} is not the cell's {t}x{t} texels"),
+        ));
+    }
+    Ok(())
+}
+
+/// A finished cell: its photo record (if it got photo colour) and its steep texel count.
+struct CellOutcome {
+    record: Option<PhotoCellRecord>,
+    steep_texels: u64,
+}
+
+/// Steep and covered masks of a cell's active texture (row-major): covered = texel centre
+/// on a surface triangle in texture space, steep = covered and normal-map slope above
+/// [`STEEP_SLOPE_DEG`].
+fn surface_masks(store: &Store, rec: &CellRecord, normals: &image::RgbImage) -> Result<(Vec<bool>, Vec<bool>)> {
+    let mesh = store.read_active_mesh(rec)?;
+    let ns = (mesh.surface_vertices as usize).min(mesh.positions.len());
+    let positions: Vec<[f64; 3]> = mesh.positions[..ns].iter().map(|p| p.map(f64::from)).collect();
+    let uvs: Vec<[f64; 2]> = (0..ns).map(|i| texcoord(rec, &mesh, i).map(f64::from)).collect();
+    let triangles: Vec<[u32; 3]> =
+        mesh.surface().iter().copied().filter(|t| t.iter().all(|&k| (k as usize) < ns)).collect();
+    let t = active_texels(rec);
+    let covered: Vec<bool> = texel_stretch(&positions, &triangles, &uvs, t, 1.0).iter().map(|s| !s.is_nan()).collect();
+    let cos_steep = STEEP_SLOPE_DEG.to_radians().cos();
+    let steep = covered.iter().zip(normals.pixels()).map(|(&c, n)| c && normal_cos_slope(n.0) < cos_steep).collect();
+    Ok((covered, steep))
+}
+
+fn finish_cell(store: &Store, rec: &CellRecord, acc: Option<&CellAccum>, opts: &ProjectOptions) -> Result<CellOutcome> {
+    let normals = store.read_active_normal_map(rec)?;
+    let (covered, steep) = surface_masks(store, rec, &normals)?;
+    let steep_texels = steep.iter().filter(|&&s| s).count() as u64;
+    let Some(acc) = acc else { return Ok(CellOutcome { record: None, steep_texels }) };
+    let existing = store.read_active_texture(rec)?;
+    check_size(store, rec, existing.dimensions(), normals.dimensions())?;
+    let b = blend_cell(&existing, acc, &opts.confidence, &covered, &steep);
+    if b.confidence.pixels().all(|p| p.0[0] == 0) {
+        return Ok(CellOutcome { record: None, steep_texels });
+    }
+    let stem = cell_stem(rec.level, rec.x, rec.y);
+    let record = PhotoCellRecord {
+        texels: active_texels(rec),
+        texture: write_png(&store.dir, &format!("{stem}.photo.png"), &b.texture)?,
+        confidence: write_png(&store.dir, &format!("{stem}.photo.conf.png"), &b.confidence)?,
+        photo_texels: b.photo_texels,
+        steep_texels: b.steep_texels,
+        steep_photo_texels: b.steep_photo_texels,
+    };
+    Ok(CellOutcome { record: Some(record), steep_texels })
+}
