@@ -7,9 +7,11 @@
 //! [`CameraModel::from_json_file`] reads the "Camera JSON" of docs/formats.md: either a
 //! cliffmap camera or an ImGRAFT-style description (e.g. the Engabreen camera file).
 
+mod geometry;
 mod json;
 
-pub use json::{camera_from_json_file, camera_from_json_str};
+pub use geometry::yaw_pitch_roll_from_rotation;
+pub use json::{camera_from_json_file, camera_from_json_str, camera_to_json};
 
 use glam::{DMat3, DVec3};
 
