@@ -148,6 +148,9 @@ fn parse_cameras(path: &Path) -> Result<Vec<(u64, Intrinsics)>> {
                 (p[0], p[1], p[2], p[3], p[4], p[5])
             }
         };
+        if !(fx > 0.0 && fy > 0.0) {
+            return Err(Error::bad_input(path, format!("line {n}: focal lengths must be positive, got fx {fx} fy {fy}")));
+        }
         if out.iter().any(|(j, _)| *j == id) {
             return Err(Error::bad_input(path, format!("line {n}: camera id {id} appears twice")));
         }
@@ -243,7 +246,7 @@ pub fn read_colmap_specs(dir: &Path) -> Result<Vec<PhotoSpec>> {
         })?;
         let cam = world_camera(intr, im.rotation, im.translation, &sim);
         let image: PathBuf = image_dir.join(&im.name);
-        out.push(photo_spec(&image, cam, &imgs_path)?);
+        out.push(photo_spec(&image, cam, &cams_path)?);
     }
     Ok(out)
 }
