@@ -237,19 +237,32 @@ fn cliffmap(
 }
 
 fn validate(c: CameraModel, path: &Path) -> Result<CameraModel> {
-    if !(c.fx > 0.0 && c.fy > 0.0) {
-        return Err(Error::bad_input(
-            path,
-            format!(
-                "focal lengths must be positive, got fx {} fy {}",
-                c.fx, c.fy
-            ),
-        ));
+    match c.problem() {
+        Some(msg) => Err(Error::bad_input(path, msg)),
+        None => Ok(c),
     }
-    if !c.position.is_finite() || !c.world_to_camera.is_finite() {
-        return Err(Error::bad_input(path, "camera pose is not finite"));
-    }
-    Ok(c)
+}
+
+/// The cliffmap Camera JSON (docs/formats.md) of `cam`: position, ImGRAFT angles in degrees
+/// (`yaw_deg`, `pitch_deg`, `roll_deg`), `width`/`height`, `fx`, `fy`, `cx`, `cy`, `k1`, `k2`.
+/// Reading it back with [`camera_from_json_str`] gives the same camera up to rounding
+/// (rotations to ~1e-12).
+pub fn camera_to_json(cam: &CameraModel) -> Value {
+    let (yaw, pitch, roll) = super::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
+    serde_json::json!({
+        "position": [cam.position.x, cam.position.y, cam.position.z],
+        "yaw_deg": yaw.to_degrees(),
+        "pitch_deg": pitch.to_degrees(),
+        "roll_deg": roll.to_degrees(),
+        "width": cam.width,
+        "height": cam.height,
+        "fx": cam.fx,
+        "fy": cam.fy,
+        "cx": cam.cx,
+        "cy": cam.cy,
+        "k1": cam.k1,
+        "k2": cam.k2,
+    })
 }
 
 #[cfg(test)]
@@ -275,6 +288,19 @@ mod tests {
         )
         .unwrap();
         assert_eq!((c.fx, c.fy, c.cx), (100.0, 100.0, 90.0));
+    }
+
+    #[test]
+    fn writer_round_trips() {
+        let r = crate::camera::rotation_look_at(DVec3::ZERO, DVec3::new(-3.0, 1.0, -0.4)).unwrap();
+        let mut cam = CameraModel::with_fov(DVec3::new(431_234.5, 6_877_100.25, 612.7), r, 1600, 1200, 0.8);
+        cam.k1 = -0.05;
+        cam.cx += 3.5;
+        let text = camera_to_json(&cam).to_string();
+        let back = parse(&text).unwrap();
+        assert_eq!((back.width, back.height, back.fx, back.cx, back.k1), (1600, 1200, cam.fx, cam.cx, -0.05));
+        assert_eq!(back.position, cam.position);
+        assert!((back.world_to_camera - cam.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-12));
     }
 
     #[test]

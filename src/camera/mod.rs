@@ -8,10 +8,12 @@
 //! cliffmap camera or an ImGRAFT-style description (e.g. the Engabreen camera file).
 //! [`CameraModel::pixel_ray`] inverts the projection (undistorting first) for ray casting.
 
+mod geometry;
 mod json;
 mod undistort;
 
-pub use json::{camera_from_json_file, camera_from_json_str};
+pub use geometry::yaw_pitch_roll_from_rotation;
+pub use json::{camera_from_json_file, camera_from_json_str, camera_to_json};
 pub(crate) use undistort::RayCaster;
 
 use glam::{DMat3, DVec3};

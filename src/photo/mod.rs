@@ -4,7 +4,9 @@
 //! Data types (the stage's plain data, shared by its files):
 //! - [`TriangleBvh`] / [`TriHit`]: nearest-hit ray casting (`obvhs` CWBVH) over f32
 //!   triangles in a local frame; [`BvhQuality`] is the build preset.
-//! - [`PhotoInput`]: a decoded photo and its [`crate::camera::CameraModel`] (world frame).
+//! - [`PhotoInput`]: a decoded photo and its [`crate::camera::CameraModel`] (world frame),
+//!   read from `photos.json` ([`read_photo_list`]) or a COLMAP text model ([`read_colmap`]);
+//!   [`PhotoSpec`] is the same without decoded pixels (load one photo at a time).
 //! - [`LevelScene`]: all cells of one quadtree level ([`SceneCell`]: surface triangles,
 //!   texture positions) in one f32 frame near the camera, with a BVH;
 //!   [`photo_footprints`] casts a photo's pixel-corner rays against it.
@@ -27,9 +29,11 @@
 mod accumulate;
 mod blend;
 mod bvh;
+mod colmap;
 mod confidence;
 mod corners;
 mod footprint;
+mod input;
 mod level;
 mod pyramid;
 mod reconstruct;
@@ -38,7 +42,12 @@ mod silhouette;
 mod splat;
 
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
+pub use colmap::{read_colmap, read_colmap_specs, read_similarity, Similarity};
 pub use footprint::{photo_footprints, FootprintOptions};
+pub use input::{
+    apply_rotation_delta, fit_camera_to_image, image_size, photo_spec, read_photo_list, read_photo_specs,
+    validate_camera, PhotoSpec,
+};
 pub use scene::{LevelScene, SceneCell};
 pub use accumulate::{BlendMode, CellAccum, PhotoAccum};
 pub use blend::{Blended, blend_cell};

@@ -34,7 +34,7 @@ mod exact;
 pub mod fill;
 mod footprint;
 mod kernel;
-mod raster;
+pub(crate) mod raster;
 mod subtexel;
 
 use image::RgbaImage;

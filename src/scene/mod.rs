@@ -11,6 +11,12 @@
 //! Placement: the north-west sample lies at UTM-sized coordinates (default x = 431 000,
 //! y = 6 878 000), so the whole pipeline is exercised at realistic magnitudes.
 
+mod photos;
+mod truth;
+
+pub use photos::{PhotoShot, SKY_COLOUR};
+pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_with};
+
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use rayon::prelude::*;
 
@@ -40,6 +46,13 @@ impl Default for DemoScene {
     }
 }
 
+/// Height of the plateau above its surroundings, metres.
+const PLATEAU_HEIGHT: f64 = 70.0;
+/// Corner rounding of the plateau (its walls stand this far outside the rectangle), metres.
+const PLATEAU_ROUNDING: f64 = 4.0;
+/// Depth of the canyon, metres.
+const CANYON_DEPTH: f64 = 90.0;
+
 /// Noise sources, built once per scene.
 struct Noises {
     hills: Fbm<Perlin>,
@@ -68,18 +81,35 @@ impl DemoScene {
         // Rolling hills and a gentle tilt.
         let mut h = 600.0 + 28.0 * n.hills.get([e, s]) + 2.0 * n.detail.get([e, s]) - 40.0 * v;
         // Escarpment: a cliff band across the south of the scene, 45 m high, ~85° wall.
-        let line = 0.78 * l + 18.0 * (e / 97.0).sin() + 6.0 * n.detail.get([e * 0.5, 3.0]);
+        let line = self.escarpment_line(n, e);
         h += 45.0 * smoothstep(-2.0, 2.0, line - s);
         // Box-like plateau (mesa): rounded rectangle, 70 m high, ~89° walls.
-        let (cx, cy, hx, hy) = (0.3 * l, 0.35 * l, 0.11 * l, 0.08 * l);
+        let [cx, cy, hx, hy] = self.plateau_rect();
         let (dx, dy) = ((e - cx).abs() - hx, (s - cy).abs() - hy);
-        let sd = (dx.max(0.0).hypot(dy.max(0.0))) + dx.max(dy).min(0.0) - 4.0;
-        h += 70.0 * smoothstep(0.6, -0.6, sd);
+        let sd = (dx.max(0.0).hypot(dy.max(0.0))) + dx.max(dy).min(0.0) - PLATEAU_ROUNDING;
+        h += PLATEAU_HEIGHT * smoothstep(0.6, -0.6, sd);
         // Meandering canyon, 90 m deep with a 20 m floor and ~80° walls.
-        let axis = 0.72 * l + 40.0 * (s / 120.0).sin();
-        let d = (e - axis).abs();
-        h -= 90.0 * (1.0 - smoothstep(10.0, 26.0, d));
+        let d = (e - self.canyon_axis(s)).abs();
+        h -= CANYON_DEPTH * (1.0 - smoothstep(10.0, 26.0, d));
         h
+    }
+
+    /// Plateau rectangle `[centre east, centre south, half width, half height]` (scene-local
+    /// metres from the north-west sample); the walls stand [`PLATEAU_ROUNDING`] outside it.
+    fn plateau_rect(&self) -> [f64; 4] {
+        let l = self.size_m();
+        [0.3 * l, 0.35 * l, 0.11 * l, 0.08 * l]
+    }
+
+    /// Scene-local east coordinate of the canyon's axis at south coordinate `s`.
+    fn canyon_axis(&self, s: f64) -> f64 {
+        0.72 * self.size_m() + 40.0 * (s / 120.0).sin()
+    }
+
+    /// Scene-local south coordinate of the escarpment's wall at east coordinate `e` (the
+    /// ground north of it is higher).
+    fn escarpment_line(&self, n: &Noises, e: f64) -> f64 {
+        0.78 * self.size_m() + 18.0 * (e / 97.0).sin() + 6.0 * n.detail.get([e * 0.5, 3.0])
     }
 
     /// Terrain height at world (x, y).

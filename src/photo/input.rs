@@ -1,0 +1,196 @@
+//! Photo lists: `photos.json` (cliffmap / ImGRAFT cameras per photo) and the checks every
+//! photo source shares (camera validity, image readable, camera size fitted to the image).
+//!
+//! `photos.json` (docs/formats.md): `{"photos": [{"image": "a.jpg", "camera": "a.json"},
+//! {"image": "b.jpg", "imgraft": "b_imgraft.json", "rotation_delta_deg": [dyaw, dpitch,
+//! droll]}]}`; relative paths resolve against the list's folder.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::PhotoInput;
+use crate::camera::{CameraModel, camera_from_json_file, rotation_from_yaw_pitch_roll, yaw_pitch_roll_from_rotation};
+use crate::error::{Error, Result};
+
+/// A photo's image file and its camera, fitted to the image's real size (pixels not decoded
+/// yet; [`PhotoSpec::load`] decodes them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotoSpec {
+    /// Short name for reports (the image's file name).
+    pub name: String,
+    /// The image file.
+    pub image_path: PathBuf,
+    /// The camera in the world frame, for an image of exactly the file's size.
+    pub camera: CameraModel,
+}
+
+impl PhotoSpec {
+    /// Decodes the image (sRGB, converted to RGB8). Errors name the file.
+    pub fn load(&self) -> Result<PhotoInput> {
+        let image = image::ImageReader::open(&self.image_path)
+            .map_err(|e| Error::io(&self.image_path, e))?
+            .with_guessed_format()
+            .map_err(|e| Error::io(&self.image_path, e))?
+            .decode()
+            .map_err(|e| Error::bad_input(&self.image_path, format!("cannot decode image: {e}")))?
+            .to_rgb8();
+        if image.dimensions() != (self.camera.width, self.camera.height) {
+            return Err(Error::bad_input(
+                &self.image_path,
+                format!(
+                    "decoded image is {} x {}, its header said {} x {}",
+                    image.width(),
+                    image.height(),
+                    self.camera.width,
+                    self.camera.height
+                ),
+            ));
+        }
+        Ok(PhotoInput { name: self.name.clone(), image_path: self.image_path.clone(), image, camera: self.camera })
+    }
+}
+
+/// Checks that `cam` can be used for projection: finite everywhere, positive size and focal
+/// lengths, orthonormal rotation (determinant +1), radial distortion invertible inside the
+/// image ([`CameraModel::problem`]). The error names `source`.
+pub fn validate_camera(cam: &CameraModel, source: &Path) -> Result<()> {
+    match cam.problem() {
+        Some(msg) => Err(Error::bad_input(source, msg)),
+        None => Ok(()),
+    }
+}
+
+/// The camera rotated by a small change of its ImGRAFT view angles (degrees, added to yaw,
+/// pitch and roll as ImGRAFT's `camB.viewdir = camA.viewdir + delta`): yaw turns the optical
+/// axis counter-clockwise seen from above (the scene moves right in the image), pitch
+/// positive looks further down (the scene moves up), roll tilts the horizon. Position and
+/// intrinsics are unchanged.
+pub fn apply_rotation_delta(cam: &CameraModel, delta_deg: [f64; 3]) -> CameraModel {
+    let (yaw, pitch, roll) = yaw_pitch_roll_from_rotation(&cam.world_to_camera);
+    let r = rotation_from_yaw_pitch_roll(
+        yaw + delta_deg[0].to_radians(),
+        pitch + delta_deg[1].to_radians(),
+        roll + delta_deg[2].to_radians(),
+    );
+    CameraModel { world_to_camera: r, ..*cam }
+}
+
+/// The real pixel size of an image file (header only). Errors name the file.
+pub fn image_size(path: &Path) -> Result<(u32, u32)> {
+    if let Err(e) = std::fs::metadata(path) {
+        return Err(Error::io(path, e));
+    }
+    image::image_dimensions(path).map_err(|e| match e {
+        image::ImageError::IoError(io) => Error::io(path, io),
+        other => Error::bad_input(path, format!("cannot read image: {other}")),
+    })
+}
+
+/// `cam` (read from `source`) for an image of `size`: unchanged if the sizes agree, else
+/// [`CameraModel::resized`] when the aspect ratios agree within 1 %, else an error naming
+/// both files.
+pub fn fit_camera_to_image(cam: CameraModel, size: (u32, u32), source: &Path, image: &Path) -> Result<CameraModel> {
+    if (cam.width, cam.height) == size {
+        return Ok(cam);
+    }
+    let a_cam = cam.width as f64 / cam.height as f64;
+    let a_img = size.0 as f64 / size.1 as f64;
+    if (a_cam / a_img - 1.0).abs() > 0.01 {
+        return Err(Error::bad_input(
+            source,
+            format!(
+                "camera is for a {} x {} image but {} is {} x {} (aspect ratios differ by more than 1 %)",
+                cam.width,
+                cam.height,
+                image.display(),
+                size.0,
+                size.1
+            ),
+        ));
+    }
+    Ok(cam.resized(size.0, size.1))
+}
+
+/// A validated [`PhotoSpec`] from an image file and the camera read for it.
+pub fn photo_spec(image_path: &Path, camera: CameraModel, camera_source: &Path) -> Result<PhotoSpec> {
+    spec_for_size(image_path, image_size(image_path)?, camera, camera_source)
+}
+
+fn spec_for_size(image_path: &Path, size: (u32, u32), camera: CameraModel, camera_source: &Path) -> Result<PhotoSpec> {
+    let camera = fit_camera_to_image(camera, size, camera_source, image_path)?;
+    validate_camera(&camera, camera_source)?;
+    let name = image_path.file_name().map_or_else(|| image_path.display().to_string(), |n| n.to_string_lossy().into());
+    Ok(PhotoSpec { name, image_path: image_path.to_path_buf(), camera })
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ListFile {
+    photos: Vec<Entry>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Entry {
+    image: PathBuf,
+    #[serde(default)]
+    camera: Option<PathBuf>,
+    #[serde(default)]
+    imgraft: Option<PathBuf>,
+    #[serde(default)]
+    rotation_delta_deg: Option<[f64; 3]>,
+}
+
+/// Reads `photos.json` and every camera it names, without decoding the images; see
+/// [`read_photo_list`].
+pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let list: ListFile = serde_json::from_str(&text).map_err(|e| {
+        Error::bad_input(
+            path,
+            format!("invalid photo list: {e} (expected {{\"photos\": [{{\"image\": ..., \"camera\" or \"imgraft\": ...}}]}})"),
+        )
+    })?;
+    if list.photos.is_empty() {
+        return Err(Error::bad_input(path, "\"photos\" is empty"));
+    }
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut out = Vec::with_capacity(list.photos.len());
+    for (i, e) in list.photos.iter().enumerate() {
+        let image = base.join(&e.image);
+        let cam_file = match (&e.camera, &e.imgraft) {
+            (Some(c), None) | (None, Some(c)) => base.join(c),
+            _ => {
+                return Err(Error::bad_input(
+                    path,
+                    format!("photo {i} ({}): give exactly one of \"camera\" and \"imgraft\"", e.image.display()),
+                ));
+            }
+        };
+        if let Some(d) = e.rotation_delta_deg {
+            if d.iter().any(|v| !v.is_finite() || v.abs() > 180.0) {
+                return Err(Error::bad_input(
+                    path,
+                    format!("photo {i}: \"rotation_delta_deg\" must be three finite angles in [-180, 180], got {d:?}"),
+                ));
+            }
+        }
+        let size = image_size(&image)?;
+        let mut cam = camera_from_json_file(&cam_file, size)?;
+        if let Some(d) = e.rotation_delta_deg {
+            cam = apply_rotation_delta(&cam, d);
+        }
+        out.push(spec_for_size(&image, size, cam, &cam_file)?);
+    }
+    Ok(out)
+}
+
+/// Reads `photos.json` (docs/formats.md): each entry's image (decoded to RGB8) and camera
+/// (`"camera"`: any Camera JSON; `"imgraft"`: an ImGRAFT-style file, same reader), with an
+/// optional `"rotation_delta_deg"` applied by [`apply_rotation_delta`]. Relative paths
+/// resolve against the list's folder. Cameras are fitted to the image's real size and
+/// validated; a missing or unreadable file is an error naming it.
+pub fn read_photo_list(path: &Path) -> Result<Vec<PhotoInput>> {
+    read_photo_specs(path)?.iter().map(PhotoSpec::load).collect()
+}

@@ -1,0 +1,192 @@
+//! Texel-level evaluation of a store against the demo scene's ground truth: each texel
+//! centre is mapped through the cell's chart to its 3D point on the cell mesh and compared
+//! with [`DemoScene::surface_colour`] there.
+
+use image::RgbaImage;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::{DemoScene, surface_colour};
+use crate::error::{Error, Result};
+use crate::resample::raster::{EMPTY, rasterize};
+use crate::store::{CellRecord, Store, texcoord};
+
+/// Which texture of each cell to evaluate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureChoice {
+    /// The active texture: the reparameterized one if the cell has it, else the orthographic.
+    Active,
+    /// The photo-enhanced texture (`rec.photo`) where the cell has one, else the active one.
+    Photo,
+}
+
+/// Slope above which a texel counts as steep, degrees.
+pub const STEEP_DEG: f64 = 60.0;
+/// Slope below which a texel counts as flat, degrees.
+pub const FLAT_DEG: f64 = 30.0;
+
+/// PSNR of one level's textures against the ground truth, by slope class. PSNR is in dB
+/// over the three 8-bit sRGB channels (`10·log10(255² / MSE)`), infinite for a perfect
+/// match, NaN (JSON `null`) for a class without texels.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TruthReport {
+    /// Quadtree level evaluated.
+    pub level: u8,
+    /// Cells evaluated.
+    pub cells: usize,
+    /// Cells whose photo-enhanced texture was used ([`TextureChoice::Photo`] only).
+    pub photo_cells: usize,
+    /// PSNR over texels whose surface slope exceeds [`STEEP_DEG`] (60°).
+    pub steep_psnr: f64,
+    /// PSNR over texels whose slope is below [`FLAT_DEG`] (30°).
+    pub flat_psnr: f64,
+    /// PSNR over texels with slopes from 30° to 60°.
+    pub mid_psnr: f64,
+    /// PSNR over all evaluated texels.
+    pub all_psnr: f64,
+    /// Steep texels evaluated.
+    pub steep_texels: u64,
+    /// Flat texels evaluated.
+    pub flat_texels: u64,
+    /// Texels with slopes from 30° to 60°.
+    pub mid_texels: u64,
+    /// Texels whose centre lies on the cell's surface chart but with alpha 0 (unknown
+    /// colour), not evaluated.
+    pub unknown_texels: u64,
+}
+
+/// Squared-error sums and texel counts per class: steep, flat, mid.
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    sq: [f64; 3],
+    n: [u64; 3],
+    unknown: u64,
+}
+
+fn psnr(sq: f64, n: u64) -> f64 {
+    if n == 0 {
+        return f64::NAN;
+    }
+    let mse = sq / (3 * n) as f64;
+    10.0 * (255.0f64 * 255.0 / mse).log10()
+}
+
+/// Evaluates the finest level of `store` against `scene` with the chosen texture.
+pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Result<TruthReport> {
+    let level = store.manifest.quadtree.levels.saturating_sub(1) as u8;
+    let mut photo_cells = 0;
+    for rec in store.manifest.cells.iter().filter(|c| c.level == level) {
+        photo_cells += usize::from(which == TextureChoice::Photo && rec.photo.is_some());
+    }
+    let mut report = texel_truth_with(store, scene, level, |rec| {
+        let file = match (&rec.photo, which) {
+            (Some(p), TextureChoice::Photo) => &p.texture,
+            _ => rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture),
+        };
+        Ok(store.read_png(file)?.to_rgba8())
+    })?;
+    report.photo_cells = photo_cells;
+    Ok(report)
+}
+
+/// Evaluates every cell of `level` with the texture `texture(rec)` returns (square, laid out
+/// over the cell's active chart: `store::texcoord` of the active mesh times its side). Each
+/// texel centre is located in the chart triangle covering it (exact rasterization, each
+/// centre in one triangle), mapped by barycentric weights to the 3D point on the cell mesh
+/// (f64 world), and compared with `surface_colour` there, using the slope of that mesh
+/// triangle. Cells run in parallel; sums are combined in cell order (deterministic).
+pub fn texel_truth_with(
+    store: &Store,
+    scene: &DemoScene,
+    level: u8,
+    texture: impl Fn(&CellRecord) -> Result<RgbaImage> + Sync,
+) -> Result<TruthReport> {
+    let cells: Vec<&CellRecord> = store.manifest.cells.iter().filter(|c| c.level == level).collect();
+    if cells.is_empty() {
+        return Err(Error::store(&store.dir, format!("no cells on level {level}")));
+    }
+    let noises = scene.noises();
+    let per_cell: Vec<Sums> = cells
+        .par_iter()
+        .map(|rec| -> Result<Sums> {
+            let mesh = store.read_active_mesh(rec)?;
+            let img = texture(rec)?;
+            let n = img.width();
+            if img.height() != n || n == 0 || n > crate::resample::MAX_TEXELS {
+                return Err(Error::store(
+                    &store.dir,
+                    format!("cell {}: texture is {} x {}, expected a square", rec.id, img.width(), img.height()),
+                ));
+            }
+            let nv = mesh.surface_vertices as usize;
+            let st: Vec<[f64; 2]> = (0..nv)
+                .map(|i| {
+                    let t = texcoord(rec, &mesh, i);
+                    [t[0] as f64 * n as f64, t[1] as f64 * n as f64]
+                })
+                .collect();
+            let tris = mesh.surface();
+            if tris.iter().flatten().any(|&k| k as usize >= nv) {
+                return Err(Error::store(&store.dir, format!("cell {}: surface triangle uses a skirt vertex", rec.id)));
+            }
+            let ids = rasterize(&st, tris, n, |_| true);
+            let origin = glam::DVec3::from_array(rec.origin);
+            let mut sums = Sums::default();
+            for (k, &id) in ids.iter().enumerate() {
+                if id == EMPTY {
+                    continue;
+                }
+                let (i, j) = (k as u32 % n, k as u32 / n);
+                let px = img.get_pixel(i, j).0;
+                if px[3] == 0 {
+                    sums.unknown += 1;
+                    continue;
+                }
+                let tri = tris[id as usize];
+                let [a, b, c] = tri.map(|v| st[v as usize]);
+                let p = [i as f64 + 0.5, j as f64 + 0.5];
+                let den = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+                let w1 = ((p[0] - a[0]) * (c[1] - a[1]) - (p[1] - a[1]) * (c[0] - a[0])) / den;
+                let w2 = ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])) / den;
+                let w0 = 1.0 - w1 - w2;
+                let pos = tri.map(|v| origin + glam::Vec3::from_array(mesh.positions[v as usize]).as_dvec3());
+                let x = pos[0] * w0 + pos[1] * w1 + pos[2] * w2;
+                let normal = (pos[1] - pos[0]).cross(pos[2] - pos[0]);
+                let slope = (normal.z.abs() / normal.length()).clamp(0.0, 1.0).acos().to_degrees();
+                let truth = surface_colour(&noises, scene, x.x, x.y, x.z, slope);
+                let err: f64 = (0..3).map(|q| (px[q] as f64 - truth[q] * 255.0).powi(2)).sum();
+                let class = if slope > STEEP_DEG {
+                    0
+                } else if slope < FLAT_DEG {
+                    1
+                } else {
+                    2
+                };
+                sums.sq[class] += err;
+                sums.n[class] += 1;
+            }
+            Ok(sums)
+        })
+        .collect::<Result<_>>()?;
+    let mut total = Sums::default();
+    for s in &per_cell {
+        for c in 0..3 {
+            total.sq[c] += s.sq[c];
+            total.n[c] += s.n[c];
+        }
+        total.unknown += s.unknown;
+    }
+    Ok(TruthReport {
+        level,
+        cells: cells.len(),
+        photo_cells: 0,
+        steep_psnr: psnr(total.sq[0], total.n[0]),
+        flat_psnr: psnr(total.sq[1], total.n[1]),
+        mid_psnr: psnr(total.sq[2], total.n[2]),
+        all_psnr: psnr(total.sq.iter().sum(), total.n.iter().sum()),
+        steep_texels: total.n[0],
+        flat_texels: total.n[1],
+        mid_texels: total.n[2],
+        unknown_texels: total.unknown,
+    })
+}
