@@ -48,14 +48,10 @@ pub fn options(a: &Args) -> ProjectOptions {
 }
 
 /// Reads the photos and their cameras from `--photos` or `--colmap`.
-///
-/// Merge point: the readers (`cliffmap::photo::read_photo_list(&Path)` and
-/// `cliffmap::photo::read_colmap(&Path)`, both `Result<Vec<PhotoInput>>`) are written on
-/// another branch; connect them here.
 fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
     match (&a.photos, &a.colmap) {
-        (Some(p), _) => anyhow::bail!("{}: reading photo lists is not part of this build yet", p.display()),
-        (None, Some(d)) => anyhow::bail!("{}: reading COLMAP models is not part of this build yet", d.display()),
+        (Some(p), _) => Ok(cliffmap::photo::read_photo_list(p)?),
+        (None, Some(d)) => Ok(cliffmap::photo::read_colmap(d)?),
         (None, None) => anyhow::bail!("give --photos PHOTOS.json or --colmap DIR"),
     }
 }
