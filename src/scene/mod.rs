@@ -14,7 +14,7 @@
 mod photos;
 mod truth;
 
-pub use photos::{PhotoShot, SKY_COLOUR};
+pub use photos::{DemoPhotoOptions, PhotoShot, SKY_COLOUR};
 pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_with};
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
@@ -121,6 +121,12 @@ impl DemoScene {
     /// `slope_deg` is the surface slope there (vegetation grows on gentle slopes only).
     pub fn surface_colour(&self, x: f64, y: f64, z: f64, slope_deg: f64) -> [f64; 3] {
         surface_colour(&self.noises(), self, x, y, z, slope_deg)
+    }
+
+    /// [`DemoScene::surface_colour`] with the noise tables built once (for many evaluations).
+    pub fn surface_colour_fn(&self) -> impl Fn(f64, f64, f64, f64) -> [f64; 3] + Sync + '_ {
+        let n = self.noises();
+        move |x, y, z, slope| surface_colour(&n, self, x, y, z, slope)
     }
 
     /// Generates the DEM and the ortho image (same grid, area-averaged top-down colour).
