@@ -8,6 +8,11 @@
 //! texel with ground truth. The ortho image is the top-down, area-averaged view of it, which
 //! smears the walls exactly as real orthophotos do.
 //!
+//! Ground truth for photo projection: [`DemoScene::photo_shots`] places ground cameras
+//! from the scene's geometry, [`DemoScene::render_truth_photo`] ray-traces what they see,
+//! [`DemoScene::write_demo_photos`] writes them as a `photos.json` set, and [`texel_truth`]
+//! scores a store's textures texel by texel against the solid texture (docs/projection.md).
+//!
 //! Placement: the north-west sample lies at UTM-sized coordinates (default x = 431 000,
 //! y = 6 878 000), so the whole pipeline is exercised at realistic magnitudes.
 
