@@ -51,7 +51,7 @@ impl CameraModel {
             } else {
                 1.0 + self.k1 * 4.0 + self.k2 * 16.0
             };
-            if !(df > 0.0) {
+            if df.is_nan() || df <= 0.0 {
                 return None;
             }
             let step = f / df;

@@ -85,7 +85,7 @@ fn locate_texel_centres(st: &[[f64; 2]], tris: &[[u32; 3]], n: u32) -> (Vec<u32>
     for (ti, t) in tris.iter().enumerate() {
         let [a, b, c] = t.map(|v| st[v as usize]);
         let den = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-        if !(den.abs() > 1e-300) || !den.is_finite() {
+        if den.abs() <= 1e-300 || !den.is_finite() {
             continue;
         }
         let lo = |k: usize| (a[k].min(b[k]).min(c[k]) - 0.5).ceil().max(0.0);
@@ -120,7 +120,7 @@ fn locate_texel_centres(st: &[[f64; 2]], tris: &[[u32; 3]], n: u32) -> (Vec<u32>
 
 /// Evaluates the finest level of `store` against `scene` with the chosen texture.
 pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Result<TruthReport> {
-    let level = store.manifest.quadtree.levels.saturating_sub(1) as u8;
+    let level = store.manifest.quadtree.levels.saturating_sub(1);
     let mut photo_cells = 0;
     for rec in store.manifest.cells.iter().filter(|c| c.level == level) {
         photo_cells += usize::from(which == TextureChoice::Photo && rec.photo.is_some());
