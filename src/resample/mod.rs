@@ -34,7 +34,7 @@ mod exact;
 pub mod fill;
 mod footprint;
 mod kernel;
-pub(crate) mod raster;
+mod raster;
 mod subtexel;
 
 use image::RgbaImage;

@@ -8,13 +8,18 @@
 //! texel with ground truth. The ortho image is the top-down, area-averaged view of it, which
 //! smears the walls exactly as real orthophotos do.
 //!
+//! Ground truth for photo projection: [`DemoScene::photo_shots`] places ground cameras
+//! from the scene's geometry, [`DemoScene::render_truth_photo`] ray-traces what they see,
+//! [`DemoScene::write_demo_photos`] writes them as a `photos.json` set, and [`texel_truth`]
+//! scores a store's textures texel by texel against the solid texture (docs/projection.md).
+//!
 //! Placement: the north-west sample lies at UTM-sized coordinates (default x = 431 000,
 //! y = 6 878 000), so the whole pipeline is exercised at realistic magnitudes.
 
 mod photos;
 mod truth;
 
-pub use photos::{PhotoShot, SKY_COLOUR};
+pub use photos::{DemoPhotoOptions, PhotoShot, SKY_COLOUR};
 pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_with};
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
@@ -121,6 +126,12 @@ impl DemoScene {
     /// `slope_deg` is the surface slope there (vegetation grows on gentle slopes only).
     pub fn surface_colour(&self, x: f64, y: f64, z: f64, slope_deg: f64) -> [f64; 3] {
         surface_colour(&self.noises(), self, x, y, z, slope_deg)
+    }
+
+    /// [`DemoScene::surface_colour`] with the noise tables built once (for many evaluations).
+    pub fn surface_colour_fn(&self) -> impl Fn(f64, f64, f64, f64) -> [f64; 3] + Sync + '_ {
+        let n = self.noises();
+        move |x, y, z, slope| surface_colour(&n, self, x, y, z, slope)
     }
 
     /// Generates the DEM and the ortho image (same grid, area-averaged top-down colour).

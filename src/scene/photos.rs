@@ -35,6 +35,24 @@ pub struct PhotoShot {
     pub camera: CameraModel,
 }
 
+/// Size and sampling of the photos [`DemoScene::write_demo_photos`] renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DemoPhotoOptions {
+    /// Image width in pixels (the cameras are [`CameraModel::resized`] from 1600 x 1200).
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Rays per pixel side (1..=8).
+    pub supersample: u32,
+}
+
+impl Default for DemoPhotoOptions {
+    /// 1600 x 1200 pixels, 2 x 2 rays per pixel.
+    fn default() -> Self {
+        DemoPhotoOptions { width: PHOTO_SIZE.0, height: PHOTO_SIZE.1, supersample: 2 }
+    }
+}
+
 /// What a camera looks at, in scene-local coordinates (east, south, up; metres).
 struct Aim {
     name: &'static str,
@@ -261,15 +279,19 @@ impl DemoScene {
         surface_colour(n, self, x.x, x.y, x.z, slope)
     }
 
-    /// Renders every [`DemoScene::photo_shots`] photo with [`DemoScene::render_truth_photo`]
-    /// into `dir` as `NAME.jpg` (JPEG quality 95) with its cliffmap Camera JSON `NAME.json`,
-    /// then writes `dir/photos.json` listing them (relative paths) and returns its path.
-    /// Every file is written atomically; `photos.json` last.
-    pub fn write_demo_photos(&self, dem: &Dem, dir: &Path, supersample: u32) -> Result<PathBuf> {
+    /// Renders every [`DemoScene::photo_shots`] photo (resized to `opts`' size) with
+    /// [`DemoScene::render_truth_photo`] into `dir` as `NAME.jpg` (JPEG quality 95) with its
+    /// cliffmap Camera JSON `NAME.json`, then writes `dir/photos.json` listing them (relative
+    /// paths) and returns its path. Every file is written atomically; `photos.json` last.
+    pub fn write_demo_photos(&self, dem: &Dem, dir: &Path, opts: &DemoPhotoOptions) -> Result<PathBuf> {
+        if opts.width == 0 || opts.height == 0 || opts.width > 16_384 || opts.height > 16_384 {
+            return Err(Error::BadOption(format!("demo photo size {} x {} must be in 1..=16384", opts.width, opts.height)));
+        }
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let mut entries = Vec::new();
-        for shot in self.photo_shots() {
-            let img = self.render_truth_photo(dem, &shot.camera, supersample)?;
+        for mut shot in self.photo_shots() {
+            shot.camera = shot.camera.resized(opts.width, opts.height);
+            let img = self.render_truth_photo(dem, &shot.camera, opts.supersample)?;
             let jpg = dir.join(format!("{}.jpg", shot.name));
             let mut bytes = Vec::new();
             image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95)

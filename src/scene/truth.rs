@@ -8,7 +8,6 @@ use serde::Serialize;
 
 use super::{DemoScene, surface_colour};
 use crate::error::{Error, Result};
-use crate::resample::raster::{EMPTY, rasterize};
 use crate::store::{CellRecord, Store, texcoord};
 
 /// Which texture of each cell to evaluate.
@@ -71,9 +70,57 @@ fn psnr(sq: f64, n: u64) -> f64 {
     10.0 * (255.0f64 * 255.0 / mse).log10()
 }
 
+/// Marker of a texel centre outside every triangle.
+const EMPTY: u32 = u32::MAX;
+
+/// For each texel centre of an `n × n` texture, the first triangle (in index order) that
+/// contains it in texture space (`st`, texel units) and its barycentric weights, clamped to
+/// the triangle. Exact f64 edge tests with a 1e-9 tolerance (so centres on shared edges go
+/// to the lower triangle index); no snapping, because on walls a tiny texture-space offset
+/// is a large 3D one.
+fn locate_texel_centres(st: &[[f64; 2]], tris: &[[u32; 3]], n: u32) -> (Vec<u32>, Vec<[f64; 3]>) {
+    let nn = n as usize;
+    let mut ids = vec![EMPTY; nn * nn];
+    let mut weights = vec![[0.0; 3]; nn * nn];
+    for (ti, t) in tris.iter().enumerate() {
+        let [a, b, c] = t.map(|v| st[v as usize]);
+        let den = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if den.abs() <= 1e-300 || !den.is_finite() {
+            continue;
+        }
+        let lo = |k: usize| (a[k].min(b[k]).min(c[k]) - 0.5).ceil().max(0.0);
+        let hi = |k: usize| (a[k].max(b[k]).max(c[k]) - 0.5).floor().min(n as f64 - 1.0);
+        let (i0, i1, j0, j1) = (lo(0), hi(0), lo(1), hi(1));
+        if i0 > i1 || j0 > j1 {
+            continue;
+        }
+        for j in j0 as usize..=j1 as usize {
+            for i in i0 as usize..=i1 as usize {
+                let k = j * nn + i;
+                if ids[k] != EMPTY {
+                    continue;
+                }
+                let p = [i as f64 + 0.5, j as f64 + 0.5];
+                let w1 = ((p[0] - a[0]) * (c[1] - a[1]) - (p[1] - a[1]) * (c[0] - a[0])) / den;
+                let w2 = ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])) / den;
+                let w0 = 1.0 - w1 - w2;
+                const TOL: f64 = -1e-9;
+                if w0 < TOL || w1 < TOL || w2 < TOL {
+                    continue;
+                }
+                let w = [w0.max(0.0), w1.max(0.0), w2.max(0.0)];
+                let sum = w[0] + w[1] + w[2];
+                ids[k] = ti as u32;
+                weights[k] = w.map(|x| x / sum);
+            }
+        }
+    }
+    (ids, weights)
+}
+
 /// Evaluates the finest level of `store` against `scene` with the chosen texture.
 pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Result<TruthReport> {
-    let level = store.manifest.quadtree.levels.saturating_sub(1) as u8;
+    let level = store.manifest.quadtree.levels.saturating_sub(1);
     let mut photo_cells = 0;
     for rec in store.manifest.cells.iter().filter(|c| c.level == level) {
         photo_cells += usize::from(which == TextureChoice::Photo && rec.photo.is_some());
@@ -91,8 +138,8 @@ pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Re
 
 /// Evaluates every cell of `level` with the texture `texture(rec)` returns (square, laid out
 /// over the cell's active chart: `store::texcoord` of the active mesh times its side). Each
-/// texel centre is located in the chart triangle covering it (exact rasterization, each
-/// centre in one triangle), mapped by barycentric weights to the 3D point on the cell mesh
+/// texel centre is located in the chart triangle covering it (exact f64 point location; a
+/// centre on a shared edge goes to the lower triangle index), mapped by barycentric weights to the 3D point on the cell mesh
 /// (f64 world), and compared with `surface_colour` there, using the slope of that mesh
 /// triangle. Cells run in parallel; sums are combined in cell order (deterministic).
 pub fn texel_truth_with(
@@ -129,7 +176,7 @@ pub fn texel_truth_with(
             if tris.iter().flatten().any(|&k| k as usize >= nv) {
                 return Err(Error::store(&store.dir, format!("cell {}: surface triangle uses a skirt vertex", rec.id)));
             }
-            let ids = rasterize(&st, tris, n, |_| true);
+            let (ids, weights) = locate_texel_centres(&st, tris, n);
             let origin = glam::DVec3::from_array(rec.origin);
             let mut sums = Sums::default();
             for (k, &id) in ids.iter().enumerate() {
@@ -143,12 +190,7 @@ pub fn texel_truth_with(
                     continue;
                 }
                 let tri = tris[id as usize];
-                let [a, b, c] = tri.map(|v| st[v as usize]);
-                let p = [i as f64 + 0.5, j as f64 + 0.5];
-                let den = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-                let w1 = ((p[0] - a[0]) * (c[1] - a[1]) - (p[1] - a[1]) * (c[0] - a[0])) / den;
-                let w2 = ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])) / den;
-                let w0 = 1.0 - w1 - w2;
+                let [w0, w1, w2] = weights[k];
                 let pos = tri.map(|v| origin + glam::Vec3::from_array(mesh.positions[v as usize]).as_dvec3());
                 let x = pos[0] * w0 + pos[1] * w1 + pos[2] * w2;
                 let normal = (pos[1] - pos[0]).cross(pos[2] - pos[0]);
