@@ -69,8 +69,9 @@ fn all_files(dir: &Path) -> Vec<(String, u32)> {
 fn demo_runs_whole_pipeline_and_is_deterministic_across_threads() {
     let t = tempfile::tempdir().unwrap();
     let (a, b) = (t.path().join("a"), t.path().join("b"));
-    ok(&["--threads", "1", "demo", "--out", s(&a), "--samples", "129", "--quiet"]);
-    ok(&["--threads", "2", "demo", "--out", s(&b), "--samples", "129", "--quiet"]);
+    let small = ["--samples", "129", "--photo-width", "480", "--photo-supersample", "1", "--quiet"];
+    ok(&[&["--threads", "1", "demo", "--out", s(&a)][..], &small[..]].concat());
+    ok(&[&["--threads", "2", "demo", "--out", s(&b)][..], &small[..]].concat());
     let store = a.join("store");
     assert!(store.join("manifest.json").is_file() && store.join("stats.json").is_file());
     assert!(store.join("stats_histogram.png").is_file());
@@ -85,6 +86,13 @@ fn demo_runs_whole_pipeline_and_is_deterministic_across_threads() {
         let m = st.read_mesh(c).unwrap();
         assert_eq!(m.surface_triangles, c.triangles);
     }
+    // The ground-photo stage ran: photo textures exist and steep texels got closer to the truth.
+    assert!(st.manifest.cells.iter().any(|c| c.photo.is_some()), "no cell got a photo texture");
+    let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(a.join("truth.json")).unwrap()).unwrap();
+    let (before, after) = (&truth["before"], &truth["after"]);
+    let psnr = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
+    assert!(psnr(after, "steep_psnr") > psnr(before, "steep_psnr"), "{truth}");
+    assert!(psnr(after, "flat_psnr") > psnr(before, "flat_psnr") - 0.1, "{truth}");
 }
 
 #[test]
