@@ -37,6 +37,8 @@ mod kernel;
 mod raster;
 mod subtexel;
 
+use std::time::{Duration, Instant};
+
 use image::RgbaImage;
 use rayon::prelude::*;
 
@@ -269,6 +271,29 @@ fn check_chart(chart: &ChartMesh, to_pixel: &PixelMap) -> Result<()> {
 /// Zero-area and degenerate triangles are allowed (they cover nothing, or collapse to
 /// the bilinear fallback). Deterministic for any thread count.
 pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Result<Resampled> {
+    resample_timed(chart, src, opts).map(|(r, _)| r)
+}
+
+/// Wall-clock time spent in each stage of one [`resample`] call (for benchmarks; the
+/// texture does not depend on it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ResampleTimings {
+    /// Validation, per-triangle maps and scan conversion.
+    pub prepare: Duration,
+    /// The per-texel colour kernel (area weights or bilinear), all rows.
+    pub kernel: Duration,
+    /// Coverage counts, gutter dilation and fill.
+    pub fill: Duration,
+}
+
+/// [`resample`], also returning how long each stage took. The result is identical to
+/// [`resample`]'s.
+pub fn resample_timed(
+    chart: &ChartMesh,
+    src: &Source,
+    opts: &ResampleOptions,
+) -> Result<(Resampled, ResampleTimings)> {
+    let t_start = Instant::now();
     opts.validate()?;
     check_chart(chart, &src.to_pixel)?;
     let t = opts.texels;
@@ -290,6 +315,7 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
         w: src.image.width() as i64,
         h: src.image.height() as i64,
     };
+    let t_kernel = Instant::now();
     let mut buf = vec![0u8; n * n * 4];
     let mut known = vec![false; n * n];
     let mut fallbacks = vec![0usize; n];
@@ -322,6 +348,7 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
                 }
             },
         );
+    let t_fill = Instant::now();
     let Some(mut image) = RgbaImage::from_raw(t, t, buf) else {
         return Err(Error::BadOption(format!(
             "texture of {t} x {t} texels could not be allocated"
@@ -336,7 +363,7 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
         Fill::AverageBorder => fill::fill_average_border(&mut image, &assigned),
         Fill::PullPush => fill::fill_pull_push(&mut image, &assigned),
     };
-    Ok(Resampled {
+    let resampled = Resampled {
         image,
         covered,
         stats: ResampleStats {
@@ -347,5 +374,14 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
             gutter_texels,
             filled_texels,
         },
-    })
+    };
+    let t_end = Instant::now();
+    Ok((
+        resampled,
+        ResampleTimings {
+            prepare: t_kernel - t_start,
+            kernel: t_fill - t_kernel,
+            fill: t_end - t_fill,
+        },
+    ))
 }
