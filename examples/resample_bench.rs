@@ -18,8 +18,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use cliffmap::GridGeoref;
 use cliffmap::resample::{
-    ChartMesh, Fill, Mode, PixelMap, ResampleOptions, Resampled, Source, resample,
-    resample_timed,
+    ChartMesh, Fill, Mode, PixelMap, ResampleOptions, Resampled, Source, resample, resample_timed,
 };
 use image::{Rgba, RgbaImage};
 use plotters::prelude::*;
@@ -358,7 +357,11 @@ fn main() -> Result<()> {
     // whose name contains CASE, print nothing else (for `perf record`)
     let profile = match args.iter().position(|a| a == "--profile") {
         Some(i) => {
-            let get = |k: usize| args.get(i + k).cloned().context("--profile CASE MODE SECONDS");
+            let get = |k: usize| {
+                args.get(i + k)
+                    .cloned()
+                    .context("--profile CASE MODE SECONDS")
+            };
             let mode = match get(2)?.as_str() {
                 "exact" => Mode::Exact,
                 "bilinear" => Mode::Bilinear,
@@ -368,11 +371,23 @@ fn main() -> Result<()> {
                         .context("--profile mode: n<N>, bilinear or exact")?,
                 ),
             };
-            Some((get(1)?, mode, get(3)?.parse::<f64>().context("--profile seconds")?))
+            Some((
+                get(1)?,
+                mode,
+                get(3)?.parse::<f64>().context("--profile seconds")?,
+            ))
         }
         None => None,
     };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let threads: usize = arg("--threads")
+        .map(|v| v.parse())
+        .transpose()
+        .context("--threads")?
+        .unwrap_or(2)
+        .max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
     let mut cases = engabreen_cases()?;
     cases.extend(generated_cases());
     let modes = [
@@ -423,12 +438,20 @@ fn main() -> Result<()> {
             // a plain loop of one mode on the matching cases, for `perf record`
             if case.name.contains(case_filter.as_str()) {
                 let t = Instant::now();
+                let cpu0 = process_cpu_seconds();
                 let mut calls = 0u32;
                 while t.elapsed().as_secs_f64() < *secs {
                     pool.install(|| resample(&mesh, &src, &opts(*mode)))?;
                     calls += 1;
                 }
-                println!("{}: {calls} calls of {}", case.name, label(*mode));
+                let cpu = process_cpu_seconds() - cpu0;
+                println!(
+                    "{}: {} x {calls} calls, {:.3} ms CPU per call ({:.2} Mtexels per CPU second)",
+                    case.name,
+                    label(*mode),
+                    1e3 * cpu / calls as f64,
+                    (case.texels as f64).powi(2) * calls as f64 / cpu / 1e6
+                );
             }
             continue;
         }
@@ -477,15 +500,18 @@ fn main() -> Result<()> {
     if profile.is_some() {
         return Ok(());
     }
-    let exact_row = |case: usize| rows.iter().find(|r| r.case == case && r.mode == Mode::Exact);
+    let exact_row = |case: usize| {
+        rows.iter()
+            .find(|r| r.case == case && r.mode == Mode::Exact)
+    };
     println!(
         "| case | texels | mode | call Mtexels/s | call × exact | kernel Mtexels/s | kernel × exact \
          | prepare / kernel / fill ms | RMSE vs exact | max err | PSNR dB | fallbacks |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for row in &rows {
-        let (ex, exk) = exact_row(row.case)
-            .map_or((f64::NAN, f64::NAN), |r| (r.mtexels_s, r.kernel_mtexels_s));
+        let (ex, exk) =
+            exact_row(row.case).map_or((f64::NAN, f64::NAN), |r| (r.mtexels_s, r.kernel_mtexels_s));
         let c = &cases[row.case];
         println!(
             "| {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} / {:.2} / {:.2} | {:.3} | {:.0} | {} | {:.1} % |",
@@ -510,9 +536,7 @@ fn main() -> Result<()> {
         );
     }
     // summary per mode: worst-case RMSE and median / minimum speed-up over exact
-    println!(
-        "\n| mode | worst RMSE | call × exact: median | min | kernel × exact: median | min |"
-    );
+    println!("\n| mode | worst RMSE | call × exact: median | min | kernel × exact: median | min |");
     println!("|---|---|---|---|---|---|");
     for &mode in &modes[..5] {
         let sel: Vec<&Row> = rows.iter().filter(|r| r.mode == mode).collect();
@@ -542,6 +566,23 @@ fn main() -> Result<()> {
         println!("\nplot written to {path}");
     }
     Ok(())
+}
+
+/// CPU time (user + system) of this process so far, in seconds, from /proc/self/stat
+/// (clock ticks of 10 ms; NaN where unavailable).
+fn process_cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // fields after the parenthesised command name; utime and stime are fields 14 and 15
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |k: usize| {
+        f.get(k)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(f64::NAN)
+    };
+    (ticks(11) + ticks(12)) / 100.0
 }
 
 /// Registers a sans-serif font for plotters (the repo's assets/fonts/DejaVuSans.ttf, or the

@@ -309,6 +309,14 @@ pub fn resample_timed(
         .map(|uv| [uv[0] * t as f64, uv[1] * t as f64])
         .collect();
     let ids = raster::rasterize(&st, chart.triangles, t, |i| maps[i].is_some());
+    // per-triangle footprint constants for the subtexel kernel
+    let shapes: Vec<Option<footprint::Shape>> = match opts.mode {
+        Mode::Subtexel(_) => maps
+            .par_iter()
+            .map(|m| m.and_then(|m| footprint::Shape::new(&m, MIN_FOOTPRINT_AREA)))
+            .collect(),
+        _ => Vec::new(),
+    };
 
     let view = SrcView {
         data: src.image.as_raw(),
@@ -334,8 +342,24 @@ pub fn resample_timed(
                     let Some(map) = maps[tri as usize] else {
                         continue;
                     };
-                    let fp = map.texel_footprint(i as u32, j as u32);
-                    let tc = kernel::texel_colour(&view, &fp, opts.mode, scratch);
+                    let (iu, ju) = (i as u32, j as u32);
+                    let tc = match opts.mode {
+                        Mode::Subtexel(sub) => subtexel::texel_colour(
+                            &view,
+                            &map,
+                            shapes[tri as usize].as_ref(),
+                            iu,
+                            ju,
+                            sub,
+                            scratch,
+                        ),
+                        _ => kernel::texel_colour(
+                            &view,
+                            &map.texel_footprint(iu, ju),
+                            opts.mode,
+                            scratch,
+                        ),
+                    };
                     *nfb += tc.fallback as usize;
                     if tc.known {
                         let px = &mut row[i * 4..i * 4 + 4];
