@@ -440,17 +440,26 @@ fn main() -> Result<()> {
                 let t = Instant::now();
                 let cpu0 = process_cpu_seconds();
                 let mut calls = 0u32;
+                let mut ph = [0.0; 3];
                 while t.elapsed().as_secs_f64() < *secs {
-                    pool.install(|| resample(&mesh, &src, &opts(*mode)))?;
+                    let (_, tm) = pool.install(|| resample_timed(&mesh, &src, &opts(*mode)))?;
+                    ph[0] += tm.prepare.as_secs_f64();
+                    ph[1] += tm.kernel.as_secs_f64();
+                    ph[2] += tm.fill.as_secs_f64();
                     calls += 1;
                 }
                 let cpu = process_cpu_seconds() - cpu0;
+                let c = calls as f64;
                 println!(
-                    "{}: {} x {calls} calls, {:.3} ms CPU per call ({:.2} Mtexels per CPU second)",
+                    "{}: {} x {calls} calls, {:.3} ms CPU per call ({:.2} Mtexels per CPU \
+                     second); wall ms per call: prepare {:.3} kernel {:.3} fill {:.3}",
                     case.name,
                     label(*mode),
-                    1e3 * cpu / calls as f64,
-                    (case.texels as f64).powi(2) * calls as f64 / cpu / 1e6
+                    1e3 * cpu / c,
+                    (case.texels as f64).powi(2) * c / cpu / 1e6,
+                    1e3 * ph[0] / c,
+                    1e3 * ph[1] / c,
+                    1e3 * ph[2] / c
                 );
             }
             continue;

@@ -65,7 +65,8 @@ pub(crate) fn triangle_map(
         return None;
     }
     // inverse of [e1 e2]
-    let inv = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
+    let id = 1.0 / det;
+    let inv = [[e2[1] * id, -e2[0] * id], [-e1[1] * id, e1[0] * id]];
     let (p0, p1, p2) = (px(tri[0]), px(tri[1]), px(tri[2]));
     let (d1, d2) = (
         [p1[0] - p0[0], p1[1] - p0[1]],
@@ -164,13 +165,6 @@ pub(crate) fn floor_i(v: f64) -> i64 {
     t - i64::from((t as f64) > v)
 }
 
-/// `ceil(v)` as an integer without a libm call (exact for |v| < 2^63; saturates beyond).
-#[inline]
-pub(crate) fn ceil_i(v: f64) -> i64 {
-    let t = v as i64;
-    t + i64::from((t as f64) < v)
-}
-
 /// One of the two constraints `-eps <= g <= 1 + eps` of a footprint (`g` = alpha or beta,
 /// see [`Footprint::param`]) solved for one coordinate: relative to the footprint origin
 /// `p0`, the solved coordinate lies in `[lo + slope * o, hi + slope * o]` where `o` is the
@@ -267,19 +261,9 @@ impl Shape {
         inside([i[0][0] * x + i[0][1] * y, i[1][0] * x + i[1][1] * y])
     }
 
-    /// The footprint's chord at `o` along the other axis, with the [`inside`] tolerance: for
+    /// The footprint's chord at `o` along the other axis between its exact edges: for
     /// `slabs = x_of_y`, the x-interval `(lo, hi)` at height `y = o` (empty when `lo > hi`);
     /// likewise for `y_of_x`.
-    #[inline]
-    pub fn chord(slabs: &[Slab; 2], o: f64) -> (f64, f64) {
-        let [s, t] = slabs;
-        (
-            (s.lo + s.slope * o).max(t.lo + t.slope * o),
-            (s.hi + s.slope * o).min(t.hi + t.slope * o),
-        )
-    }
-
-    /// [`Shape::chord`] between the exact edges (no tolerance).
     #[inline]
     fn chord_exact(slabs: &[Slab; 2], o: f64) -> (f64, f64) {
         let [s, t] = slabs;

@@ -300,7 +300,7 @@ pub fn resample_timed(
     let n = t as usize;
     let maps: Vec<Option<footprint::Affine2>> = chart
         .triangles
-        .iter()
+        .par_iter()
         .map(|&tri| footprint::triangle_map(chart, tri, t, &src.to_pixel))
         .collect();
     let st: Vec<[f64; 2]> = chart
@@ -364,7 +364,8 @@ pub fn resample_timed(
                     if tc.known {
                         let px = &mut row[i * 4..i * 4 + 4];
                         for (p, c) in px.iter_mut().zip(tc.rgb) {
-                            *p = c.round().clamp(0.0, 255.0) as u8;
+                            // round half up (c >= 0 after the clamp); no libm call
+                            *p = (c.clamp(0.0, 255.0) + 0.5) as u8;
                         }
                         px[3] = 255;
                         krow[i] = true;

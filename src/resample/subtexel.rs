@@ -9,7 +9,7 @@
 //! reference (the two agree up to samples lying within rounding of the footprint's edge).
 
 use super::SrcView;
-use super::footprint::{Affine2, Param, Shape, ceil_i, floor_i, inside};
+use super::footprint::{Affine2, Param, Shape, floor_i, inside};
 use super::kernel::{MIN_FOOTPRINT_AREA, Scratch, TexelColour, bilinear_at};
 
 /// Largest accepted subtexel count per axis.
@@ -48,18 +48,59 @@ pub(crate) fn area_by_rows(sh: &Shape, n: u32, x0: f64, x1: f64, y0: f64, y1: f6
     let nf = n as f64;
     let inv_n = 1.0 / nf;
     let dy = h * inv_n;
-    // sample k of a row is at x0 + (k + 0.5) w / n
+    // Sample (kx, ky) is at (x0 + (kx + 0.5) w / n, y0 + (ky + 0.5) dy). In row ky the
+    // samples inside are those with lo(y) <= x <= hi(y) (the chord), i.e. kx in
+    // [max_s u_lo_s(ky), min_s u_hi_s(ky)] with u = (bound - x0) n / w - 0.5, each bound
+    // linear in ky: u(ky) = u0 + u1 ky.
     let per_x = nf / w;
-    let top = n as i64 - 1;
-    let mut count = 0i64;
+    let yc = y0 + 0.5 * dy;
+    let [sa, sb] = &sh.x_of_y;
+    let lin =
+        |bound: f64, slope: f64| ((bound + slope * yc - x0) * per_x - 0.5, slope * dy * per_x);
+    let (la, lb, ha, hb) = (
+        lin(sa.lo, sa.slope),
+        lin(sb.lo, sb.slope),
+        lin(sa.hi, sa.slope),
+        lin(sb.hi, sb.slope),
+    );
+    let top = nf - 1.0;
+    let mut count = 0.0;
     for k in 0..n {
-        let y = y0 + (k as f64 + 0.5) * dy;
-        let (l, r) = Shape::chord(&sh.x_of_y, y);
-        let first = ceil_i(((l - x0) * per_x - 0.5).max(-1.0)).max(0);
-        let last = floor_i(((r - x0) * per_x - 0.5).min(nf)).min(top);
-        count += (last - first + 1).max(0);
+        let kf = k as f64;
+        let lo = max_f(la.0 + la.1 * kf, lb.0 + lb.1 * kf);
+        let hi = min_f(ha.0 + ha.1 * kf, hb.0 + hb.1 * kf);
+        let first = max_f(ceil_f(max_f(lo, -1.0)), 0.0);
+        let last = min_f(floor_f(min_f(hi, nf)), top);
+        count += max_f(last - first + 1.0, 0.0);
     }
-    count as f64 * inv_n * inv_n * w * h
+    count * inv_n * inv_n * w * h
+}
+
+/// `max` without NaN handling (returns `b` when `a` is NaN).
+#[inline(always)]
+fn max_f(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
+}
+
+/// `min` without NaN handling (returns `b` when `a` is NaN).
+#[inline(always)]
+fn min_f(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// `floor(x)` for |x| < 2^51 in plain arithmetic (no libm call; exact: adding and
+/// subtracting 1.5 * 2^52 rounds to an integer, corrected downwards).
+#[inline(always)]
+fn floor_f(x: f64) -> f64 {
+    const M: f64 = 6_755_399_441_055_744.0;
+    let r = (x + M) - M;
+    if r > x { r - 1.0 } else { r }
+}
+
+/// `ceil(x)` for |x| < 2^51 (see [`floor_f`]).
+#[inline(always)]
+fn ceil_f(x: f64) -> f64 {
+    -floor_f(-x)
 }
 
 /// Colour of texel `(i, j)` of a triangle with map `map` by the subtexel estimate with
@@ -176,6 +217,31 @@ mod tests {
     use super::super::footprint::Footprint;
     use super::super::{Mode, kernel};
     use super::*;
+
+    #[test]
+    fn floor_and_ceil_without_libm() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.9999999999999996,
+            -2.9999999999999996,
+            1e-300,
+            -1e-300,
+            63.5,
+            64.0,
+            -1.0000000000000002,
+            1125899906842623.5,
+            -1e15 - 0.25,
+        ] {
+            assert_eq!(floor_f(x), x.floor(), "{x}");
+            assert_eq!(ceil_f(x), x.ceil(), "{x}");
+            assert_eq!(floor_i(x), x.floor() as i64, "{x}");
+        }
+    }
 
     /// The row-counting kernel against the generic sample-by-sample kernel on random
     /// footprints (sizes 0.05 to 6 pixels, any orientation, partly off the image) over an
