@@ -18,7 +18,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use cliffmap::GridGeoref;
 use cliffmap::resample::{
-    ChartMesh, Fill, Mode, PixelMap, ResampleOptions, Resampled, Source, resample,
+    ChartMesh, Fill, Mode, PixelMap, ResampleOptions, Resampled, Source, resample, resample_timed,
 };
 use image::{Rgba, RgbaImage};
 use plotters::prelude::*;
@@ -302,7 +302,12 @@ fn generated_cases() -> Vec<Case> {
 struct Row {
     case: usize,
     mode: Mode,
+    /// whole `resample` call
     mtexels_s: f64,
+    /// the per-texel kernel alone
+    kernel_mtexels_s: f64,
+    /// median milliseconds per call: prepare (maps, rasterization), kernel, fill
+    phases_ms: [f64; 3],
     rmse: f64,
     max: f64,
     psnr: f64,
@@ -348,7 +353,41 @@ fn main() -> Result<()> {
         .unwrap_or(7)
         .max(1);
     let plot = arg("--plot");
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    // --profile CASE MODE SECONDS: loop one mode (n1..n64, bilinear, exact) on the cases
+    // whose name contains CASE, print nothing else (for `perf record`)
+    let profile = match args.iter().position(|a| a == "--profile") {
+        Some(i) => {
+            let get = |k: usize| {
+                args.get(i + k)
+                    .cloned()
+                    .context("--profile CASE MODE SECONDS")
+            };
+            let mode = match get(2)?.as_str() {
+                "exact" => Mode::Exact,
+                "bilinear" => Mode::Bilinear,
+                m => Mode::Subtexel(
+                    m.trim_start_matches('n')
+                        .parse()
+                        .context("--profile mode: n<N>, bilinear or exact")?,
+                ),
+            };
+            Some((
+                get(1)?,
+                mode,
+                get(3)?.parse::<f64>().context("--profile seconds")?,
+            ))
+        }
+        None => None,
+    };
+    let threads: usize = arg("--threads")
+        .map(|v| v.parse())
+        .transpose()
+        .context("--threads")?
+        .unwrap_or(2)
+        .max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
     let mut cases = engabreen_cases()?;
     cases.extend(generated_cases());
     let modes = [
@@ -372,29 +411,81 @@ fn main() -> Result<()> {
             fill: Fill::AverageBorder,
             gutter_texels: 4,
         };
-        // one timing = mean time per call over calls repeated for at least 0.1 s; the modes
-        // are interleaved within each repetition so load changes hit them alike
-        let time_once = |mode: Mode| -> Result<f64> {
+        // one timing = mean time per call over calls repeated for at least 0.1 s (whole call,
+        // and each stage as timed inside the call); the modes are interleaved within each
+        // repetition so load changes hit them alike
+        let time_once = |mode: Mode| -> Result<[f64; 4]> {
             let o = opts(mode);
             let t = Instant::now();
             let mut calls = 0u32;
+            let mut phases = [0.0; 3];
             while calls == 0 || t.elapsed().as_secs_f64() < 0.1 {
-                pool.install(|| resample(&mesh, &src, &o))?;
+                let (_, tm) = pool.install(|| resample_timed(&mesh, &src, &o))?;
+                phases[0] += tm.prepare.as_secs_f64();
+                phases[1] += tm.kernel.as_secs_f64();
+                phases[2] += tm.fill.as_secs_f64();
                 calls += 1;
             }
-            Ok(t.elapsed().as_secs_f64() / calls as f64)
+            let c = calls as f64;
+            Ok([
+                t.elapsed().as_secs_f64() / c,
+                phases[0] / c,
+                phases[1] / c,
+                phases[2] / c,
+            ])
         };
-        let mut times = vec![vec![]; modes.len()];
+        if let Some((case_filter, mode, secs)) = &profile {
+            // a plain loop of one mode on the matching cases, for `perf record`
+            if case.name.contains(case_filter.as_str()) {
+                let t = Instant::now();
+                let cpu0 = process_cpu_seconds();
+                let mut calls = 0u32;
+                let mut ph = [0.0; 3];
+                while t.elapsed().as_secs_f64() < *secs {
+                    let (_, tm) = pool.install(|| resample_timed(&mesh, &src, &opts(*mode)))?;
+                    ph[0] += tm.prepare.as_secs_f64();
+                    ph[1] += tm.kernel.as_secs_f64();
+                    ph[2] += tm.fill.as_secs_f64();
+                    calls += 1;
+                }
+                let cpu = process_cpu_seconds() - cpu0;
+                let c = calls as f64;
+                println!(
+                    "{}: {} x {calls} calls, {:.3} ms CPU per call ({:.2} Mtexels per CPU \
+                     second); wall ms per call: prepare {:.3} kernel {:.3} fill {:.3}",
+                    case.name,
+                    label(*mode),
+                    1e3 * cpu / c,
+                    (case.texels as f64).powi(2) * c / cpu / 1e6,
+                    1e3 * ph[0] / c,
+                    1e3 * ph[1] / c,
+                    1e3 * ph[2] / c
+                );
+            }
+            continue;
+        }
+        let mut times = vec![[vec![], vec![], vec![], vec![]]; modes.len()];
         for _ in 0..runs {
             for (k, &mode) in modes.iter().enumerate() {
-                times[k].push(time_once(mode)?);
+                let t = time_once(mode)?;
+                for p in 0..4 {
+                    times[k][p].push(t[p]);
+                }
             }
         }
         let exact = pool.install(|| resample(&mesh, &src, &opts(Mode::Exact)))?;
         for (k, &mode) in modes.iter().enumerate() {
             let r = pool.install(|| resample(&mesh, &src, &opts(mode)))?;
-            times[k].sort_by(f64::total_cmp);
-            let t = times[k][times[k].len() / 2];
+            let med = |v: &mut Vec<f64>| {
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            let t = med(&mut times[k][0]);
+            let phases_ms = [
+                1e3 * med(&mut times[k][1]),
+                1e3 * med(&mut times[k][2]),
+                1e3 * med(&mut times[k][3]),
+            ];
             let (rmse, max) = compare(&r, &exact);
             let psnr = if rmse > 0.0 {
                 20.0 * (255.0 / rmse).log10()
@@ -405,6 +496,8 @@ fn main() -> Result<()> {
                 case: ci,
                 mode,
                 mtexels_s: (case.texels as f64).powi(2) / t / 1e6,
+                kernel_mtexels_s: (case.texels as f64).powi(2) / (phases_ms[1] * 1e-3) / 1e6,
+                phases_ms,
                 rmse,
                 max,
                 psnr,
@@ -413,23 +506,34 @@ fn main() -> Result<()> {
             });
         }
     }
+    if profile.is_some() {
+        return Ok(());
+    }
+    let exact_row = |case: usize| {
+        rows.iter()
+            .find(|r| r.case == case && r.mode == Mode::Exact)
+    };
     println!(
-        "| case | texels | mode | Mtexels/s | × exact | RMSE vs exact | max err | PSNR dB | fallbacks |"
+        "| case | texels | mode | call Mtexels/s | call × exact | kernel Mtexels/s | kernel × exact \
+         | prepare / kernel / fill ms | RMSE vs exact | max err | PSNR dB | fallbacks |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for row in &rows {
-        let ex = rows
-            .iter()
-            .find(|r| r.case == row.case && r.mode == Mode::Exact)
-            .map_or(f64::NAN, |r| r.mtexels_s);
+        let (ex, exk) =
+            exact_row(row.case).map_or((f64::NAN, f64::NAN), |r| (r.mtexels_s, r.kernel_mtexels_s));
         let c = &cases[row.case];
         println!(
-            "| {} | {}² | {} | {:.2} | {:.1} | {:.3} | {:.0} | {} | {:.1} % |",
+            "| {} | {}² | {} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} / {:.2} / {:.2} | {:.3} | {:.0} | {} | {:.1} % |",
             c.name,
             c.texels,
             label(row.mode),
             row.mtexels_s,
             row.mtexels_s / ex,
+            row.kernel_mtexels_s,
+            row.kernel_mtexels_s / exk,
+            row.phases_ms[0],
+            row.phases_ms[1],
+            row.phases_ms[2],
             row.rmse,
             row.max,
             if row.psnr.is_finite() {
@@ -440,29 +544,30 @@ fn main() -> Result<()> {
             100.0 * row.fallbacks as f64 / row.covered.max(1) as f64
         );
     }
-    // summary per mode: worst-case RMSE and median speed-up over exact
-    println!("\n| mode | worst RMSE | median × exact | min × exact |");
-    println!("|---|---|---|---|");
+    // summary per mode: worst-case RMSE and median / minimum speed-up over exact
+    println!("\n| mode | worst RMSE | call × exact: median | min | kernel × exact: median | min |");
+    println!("|---|---|---|---|---|---|");
     for &mode in &modes[..5] {
         let sel: Vec<&Row> = rows.iter().filter(|r| r.mode == mode).collect();
-        let mut ups: Vec<f64> = sel
-            .iter()
-            .map(|r| {
-                r.mtexels_s
-                    / rows
-                        .iter()
-                        .find(|e| e.case == r.case && e.mode == Mode::Exact)
-                        .map_or(f64::NAN, |e| e.mtexels_s)
-            })
-            .collect();
-        ups.sort_by(f64::total_cmp);
+        let ratios = |f: &dyn Fn(&Row) -> f64| {
+            let mut v: Vec<f64> = sel
+                .iter()
+                .map(|r| f(r) / exact_row(r.case).map_or(f64::NAN, |e| f(e)))
+                .collect();
+            v.sort_by(f64::total_cmp);
+            (v[v.len() / 2], v[0])
+        };
+        let (cm, cmin) = ratios(&|r| r.mtexels_s);
+        let (km, kmin) = ratios(&|r| r.kernel_mtexels_s);
         let worst = sel.iter().map(|r| r.rmse).fold(0.0, f64::max);
         println!(
-            "| {} | {:.3} | {:.1} | {:.1} |",
+            "| {} | {:.3} | {:.1} | {:.1} | {:.1} | {:.1} |",
             label(mode),
             worst,
-            ups[ups.len() / 2],
-            ups[0]
+            cm,
+            cmin,
+            km,
+            kmin
         );
     }
     if let Some(path) = plot {
@@ -470,6 +575,23 @@ fn main() -> Result<()> {
         println!("\nplot written to {path}");
     }
     Ok(())
+}
+
+/// CPU time (user + system) of this process so far, in seconds, from /proc/self/stat
+/// (clock ticks of 10 ms; NaN where unavailable).
+fn process_cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // fields after the parenthesised command name; utime and stime are fields 14 and 15
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |k: usize| {
+        f.get(k)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(f64::NAN)
+    };
+    (ticks(11) + ticks(12)) / 100.0
 }
 
 /// Registers a sans-serif font for plotters (the repo's assets/fonts/DejaVuSans.ttf, or the

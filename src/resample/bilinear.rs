@@ -1,6 +1,7 @@
 //! Bilinear lookup in the source image, ignoring unknown (alpha 0) and out-of-image taps.
 
 use super::SrcView;
+use super::footprint::floor_i;
 
 /// Bilinear colour (RGB, 0..=255) at fractional pixel coordinates `(col, row)` (pixel
 /// centres at integers). Taps outside the image or with alpha 0 are dropped and the rest
@@ -14,9 +15,8 @@ pub(crate) fn sample(src: &SrcView, col: f64, row: f64) -> Option<[f64; 3]> {
     {
         return None;
     }
-    let (c0, r0) = (col.floor(), row.floor());
-    let (fx, fy) = (col - c0, row - r0);
-    let (c0, r0) = (c0 as i64, r0 as i64);
+    let (c0, r0) = (floor_i(col), floor_i(row));
+    let (fx, fy) = (col - c0 as f64, row - r0 as f64);
     let mut acc = [0.0; 3];
     let mut wsum = 0.0;
     for (dc, dr, w) in [

@@ -4,7 +4,6 @@
 
 use image::RgbaImage;
 
-const N4: [(i64, i64); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
 const N8: [(i64, i64); 8] = [
     (-1, -1),
     (0, -1),
@@ -33,34 +32,42 @@ pub fn dilate_gutter(image: &mut RgbaImage, assigned: &mut [bool], passes: u32) 
     let mut total = 0;
     for _ in 0..passes {
         changed.clear();
-        for y in 0..h {
-            for x in 0..w {
-                if assigned[(y * w + x) as usize] {
-                    continue;
-                }
-                let (mut s, mut n) = ([0u32; 3], 0u32);
-                for (dx, dy) in N8 {
-                    let (nx, ny) = (x + dx, y + dy);
-                    if nx >= 0 && ny >= 0 && nx < w && ny < h && assigned[(ny * w + nx) as usize] {
-                        let p = image.get_pixel(nx as u32, ny as u32).0;
-                        for k in 0..3 {
-                            s[k] += p[k] as u32;
-                        }
-                        n += 1;
+        {
+            let data: &[u8] = image.as_raw();
+            for y in 0..h {
+                let row = (y * w) as usize;
+                for x in 0..w {
+                    if assigned[row + x as usize] {
+                        continue;
                     }
-                }
-                if n > 0 {
-                    changed.push((x, y, s.map(|v| ((v + n / 2) / n) as u8)));
+                    let (mut s, mut n) = ([0u32; 3], 0u32);
+                    for (dx, dy) in N8 {
+                        let (nx, ny) = (x + dx, y + dy);
+                        if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                            continue;
+                        }
+                        let k = (ny * w + nx) as usize;
+                        if assigned[k] {
+                            let p = &data[4 * k..4 * k + 3];
+                            for c in 0..3 {
+                                s[c] += p[c] as u32;
+                            }
+                            n += 1;
+                        }
+                    }
+                    if n > 0 {
+                        changed.push((row + x as usize, s.map(|v| ((v + n / 2) / n) as u8)));
+                    }
                 }
             }
         }
         if changed.is_empty() {
             break;
         }
-        for &(x, y, rgb) in &changed {
-            let p = image.get_pixel_mut(x as u32, y as u32);
-            p.0[..3].copy_from_slice(&rgb);
-            assigned[(y * w + x) as usize] = true;
+        let data: &mut [u8] = &mut *image;
+        for &(k, rgb) in &changed {
+            data[4 * k..4 * k + 3].copy_from_slice(&rgb);
+            assigned[k] = true;
         }
         total += changed.len();
     }
@@ -71,21 +78,23 @@ pub fn dilate_gutter(image: &mut RgbaImage, assigned: &mut [bool], passes: u32) 
 /// 4-neighbour, or `None` if there is none (nothing or everything assigned).
 pub fn average_border_colour(image: &RgbaImage, assigned: &[bool]) -> Option<[u8; 3]> {
     check(image, assigned);
-    let (w, h) = (image.width() as i64, image.height() as i64);
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let data: &[u8] = image.as_raw();
     let (mut s, mut n) = ([0u64; 3], 0u64);
     for y in 0..h {
+        let row = y * w;
         for x in 0..w {
-            if !assigned[(y * w + x) as usize] {
+            let k = row + x;
+            if !assigned[k] {
                 continue;
             }
-            let borders = N4.iter().any(|&(dx, dy)| {
-                let (nx, ny) = (x + dx, y + dy);
-                nx >= 0 && ny >= 0 && nx < w && ny < h && !assigned[(ny * w + nx) as usize]
-            });
+            let borders = (x > 0 && !assigned[k - 1])
+                || (x + 1 < w && !assigned[k + 1])
+                || (y > 0 && !assigned[k - w])
+                || (y + 1 < h && !assigned[k + w]);
             if borders {
-                let p = image.get_pixel(x as u32, y as u32).0;
-                for k in 0..3 {
-                    s[k] += p[k] as u64;
+                for c in 0..3 {
+                    s[c] += data[4 * k + c] as u64;
                 }
                 n += 1;
             }

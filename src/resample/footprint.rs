@@ -65,7 +65,8 @@ pub(crate) fn triangle_map(
         return None;
     }
     // inverse of [e1 e2]
-    let inv = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
+    let id = 1.0 / det;
+    let inv = [[e2[1] * id, -e2[0] * id], [-e1[1] * id, e1[0] * id]];
     let (p0, p1, p2) = (px(tri[0]), px(tri[1]), px(tri[2]));
     let (d1, d2) = (
         [p1[0] - p0[0], p1[1] - p0[1]],
@@ -154,6 +155,182 @@ impl Footprint {
             [-self.a[1] / det, self.a[0] / det],
         ];
         Some(Param { p0: self.p0, inv })
+    }
+}
+
+/// `floor(v)` as an integer without a libm call (exact for |v| < 2^63; saturates beyond).
+#[inline]
+pub(crate) fn floor_i(v: f64) -> i64 {
+    let t = v as i64;
+    t - i64::from((t as f64) > v)
+}
+
+/// One of the two constraints `-eps <= g <= 1 + eps` of a footprint (`g` = alpha or beta,
+/// see [`Footprint::param`]) solved for one coordinate: relative to the footprint origin
+/// `p0`, the solved coordinate lies in `[lo + slope * o, hi + slope * o]` where `o` is the
+/// other coordinate (also relative to `p0`); `lo0`, `hi0` likewise for `0 <= g <= 1` (the
+/// exact edges). Unbounded (`-inf`, `+inf`) when `g` does not depend on the solved
+/// coordinate.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Slab {
+    pub lo: f64,
+    pub hi: f64,
+    pub lo0: f64,
+    pub hi0: f64,
+    pub slope: f64,
+}
+
+impl Slab {
+    fn new(g_solved: f64, g_other: f64) -> Slab {
+        if g_solved == 0.0 {
+            return Slab {
+                lo: f64::NEG_INFINITY,
+                hi: f64::INFINITY,
+                lo0: f64::NEG_INFINITY,
+                hi0: f64::INFINITY,
+                slope: 0.0,
+            };
+        }
+        let r = 1.0 / g_solved;
+        let (e0, e1) = (-PARAM_EPS * r, (1.0 + PARAM_EPS) * r);
+        Slab {
+            lo: e0.min(e1),
+            hi: e0.max(e1),
+            lo0: r.min(0.0),
+            hi0: r.max(0.0),
+            slope: -g_other * r,
+        }
+    }
+}
+
+/// What all footprints of one triangle share: they are translates of one parallelogram
+/// (`p0 + alpha a + beta b`, alpha, beta in [0, 1]), so everything but `p0` is computed once
+/// per triangle and the subtexel kernel needs no division per texel. Coordinates relative
+/// to `p0`, in source pixels.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Shape {
+    /// Edge vectors.
+    pub a: [f64; 2],
+    pub b: [f64; 2],
+    /// Bounding box of the corners: `[min x, min y, max x, max y]`.
+    pub bb: [f64; 4],
+    /// Rows: alpha = inv[0] . (p - p0), beta = inv[1] . (p - p0) (as [`Footprint::param`]).
+    pub inv: [[f64; 2]; 2],
+    /// x in terms of y: alpha and beta constraints.
+    pub x_of_y: [Slab; 2],
+    /// y in terms of x: alpha and beta constraints.
+    pub y_of_x: [Slab; 2],
+}
+
+impl Shape {
+    /// The shape of the footprints of `map`, or `None` when they are collapsed (area below
+    /// `min_area`, the same test as [`Footprint::param`]).
+    pub fn new(map: &Affine2, min_area: f64) -> Option<Shape> {
+        let fp = map.texel_footprint(0, 0);
+        let par = fp.param(min_area)?;
+        let (a, b) = (fp.a, fp.b);
+        let inv = par.inv;
+        let xs = [0.0, a[0], a[0] + b[0], b[0]];
+        let ys = [0.0, a[1], a[1] + b[1], b[1]];
+        let bb = [
+            xs.iter().copied().fold(f64::INFINITY, f64::min),
+            ys.iter().copied().fold(f64::INFINITY, f64::min),
+            xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            ys.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        ];
+        Some(Shape {
+            a,
+            b,
+            bb,
+            inv,
+            x_of_y: [
+                Slab::new(inv[0][0], inv[0][1]),
+                Slab::new(inv[1][0], inv[1][1]),
+            ],
+            y_of_x: [
+                Slab::new(inv[0][1], inv[0][0]),
+                Slab::new(inv[1][1], inv[1][0]),
+            ],
+        })
+    }
+
+    /// Whether the point `(x, y)` (relative to `p0`) lies in the footprint ([`inside`]).
+    #[inline]
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        let i = &self.inv;
+        inside([i[0][0] * x + i[0][1] * y, i[1][0] * x + i[1][1] * y])
+    }
+
+    /// The footprint's chord at `o` along the other axis between its exact edges: for
+    /// `slabs = x_of_y`, the x-interval `(lo, hi)` at height `y = o` (empty when `lo > hi`);
+    /// likewise for `y_of_x`.
+    #[inline]
+    fn chord_exact(slabs: &[Slab; 2], o: f64) -> (f64, f64) {
+        let [s, t] = slabs;
+        (
+            (s.lo0 + s.slope * o).max(t.lo0 + t.slope * o),
+            (s.hi0 + s.slope * o).min(t.hi0 + t.slope * o),
+        )
+    }
+
+    /// The four corners relative to `p0`, in order around the parallelogram.
+    #[inline]
+    pub fn corners(&self) -> [[f64; 2]; 4] {
+        let (a, b) = (self.a, self.b);
+        [[0.0, 0.0], a, [a[0] + b[0], a[1] + b[1]], b]
+    }
+
+    /// For the strips `k0 ..= k1` of axis `axis` (0: pixel columns, strip k = `k - 0.5 <= x
+    /// <= k + 0.5`; 1: pixel rows, in y), the extent along the other axis of the footprint
+    /// within each strip, relative to `p0`, written to `out[k - k0]` (`(inf, -inf)` where
+    /// they do not meet). `origin` is `p0`'s coordinate along `axis` and `corner_strip[q]`
+    /// the strip holding corner q (`floor(origin + corner + 0.5)`). One pass: each corner
+    /// goes to its strip and each strip boundary inside the footprint adds the footprint's
+    /// chord there to the two strips it separates, which gives the same extents as clipping
+    /// the footprint to each strip.
+    pub fn strip_extents(
+        &self,
+        axis: usize,
+        origin: f64,
+        corner_strip: &[i64; 4],
+        k0: i64,
+        k1: i64,
+        out: &mut Vec<(f64, f64)>,
+    ) {
+        let o = 1 - axis;
+        out.clear();
+        out.resize((k1 - k0 + 1) as usize, (f64::INFINITY, f64::NEG_INFINITY));
+        let add = |e: &mut (f64, f64), lo: f64, hi: f64| {
+            e.0 = e.0.min(lo);
+            e.1 = e.1.max(hi);
+        };
+        for (c, &k) in self.corners().iter().zip(corner_strip) {
+            if k >= k0 && k <= k1 {
+                let v = c[o];
+                add(&mut out[(k - k0) as usize], v, v);
+            }
+        }
+        let slabs = if axis == 1 {
+            &self.x_of_y
+        } else {
+            &self.y_of_x
+        };
+        let (bmin, bmax) = (self.bb[axis], self.bb[axis + 2]);
+        // boundary between strips k - 1 and k
+        for k in k0..=k1 + 1 {
+            let line = k as f64 - 0.5 - origin;
+            if line > bmin && line < bmax {
+                let (l, h) = Self::chord_exact(slabs, line);
+                if l <= h {
+                    if k > k0 {
+                        add(&mut out[(k - 1 - k0) as usize], l, h);
+                    }
+                    if k <= k1 {
+                        add(&mut out[(k - k0) as usize], l, h);
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -23,10 +23,12 @@ pub(crate) struct TexelColour {
 pub(crate) struct Scratch {
     /// For each source column of the current footprint's bounding box, the row extent of
     /// the footprint within that column.
-    col_ranges: Vec<(f64, f64)>,
+    pub col_ranges: Vec<(f64, f64)>,
+    /// Likewise per source row, the column extent (subtexel kernel).
+    pub row_ranges: Vec<(f64, f64)>,
 }
 
-fn bilinear_at(src: &SrcView, fp: &Footprint, fallback: bool) -> TexelColour {
+pub(crate) fn bilinear_at(src: &SrcView, fp: &Footprint, fallback: bool) -> TexelColour {
     let c = fp.centre();
     match bilinear::sample(src, c[0], c[1]) {
         Some(rgb) => TexelColour {

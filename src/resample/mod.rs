@@ -37,6 +37,8 @@ mod kernel;
 mod raster;
 mod subtexel;
 
+use std::time::{Duration, Instant};
+
 use image::RgbaImage;
 use rayon::prelude::*;
 
@@ -270,13 +272,36 @@ fn check_chart(chart: &ChartMesh, to_pixel: &PixelMap) -> Result<()> {
 /// Zero-area and degenerate triangles are allowed (they cover nothing, or collapse to
 /// the bilinear fallback). Deterministic for any thread count.
 pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Result<Resampled> {
+    resample_timed(chart, src, opts).map(|(r, _)| r)
+}
+
+/// Wall-clock time spent in each stage of one [`resample`] call (for benchmarks; the
+/// texture does not depend on it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ResampleTimings {
+    /// Validation, per-triangle maps and scan conversion.
+    pub prepare: Duration,
+    /// The per-texel colour kernel (area weights or bilinear), all rows.
+    pub kernel: Duration,
+    /// Coverage counts, gutter dilation and fill.
+    pub fill: Duration,
+}
+
+/// [`resample`], also returning how long each stage took. The result is identical to
+/// [`resample`]'s.
+pub fn resample_timed(
+    chart: &ChartMesh,
+    src: &Source,
+    opts: &ResampleOptions,
+) -> Result<(Resampled, ResampleTimings)> {
+    let t_start = Instant::now();
     opts.validate()?;
     check_chart(chart, &src.to_pixel)?;
     let t = opts.texels;
     let n = t as usize;
     let maps: Vec<Option<footprint::Affine2>> = chart
         .triangles
-        .iter()
+        .par_iter()
         .map(|&tri| footprint::triangle_map(chart, tri, t, &src.to_pixel))
         .collect();
     let st: Vec<[f64; 2]> = chart
@@ -285,12 +310,21 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
         .map(|uv| [uv[0] * t as f64, uv[1] * t as f64])
         .collect();
     let ids = raster::rasterize(&st, chart.triangles, t, |i| maps[i].is_some());
+    // per-triangle footprint constants for the subtexel kernel
+    let shapes: Vec<Option<footprint::Shape>> = match opts.mode {
+        Mode::Subtexel(_) => maps
+            .par_iter()
+            .map(|m| m.and_then(|m| footprint::Shape::new(&m, MIN_FOOTPRINT_AREA)))
+            .collect(),
+        _ => Vec::new(),
+    };
 
     let view = SrcView {
         data: src.image.as_raw(),
         w: src.image.width() as i64,
         h: src.image.height() as i64,
     };
+    let t_kernel = Instant::now();
     let mut buf = vec![0u8; n * n * 4];
     let mut known = vec![false; n * n];
     let mut fallbacks = vec![0usize; n];
@@ -309,13 +343,30 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
                     let Some(map) = maps[tri as usize] else {
                         continue;
                     };
-                    let fp = map.texel_footprint(i as u32, j as u32);
-                    let tc = kernel::texel_colour(&view, &fp, opts.mode, scratch);
+                    let (iu, ju) = (i as u32, j as u32);
+                    let tc = match opts.mode {
+                        Mode::Subtexel(sub) => subtexel::texel_colour(
+                            &view,
+                            &map,
+                            shapes[tri as usize].as_ref(),
+                            iu,
+                            ju,
+                            sub,
+                            scratch,
+                        ),
+                        _ => kernel::texel_colour(
+                            &view,
+                            &map.texel_footprint(iu, ju),
+                            opts.mode,
+                            scratch,
+                        ),
+                    };
                     *nfb += tc.fallback as usize;
                     if tc.known {
                         let px = &mut row[i * 4..i * 4 + 4];
                         for (p, c) in px.iter_mut().zip(tc.rgb) {
-                            *p = c.round().clamp(0.0, 255.0) as u8;
+                            // round half up (c >= 0 after the clamp); no libm call
+                            *p = (c.clamp(0.0, 255.0) + 0.5) as u8;
                         }
                         px[3] = 255;
                         krow[i] = true;
@@ -323,6 +374,7 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
                 }
             },
         );
+    let t_fill = Instant::now();
     let Some(mut image) = RgbaImage::from_raw(t, t, buf) else {
         return Err(Error::BadOption(format!(
             "texture of {t} x {t} texels could not be allocated"
@@ -337,7 +389,7 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
         Fill::AverageBorder => fill::fill_average_border(&mut image, &assigned),
         Fill::PullPush => fill::fill_pull_push(&mut image, &assigned),
     };
-    Ok(Resampled {
+    let resampled = Resampled {
         image,
         covered,
         stats: ResampleStats {
@@ -348,5 +400,14 @@ pub fn resample(chart: &ChartMesh, src: &Source, opts: &ResampleOptions) -> Resu
             gutter_texels,
             filled_texels,
         },
-    })
+    };
+    let t_end = Instant::now();
+    Ok((
+        resampled,
+        ResampleTimings {
+            prepare: t_kernel - t_start,
+            kernel: t_fill - t_kernel,
+            fill: t_end - t_fill,
+        },
+    ))
 }

@@ -15,7 +15,11 @@ pub(crate) const SUBPIXEL: i64 = 256;
 /// `|v| <= 2^30 / SUBPIXEL`.
 #[inline]
 fn fixed(v: f64) -> i64 {
-    (v * SUBPIXEL as f64).round() as i64
+    // round half away from zero, without a libm call (x - t is exact for |x| < 2^52)
+    let x = v * SUBPIXEL as f64;
+    let t = x as i64;
+    let f = x - t as f64;
+    t + i64::from(f >= 0.5) - i64::from(f <= -0.5)
 }
 
 /// Whether an edge with direction `d` (y down) is a top or left edge of a triangle whose
@@ -39,14 +43,12 @@ pub(crate) fn rasterize(
     let n = texels as usize;
     let mut ids = vec![EMPTY; n * n];
     let half = SUBPIXEL / 2;
+    let fx: Vec<[i64; 2]> = st.iter().map(|p| [fixed(p[0]), fixed(p[1])]).collect();
     for (ti, tri) in triangles.iter().enumerate() {
         if !usable(ti) {
             continue;
         }
-        let mut v = tri.map(|k| {
-            let p = st[k as usize];
-            [fixed(p[0]), fixed(p[1])]
-        });
+        let mut v = tri.map(|k| fx[k as usize]);
         let cross = |a: [i64; 2], b: [i64; 2], c: [i64; 2]| {
             (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
         };
