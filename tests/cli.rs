@@ -201,6 +201,16 @@ fn bad_inputs_fail_cleanly_without_output() {
 }
 
 #[test]
+fn project_flags_fail_cleanly() {
+    let t = tempfile::tempdir().unwrap();
+    fails_naming(&["project", s(&t.path().join("nostore")), "--photos", "p.json"], "nostore");
+    fails_naming(&["project", s(t.path())], "--photos");
+    fails_naming(&["project", s(t.path()), "--photos", "a.json", "--colmap", "d"], "--colmap");
+    fails_naming(&["project", s(t.path()), "--photos", "a.json", "--blend", "mean"], "blend");
+    fails_naming(&["project", s(t.path()), "--photos", "a.json", "--bvh", "quick"], "bvh");
+}
+
+#[test]
 fn engabreen_reparam_mixed_mode_and_export() {
     let t = tempfile::tempdir().unwrap();
     let out = t.path().join("eng.store");

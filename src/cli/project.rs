@@ -58,6 +58,8 @@ fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
 
 /// Runs `project`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    // a bad store is reported before any photo is decoded
+    cliffmap::store::Store::open(&a.store)?;
     let photos = load_photos(&a)?;
     let report = project_store(&a.store, &photos, &options(&a))?;
     if !a.quiet {

@@ -46,6 +46,7 @@ use crate::error::{Error, Result};
 use crate::georef::GridGeoref;
 
 pub use kernel::MIN_FOOTPRINT_AREA;
+#[cfg(test)]
 pub(crate) use exact::polygon_box_area;
 pub use subtexel::MAX_SUBTEXELS;
 

@@ -1,0 +1,55 @@
+//! Splatting throughput: footprints per second deposited by `photo::PhotoAccum::add_all`
+//! (one thread, one 256² cell) for footprints of different sizes relative to a texel, with
+//! the bilinear-only deposit of the same footprints (centre point, collapsed path) as the
+//! peer measured in the same run. Prints a Markdown table (medians of 5 runs).
+//!
+//! Run: `cargo run --release --example splat_bench`
+
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
+use std::time::Instant;
+
+use cliffmap::photo::{ColourTransform, ConfidenceParams, PhotoAccum, PixelFootprint};
+use image::RgbImage;
+
+/// A grid of `n × n` slightly rotated and sheared pixel footprints of side `s` texels,
+/// starting at texel (1, 1) of a 256² texture (wrapped to stay inside).
+fn footprints(n: u32, s: f32, collapse: bool) -> Vec<PixelFootprint> {
+    let (a, b) = ([s * 0.98, s * 0.17], [-s * 0.12, s * 1.01]);
+    let span = 250.0;
+    (0..n)
+        .flat_map(|r| (0..n).map(move |c| (c, r)))
+        .map(|(c, r)| {
+            let o = [1.0 + (c as f32 * a[0] + r as f32 * b[0]).rem_euclid(span), 1.0 + (c as f32 * a[1] + r as f32 * b[1]).rem_euclid(span)];
+            let (a, b) = if collapse { (a.map(|v| v * 0.1), b.map(|v| v * 0.1)) } else { (a, b) };
+            let corners = [o, [o[0] + a[0], o[1] + a[1]], [o[0] + a[0] + b[0], o[1] + a[1] + b[1]], [o[0] + b[0], o[1] + b[1]]];
+            PixelFootprint { cell: 0, pixel: [c, r], corners, cos_view: 0.9, distance: 100.0, reconstructed: 0 }
+        })
+        .collect()
+}
+
+fn main() {
+    let n = 1000u32; // 1 Mpixel per run
+    let img = RgbImage::from_fn(n, n, |x, y| image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x ^ y) % 256) as u8]));
+    let params = ConfidenceParams::default();
+    println!("| footprint side (texels) | exact splat, Mfootprints/s | bilinear peer, Mfootprints/s | ratio |");
+    println!("|---|---|---|---|");
+    for s in [0.35f32, 0.7, 1.5, 4.0] {
+        let time = |collapse: bool| {
+            let fps = footprints(n, s, collapse);
+            let runs: Vec<f64> = (0..5)
+                .map(|_| {
+                    let mut acc = PhotoAccum::new(256);
+                    let t = Instant::now();
+                    acc.add_all(&fps, &img, &ColourTransform::IDENTITY, &params);
+                    std::hint::black_box(&acc);
+                    fps.len() as f64 / t.elapsed().as_secs_f64() / 1e6
+                })
+                .collect();
+            bench_util::median(runs)
+        };
+        let (exact, bil) = (time(false), time(true));
+        println!("| {s} | {exact:.2} | {bil:.2} | {:.2} |", bil / exact);
+    }
+}
