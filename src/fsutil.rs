@@ -69,3 +69,37 @@ mod tests {
         assert_eq!(names.len(), 1);
     }
 }
+
+/// `path` written relative to the directory `base` (e.g. `../photos/a.jpg`), with `/`
+/// separators, so records stay valid when the two are moved together; `path` as given if
+/// either cannot be resolved or they share no root.
+pub fn relative_path(path: &Path, base: &Path) -> String {
+    let (Ok(p), Ok(b)) = (path.canonicalize(), base.canonicalize()) else {
+        return path.display().to_string();
+    };
+    let (pc, bc): (Vec<_>, Vec<_>) = (p.components().collect(), b.components().collect());
+    let common = pc.iter().zip(&bc).take_while(|(x, y)| x == y).count();
+    if common == 0 {
+        return path.display().to_string();
+    }
+    let mut parts: Vec<String> = vec!["..".to_string(); bc.len() - common];
+    parts.extend(pc[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    parts.join("/")
+}
+
+#[cfg(test)]
+mod relative_tests {
+    use super::relative_path;
+
+    #[test]
+    fn relative_paths_climb_to_the_common_ancestor() {
+        let t = tempfile::tempdir().unwrap();
+        let (store, photos) = (t.path().join("out/store"), t.path().join("out/photos"));
+        std::fs::create_dir_all(&store).unwrap();
+        std::fs::create_dir_all(&photos).unwrap();
+        let img = photos.join("a.jpg");
+        std::fs::write(&img, b"x").unwrap();
+        assert_eq!(relative_path(&img, &store), "../photos/a.jpg");
+        assert_eq!(relative_path(&store.join("missing.jpg"), &store), store.join("missing.jpg").display().to_string());
+    }
+}

@@ -122,7 +122,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         .iter()
         .map(|p| PhotoReport {
             name: p.name.clone(),
-            image: p.image_path.display().to_string(),
+            image: crate::fsutil::relative_path(&p.image_path, dir),
             texels_written: 0,
             pixels_hit: 0,
             rejected_silhouette: 0,

@@ -243,7 +243,7 @@ pub struct PhotoLevelReport {
 pub struct PhotoReport {
     /// Name of the photo (its file name).
     pub name: String,
-    /// Image path as given.
+    /// Image path relative to the store directory (as given if it cannot be made relative).
     pub image: String,
     /// Texels that received colour from this photo.
     pub texels_written: u64,
