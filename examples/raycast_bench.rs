@@ -2,8 +2,8 @@
 //!
 //! 1. Rays/s of `TriangleBvh::nearest` against `nearest_brute_force` on a small heightfield
 //!    mesh (same rays; the hits must agree).
-//! 2. On the finest level of an Engabreen store (built here unless a store directory is
-//!    given), for every `BvhQuality`: scene + BVH build time, corner rays/s for the
+//! 2. On the finest level of an Engabreen store (built here, into STORE_DIR if given and
+//!    it holds no store yet), for every `BvhQuality`: scene + BVH build time, corner rays/s for the
 //!    IMG_8902 camera (4290 × 2856, 12.26 M corner rays) and the full `photo_footprints` time.
 //!
 //! Medians of `RUNS` runs (default 3). Run with:
@@ -32,6 +32,21 @@ impl Lcg {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f32) / (1u64 << 24) as f32
     }
+}
+
+/// CPU seconds (user + system, all threads) this process has used so far (Linux
+/// `/proc/self/stat`, 100 Hz ticks; NaN elsewhere).
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit_once(')')?.1.split_whitespace().collect::<Vec<_>>();
+            // Fields after the command: state is index 0, utime 11, stime 12.
+            let u: f64 = rest.get(11)?.parse().ok()?;
+            let k: f64 = rest.get(12)?.parse().ok()?;
+            Some((u + k) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
 }
 
 fn time<T>(f: impl FnOnce() -> T) -> (T, f64) {
@@ -114,17 +129,18 @@ fn main() -> anyhow::Result<()> {
     small_mesh_table();
 
     let tmp = tempfile::tempdir()?;
-    let dir = match args.get(1) {
-        Some(d) => std::path::PathBuf::from(d),
-        None => {
-            let t = engabreen_store(tmp.path())?;
-            println!("Engabreen store built in {t:.1} s (default build options)");
-            tmp.path().to_path_buf()
-        }
-    };
+    // A given directory without a manifest gets the store built into it (kept for reruns).
+    let dir = args.get(1).map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
+    if !dir.join("manifest.json").is_file() {
+        let t = engabreen_store(&dir)?;
+        println!("Engabreen store built in {t:.1} s (default build options)");
+    }
     let store = Store::open(&dir)?;
     let level = store.manifest.quadtree.levels - 1;
     let cam = camera_from_json_file(&shared_data("engabreen/engabreen_camera_IMG_8902.json"), (4290, 2856))?;
+    // Optional third argument: shrink the photo by this factor (quick runs).
+    let shrink: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(1).max(1);
+    let cam = cam.resized(cam.width / shrink, cam.height / shrink);
     let (w, h) = (cam.width, cam.height);
     let base = LevelScene::from_store(&store, level, cam.position, BvhQuality::Fastest)?;
     let cells = base.cells.clone();
@@ -135,7 +151,7 @@ fn main() -> anyhow::Result<()> {
         ((w + 1) * (h + 1)) as f64 / 1e6,
         rayon::current_num_threads()
     );
-    println!("| BvhQuality | scene + BVH build s | corner hits | corner rays/s | corner rays s | photo_footprints s | footprints | silhouette | reconstructed | dropped |");
+    println!("| BvhQuality | scene + BVH build s | corner hits | corner rays/s | corner rays s (CPU s) | photo_footprints s (CPU s) | footprints | silhouette | reconstructed | dropped |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let origin = Vec3::ZERO; // the frame is centred on the camera
     for q in BvhQuality::ALL {
@@ -148,8 +164,10 @@ fn main() -> anyhow::Result<()> {
         }
         let scene = scene.expect("runs >= 1");
         let mut cast = Vec::new();
+        let mut cast_cpu = Vec::new();
         let mut nhit = 0;
         for _ in 0..runs {
+            let c0 = cpu_seconds();
             let (n, t) = time(|| {
                 (0..=h)
                     .into_par_iter()
@@ -164,13 +182,17 @@ fn main() -> anyhow::Result<()> {
                     })
                     .sum::<usize>()
             });
+            cast_cpu.push(cpu_seconds() - c0);
             cast.push(t);
             nhit = n;
         }
         let mut full = Vec::new();
+        let mut full_cpu = Vec::new();
         let mut set = None;
         for _ in 0..runs {
+            let c0 = cpu_seconds();
             let (s, t) = time(|| photo_footprints(&scene, &cam, &FootprintOptions::default()));
+            full_cpu.push(cpu_seconds() - c0);
             full.push(t);
             set = Some(s);
         }
@@ -178,13 +200,15 @@ fn main() -> anyhow::Result<()> {
         let rays = ((w + 1) * (h + 1)) as f64;
         let c = median(cast);
         println!(
-            "| {} | {:.2} | {:.1} % | {:.2} M | {:.2} | {:.2} | {} | {} | {} | {} |",
+            "| {} | {:.2} | {:.1} % | {:.2} M | {:.2} ({:.1}) | {:.2} ({:.1}) | {} | {} | {} | {} |",
             q.name(),
             median(build),
             100.0 * nhit as f64 / rays,
             rays / c / 1e6,
             c,
+            median(cast_cpu),
             median(full),
+            median(full_cpu),
             set.footprints.len(),
             set.rejected_silhouette,
             set.reconstructed,
