@@ -1,0 +1,219 @@
+//! Ray-casting benchmark for the photo stage (docs/projection.md, "Ray casting").
+//!
+//! 1. Rays/s of `TriangleBvh::nearest` against `nearest_brute_force` on a small heightfield
+//!    mesh (same rays; the hits must agree).
+//! 2. On the finest level of an Engabreen store (built here, into STORE_DIR if given and
+//!    it holds no store yet), for every `BvhQuality`: scene + BVH build time, corner rays/s for the
+//!    IMG_8902 camera (4290 × 2856, 12.26 M corner rays) and the full `photo_footprints` time.
+//!
+//! Medians of `RUNS` runs (default 3). Run with:
+//! ```sh
+//! cargo run --release --example raycast_bench -- [STORE_DIR] [RUNS]
+//! ```
+
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
+use std::time::Instant;
+
+use bench_util::{median, shared_data};
+use cliffmap::camera::camera_from_json_file;
+use cliffmap::photo::{nearest_brute_force, photo_footprints, BvhQuality, FootprintOptions, LevelScene, TriangleBvh};
+use cliffmap::pipeline::{build_store, BuildInputs, BuildOptions};
+use cliffmap::store::Store;
+use cliffmap::{Dem, DemLoadOptions, OrthoPlacement};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Deterministic pseudo-random numbers in [0, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+/// CPU seconds (user + system, all threads) this process has used so far (Linux
+/// `/proc/self/stat`, 100 Hz ticks; NaN elsewhere).
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit_once(')')?.1.split_whitespace().collect::<Vec<_>>();
+            // Fields after the command: state is index 0, utime 11, stime 12.
+            let u: f64 = rest.get(11)?.parse().ok()?;
+            let k: f64 = rest.get(12)?.parse().ok()?;
+            Some((u + k) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
+fn time<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let t = Instant::now();
+    let r = f();
+    (r, t.elapsed().as_secs_f64())
+}
+
+fn small_mesh_table() {
+    let n = 48;
+    let z = |i: i32, j: i32| (i as f32 * 0.37).sin() * 3.0 + (j as f32 * 0.23).cos() * 2.0 + ((i * j) % 7) as f32 * 0.2;
+    let p = |i: i32, j: i32| Vec3::new(i as f32, j as f32, z(i, j));
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            tris.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            tris.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    let mut rng = Lcg(7);
+    let rays: Vec<(Vec3, Vec3)> = (0..20_000)
+        .map(|_| {
+            let o = Vec3::new(rng.next() * 60.0 - 6.0, rng.next() * 60.0 - 6.0, 20.0 + rng.next() * 10.0);
+            let target = Vec3::new(rng.next() * n as f32, rng.next() * n as f32, 0.0);
+            (o, target - o)
+        })
+        .collect();
+    let bvh = TriangleBvh::build(&tris, BvhQuality::default());
+    let mut bf_s = Vec::new();
+    let mut bvh_s = Vec::new();
+    let mut bvh2_s = Vec::new();
+    let mut agree = 0;
+    let mut hits = 0;
+    for _ in 0..3 {
+        let (a, t) = time(|| rays.iter().map(|(o, d)| bvh.nearest(*o, *d, 0.0, f32::INFINITY)).collect::<Vec<_>>());
+        bvh_s.push(t);
+        let (_, t2) = time(|| rays.par_iter().map(|(o, d)| bvh.nearest(*o, *d, 0.0, f32::INFINITY)).collect::<Vec<_>>());
+        bvh2_s.push(t2);
+        let (b, t) = time(|| rays.iter().map(|(o, d)| nearest_brute_force(&tris, *o, *d, 0.0, f32::INFINITY)).collect::<Vec<_>>());
+        bf_s.push(t);
+        agree = a.iter().zip(&b).filter(|(x, y)| x.map(|h| h.triangle) == y.map(|h| h.triangle)).count();
+        hits = a.iter().filter(|h| h.is_some()).count();
+    }
+    let nr = rays.len() as f64;
+    let (bf, bv, bv2) = (median(bf_s), median(bvh_s), median(bvh2_s));
+    println!("Small mesh: {} triangles, {} rays ({} hit), hits agree on {}/{} rays\n", tris.len(), rays.len(), hits, agree, rays.len());
+    println!("| method | threads | rays/s | speed-up vs brute force |");
+    println!("|---|---|---|---|");
+    println!("| nearest_brute_force | 1 | {:.3} M | 1.0 |", nr / bf / 1e6);
+    println!("| TriangleBvh::nearest ({}) | 1 | {:.2} M | {:.0} |", BvhQuality::default().name(), nr / bv / 1e6, bf / bv);
+    println!(
+        "| TriangleBvh::nearest ({}) | {} | {:.2} M | {:.0} |\n",
+        BvhQuality::default().name(),
+        rayon::current_num_threads(),
+        nr / bv2 / 1e6,
+        bf / bv2
+    );
+    assert_eq!(agree, rays.len(), "BVH and brute force disagree");
+}
+
+fn engabreen_store(dir: &std::path::Path) -> anyhow::Result<f64> {
+    let dem_opts = DemLoadOptions {
+        width: Some(507),
+        height: Some(590),
+        spacing: Some(3.0),
+        origin: Some((445302.17, 7396769.45)),
+        ..Default::default()
+    };
+    let dem: Dem = cliffmap::load_dem(&shared_data("engabreen/engabreen_dem_3m_507x590.f32"), &dem_opts)?;
+    let ortho = cliffmap::load_ortho(&shared_data("engabreen/engabreen_ortho_3m_507x590.png"), OrthoPlacement::SameGridAsDem, &dem, 1 << 30)?;
+    let inputs = BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "engabreen".into(), ortho_source: None, fingerprint: "raycast-bench".into() };
+    let opts = BuildOptions { quiet: true, ..BuildOptions::default() };
+    let (_, t) = time(|| build_store(&inputs, &opts, dir));
+    Ok(t)
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let runs: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(3).max(1);
+    small_mesh_table();
+
+    let tmp = tempfile::tempdir()?;
+    // A given directory without a manifest gets the store built into it (kept for reruns).
+    let dir = args.get(1).map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
+    if !dir.join("manifest.json").is_file() {
+        let t = engabreen_store(&dir)?;
+        println!("Engabreen store built in {t:.1} s (default build options)");
+    }
+    let store = Store::open(&dir)?;
+    let level = store.manifest.quadtree.levels - 1;
+    let cam = camera_from_json_file(&shared_data("engabreen/engabreen_camera_IMG_8902.json"), (4290, 2856))?;
+    // Optional third argument: shrink the photo by this factor (quick runs).
+    let shrink: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(1).max(1);
+    let cam = cam.resized(cam.width / shrink, cam.height / shrink);
+    let (w, h) = (cam.width, cam.height);
+    let base = LevelScene::from_store(&store, level, cam.position, BvhQuality::Fastest)?;
+    let cells = base.cells.clone();
+    println!(
+        "Finest level {level}: {} cells, {} triangles; camera {w} × {h} = {:.2} M corner rays; {} threads\n",
+        cells.len(),
+        base.triangle_count(),
+        ((w + 1) * (h + 1)) as f64 / 1e6,
+        rayon::current_num_threads()
+    );
+    println!("| BvhQuality | scene + BVH build s | corner hits | corner rays/s | corner rays s (CPU s) | photo_footprints s (CPU s) | footprints | silhouette | reconstructed | dropped |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let origin = Vec3::ZERO; // the frame is centred on the camera
+    for q in BvhQuality::ALL {
+        let mut build = Vec::new();
+        let mut scene = None;
+        for _ in 0..runs {
+            let (s, t) = time(|| LevelScene::new(cells.clone(), cam.position, q));
+            build.push(t);
+            scene = Some(s);
+        }
+        let scene = scene.expect("runs >= 1");
+        let mut cast = Vec::new();
+        let mut cast_cpu = Vec::new();
+        let mut nhit = 0;
+        for _ in 0..runs {
+            let c0 = cpu_seconds();
+            let (n, t) = time(|| {
+                (0..=h)
+                    .into_par_iter()
+                    .map(|j| {
+                        (0..=w)
+                            .filter(|&i| {
+                                cam.pixel_ray(i as f64 - 0.5, j as f64 - 0.5)
+                                    .and_then(|d| scene.bvh.nearest(origin, d.as_vec3(), 0.0, f32::INFINITY))
+                                    .is_some()
+                            })
+                            .count()
+                    })
+                    .sum::<usize>()
+            });
+            cast_cpu.push(cpu_seconds() - c0);
+            cast.push(t);
+            nhit = n;
+        }
+        let mut full = Vec::new();
+        let mut full_cpu = Vec::new();
+        let mut set = None;
+        for _ in 0..runs {
+            let c0 = cpu_seconds();
+            let (s, t) = time(|| photo_footprints(&scene, &cam, &FootprintOptions::default()));
+            full_cpu.push(cpu_seconds() - c0);
+            full.push(t);
+            set = Some(s);
+        }
+        let set = set.expect("runs >= 1");
+        let rays = ((w + 1) * (h + 1)) as f64;
+        let c = median(cast);
+        println!(
+            "| {} | {:.2} | {:.1} % | {:.2} M | {:.2} ({:.1}) | {:.2} ({:.1}) | {} | {} | {} | {} |",
+            q.name(),
+            median(build),
+            100.0 * nhit as f64 / rays,
+            rays / c / 1e6,
+            c,
+            median(cast_cpu),
+            median(full),
+            median(full_cpu),
+            set.footprints.len(),
+            set.rejected_silhouette,
+            set.reconstructed,
+            set.dropped
+        );
+    }
+    Ok(())
+}
