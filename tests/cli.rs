@@ -310,3 +310,48 @@ fn geotiff_with_nodata_and_terrain_rgb_build() {
     assert!(m2.dem.height_min >= 439.0 && m2.dem.height_max <= 2184.5);
     assert!(m2.cells.iter().any(|c| c.stats.max_slope_deg > 60.0));
 }
+
+#[test]
+fn engabreen_photos_project_onto_the_rock_walls() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("eng.store");
+    let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
+    let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
+    let args = engabreen_build_args(&dem, &ortho, &out);
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    ok(&["reparam", s(&out), "--quiet"]);
+    // The two ground photos of the README: IMG_8902 with its fitted pose, IMG_8937 with
+    // ImGRAFT's rotation delta.
+    let cam = real_data("engabreen/engabreen_camera_IMG_8902.json");
+    let list = serde_json::json!({"photos": [
+        {"image": real_data("engabreen/IMG_8902.jpg"), "imgraft": cam},
+        {"image": real_data("engabreen/IMG_8937.jpg"), "imgraft": cam,
+         "rotation_delta_deg": [0.12633, 0.017584, 0.015242]},
+    ]});
+    let photos = t.path().join("photos.json");
+    std::fs::write(&photos, list.to_string()).unwrap();
+    ok(&["project", s(&out), "--photos", s(&photos), "--quiet"]);
+    let o = ok(&["stats", s(&out), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let sum = &v["summary"];
+    let frac = sum["photo_improved_steep_fraction"].as_f64().unwrap();
+    assert!(frac > 0.05 && frac <= 1.0, "photo_improved_steep_fraction {frac}");
+    let reports = sum["photos"].as_array().unwrap();
+    assert_eq!(reports.len(), 2);
+    for p in reports {
+        // Most of the 12 MP photo sees the DEM crop; the walls and ridges cause silhouettes.
+        assert!(p["pixels_hit"].as_u64().unwrap() > 2_000_000, "{p}");
+        assert!(p["texels_written"].as_u64().unwrap() > 10_000, "{p}");
+        assert!(p["rejected_silhouette"].as_u64().unwrap() > 0, "{p}");
+        assert!(p["reconstructed_footprints"].as_u64().is_some(), "{p}");
+    }
+    let st = Store::open(&out).unwrap();
+    let photo_cells = st.manifest.cells.iter().filter(|c| c.photo.is_some()).count();
+    assert!(photo_cells > 0 && photo_cells < st.manifest.cells.len(), "{photo_cells} photo cells");
+    // Every photo texture reads back intact and has the active texture's size.
+    for c in st.manifest.cells.iter().filter(|c| c.photo.is_some()) {
+        let p = c.photo.as_ref().unwrap();
+        let img = st.read_png(&p.texture).unwrap();
+        assert_eq!(img.width(), cliffmap::store::active_texels(c));
+    }
+}
