@@ -17,6 +17,8 @@ pub enum Mode {
     Reparam,
     /// Each cell as stored (correct rendering).
     Mixed,
+    /// Like mixed, with photo-enhanced textures where the store has them.
+    Photo,
 }
 
 /// Flags of `cliffmap fly`.
@@ -55,6 +57,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Mode::Ortho => (UvMode::Ortho, "ortho"),
         Mode::Reparam => (UvMode::Reparam, "reparam"),
         Mode::Mixed => (UvMode::Mixed, "mixed"),
+        Mode::Photo => (UvMode::Photo, "photo"),
     };
     let opts = SceneOptions {
         sse_px: a.sse,

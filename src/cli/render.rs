@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::fsutil::write_png_atomic;
-use cliffmap::render::{FrameOptions, SceneOptions, TerrainScene, UvMode};
+use cliffmap::render::{FrameOptions, Overlay, SceneOptions, TerrainScene, UvMode};
 
 /// Flags of `cliffmap render`.
 #[derive(clap::Args, Debug)]
@@ -27,9 +27,60 @@ pub struct Args {
     /// Texture colour only (no lighting), flat sky.
     #[arg(long)]
     unlit: bool,
-    /// Tint cells by quadtree level.
+    /// Tint cells by quadtree level (same as `--overlay levels`).
     #[arg(long)]
     levels: bool,
+    /// Texture source: orthographic files only, the reparameterized variant where a cell has
+    /// one, or additionally the photo-enhanced texture where a cell has one.
+    #[arg(long, value_enum, default_value_t = TextureMode::Reparam)]
+    mode: TextureMode,
+    /// Overlay: level colours + bounding boxes, or the per-texel stretch heat map.
+    #[arg(long, value_enum, default_value_t = OverlayArg::None)]
+    overlay: OverlayArg,
+}
+
+/// Texture source of `render` (and `view`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum TextureMode {
+    /// Orthographic files of every cell.
+    Ortho,
+    /// Each cell's reparameterized variant where it has one (as stored).
+    Reparam,
+    /// Like reparam, with photo-enhanced textures where present.
+    Photo,
+}
+
+impl TextureMode {
+    /// The renderer mode.
+    pub fn uv_mode(self) -> UvMode {
+        match self {
+            TextureMode::Ortho => UvMode::Ortho,
+            TextureMode::Reparam => UvMode::Mixed,
+            TextureMode::Photo => UvMode::Photo,
+        }
+    }
+}
+
+/// Overlay flag values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum OverlayArg {
+    /// No overlay.
+    None,
+    /// Level colours and cell bounding boxes.
+    Levels,
+    /// Per-texel stretch heat map (blue 1, yellow 2, red ≥ 4).
+    Stretch,
+}
+
+impl OverlayArg {
+    /// The renderer overlay.
+    pub fn overlay(self) -> Overlay {
+        match self {
+            OverlayArg::None => Overlay::None,
+            OverlayArg::Levels => Overlay::Levels,
+            OverlayArg::Stretch => Overlay::Stretch,
+        }
+    }
 }
 
 /// Parses `WxH` into positive pixel counts.
@@ -55,18 +106,27 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let (w, h) = a.size;
     let cam = camera_from_json_file(&a.camera, (w, h))?.resized(w, h);
+    let overlay = match (a.unlit, a.levels, a.overlay.overlay()) {
+        // --unlit is the texture colour alone: no overlays.
+        (true, _, _) => Overlay::None,
+        (false, true, _) => Overlay::Levels,
+        (false, false, o) => o,
+    };
     let opts = SceneOptions {
         sse_px: a.sse,
-        uv_mode: UvMode::Mixed,
+        uv_mode: a.mode.uv_mode(),
+        overlay,
         frame: FrameOptions {
             lit: !a.unlit,
-            level_overlay: a.levels,
             ..Default::default()
         },
         ..Default::default()
     };
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
     eprintln!("adapter: {}", scene.gpu().describe());
+    if matches!(a.mode, TextureMode::Photo) && !scene.has_photo() {
+        eprintln!("note: the store has no photo-enhanced textures; --mode photo shows reparam");
+    }
     let r = scene.frame(&cam, true)?;
     let img = scene.read_rgba()?;
     write_png_atomic(&a.out, &img).with_context(|| format!("writing {}", a.out.display()))?;

@@ -68,6 +68,27 @@ impl RenderCamera {
         Frustum::from_view_proj(&self.view_proj_relative())
     }
 
+    /// The point seen at pixel `(u, v)` (pixel centres at integer coordinates, the camera
+    /// model's convention) with reverse-Z depth-buffer value `depth` (= near / z), as an offset
+    /// from the camera position in world metres; `None` for depth ≤ 0 (nothing drawn) or NaN.
+    pub fn unproject_relative(&self, u: f64, v: f64, depth: f32) -> Option<DVec3> {
+        if !(depth > 0.0) {
+            return None;
+        }
+        let m = &self.model;
+        let z = self.near / depth as f64;
+        let cam = DVec3::new((u - m.cx) / m.fx * z, (v - m.cy) / m.fy * z, z);
+        Some(m.world_to_camera.transpose() * cam)
+    }
+
+    /// Pinhole projection (no distortion, as rasterized) of a camera-relative world offset to
+    /// pixel coordinates; `None` behind the camera.
+    pub fn project_relative(&self, rel: DVec3) -> Option<[f64; 2]> {
+        let m = &self.model;
+        let c = m.world_to_camera * rel;
+        (c.z > 1e-12).then(|| [m.fx * c.x / c.z + m.cx, m.fy * c.y / c.z + m.cy])
+    }
+
     /// Pixels covered by one metre seen face-on at `distance` metres (vertical focal length / d).
     pub fn pixels_per_metre(&self, distance: f64) -> f64 {
         self.model.fy / distance.max(1e-9)
@@ -100,5 +121,11 @@ mod tests {
             "{px:?} vs {want:?}"
         );
         assert!(ndc.z > 0.0 && ndc.z < 1.0);
+        // The depth value round-trips through unprojection to the same point.
+        let world = origin + local.as_dvec3();
+        let p = cam.project_relative(world - pos).unwrap();
+        let back = cam.unproject_relative(p[0], p[1], ndc.z).unwrap() + pos;
+        assert!((back - world).length() < 1e-3 * (world - pos).length(), "{back} vs {world}");
+        assert!(cam.unproject_relative(1.0, 1.0, 0.0).is_none());
     }
 }

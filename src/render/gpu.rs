@@ -100,6 +100,8 @@ pub enum UvMode {
     /// Like `Mixed`, but every cell reads a UV vertex stream (computed on the CPU for cells
     /// without stored UVs).
     Reparam,
+    /// Like `Mixed`, with each cell's photo-enhanced texture (`rec.photo`) where it has one.
+    Photo,
 }
 
 impl CellData {
@@ -114,7 +116,7 @@ impl CellData {
     ) -> CellData {
         let uvs = match mode {
             UvMode::Ortho => None,
-            UvMode::Mixed => mesh.uvs.clone(),
+            UvMode::Mixed | UvMode::Photo => mesh.uvs.clone(),
             UvMode::Reparam => Some((0..mesh.positions.len()).map(|k| texcoord(rec, &mesh, k)).collect()),
         };
         let normal = image::DynamicImage::ImageRgb8(normal).to_rgba8();
@@ -152,6 +154,7 @@ pub struct GpuCell {
     uvs: Option<wgpu::Buffer>,
     indices: wgpu::Buffer,
     index_count: u32,
+    box_lines: wgpu::Buffer,
     textures: wgpu::BindGroup,
     /// World origin of the cell-local frame.
     pub origin: DVec3,
@@ -178,6 +181,8 @@ pub struct FrameOptions {
     pub sky: [u8; 3],
     /// Tint cells by quadtree level.
     pub level_overlay: bool,
+    /// Draw each cell's world bounding box (lines in its level colour).
+    pub bounding_boxes: bool,
 }
 
 impl Default for FrameOptions {
@@ -188,6 +193,7 @@ impl Default for FrameOptions {
             ambient: 0.35,
             sky: [170, 200, 235],
             level_overlay: false,
+            bounding_boxes: false,
         }
     }
 }
@@ -199,10 +205,12 @@ pub struct TerrainRenderer {
     width: u32,
     height: u32,
     colour: wgpu::Texture,
+    depth: wgpu::Texture,
     depth_view: wgpu::TextureView,
     colour_view: wgpu::TextureView,
     pipeline_ortho: wgpu::RenderPipeline,
     pipeline_uv: wgpu::RenderPipeline,
+    pipeline_lines: wgpu::RenderPipeline,
     cell_layout: wgpu::BindGroupLayout,
     frame_layout: wgpu::BindGroupLayout,
     frame_buf: wgpu::Buffer,
@@ -314,7 +322,11 @@ impl TerrainRenderer {
                 shader_location: 1,
             }],
         };
-        let make = |entry: &str, buffers: &[Option<wgpu::VertexBufferLayout>]| {
+        let make = |entry: &str,
+                    buffers: &[Option<wgpu::VertexBufferLayout>],
+                    topology: wgpu::PrimitiveTopology,
+                    fragment: &str| {
+            let lines = topology == wgpu::PrimitiveTopology::LineList;
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&layout),
@@ -325,21 +337,25 @@ impl TerrainRenderer {
                     buffers,
                 },
                 primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    topology,
                     cull_mode: None,
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    depth_write_enabled: Some(!lines),
+                    depth_compare: Some(if lines {
+                        wgpu::CompareFunction::GreaterEqual
+                    } else {
+                        wgpu::CompareFunction::Greater
+                    }),
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(fragment),
                     compilation_options: Default::default(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: COLOR_FORMAT,
@@ -351,8 +367,15 @@ impl TerrainRenderer {
                 cache: None,
             })
         };
-        let pipeline_ortho = make("vs_ortho", &[Some(pos_layout.clone())]);
-        let pipeline_uv = make("vs_uv", &[Some(pos_layout), Some(uv_layout)]);
+        let tris = wgpu::PrimitiveTopology::TriangleList;
+        let pipeline_ortho = make("vs_ortho", &[Some(pos_layout.clone())], tris, "fs_main");
+        let pipeline_lines = make(
+            "vs_ortho",
+            &[Some(pos_layout.clone())],
+            wgpu::PrimitiveTopology::LineList,
+            "fs_line",
+        );
+        let pipeline_uv = make("vs_uv", &[Some(pos_layout), Some(uv_layout)], tris, "fs_main");
         let frame_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: 32,
@@ -369,7 +392,7 @@ impl TerrainRenderer {
             anisotropy_clamp: 8,
             ..Default::default()
         });
-        let (colour, colour_view, depth_view) = Self::targets(device, width, height);
+        let (colour, colour_view, depth, depth_view) = Self::targets(device, width, height);
         let draw_capacity = 64;
         let draw_buf = Self::draw_buffer(device, draw_capacity);
         let frame_group = Self::frame_group(device, &frame_layout, &frame_buf, &draw_buf);
@@ -378,10 +401,12 @@ impl TerrainRenderer {
             width,
             height,
             colour,
+            depth,
             depth_view,
             colour_view,
             pipeline_ortho,
             pipeline_uv,
+            pipeline_lines,
             cell_layout,
             frame_layout,
             frame_buf,
@@ -396,7 +421,7 @@ impl TerrainRenderer {
         device: &wgpu::Device,
         width: u32,
         height: u32,
-    ) -> (wgpu::Texture, wgpu::TextureView, wgpu::TextureView) {
+    ) -> (wgpu::Texture, wgpu::TextureView, wgpu::Texture, wgpu::TextureView) {
         let size = wgpu::Extent3d {
             width,
             height,
@@ -419,12 +444,12 @@ impl TerrainRenderer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         let cv = colour.create_view(&Default::default());
         let dv = depth.create_view(&Default::default());
-        (colour, cv, dv)
+        (colour, cv, depth, dv)
     }
 
     fn draw_buffer(device: &wgpu::Device, capacity: u64) -> wgpu::Buffer {
@@ -593,6 +618,31 @@ impl TerrainRenderer {
             ],
         });
         let origin = DVec3::from(rec.origin);
+        let (lo, hi) = (
+            (DVec3::from(rec.bbox_min) - origin).as_vec3(),
+            (DVec3::from(rec.bbox_max) - origin).as_vec3(),
+        );
+        let corner = |k: usize| {
+            [
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            ]
+        };
+        let mut lines = Vec::with_capacity(72);
+        for a in 0..8usize {
+            for bit in [1, 2, 4] {
+                if a & bit == 0 {
+                    lines.extend(corner(a));
+                    lines.extend(corner(a | bit));
+                }
+            }
+        }
+        let box_lines = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("bbox lines"),
+            contents: &f32_bytes(&lines),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
         let e = rec.extent;
         let bytes = pos.len() as u64 * 4
             + idx.len() as u64
@@ -604,6 +654,7 @@ impl TerrainRenderer {
             uvs,
             indices,
             index_count: data.mesh.triangles.len() as u32 * 3,
+            box_lines,
             textures,
             origin,
             extent_rel: [
@@ -691,7 +742,7 @@ impl TerrainRenderer {
                     view: &self.depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
-                        store: wgpu::StoreOp::Discard,
+                        store: wgpu::StoreOp::Store,
                     }),
                     stencil_ops: None,
                 }),
@@ -714,6 +765,15 @@ impl TerrainRenderer {
                 pass.draw_indexed(0..c.index_count, 0, 0..1);
                 triangles += c.triangles as u64;
             }
+            if opts.bounding_boxes {
+                pass.set_pipeline(&self.pipeline_lines);
+                for (i, c) in cells.iter().enumerate() {
+                    pass.set_bind_group(0, &self.frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
+                    pass.set_bind_group(1, &c.textures, &[]);
+                    pass.set_vertex_buffer(0, c.box_lines.slice(..));
+                    pass.draw(0..24, 0..1);
+                }
+            }
         }
         self.ctx.queue.submit([enc.finish()]);
         device
@@ -722,10 +782,34 @@ impl TerrainRenderer {
         Ok(triangles)
     }
 
-    /// Copies the last rendered frame back (256-byte aligned rows, unpadded here).
+    /// Copies the last rendered frame back (sRGB RGBA8, row 0 at the top).
     pub fn read_rgba(&self) -> Result<image::RgbaImage> {
+        let out = self.read_target(&self.colour, wgpu::TextureAspect::All, 4)?;
+        image::RgbaImage::from_raw(self.width, self.height, out)
+            .ok_or_else(|| Error::Gpu("readback size mismatch".into()))
+    }
+
+    /// Copies the last frame's depth buffer back: `width × height` values, row 0 at the top,
+    /// reverse-Z (`near / z_camera`, 0 where nothing was drawn). Needs a backend that can
+    /// copy depth textures (Vulkan, Metal, DX12; not GL).
+    pub fn read_depth(&self) -> Result<Vec<f32>> {
+        let out = self.read_target(&self.depth, wgpu::TextureAspect::DepthOnly, 4)?;
+        Ok(out
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect())
+    }
+
+    /// Copies one aspect of a full-size target texture into tightly packed rows
+    /// (the copy uses rows padded to 256 bytes).
+    fn read_target(
+        &self,
+        texture: &wgpu::Texture,
+        aspect: wgpu::TextureAspect,
+        bytes_per_pixel: u32,
+    ) -> Result<Vec<u8>> {
         let device = &self.ctx.device;
-        let row = 4 * self.width;
+        let row = bytes_per_pixel * self.width;
         let padded =
             row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buf = device.create_buffer(&wgpu::BufferDescriptor {
@@ -739,10 +823,10 @@ impl TerrainRenderer {
         });
         enc.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
-                texture: &self.colour,
+                texture,
                 mip_level: 0,
                 origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
+                aspect,
             },
             wgpu::TexelCopyBufferInfo {
                 buffer: &buf,
@@ -781,7 +865,6 @@ impl TerrainRenderer {
             }
         }
         buf.unmap();
-        image::RgbaImage::from_raw(self.width, self.height, out)
-            .ok_or_else(|| Error::Gpu("readback size mismatch".into()))
+        Ok(out)
     }
 }

@@ -10,9 +10,11 @@ mod cache;
 mod camera;
 mod frustum;
 mod lod;
+mod overlay;
 mod stream;
 
 pub use cache::LruCache;
+pub use overlay::{Overlay, heat_colour, stretch_heatmap};
 pub use camera::RenderCamera;
 pub use frustum::Frustum;
 pub use lod::{
@@ -20,6 +22,7 @@ pub use lod::{
 };
 pub use stream::{DrawList, Streamer, resolve_draw_list};
 
+pub mod accuracy;
 pub mod gpu;
 mod scene;
 

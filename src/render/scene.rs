@@ -10,6 +10,7 @@ use super::cache::LruCache;
 use super::camera::RenderCamera;
 use super::gpu::{CellData, FrameOptions, GpuCell, GpuContext, TerrainRenderer, UvMode};
 use super::lod::{CellIndex, distance_to_bbox, select_cells};
+use super::overlay::{Overlay, stretch_heatmap};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -22,8 +23,10 @@ pub struct SceneOptions {
     pub sse_px: f64,
     /// GPU memory budget for cached cells, bytes.
     pub budget_bytes: u64,
-    /// Texture-coordinate mode.
+    /// Texture-coordinate mode (and texture source).
     pub uv_mode: UvMode,
+    /// Overlay (stretch replaces the colour textures; levels tints and draws boxes).
+    pub overlay: Overlay,
     /// Background loader threads (≥ 1).
     pub loader_threads: usize,
     /// Shading.
@@ -36,6 +39,7 @@ impl Default for SceneOptions {
             sse_px: 0.5,
             budget_bytes: 512 << 20,
             uv_mode: UvMode::Mixed,
+            overlay: Overlay::None,
             loader_threads: 1,
             frame: FrameOptions::default(),
         }
@@ -98,22 +102,12 @@ impl TerrainScene {
         }
         let renderer = TerrainRenderer::new(GpuContext::new()?, width, height)?;
         let index = CellIndex::new(&store.manifest.cells);
-        let loader_store = Arc::clone(&store);
-        let mode = opts.uv_mode;
-        let streamer = Streamer::new(opts.loader_threads, move |i| {
-            let rec = &loader_store.manifest.cells[i];
-            // The reparameterized variant where the cell has one, unless the baseline
-            // orthographic rendering is asked for.
-            let files = match (&rec.reparam, mode) {
-                (Some(r), UvMode::Mixed | UvMode::Reparam) => &r.files,
-                _ => &rec.files,
-            };
-            let bytes = loader_store.read_file(&files.mesh)?;
-            let mesh = CellMesh::from_bytes(&bytes, &loader_store.dir.join(&files.mesh.path))?;
-            let colour = loader_store.read_png(&files.texture)?.to_rgba8();
-            let normal = loader_store.read_png(&files.normal)?.to_rgb8();
-            Ok(CellData::new(rec, mesh, colour, normal, mode))
-        });
+        let streamer = Self::streamer(&store, &opts);
+        let mut opts = opts;
+        if opts.overlay == Overlay::Levels {
+            opts.frame.level_overlay = true;
+            opts.frame.bounding_boxes = true;
+        }
         Ok(TerrainScene {
             store,
             index,
@@ -122,6 +116,54 @@ impl TerrainScene {
             streamer,
             opts,
         })
+    }
+
+    /// Background loaders producing upload data for `opts.uv_mode` and `opts.overlay`.
+    fn streamer(store: &Arc<Store>, opts: &SceneOptions) -> Streamer<CellData> {
+        let loader_store = Arc::clone(store);
+        let (mode, overlay) = (opts.uv_mode, opts.overlay);
+        Streamer::new(opts.loader_threads, move |i| {
+            let rec = &loader_store.manifest.cells[i];
+            // The reparameterized variant where the cell has one, unless the baseline
+            // orthographic rendering is asked for.
+            let files = match (&rec.reparam, mode) {
+                (Some(r), UvMode::Mixed | UvMode::Reparam | UvMode::Photo) => &r.files,
+                _ => &rec.files,
+            };
+            let bytes = loader_store.read_file(&files.mesh)?;
+            let mesh = CellMesh::from_bytes(&bytes, &loader_store.dir.join(&files.mesh.path))?;
+            // The photo-enhanced texture has the layout of the active (reparam or ortho) one.
+            let texture = match (&rec.photo, mode) {
+                (Some(p), UvMode::Photo) => &p.texture,
+                _ => &files.texture,
+            };
+            let mut colour = loader_store.read_png(texture)?.to_rgba8();
+            if overlay == Overlay::Stretch {
+                colour = stretch_heatmap(rec, &mesh, colour.width().max(colour.height()));
+            }
+            let normal = loader_store.read_png(&files.normal)?.to_rgb8();
+            Ok(CellData::new(rec, mesh, colour, normal, mode))
+        })
+    }
+
+    /// Switches texture mode and overlay: drops the cached cells (they reload in the
+    /// background) when the cell data changes; the level tint applies at once.
+    pub fn set_mode(&mut self, uv_mode: UvMode, overlay: Overlay) {
+        let reload = uv_mode != self.opts.uv_mode
+            || (overlay == Overlay::Stretch) != (self.opts.overlay == Overlay::Stretch);
+        self.opts.uv_mode = uv_mode;
+        self.opts.overlay = overlay;
+        self.opts.frame.level_overlay = overlay == Overlay::Levels;
+        self.opts.frame.bounding_boxes = overlay == Overlay::Levels;
+        if reload {
+            self.streamer = Self::streamer(&self.store, &self.opts);
+            self.cache = LruCache::new(self.opts.budget_bytes);
+        }
+    }
+
+    /// Whether any cell of the store has a photo-enhanced texture.
+    pub fn has_photo(&self) -> bool {
+        self.store.manifest.cells.iter().any(|c| c.photo.is_some())
     }
 
     /// The opened store.
@@ -235,6 +277,32 @@ impl TerrainScene {
     /// The last frame's pixels (sRGB RGBA8, row 0 at the top).
     pub fn read_rgba(&self) -> Result<image::RgbaImage> {
         self.renderer.read_rgba()
+    }
+
+    /// The last frame's reverse-Z depth buffer (see [`TerrainRenderer::read_depth`]).
+    pub fn read_depth(&self) -> Result<Vec<f32>> {
+        self.renderer.read_depth()
+    }
+
+    /// Current options.
+    pub fn options(&self) -> &SceneOptions {
+        &self.opts
+    }
+
+    /// Changes the screen-space error threshold (pixels, finite and > 0).
+    pub fn set_sse(&mut self, sse_px: f64) -> Result<()> {
+        if !(sse_px.is_finite() && sse_px > 0.0) {
+            return Err(Error::BadOption(format!(
+                "screen-space error threshold must be > 0 px, got {sse_px}"
+            )));
+        }
+        self.opts.sse_px = sse_px;
+        Ok(())
+    }
+
+    /// Changes the shading options of the following frames.
+    pub fn set_frame_options(&mut self, frame: FrameOptions) {
+        self.opts.frame = frame;
     }
 
     /// World position of the centre of the store's root bounding box (for default views).

@@ -61,3 +61,9 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     }
     return vec4<f32>(rgb, 1.0);
 }
+
+// Bounding-box lines of the level overlay: the level colour, unlit.
+@fragment
+fn fs_line(i: VOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(draw.tint.rgb, 1.0);
+}

@@ -1,0 +1,78 @@
+//! Overlay textures: the per-texel stretch of a cell's parameterization as a heat map.
+
+use crate::stats::texel_stretch;
+use crate::store::{CellMesh, CellRecord, texcoord};
+
+/// What is drawn over the terrain.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Overlay {
+    /// The texture alone.
+    #[default]
+    None,
+    /// Cells tinted by quadtree level, with their bounding boxes drawn as lines.
+    Levels,
+    /// Per-texel stretch heat map instead of the colour texture (see [`stretch_heatmap`]).
+    Stretch,
+}
+
+/// Heat-map colour of a stretch value (sRGB RGBA8): 1 (optimal) dark blue, through cyan (1.25),
+/// green (1.5), yellow (2, the "steep" mark, 60° for the ortho map) to red at ≥ 4; values
+/// below 1 (compression) purple; NaN (texel not covered) mid grey.
+pub fn heat_colour(stretch: f32) -> [u8; 4] {
+    if !stretch.is_finite() {
+        return [128, 128, 128, 255];
+    }
+    const STOPS: [(f32, [f32; 3]); 6] = [
+        (0.5, [0.55, 0.1, 0.6]),
+        (1.0, [0.05, 0.1, 0.55]),
+        (1.25, [0.0, 0.7, 0.9]),
+        (1.5, [0.1, 0.8, 0.2]),
+        (2.0, [0.95, 0.9, 0.1]),
+        (4.0, [0.85, 0.05, 0.05]),
+    ];
+    let s = stretch.clamp(STOPS[0].0, STOPS[STOPS.len() - 1].0);
+    let k = STOPS.iter().position(|st| st.0 >= s).unwrap_or(STOPS.len() - 1).max(1);
+    let (a, b) = (STOPS[k - 1], STOPS[k]);
+    let t = ((s - a.0) / (b.0 - a.0)).clamp(0.0, 1.0);
+    let c = [0, 1, 2].map(|i| ((a.1[i] + t * (b.1[i] - a.1[i])) * 255.0).round() as u8);
+    [c[0], c[1], c[2], 255]
+}
+
+/// The per-texel stretch heat map of a cell drawn with `mesh` (its surface triangles and
+/// texture coordinates from [`texcoord`]) on a `texels × texels` texture budgeted for the
+/// cell's nominal square (stretch as in [`crate::stats::texel_stretch`]).
+pub fn stretch_heatmap(rec: &CellRecord, mesh: &CellMesh, texels: u32) -> image::RgbaImage {
+    let n = mesh.surface_vertices as usize;
+    let positions: Vec<[f64; 3]> = mesh.positions[..n.min(mesh.positions.len())]
+        .iter()
+        .map(|p| p.map(f64::from))
+        .collect();
+    let uvs: Vec<[f64; 2]> = (0..positions.len())
+        .map(|i| texcoord(rec, mesh, i).map(f64::from))
+        .collect();
+    let tris: Vec<[u32; 3]> = mesh
+        .surface()
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&k| (k as usize) < positions.len()))
+        .collect();
+    let base_area = (rec.extent.width() * rec.extent.height()).abs();
+    let t = texels.max(1);
+    let s = texel_stretch(&positions, &tris, &uvs, t, base_area);
+    image::RgbaImage::from_fn(t, t, |x, y| image::Rgba(heat_colour(s[(y * t + x) as usize])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heat_colours_follow_the_scale() {
+        assert_eq!(heat_colour(f32::NAN), [128, 128, 128, 255]);
+        assert_eq!(heat_colour(1.0), [13, 26, 140, 255]);
+        assert_eq!(heat_colour(2.0), [242, 230, 26, 255]);
+        assert_eq!(heat_colour(9.0), heat_colour(4.0));
+        // Redder with more stretch.
+        assert!(heat_colour(3.0)[1] < heat_colour(2.0)[1]);
+    }
+}
