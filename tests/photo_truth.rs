@@ -76,7 +76,8 @@ fn truth_photos_apply_the_lens_distortion_consistently() {
     let (mut warped, mut plain, mut n) = (0.0, 0.0, 0);
     for v in 0..300u32 {
         for u in 0..400u32 {
-            let [x, y] = cd.undistort(u as f64, v as f64).unwrap();
+            let (xd, yd) = ((u as f64 - cd.cx) / cd.fx, (v as f64 - cd.cy) / cd.fy);
+            let [x, y] = cd.undistort(xd, yd).unwrap();
             let (uu, vu) = (cu.fx * x + cu.cx, cu.fy * y + cu.cy);
             if !(0.0..399.0).contains(&uu) || !(0.0..299.0).contains(&vu) {
                 continue;
