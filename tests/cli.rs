@@ -93,6 +93,10 @@ fn demo_runs_whole_pipeline_and_is_deterministic_across_threads() {
     let psnr = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
     assert!(psnr(after, "steep_psnr") > psnr(before, "steep_psnr"), "{truth}");
     assert!(psnr(after, "flat_psnr") > psnr(before, "flat_psnr") - 0.1, "{truth}");
+    // Where photos dominate, steep texels are much closer to the truth than the ortho was.
+    let (cb, ca) = (&truth["photo_covered_before"], &truth["photo_covered_after"]);
+    assert!(ca["steep_texels"].as_u64().unwrap() > 100, "{truth}");
+    assert!(psnr(ca, "steep_psnr") > psnr(cb, "steep_psnr") + 3.0, "{truth}");
 }
 
 #[test]

@@ -6,7 +6,7 @@ use cliffmap::fsutil::write_png_atomic;
 use cliffmap::pipeline::{
     BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store,
 };
-use cliffmap::scene::{DemoScene, TextureChoice, texel_truth};
+use cliffmap::scene::{DemoScene, TextureChoice, texel_truth, texel_truth_covered};
 
 use super::stats::print_summary;
 
@@ -42,7 +42,13 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, a: &Args, store: &std::pa
     let report = project_store(store, &photos, &ProjectOptions { quiet: a.quiet, ..ProjectOptions::default() })?;
     let st = cliffmap::store::Store::open(store)?;
     let after = texel_truth(&st, scene, TextureChoice::Photo)?;
-    let json = serde_json::json!({ "before": before, "after": after });
+    let (covered_before, covered_after) = texel_truth_covered(&st, scene)?;
+    let json = serde_json::json!({
+        "before": before,
+        "after": after,
+        "photo_covered_before": covered_before,
+        "photo_covered_after": covered_after,
+    });
     cliffmap::fsutil::write_atomic(&a.out.join("truth.json"), serde_json::to_string_pretty(&json)?.as_bytes())?;
     if !a.quiet {
         println!(
@@ -54,6 +60,10 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, a: &Args, store: &std::pa
         println!(
             "texel PSNR vs ground truth, finest level: steep (>60°) {:.2} -> {:.2} dB, flat (<30°) {:.2} -> {:.2} dB",
             before.steep_psnr, after.steep_psnr, before.flat_psnr, after.flat_psnr
+        );
+        println!(
+            "  on the {} steep texels where photos dominate: {:.2} -> {:.2} dB",
+            covered_after.steep_texels, covered_before.steep_psnr, covered_after.steep_psnr
         );
     }
     Ok(())

@@ -20,7 +20,7 @@ mod photos;
 mod truth;
 
 pub use photos::{DemoPhotoOptions, PhotoShot, SKY_COLOUR};
-pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_with};
+pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_covered, texel_truth_with};
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use rayon::prelude::*;

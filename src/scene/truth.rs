@@ -136,6 +136,41 @@ pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Re
     Ok(report)
 }
 
+/// Evaluates the finest level's photo-covered texels only (photo weight > 0.5 in the cell's
+/// confidence map), before projection (active texture) and after (photo texture), so both
+/// reports score exactly the same texels: the gain where photos actually contributed.
+pub fn texel_truth_covered(store: &Store, scene: &DemoScene) -> Result<(TruthReport, TruthReport)> {
+    let level = store.manifest.quadtree.levels.saturating_sub(1);
+    let masked = |photo: bool| {
+        move |rec: &CellRecord| -> Result<RgbaImage> {
+            let active = rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture);
+            let Some(p) = &rec.photo else {
+                // No photo colour: every texel is excluded.
+                let mut img = store.read_png(active)?.to_rgba8();
+                img.pixels_mut().for_each(|px| px[3] = 0);
+                return Ok(img);
+            };
+            let mut img = store.read_png(if photo { &p.texture } else { active })?.to_rgba8();
+            let conf = store.read_png(&p.confidence)?.to_luma8();
+            if conf.dimensions() != img.dimensions() {
+                return Err(crate::Error::store(
+                    store.dir.join(&p.confidence.path),
+                    "confidence map and texture differ in size",
+                ));
+            }
+            for (px, c) in img.pixels_mut().zip(conf.pixels()) {
+                if c[0] <= 127 {
+                    px[3] = 0;
+                }
+            }
+            Ok(img)
+        }
+    };
+    let before = texel_truth_with(store, scene, level, masked(false))?;
+    let after = texel_truth_with(store, scene, level, masked(true))?;
+    Ok((before, after))
+}
+
 /// Evaluates every cell of `level` with the texture `texture(rec)` returns (square, laid out
 /// over the cell's active chart: `store::texcoord` of the active mesh times its side). Each
 /// texel centre is located in the chart triangle covering it (exact f64 point location; a
