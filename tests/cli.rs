@@ -359,3 +359,28 @@ fn engabreen_photos_project_onto_the_rock_walls() {
         assert_eq!(img.width(), cliffmap::store::active_texels(c));
     }
 }
+
+#[test]
+fn view_fails_cleanly_without_display_or_store() {
+    let t = tempfile::tempdir().unwrap();
+    ok(&["demo", "--out", s(t.path()), "--samples", "65", "--no-photos", "--quiet"]);
+    let store = t.path().join("store");
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_cliffmap"))
+            .args(args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("cannot start cliffmap")
+    };
+    let o = run(&["view", s(&store)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "view without a display should fail: {err}");
+    assert!(err.contains("no display available"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let missing = t.path().join("nope");
+    let o = run(&["view", s(&missing)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && !err.contains("panicked"), "{err}");
+    assert!(err.contains("nope") && !err.contains("no display"), "{err}");
+}

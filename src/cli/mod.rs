@@ -9,6 +9,7 @@ mod project;
 mod render;
 mod reparam;
 mod stats;
+mod view;
 
 use std::process::ExitCode;
 
@@ -43,6 +44,8 @@ enum Command {
     Render(render::Args),
     /// Timed fly-through over a store (headless GPU); writes a JSON report.
     Fly(fly::Args),
+    /// Interactive window over a store: fly camera, overlays, texture modes (needs a display).
+    View(view::Args),
 }
 
 /// Parses arguments, runs the command, prints errors as `error: ...` and maps them to exit codes.
@@ -70,6 +73,7 @@ pub fn run() -> ExitCode {
         Command::ExportObj(a) => export_obj::run(a),
         Command::Render(a) => render::run(a),
         Command::Fly(a) => fly::run(a),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -43,6 +43,12 @@ impl GpuContext {
                  apt-get install mesa-vulkan-drivers libegl1 libegl-mesa0 libgl1-mesa-dri"
             ))
         })?;
+        Self::from_adapter(adapter)
+    }
+
+    /// Opens a device on `adapter` (e.g. one chosen for a window surface with
+    /// `compatible_surface`); errors name the adapter.
+    pub fn from_adapter(adapter: wgpu::Adapter) -> Result<GpuContext> {
         let info = adapter.get_info();
         let limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

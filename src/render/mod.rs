@@ -29,5 +29,8 @@ mod scene;
 pub use gpu::{CellData, FrameOptions, GpuCell, GpuContext, TerrainRenderer, UvMode};
 pub use scene::{FrameReport, SceneOptions, TerrainScene};
 mod flight;
+mod fly_camera;
+
+pub use fly_camera::{FAST_FACTOR, FlyCamera, FlyInput, MAX_PITCH, adjust_sse};
 
 pub use flight::{FlightKey, FlightPath, FlyReport, fly, percentile};

@@ -87,6 +87,18 @@ impl TerrainScene {
         height: u32,
         opts: SceneOptions,
     ) -> Result<TerrainScene> {
+        Self::open_with_context(store_dir, GpuContext::new()?, width, height, opts)
+    }
+
+    /// Like [`TerrainScene::open`] on an already opened GPU context (e.g. one whose adapter
+    /// can present to a window surface).
+    pub fn open_with_context(
+        store_dir: &Path,
+        ctx: GpuContext,
+        width: u32,
+        height: u32,
+        opts: SceneOptions,
+    ) -> Result<TerrainScene> {
         if !(opts.sse_px.is_finite() && opts.sse_px > 0.0) {
             return Err(Error::BadOption(format!(
                 "screen-space error threshold must be > 0 px, got {}",
@@ -100,7 +112,7 @@ impl TerrainScene {
                 "no root (level 0) cell",
             ));
         }
-        let renderer = TerrainRenderer::new(GpuContext::new()?, width, height)?;
+        let renderer = TerrainRenderer::new(ctx, width, height)?;
         let index = CellIndex::new(&store.manifest.cells);
         let streamer = Self::streamer(&store, &opts);
         let mut opts = opts;
