@@ -5,13 +5,15 @@ use glam::DVec3;
 use wgpu::util::DeviceExt;
 
 use super::camera::RenderCamera;
+use super::distort_pass::DistortPass;
+use super::distortion::DistortedView;
+use super::target::RenderTarget;
+pub use super::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::error::{Error, Result};
 use crate::store::{CellMesh, CellRecord, texcoord};
 
-/// Colour target format: sRGB, so unlit output bytes equal the texture's bytes.
-pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-/// Depth format (reverse-Z: cleared to 0, closer = larger).
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Bytes of the shader's per-draw `Draw` uniform (mvp, extent, tint, morph).
+const DRAW_BYTES: u64 = 112;
 /// Byte stride of the per-draw uniform slots (the dynamic-offset alignment wgpu guarantees).
 const DRAW_STRIDE: u64 = 256;
 
@@ -93,6 +95,19 @@ pub struct CellData {
     pub colour_mips: Vec<image::RgbaImage>,
     /// Normal map (RGB in the cell-local frame, n·0.5+0.5; A = 255), full mip chain.
     pub normal_mips: Vec<image::RgbaImage>,
+    /// Geomorphing data (towards the parent cell), when the scene morphs and the cell has a parent.
+    pub morph: Option<MorphData>,
+}
+
+/// What a cell needs to be morphed towards its parent (see [`super::geomorph`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MorphData {
+    /// Per vertex (surface and skirt), the target height in the cell-local frame, metres.
+    pub targets: Vec<f32>,
+    /// LOD shift of the colour texture to the parent's texel density, mip levels (≥ 0).
+    pub colour_shift: f32,
+    /// LOD shift of the normal map to the parent's, mip levels (≥ 0).
+    pub normal_shift: f32,
 }
 
 /// How texture coordinates are produced.
@@ -131,6 +146,7 @@ impl CellData {
             uvs,
             colour_mips: mip_chain(colour),
             normal_mips: mip_chain(normal),
+            morph: None,
         }
     }
 }
@@ -158,6 +174,8 @@ pub fn mip_chain(img: image::RgbaImage) -> Vec<image::RgbaImage> {
 pub struct GpuCell {
     positions: wgpu::Buffer,
     uvs: Option<wgpu::Buffer>,
+    morph: Option<wgpu::Buffer>,
+    mip_shift: [f32; 2],
     indices: wgpu::Buffer,
     index_count: u32,
     box_lines: wgpu::Buffer,
@@ -172,6 +190,23 @@ pub struct GpuCell {
     pub triangles: u32,
     /// GPU bytes held (buffers and textures with mips).
     pub bytes: u64,
+}
+
+impl GpuCell {
+    /// Whether the cell carries morph targets (it can be geomorphed).
+    pub fn can_morph(&self) -> bool {
+        self.morph.is_some()
+    }
+}
+
+/// One cell of a frame and its morph factor (0 = as stored, 1 = its parent's shape and
+/// texel density; ignored for cells without morph targets).
+#[derive(Clone, Copy)]
+pub struct CellDraw<'a> {
+    /// The cell.
+    pub cell: &'a GpuCell,
+    /// Morph factor in [0, 1].
+    pub morph: f32,
 }
 
 /// Options of one frame.
@@ -204,18 +239,21 @@ impl Default for FrameOptions {
     }
 }
 
-/// Pipelines, uniforms and an offscreen colour + depth target of fixed size.
+/// Pipelines, uniforms and an offscreen colour + depth target (resizable), plus the pinhole
+/// target and pass of distorted frames.
 pub struct TerrainRenderer {
     /// The device.
     pub ctx: GpuContext,
-    width: u32,
-    height: u32,
-    colour: wgpu::Texture,
-    depth: wgpu::Texture,
-    depth_view: wgpu::TextureView,
-    colour_view: wgpu::TextureView,
+    target: RenderTarget,
+    /// Pinhole target of distorted frames (allocated on first use, reused while its size holds).
+    pinhole: Option<RenderTarget>,
+    distort: DistortPass,
+    /// Whether the last frame went through the distortion pass (its depth is the pinhole's).
+    last_distorted: bool,
     pipeline_ortho: wgpu::RenderPipeline,
     pipeline_uv: wgpu::RenderPipeline,
+    pipeline_ortho_morph: wgpu::RenderPipeline,
+    pipeline_uv_morph: wgpu::RenderPipeline,
     pipeline_lines: wgpu::RenderPipeline,
     cell_layout: wgpu::BindGroupLayout,
     frame_layout: wgpu::BindGroupLayout,
@@ -250,6 +288,16 @@ fn level_tint(level: u8) -> [f32; 4] {
     [t[0], t[1], t[2], 1.0]
 }
 
+fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<()> {
+    let max = ctx.device.limits().max_texture_dimension_2d;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(Error::BadOption(format!(
+            "frame size {width}x{height} must be within 1..={max} per side"
+        )));
+    }
+    Ok(())
+}
+
 fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
@@ -257,12 +305,7 @@ fn f32_bytes(v: &[f32]) -> Vec<u8> {
 impl TerrainRenderer {
     /// Creates pipelines and a `width × height` target (each in 1..=max texture size).
     pub fn new(ctx: GpuContext, width: u32, height: u32) -> Result<TerrainRenderer> {
-        let max = ctx.device.limits().max_texture_dimension_2d;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(Error::BadOption(format!(
-                "frame size {width}x{height} must be within 1..={max} per side"
-            )));
-        }
+        check_size(&ctx, width, height)?;
         let device = &ctx.device;
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("terrain.wgsl"),
@@ -381,7 +424,33 @@ impl TerrainRenderer {
             wgpu::PrimitiveTopology::LineList,
             "fs_line",
         );
-        let pipeline_uv = make("vs_uv", &[Some(pos_layout), Some(uv_layout)], tris, "fs_main");
+        let morph_layout = wgpu::VertexBufferLayout {
+            array_stride: 4,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Float32,
+                offset: 0,
+                shader_location: 2,
+            }],
+        };
+        let pipeline_uv = make(
+            "vs_uv",
+            &[Some(pos_layout.clone()), Some(uv_layout.clone())],
+            tris,
+            "fs_main",
+        );
+        let pipeline_ortho_morph = make(
+            "vs_ortho_morph",
+            &[Some(pos_layout.clone()), Some(morph_layout.clone())],
+            tris,
+            "fs_main",
+        );
+        let pipeline_uv_morph = make(
+            "vs_uv_morph",
+            &[Some(pos_layout), Some(uv_layout), Some(morph_layout)],
+            tris,
+            "fs_main",
+        );
         let frame_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame uniforms"),
             size: 32,
@@ -398,20 +467,21 @@ impl TerrainRenderer {
             anisotropy_clamp: 8,
             ..Default::default()
         });
-        let (colour, colour_view, depth, depth_view) = Self::targets(device, width, height);
+        let target = RenderTarget::new(device, width, height);
+        let distort = DistortPass::new(device);
         let draw_capacity = 64;
         let draw_buf = Self::draw_buffer(device, draw_capacity);
         let frame_group = Self::frame_group(device, &frame_layout, &frame_buf, &draw_buf);
         Ok(TerrainRenderer {
             ctx,
-            width,
-            height,
-            colour,
-            depth,
-            depth_view,
-            colour_view,
+            target,
+            pinhole: None,
+            distort,
+            last_distorted: false,
             pipeline_ortho,
             pipeline_uv,
+            pipeline_ortho_morph,
+            pipeline_uv_morph,
             pipeline_lines,
             cell_layout,
             frame_layout,
@@ -421,41 +491,6 @@ impl TerrainRenderer {
             frame_group,
             sampler,
         })
-    }
-
-    fn targets(
-        device: &wgpu::Device,
-        width: u32,
-        height: u32,
-    ) -> (wgpu::Texture, wgpu::TextureView, wgpu::Texture, wgpu::TextureView) {
-        let size = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
-        let colour = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("colour target"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: COLOR_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("depth target"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let cv = colour.create_view(&Default::default());
-        let dv = depth.create_view(&Default::default());
-        (colour, cv, depth, dv)
     }
 
     fn draw_buffer(device: &wgpu::Device, capacity: u64) -> wgpu::Buffer {
@@ -486,7 +521,7 @@ impl TerrainRenderer {
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer: draw,
                         offset: 0,
-                        size: wgpu::BufferSize::new(96),
+                        size: wgpu::BufferSize::new(DRAW_BYTES),
                     }),
                 },
             ],
@@ -495,12 +530,23 @@ impl TerrainRenderer {
 
     /// Target width in pixels.
     pub fn width(&self) -> u32 {
-        self.width
+        self.target.width
     }
 
     /// Target height in pixels.
     pub fn height(&self) -> u32 {
-        self.height
+        self.target.height
+    }
+
+    /// Reallocates the colour and depth target at `width × height` (each in 1..=max texture
+    /// size); the next frame renders at that size. A no-op if the size is unchanged.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        check_size(&self.ctx, width, height)?;
+        if (width, height) != (self.target.width, self.target.height) {
+            self.target = RenderTarget::new(&self.ctx.device, width, height);
+            self.last_distorted = false;
+        }
+        Ok(())
     }
 
     fn texture(
@@ -569,6 +615,16 @@ impl TerrainRenderer {
         if data.mesh.triangles.is_empty() {
             return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
         }
+        if let Some(m) = &data.morph {
+            if m.targets.len() != data.mesh.positions.len() {
+                return Err(Error::Gpu(format!(
+                    "cell {}: {} morph targets for {} vertices",
+                    rec.id,
+                    m.targets.len(),
+                    data.mesh.positions.len()
+                )));
+            }
+        }
         let device = &self.ctx.device;
         let pos: Vec<f32> = data.mesh.positions.iter().flatten().copied().collect();
         let idx: Vec<u8> = data
@@ -588,6 +644,13 @@ impl TerrainRenderer {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("uvs"),
                 contents: &f32_bytes(&flat),
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+        });
+        let morph = data.morph.as_ref().map(|m| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("morph targets"),
+                contents: &f32_bytes(&m.targets),
                 usage: wgpu::BufferUsages::VERTEX,
             })
         });
@@ -653,11 +716,17 @@ impl TerrainRenderer {
         let bytes = pos.len() as u64 * 4
             + idx.len() as u64
             + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+            + data.morph.as_ref().map_or(0, |m| m.targets.len() as u64 * 4)
             + cb
             + nb;
         Ok(GpuCell {
             positions,
             uvs,
+            morph,
+            mip_shift: data
+                .morph
+                .as_ref()
+                .map_or([0.0; 2], |m| [m.colour_shift, m.normal_shift]),
             indices,
             index_count: data.mesh.triangles.len() as u32 * 3,
             box_lines,
@@ -675,27 +744,70 @@ impl TerrainRenderer {
         })
     }
 
-    /// Renders `cells` seen from `cam` into the target and waits until the GPU is done.
-    /// `cam` must have the target's size. Returns the number of triangles drawn.
+    /// Renders `draws` seen from `cam` and waits until the GPU is done; returns the number of
+    /// triangles drawn. Without `distorted`, `cam` must have the target's size and renders
+    /// straight into it. With `distorted`, `cam` must be `distorted.pinhole` (any size within
+    /// the device limits) and `distorted.output` the target's size: the terrain is rendered into
+    /// a pinhole target, then resampled through the distortion into the target (the frame's
+    /// depth is then only available as the pinhole view's, see [`TerrainRenderer::read_depth`]).
     pub fn render(
         &mut self,
         cam: &RenderCamera,
-        cells: &[&GpuCell],
+        draws: &[CellDraw<'_>],
         opts: &FrameOptions,
+        distorted: Option<&DistortedView>,
     ) -> Result<u64> {
-        if cam.model.width != self.width || cam.model.height != self.height {
+        let (w, h) = (self.target.width, self.target.height);
+        let out_size = distorted.map_or((cam.model.width, cam.model.height), |d| {
+            (d.output.width, d.output.height)
+        });
+        if out_size != (w, h) {
             return Err(Error::BadOption(format!(
-                "camera is {}x{} but the target is {}x{}",
-                cam.model.width, cam.model.height, self.width, self.height
+                "camera is {}x{} but the target is {w}x{h}",
+                out_size.0, out_size.1
             )));
         }
-        let device = &self.ctx.device;
-        if cells.len() as u64 > self.draw_capacity {
-            self.draw_capacity = (cells.len() as u64).next_power_of_two();
+        let sky = opts.sky.map(srgb_to_linear);
+        if draws.len() as u64 > self.draw_capacity {
+            let device = &self.ctx.device;
+            self.draw_capacity = (draws.len() as u64).next_power_of_two();
             self.draw_buf = Self::draw_buffer(device, self.draw_capacity);
             self.frame_group =
                 Self::frame_group(device, &self.frame_layout, &self.frame_buf, &self.draw_buf);
         }
+        let Some(view) = distorted else {
+            self.last_distorted = false;
+            return self.draw_terrain(&self.target, cam, draws, opts, sky, None);
+        };
+        let (pw, ph) = (view.pinhole.width, view.pinhole.height);
+        if (cam.model.width, cam.model.height) != (pw, ph) {
+            return Err(Error::BadOption(format!(
+                "camera is {}x{} but the pinhole view is {pw}x{ph}",
+                cam.model.width, cam.model.height
+            )));
+        }
+        check_size(&self.ctx, pw, ph)?;
+        let pinhole = match self.pinhole.take() {
+            Some(t) if (t.width, t.height) == (pw, ph) => t,
+            _ => RenderTarget::new(&self.ctx.device, pw, ph),
+        };
+        let r = self.draw_terrain(&pinhole, cam, draws, opts, sky, Some((view, &self.target)));
+        self.pinhole = Some(pinhole);
+        self.last_distorted = true;
+        r
+    }
+
+    /// Draws the terrain into `target` (then, with `distort`, resamples it into that target).
+    fn draw_terrain(
+        &self,
+        target: &RenderTarget,
+        cam: &RenderCamera,
+        draws: &[CellDraw<'_>],
+        opts: &FrameOptions,
+        sky: [f64; 3],
+        distort: Option<(&DistortedView, &RenderTarget)>,
+    ) -> Result<u64> {
+        let device = &self.ctx.device;
         let sun = opts.sun_dir.try_normalize().unwrap_or(DVec3::Z).as_vec3();
         let frame = [
             sun.x,
@@ -710,28 +822,40 @@ impl TerrainRenderer {
         self.ctx
             .queue
             .write_buffer(&self.frame_buf, 0, &f32_bytes(&frame));
-        if !cells.is_empty() {
-            let mut draws = vec![0u8; cells.len() * DRAW_STRIDE as usize];
-            for (i, c) in cells.iter().enumerate() {
+        // A draw morphs only if it has targets and a positive factor.
+        let morph_of = |d: &CellDraw| {
+            if d.cell.morph.is_some() && d.morph > 0.0 {
+                d.morph.min(1.0)
+            } else {
+                0.0
+            }
+        };
+        if !draws.is_empty() {
+            let mut bytes = vec![0u8; draws.len() * DRAW_STRIDE as usize];
+            for (i, d) in draws.iter().enumerate() {
+                let c = d.cell;
                 let mut v: Vec<f32> = cam.mvp_for_origin(c.origin).to_cols_array().to_vec();
                 v.extend_from_slice(&c.extent_rel);
                 v.extend_from_slice(&level_tint(c.level));
+                v.extend_from_slice(&[morph_of(d), c.mip_shift[0], c.mip_shift[1], 0.0]);
                 let b = f32_bytes(&v);
-                draws[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
+                bytes[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
                     .copy_from_slice(&b);
             }
-            self.ctx.queue.write_buffer(&self.draw_buf, 0, &draws);
+            self.ctx
+                .queue
+                .write_buffer(&self.draw_buf, 0, &bytes);
         }
-        let sky = opts.sky.map(srgb_to_linear);
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
         let mut triangles = 0u64;
         {
+            let frame_group = &self.frame_group;
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("terrain"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.colour_view,
+                    view: &target.colour_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -745,7 +869,7 @@ impl TerrainRenderer {
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth_view,
+                    view: &target.depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
                         store: wgpu::StoreOp::Store,
@@ -756,15 +880,26 @@ impl TerrainRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            for (i, c) in cells.iter().enumerate() {
-                match &c.uvs {
-                    Some(uv) => {
+            for (i, d) in draws.iter().enumerate() {
+                let c = d.cell;
+                let morph = c.morph.as_ref().filter(|_| morph_of(d) > 0.0);
+                match (&c.uvs, morph) {
+                    (Some(uv), None) => {
                         pass.set_pipeline(&self.pipeline_uv);
                         pass.set_vertex_buffer(1, uv.slice(..));
                     }
-                    None => pass.set_pipeline(&self.pipeline_ortho),
+                    (Some(uv), Some(m)) => {
+                        pass.set_pipeline(&self.pipeline_uv_morph);
+                        pass.set_vertex_buffer(1, uv.slice(..));
+                        pass.set_vertex_buffer(2, m.slice(..));
+                    }
+                    (None, None) => pass.set_pipeline(&self.pipeline_ortho),
+                    (None, Some(m)) => {
+                        pass.set_pipeline(&self.pipeline_ortho_morph);
+                        pass.set_vertex_buffer(1, m.slice(..));
+                    }
                 }
-                pass.set_bind_group(0, &self.frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
+                pass.set_bind_group(0, frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
                 pass.set_bind_group(1, &c.textures, &[]);
                 pass.set_vertex_buffer(0, c.positions.slice(..));
                 pass.set_index_buffer(c.indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -773,13 +908,16 @@ impl TerrainRenderer {
             }
             if opts.bounding_boxes {
                 pass.set_pipeline(&self.pipeline_lines);
-                for (i, c) in cells.iter().enumerate() {
-                    pass.set_bind_group(0, &self.frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
-                    pass.set_bind_group(1, &c.textures, &[]);
-                    pass.set_vertex_buffer(0, c.box_lines.slice(..));
+                for (i, d) in draws.iter().enumerate() {
+                    pass.set_bind_group(0, frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
+                    pass.set_bind_group(1, &d.cell.textures, &[]);
+                    pass.set_vertex_buffer(0, d.cell.box_lines.slice(..));
                     pass.draw(0..24, 0..1);
                 }
             }
+        }
+        if let Some((view, out)) = distort {
+            self.distort.encode(device, &self.ctx.queue, &mut enc, target, out, view, sky);
         }
         self.ctx.queue.submit([enc.finish()]);
         device
@@ -790,87 +928,28 @@ impl TerrainRenderer {
 
     /// Copies the last rendered frame back (sRGB RGBA8, row 0 at the top).
     pub fn read_rgba(&self) -> Result<image::RgbaImage> {
-        let out = self.read_target(&self.colour, wgpu::TextureAspect::All, 4)?;
-        image::RgbaImage::from_raw(self.width, self.height, out)
+        let t = &self.target;
+        let out = t.read(&self.ctx.device, &self.ctx.queue, &t.colour, wgpu::TextureAspect::All, 4)?;
+        image::RgbaImage::from_raw(t.width, t.height, out)
             .ok_or_else(|| Error::Gpu("readback size mismatch".into()))
     }
 
     /// Copies the last frame's depth buffer back: `width × height` values, row 0 at the top,
     /// reverse-Z (`near / z_camera`, 0 where nothing was drawn). Needs a backend that can
-    /// copy depth textures (Vulkan, Metal, DX12; not GL).
+    /// copy depth textures (Vulkan, Metal, DX12; not GL). Fails after a distorted frame (its
+    /// depth exists only in the pinhole view's geometry; render it with distortion off).
     pub fn read_depth(&self) -> Result<Vec<f32>> {
-        let out = self.read_target(&self.depth, wgpu::TextureAspect::DepthOnly, 4)?;
+        if self.last_distorted {
+            return Err(Error::BadOption(
+                "the depth of a distorted frame is not available (render it with distortion off)"
+                    .into(),
+            ));
+        }
+        let t = &self.target;
+        let out = t.read(&self.ctx.device, &self.ctx.queue, &t.depth, wgpu::TextureAspect::DepthOnly, 4)?;
         Ok(out
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect())
-    }
-
-    /// Copies one aspect of a full-size target texture into tightly packed rows
-    /// (the copy uses rows padded to 256 bytes).
-    fn read_target(
-        &self,
-        texture: &wgpu::Texture,
-        aspect: wgpu::TextureAspect,
-        bytes_per_pixel: u32,
-    ) -> Result<Vec<u8>> {
-        let device = &self.ctx.device;
-        let row = bytes_per_pixel * self.width;
-        let padded =
-            row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buf = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: padded as u64 * self.height as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("readback"),
-        });
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buf,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded),
-                    rows_per_image: Some(self.height),
-                },
-            },
-            wgpu::Extent3d {
-                width: self.width,
-                height: self.height,
-                depth_or_array_layers: 1,
-            },
-        );
-        self.ctx.queue.submit([enc.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        buf.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu(format!("waiting for the readback failed: {e}")))?;
-        rx.recv()
-            .map_err(|_| Error::Gpu("readback was cancelled".into()))?
-            .map_err(|e| Error::Gpu(format!("cannot map the readback buffer: {e}")))?;
-        let mut out = Vec::with_capacity((row * self.height) as usize);
-        {
-            let view = buf
-                .get_mapped_range(..)
-                .map_err(|e| Error::Gpu(format!("cannot read the readback buffer: {e}")))?;
-            for r in 0..self.height as usize {
-                out.extend_from_slice(
-                    &view[r * padded as usize..r * padded as usize + row as usize],
-                );
-            }
-        }
-        buf.unmap();
-        Ok(out)
     }
 }

@@ -119,14 +119,29 @@ pub fn select_cells(
     cam: &RenderCamera,
     threshold_px: f64,
 ) -> LodSelection {
+    select_cells_with_margin(cells, index, cam, threshold_px, |_| 0.0)
+}
+
+/// [`select_cells`] with each cell's bounding box extended by `z_margin(cell index)` metres
+/// (≥ 0) up and down for the frustum test (e.g. the height range a geomorphed cell can reach).
+/// The refinement test is unchanged.
+pub fn select_cells_with_margin(
+    cells: &[CellRecord],
+    index: &CellIndex,
+    cam: &RenderCamera,
+    threshold_px: f64,
+    z_margin: impl Fn(usize) -> f64,
+) -> LodSelection {
     let frustum = cam.frustum();
     let eye = cam.model.position;
     let mut out = LodSelection::default();
     let mut stack: Vec<usize> = index.roots().iter().rev().copied().collect();
     while let Some(i) = stack.pop() {
         let rec = &cells[i];
-        let lo = DVec3::from(rec.bbox_min) - DVec3::new(0.0, 0.0, rec.skirt_depth.max(0.0)) - eye;
-        let hi = DVec3::from(rec.bbox_max) - eye;
+        let m = z_margin(i).max(0.0);
+        let m = if m.is_finite() { m } else { 0.0 };
+        let lo = DVec3::from(rec.bbox_min) - DVec3::new(0.0, 0.0, rec.skirt_depth.max(0.0) + m) - eye;
+        let hi = DVec3::from(rec.bbox_max) + DVec3::new(0.0, 0.0, m) - eye;
         if !frustum.intersects_aabb(lo, hi) {
             out.culled += 1;
             continue;

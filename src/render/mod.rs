@@ -3,15 +3,21 @@
 //! Policy (plain Rust, no GPU): [`RenderCamera`] (f64 camera-relative matrices, reverse-Z),
 //! [`Frustum`], LOD selection by screen-space error ([`select_cells`]), an LRU cache with a
 //! byte budget ([`LruCache`]) and background loading with ancestor fallback ([`Streamer`],
-//! [`resolve_draw_list`]). GPU side: [`gpu`] (headless wgpu: cell uploads, pipelines,
-//! offscreen frames, PNG readback) and [`TerrainScene`] (a store with cache, loaders and frames).
+//! [`resolve_draw_list`]), geomorphing towards parent cells ([`geomorph`]) and the pinhole view
+//! of distorted cameras ([`distortion`]). GPU side: [`gpu`] (headless wgpu: cell uploads,
+//! pipelines, offscreen frames, the distortion pass, PNG readback) and [`TerrainScene`] (a store
+//! with cache, loaders and frames).
 
 mod cache;
 mod camera;
+mod distort_pass;
+pub mod distortion;
 mod frustum;
+pub mod geomorph;
 mod lod;
 mod overlay;
 mod stream;
+mod target;
 
 pub use cache::LruCache;
 pub use overlay::{Overlay, heat_colour, stretch_heatmap};
@@ -19,14 +25,19 @@ pub use camera::RenderCamera;
 pub use frustum::Frustum;
 pub use lod::{
     CellIndex, LodSelection, cell_error, distance_to_bbox, screen_space_error, select_cells,
+    select_cells_with_margin,
 };
+pub use distortion::{DistortedView, DistortionMode};
+pub use geomorph::GeomorphOptions;
 pub use stream::{DrawList, Streamer, resolve_draw_list};
 
 pub mod accuracy;
 pub mod gpu;
 mod scene;
 
-pub use gpu::{CellData, FrameOptions, GpuCell, GpuContext, TerrainRenderer, UvMode};
+pub use gpu::{
+    CellData, CellDraw, FrameOptions, GpuCell, GpuContext, MorphData, TerrainRenderer, UvMode,
+};
 pub use scene::{FrameReport, SceneOptions, TerrainScene};
 mod flight;
 mod fly_camera;

@@ -8,13 +8,17 @@ use glam::DVec3;
 
 use super::cache::LruCache;
 use super::camera::RenderCamera;
-use super::gpu::{CellData, FrameOptions, GpuCell, GpuContext, TerrainRenderer, UvMode};
-use super::lod::{CellIndex, distance_to_bbox, select_cells};
+use super::distortion::{DistortedView, DistortionMode};
+use super::geomorph::{GeomorphOptions, mip_shift, morph_factor, morph_targets};
+use super::gpu::{
+    CellData, CellDraw, FrameOptions, GpuCell, GpuContext, MorphData, TerrainRenderer, UvMode,
+};
+use super::lod::{CellIndex, cell_error, distance_to_bbox, screen_space_error, select_cells_with_margin};
 use super::overlay::{Overlay, stretch_heatmap};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
-use crate::store::{CellMesh, Store};
+use crate::store::{CellMesh, CellRecord, Store};
 
 /// How a scene renders.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -31,6 +35,10 @@ pub struct SceneOptions {
     pub loader_threads: usize,
     /// Shading.
     pub frame: FrameOptions,
+    /// Geomorphing of cells towards their parents (default off).
+    pub geomorph: GeomorphOptions,
+    /// When the camera's radial distortion is applied (default: when it has one).
+    pub distortion: DistortionMode,
 }
 
 impl Default for SceneOptions {
@@ -42,6 +50,8 @@ impl Default for SceneOptions {
             overlay: Overlay::None,
             loader_threads: 1,
             frame: FrameOptions::default(),
+            geomorph: GeomorphOptions::default(),
+            distortion: DistortionMode::Auto,
         }
     }
 }
@@ -67,6 +77,12 @@ pub struct FrameReport {
     pub frame_ms: f64,
     /// GPU bytes held by cached cells after the frame.
     pub gpu_bytes: u64,
+    /// Cells drawn with a morph factor > 0 (geomorphing).
+    pub morphed: usize,
+    /// Whether the frame went through the distortion pass.
+    pub distorted: bool,
+    /// Size of the pinhole view rasterized for a distorted frame (0 × 0 otherwise).
+    pub pinhole_size: (u32, u32),
 }
 
 /// A store with a GPU renderer, a cell cache and background loaders.
@@ -112,9 +128,15 @@ impl TerrainScene {
                 "no root (level 0) cell",
             ));
         }
+        if !(opts.geomorph.band > 1.0 && opts.geomorph.band.is_finite()) {
+            return Err(Error::BadOption(format!(
+                "geomorph band must be a finite ratio > 1, got {}",
+                opts.geomorph.band
+            )));
+        }
         let renderer = TerrainRenderer::new(ctx, width, height)?;
         let index = CellIndex::new(&store.manifest.cells);
-        let streamer = Self::streamer(&store, &opts);
+        let streamer = Self::streamer(&store, &index, &opts);
         let mut opts = opts;
         if opts.overlay == Overlay::Levels {
             opts.frame.level_overlay = true;
@@ -130,32 +152,82 @@ impl TerrainScene {
         })
     }
 
-    /// Background loaders producing upload data for `opts.uv_mode` and `opts.overlay`.
-    fn streamer(store: &Arc<Store>, opts: &SceneOptions) -> Streamer<CellData> {
+    /// Background loaders producing upload data for `opts.uv_mode` and `opts.overlay` (and
+    /// morph targets when geomorphing).
+    fn streamer(store: &Arc<Store>, index: &CellIndex, opts: &SceneOptions) -> Streamer<CellData> {
         let loader_store = Arc::clone(store);
-        let (mode, overlay) = (opts.uv_mode, opts.overlay);
+        let index = index.clone();
+        let (mode, overlay, morph) = (opts.uv_mode, opts.overlay, opts.geomorph.enabled);
         Streamer::new(opts.loader_threads, move |i| {
-            let rec = &loader_store.manifest.cells[i];
-            // The reparameterized variant where the cell has one, unless the baseline
-            // orthographic rendering is asked for.
-            let files = match (&rec.reparam, mode) {
-                (Some(r), UvMode::Mixed | UvMode::Reparam | UvMode::Photo) => &r.files,
-                _ => &rec.files,
-            };
-            let bytes = loader_store.read_file(&files.mesh)?;
-            let mesh = CellMesh::from_bytes(&bytes, &loader_store.dir.join(&files.mesh.path))?;
+            let st = &loader_store;
+            let rec = &st.manifest.cells[i];
+            let files = active_files(rec, mode);
+            let bytes = st.read_file(&files.mesh)?;
+            let mesh = CellMesh::from_bytes(&bytes, &st.dir.join(&files.mesh.path))?;
             // The photo-enhanced texture has the layout of the active (reparam or ortho) one.
             let texture = match (&rec.photo, mode) {
                 (Some(p), UvMode::Photo) => &p.texture,
                 _ => &files.texture,
             };
-            let mut colour = loader_store.read_png(texture)?.to_rgba8();
+            let mut colour = st.read_png(texture)?.to_rgba8();
             if overlay == Overlay::Stretch {
                 colour = stretch_heatmap(rec, &mesh, colour.width().max(colour.height()));
             }
-            let normal = loader_store.read_png(&files.normal)?.to_rgb8();
-            Ok(CellData::new(rec, mesh, colour, normal, mode))
+            let normal = st.read_png(&files.normal)?.to_rgb8();
+            let parent = rec.key().parent().and_then(|k| index.get(k));
+            let morph_data = match parent.filter(|_| morph) {
+                Some(p) => {
+                    let prec = &st.manifest.cells[p];
+                    // Positions are the same in every variant; the orthographic mesh is smallest.
+                    let pbytes = st.read_file(&prec.files.mesh)?;
+                    let pmesh = CellMesh::from_bytes(&pbytes, &st.dir.join(&prec.files.mesh.path))?;
+                    let targets =
+                        morph_targets(rec.origin.into(), &mesh, prec.origin.into(), &pmesh);
+                    let (pc, pn) = drawn_texels(prec, mode);
+                    let (cw, pw) = (rec.extent.width(), prec.extent.width());
+                    Some(MorphData {
+                        targets,
+                        colour_shift: mip_shift(colour.width(), cw, pc, pw),
+                        normal_shift: mip_shift(normal.width(), cw, pn, pw),
+                    })
+                }
+                None => None,
+            };
+            let mut data = CellData::new(rec, mesh, colour, normal, mode);
+            data.morph = morph_data;
+            Ok(data)
         })
+    }
+
+    /// Restarts the loaders and empties the cache (cells reload in the background).
+    fn reload(&mut self) {
+        self.streamer = Self::streamer(&self.store, &self.index, &self.opts);
+        self.cache = LruCache::new(self.opts.budget_bytes);
+    }
+
+    /// Switches geomorphing on or off. Switching on reloads the cells (they need morph
+    /// targets); switching off takes effect at once (cells are drawn unmorphed).
+    pub fn set_geomorph(&mut self, enabled: bool) {
+        let reload = enabled && !self.opts.geomorph.enabled;
+        self.opts.geomorph.enabled = enabled;
+        if reload {
+            self.reload();
+        }
+    }
+
+    /// Changes when the camera's radial distortion is applied (from the next frame).
+    pub fn set_distortion(&mut self, mode: DistortionMode) {
+        self.opts.distortion = mode;
+    }
+
+    /// Resizes the output target to `width × height` (e.g. a resized window).
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        self.renderer.resize(width, height)
+    }
+
+    /// The output size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.renderer.width(), self.renderer.height())
     }
 
     /// Switches texture mode and overlay: drops the cached cells (they reload in the
@@ -168,8 +240,7 @@ impl TerrainScene {
         self.opts.frame.level_overlay = overlay == Overlay::Levels;
         self.opts.frame.bounding_boxes = overlay == Overlay::Levels;
         if reload {
-            self.streamer = Self::streamer(&self.store, &self.opts);
-            self.cache = LruCache::new(self.opts.budget_bytes);
+            self.reload();
         }
     }
 
@@ -221,15 +292,56 @@ impl TerrainScene {
         Ok(())
     }
 
+    /// The pinhole view a frame of `model` is rasterized through when its distortion applies
+    /// (see [`DistortionMode`]), else `None`.
+    pub fn distorted_view(&self, model: &CameraModel) -> Result<Option<DistortedView>> {
+        if !self.opts.distortion.applies_to(model) {
+            return Ok(None);
+        }
+        let max = self.renderer.ctx.device.limits().max_texture_dimension_2d;
+        DistortedView::new(model, max).map(Some)
+    }
+
+    /// Morph factor of cell `i` in a frame seen by `cam` (0 when not geomorphing or for roots).
+    fn morph_of(&self, i: usize, cam: &RenderCamera) -> f32 {
+        let cells = &self.store.manifest.cells;
+        let rec = &cells[i];
+        let g = &self.opts.geomorph;
+        let Some(p) = rec.key().parent().and_then(|k| self.index.get(k)).filter(|_| g.enabled)
+        else {
+            return 0.0;
+        };
+        let thr = self.opts.sse_px;
+        let parent = screen_space_error(&cells[p], cam) / thr;
+        let own = self
+            .index
+            .children(rec.key())
+            .next()
+            .map(|_| screen_space_error(rec, cam) / thr);
+        morph_factor(parent, own, g.band)
+    }
+
     /// Renders one frame from `model` (whose size must be the target's). With `complete`,
     /// waits until every selected cell is loaded (for stills); otherwise never waits for the
     /// disk: missing cells are requested and drawn through their nearest loaded ancestor.
+    /// A camera with radial distortion is rasterized through its [`DistortedView`] and
+    /// resampled (unless the scene's [`DistortionMode`] is `Off`); LOD and culling then use
+    /// the pinhole view (at least as dense as the output everywhere).
     pub fn frame(&mut self, model: &CameraModel, complete: bool) -> Result<FrameReport> {
         let start = Instant::now();
-        let cam = self.render_camera(model);
+        let distorted = self.distorted_view(model)?;
+        let cam = self.render_camera(distorted.as_ref().map_or(model, |d| &d.pinhole));
         let store = Arc::clone(&self.store);
         let cells = &store.manifest.cells;
-        let sel = select_cells(cells, &self.index, &cam, self.opts.sse_px);
+        // A morphed cell reaches its parent's surface: up to the parent's error away.
+        let geomorph = self.opts.geomorph.enabled;
+        let index = &self.index;
+        let sel = select_cells_with_margin(cells, index, &cam, self.opts.sse_px, |i| {
+            match cells[i].key().parent().and_then(|k| index.get(k)) {
+                Some(p) if geomorph => cell_error(&cells[p]),
+                _ => 0.0,
+            }
+        });
         self.cache.begin_frame();
         for &i in &sel.cells {
             self.cache.get(i);
@@ -276,11 +388,25 @@ impl TerrainScene {
         for &i in &dl.draw {
             self.cache.get(i);
         }
-        let draw: Vec<&GpuCell> = dl.draw.iter().filter_map(|&i| self.cache.peek(i)).collect();
+        let morphs: Vec<f32> = dl.draw.iter().map(|&i| self.morph_of(i, &cam)).collect();
+        let cache = &self.cache;
+        let draw: Vec<CellDraw> = dl
+            .draw
+            .iter()
+            .zip(morphs)
+            .filter_map(|(&i, morph)| {
+                let cell: &GpuCell = cache.peek(i)?;
+                Some(CellDraw { cell, morph })
+            })
+            .collect();
         report.drawn = draw.len();
+        report.morphed = draw.iter().filter(|d| d.morph > 0.0 && d.cell.can_morph()).count();
         report.substituted = dl.substituted;
         report.holes = dl.holes;
-        report.triangles = self.renderer.render(&cam, &draw, &self.opts.frame)?;
+        report.distorted = distorted.is_some();
+        report.pinhole_size = distorted.map_or((0, 0), |d| (d.pinhole.width, d.pinhole.height));
+        report.triangles =
+            self.renderer.render(&cam, &draw, &self.opts.frame, distorted.as_ref())?;
         report.gpu_bytes = self.cache.used_bytes();
         report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(report)
@@ -323,4 +449,26 @@ impl TerrainScene {
         let r = &cells[self.index.roots()[0]];
         (DVec3::from(r.bbox_min) + DVec3::from(r.bbox_max)) / 2.0
     }
+}
+
+/// The files a cell is drawn from in `mode`: its reparameterized variant where it has one,
+/// unless the baseline orthographic rendering is asked for.
+fn active_files(rec: &CellRecord, mode: UvMode) -> &crate::store::CellFiles {
+    match (&rec.reparam, mode) {
+        (Some(r), UvMode::Mixed | UvMode::Reparam | UvMode::Photo) => &r.files,
+        _ => &rec.files,
+    }
+}
+
+/// Side lengths in texels of the colour texture and normal map a cell is drawn with in `mode`.
+fn drawn_texels(rec: &CellRecord, mode: UvMode) -> (u32, u32) {
+    let base = match (&rec.reparam, mode) {
+        (Some(r), UvMode::Mixed | UvMode::Reparam | UvMode::Photo) => r.texels,
+        _ => rec.texels,
+    };
+    let colour = match (&rec.photo, mode) {
+        (Some(p), UvMode::Photo) => p.texels,
+        _ => base,
+    };
+    (colour, base)
 }

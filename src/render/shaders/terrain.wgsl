@@ -15,6 +15,9 @@ struct Draw {
     extent: vec4<f32>,
     // Overlay colour of the cell's level (linear RGB).
     tint: vec4<f32>,
+    // Geomorphing: x = morph factor t in [0, 1] (0: as stored, 1: the parent's shape and texel
+    // density), y / z = LOD shift of the colour texture / normal map to the parent's, mip levels.
+    morph: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -46,10 +49,58 @@ fn vs_uv(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>) -> VOut {
     return o;
 }
 
+// Geomorphed variants: the height moves to the parent's surface height `zt` by the factor t;
+// texture coordinates stay those of the unmorphed vertex.
+@vertex
+fn vs_ortho_morph(@location(0) p: vec3<f32>, @location(2) zt: f32) -> VOut {
+    var o: VOut;
+    let q = vec3<f32>(p.xy, mix(p.z, zt, draw.morph.x));
+    o.pos = draw.mvp * vec4<f32>(q, 1.0);
+    o.uv = vec2<f32>((p.x - draw.extent.x) / draw.extent.z, (draw.extent.y - p.y) / draw.extent.w);
+    return o;
+}
+
+@vertex
+fn vs_uv_morph(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>, @location(2) zt: f32) -> VOut {
+    var o: VOut;
+    let q = vec3<f32>(p.xy, mix(p.z, zt, draw.morph.x));
+    o.pos = draw.mvp * vec4<f32>(q, 1.0);
+    o.uv = uv;
+    return o;
+}
+
+// Gradient scale that moves a texture's level of detail from its own `lod` to
+// mix(lod, max(lod, shift), t): where the texture is finer than the parent's (lod < shift),
+// the sample blends towards the parent's texel density. `g` are the uv derivatives.
+fn morph_grad_scale(gx: vec2<f32>, gy: vec2<f32>, size: vec2<f32>, shift: f32, t: f32) -> f32 {
+    let a = gx * size;
+    let b = gy * size;
+    let la = dot(a, a);
+    let lb = dot(b, b);
+    let major = sqrt(max(la, lb));
+    let minor = sqrt(min(la, lb));
+    // The level anisotropic filtering (8 taps at most) samples at.
+    let taps = clamp(ceil(major / max(minor, 1e-20)), 1.0, 8.0);
+    let lod = log2(max(major / taps, 1e-20));
+    return exp2(t * max(shift - lod, 0.0));
+}
+
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
-    let c = textureSample(colour_tex, samp, i.uv);
-    let n_raw = textureSample(normal_tex, samp, i.uv).xyz * 2.0 - vec3<f32>(1.0);
+    var c: vec4<f32>;
+    var n_raw: vec3<f32>;
+    let t = draw.morph.x;
+    if t > 0.0 {
+        let gx = dpdx(i.uv);
+        let gy = dpdy(i.uv);
+        let sc = morph_grad_scale(gx, gy, vec2<f32>(textureDimensions(colour_tex, 0)), draw.morph.y, t);
+        let sn = morph_grad_scale(gx, gy, vec2<f32>(textureDimensions(normal_tex, 0)), draw.morph.z, t);
+        c = textureSampleGrad(colour_tex, samp, i.uv, gx * sc, gy * sc);
+        n_raw = textureSampleGrad(normal_tex, samp, i.uv, gx * sn, gy * sn).xyz * 2.0 - vec3<f32>(1.0);
+    } else {
+        c = textureSample(colour_tex, samp, i.uv);
+        n_raw = textureSample(normal_tex, samp, i.uv).xyz * 2.0 - vec3<f32>(1.0);
+    }
     var rgb = c.rgb;
     if frame.params.z > 0.5 {
         rgb = mix(rgb, draw.tint.rgb, 0.5);
