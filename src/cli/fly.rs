@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use cliffmap::fsutil::write_atomic;
-use cliffmap::render::{FlightPath, FrameOptions, SceneOptions, TerrainScene, UvMode, fly};
+use cliffmap::render::{
+    FlightPath, FrameOptions, GeomorphOptions, SceneOptions, TerrainScene, UvMode, fly,
+};
 
 use super::render::parse_size;
 
@@ -45,6 +47,9 @@ pub struct Args {
     /// GPU memory budget for cached cells, e.g. 256M.
     #[arg(long, value_parser = super::parse_bytes, default_value = "512M")]
     budget: u64,
+    /// Blend cells towards their parents' shape and texel density near LOD switches.
+    #[arg(long)]
+    geomorph: bool,
     /// Report JSON.
     #[arg(long)]
     out: PathBuf,
@@ -64,6 +69,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         budget_bytes: a.budget,
         uv_mode,
         frame: FrameOptions::default(),
+        geomorph: GeomorphOptions {
+            enabled: a.geomorph,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
@@ -73,9 +82,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let cams = path.cameras(a.frames.max(2), w, h);
     eprintln!(
-        "adapter: {}; {} frames at {w}x{h}, mode {name}",
+        "adapter: {}; {} frames at {w}x{h}, mode {name}{}",
         scene.gpu().describe(),
-        cams.len()
+        cams.len(),
+        if a.geomorph { ", geomorphing" } else { "" }
     );
     let report = fly(&mut scene, &cams, name, a.sse, a.budget)?;
     let text = serde_json::to_string_pretty(&report)?;

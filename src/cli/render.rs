@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::fsutil::write_png_atomic;
-use cliffmap::render::{FrameOptions, Overlay, SceneOptions, TerrainScene, UvMode};
+use cliffmap::render::{
+    DistortionMode, FrameOptions, GeomorphOptions, Overlay, SceneOptions, TerrainScene, UvMode,
+};
 
 /// Flags of `cliffmap render`.
 #[derive(clap::Args, Debug)]
@@ -37,6 +39,13 @@ pub struct Args {
     /// Overlay: level colours + bounding boxes, or the per-texel stretch heat map.
     #[arg(long, value_enum, default_value_t = OverlayArg::None)]
     overlay: OverlayArg,
+    /// Blend cells towards their parents' shape and texel density near LOD switches.
+    #[arg(long)]
+    geomorph: bool,
+    /// Render a camera with radial distortion (k1, k2) as a pinhole (by default its frame is
+    /// distorted like the photo, pixel for pixel).
+    #[arg(long)]
+    no_distortion: bool,
 }
 
 /// Texture source of `render` (and `view`).
@@ -120,12 +129,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             lit: !a.unlit,
             ..Default::default()
         },
+        geomorph: GeomorphOptions {
+            enabled: a.geomorph,
+            ..Default::default()
+        },
+        distortion: if a.no_distortion {
+            DistortionMode::Off
+        } else {
+            DistortionMode::Auto
+        },
         ..Default::default()
     };
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
     eprintln!("adapter: {}", scene.gpu().describe());
     if matches!(a.mode, TextureMode::Photo) && !scene.has_photo() {
         eprintln!("note: the store has no photo-enhanced textures; --mode photo shows reparam");
+    }
+    if let Some(d) = scene.distorted_view(&cam)? {
+        eprintln!(
+            "lens distortion k1 {} k2 {}: rasterized as a {}x{} pinhole view (focal x{:.3}), then resampled{}",
+            cam.k1,
+            cam.k2,
+            d.pinhole.width,
+            d.pinhole.height,
+            d.scale,
+            if d.limited { " (view shrunk to the texture size limit: parts are undersampled)" } else { "" }
+        );
     }
     let r = scene.frame(&cam, true)?;
     let img = scene.read_rgba()?;

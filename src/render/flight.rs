@@ -230,6 +230,12 @@ pub struct FlyReport {
     pub uploads: usize,
     /// Time of the warm-up frame (first view loaded completely), ms.
     pub warmup_ms: f64,
+    /// Whether the flight geomorphed cells towards their parents.
+    #[serde(default)]
+    pub geomorph: bool,
+    /// Median over frames of the cells drawn with a morph factor > 0.
+    #[serde(default)]
+    pub morphed_cells_per_frame_median: f64,
 }
 
 /// Nearest-rank percentile (`q` in [0, 1]) of `v`; NaN if empty.
@@ -305,5 +311,10 @@ pub fn fly(
         hole_cells: reports.iter().map(|r| r.holes).sum(),
         uploads: reports.iter().map(|r| r.uploads).sum(),
         warmup_ms: warm.frame_ms,
+        geomorph: scene.options().geomorph.enabled,
+        morphed_cells_per_frame_median: percentile(
+            &reports.iter().map(|r| r.morphed as f64).collect::<Vec<_>>(),
+            0.5,
+        ),
     })
 }

@@ -157,6 +157,22 @@ pub fn write_store(
     colour: impl Fn(&CellRecord) -> [u8; 4],
     reparam: impl Fn(&CellRecord) -> bool,
 ) -> Manifest {
+    write_store_textured(
+        dir,
+        s,
+        |rec| image::RgbaImage::from_pixel(s.texels, s.texels, image::Rgba(colour(rec))),
+        reparam,
+    )
+}
+
+/// Like [`write_store`], with each cell's texture (`s.texels` square, u east, v south over the
+/// cell's nominal square) from `texture(record)`.
+pub fn write_store_textured(
+    dir: &Path,
+    s: &Synth,
+    texture: impl Fn(&CellRecord) -> image::RgbaImage,
+    reparam: impl Fn(&CellRecord) -> bool,
+) -> Manifest {
     let mut cells = records(s);
     for rec in &mut cells {
         let rp = reparam(rec);
@@ -167,7 +183,7 @@ pub fn write_store(
         };
         let mesh = flat_mesh(rec, rp);
         let stem = cell_stem(rec.level, rec.x, rec.y);
-        let tex = image::RgbaImage::from_pixel(s.texels, s.texels, image::Rgba(colour(rec)));
+        let tex = texture(rec);
         let nrm = image::RgbImage::from_pixel(s.texels, s.texels, image::Rgb([128, 128, 255]));
         let png = |img: &dyn Fn(&mut std::io::Cursor<Vec<u8>>)| {
             let mut c = std::io::Cursor::new(Vec::new());
