@@ -3,9 +3,12 @@
 //!
 //! A drawn cell `c` with parent `p` is blended towards `p`'s shape: the vertex shader moves each
 //! vertex from its own height `z` to the target `z_p` (the parent's surface height at the
-//! vertex's x, y, see [`morph_targets`]) by the factor `t` of [`morph_factor`], and samples the
-//! cell's textures at a level of detail at least `t · shift` coarser where they are finer than
-//! the parent's (see [`mip_shift`]). `t = 1` exactly when the parent's screen-space error
+//! vertex's x, y, see [`morph_targets`]) by the factor `t` of [`morph_factor`], and the fragment
+//! shader blends the cell's colour and normal samples by `t` towards the parent's textures,
+//! sampled at the parent's texture coordinates of the same surface point (interpolated per
+//! vertex by [`morph_targets`]). If the parent's textures are not resident, the cell's own
+//! textures are sampled at a level of detail up to `t · shift` coarser instead, where they are
+//! finer than the parent's (see [`mip_shift`]). `t = 1` exactly when the parent's screen-space error
 //! reaches the refinement threshold, i.e. at the moment the LOD selection switches between `p`
 //! and its children, so the switch shows (up to the differences of the two triangulations)
 //! the same surface on both sides; `t = 0` from `band ×` the threshold on, and always before
@@ -84,6 +87,8 @@ pub fn mip_shift(child_texels: u32, child_width: f64, parent_texels: u32, parent
 #[derive(Clone, Debug)]
 pub struct SurfaceLocator {
     tris: Vec<[DVec3; 3]>,
+    /// Vertex indices of `tris`.
+    idx: Vec<[u32; 3]>,
     bins: Vec<Vec<u32>>,
     n: usize,
     min: [f64; 2],
@@ -94,12 +99,16 @@ impl SurfaceLocator {
     /// Indexes the triangles `triangles` over `positions` (any frame; indices out of range and
     /// triangles without area in x, y are skipped).
     pub fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> SurfaceLocator {
-        let tris: Vec<[DVec3; 3]> = triangles
+        let idx: Vec<[u32; 3]> = triangles
             .iter()
             .filter(|t| t.iter().all(|&k| (k as usize) < positions.len()))
-            .map(|t| t.map(|k| positions[k as usize]))
-            .filter(|t| cross2(t[1] - t[0], t[2] - t[0]).abs() > 0.0)
+            .filter(|t| {
+                let p = t.map(|k| positions[k as usize]);
+                cross2(p[1] - p[0], p[2] - p[0]).abs() > 0.0
+            })
+            .copied()
             .collect();
+        let tris: Vec<[DVec3; 3]> = idx.iter().map(|t| t.map(|k| positions[k as usize])).collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in tris.iter().flatten() {
             lo = [lo[0].min(p.x), lo[1].min(p.y)];
@@ -116,6 +125,7 @@ impl SurfaceLocator {
         };
         let mut s = SurfaceLocator {
             tris: Vec::new(),
+            idx,
             bins: vec![Vec::new(); n * n],
             n,
             min: lo,
@@ -142,31 +152,44 @@ impl SurfaceLocator {
         (f(x, 0), f(y, 1))
     }
 
-    /// Height of the surface at `(x, y)`: linear interpolation in the triangle containing the
-    /// point (tolerance 1e-9 in barycentric terms); outside every triangle, the height at the
-    /// nearest point of the nearest triangle. `None` without triangles or for non-finite input.
-    pub fn height_at(&self, x: f64, y: f64) -> Option<f64> {
+    /// Internal triangle index and barycentric weights of the point (see [`Self::locate`]).
+    fn locate_internal(&self, x: f64, y: f64) -> Option<(usize, [f64; 3])> {
         if self.tris.is_empty() || !(x.is_finite() && y.is_finite()) {
             return None;
         }
         let (bx, by) = self.bin(x, y);
         for &k in &self.bins[by * self.n + bx] {
-            let t = &self.tris[k as usize];
-            let b = barycentric(t, x, y);
+            let b = barycentric(&self.tris[k as usize], x, y);
             if b.iter().all(|&w| w >= -1e-9) {
-                return Some(b[0] * t[0].z + b[1] * t[1].z + b[2] * t[2].z);
+                return Some((k as usize, b));
             }
         }
         // Outside (rounding at the border, or beyond it): nearest point of the nearest triangle.
         let q = glam::DVec2::new(x, y);
-        let mut best = (f64::INFINITY, 0.0);
-        for t in &self.tris {
-            let (d2, z) = nearest_on_triangle(t, q);
+        let mut best = (f64::INFINITY, 0usize, [1.0, 0.0, 0.0]);
+        for (k, t) in self.tris.iter().enumerate() {
+            let (d2, w) = nearest_on_triangle(t, q);
             if d2 < best.0 {
-                best = (d2, z);
+                best = (d2, k, w);
             }
         }
-        Some(best.1)
+        Some((best.1, best.2))
+    }
+
+    /// The triangle (its vertex indices) containing `(x, y)` and the point's barycentric
+    /// weights in it (tolerance 1e-9); outside every triangle, the nearest point of the nearest
+    /// triangle (weights ≥ 0). `None` without triangles or for non-finite input.
+    pub fn locate(&self, x: f64, y: f64) -> Option<([u32; 3], [f64; 3])> {
+        self.locate_internal(x, y).map(|(k, w)| (self.idx[k], w))
+    }
+
+    /// Height of the surface at `(x, y)`: linear interpolation in the triangle containing the
+    /// point; outside every triangle, the height at the nearest point of the nearest triangle
+    /// (see [`SurfaceLocator::locate`]). `None` without triangles or for non-finite input.
+    pub fn height_at(&self, x: f64, y: f64) -> Option<f64> {
+        let (k, w) = self.locate_internal(x, y)?;
+        let t = &self.tris[k];
+        Some(w[0] * t[0].z + w[1] * t[1].z + w[2] * t[2].z)
     }
 }
 
@@ -182,16 +205,16 @@ fn barycentric(t: &[DVec3; 3], x: f64, y: f64) -> [f64; 3] {
     [w0, w1, 1.0 - w0 - w1]
 }
 
-/// Squared x, y distance from `q` to triangle `t` and the surface height at the nearest point.
-fn nearest_on_triangle(t: &[DVec3; 3], q: glam::DVec2) -> (f64, f64) {
+/// Squared x, y distance from `q` to triangle `t` and the barycentric weights (≥ 0) of the
+/// nearest point.
+fn nearest_on_triangle(t: &[DVec3; 3], q: glam::DVec2) -> (f64, [f64; 3]) {
     let b = barycentric(t, q.x, q.y);
     if b.iter().all(|&w| w >= 0.0) {
-        return (0.0, b[0] * t[0].z + b[1] * t[1].z + b[2] * t[2].z);
+        return (0.0, b);
     }
-    let mut best = (f64::INFINITY, 0.0);
+    let mut best = (f64::INFINITY, [1.0, 0.0, 0.0]);
     for k in 0..3 {
-        let (a, c) = (t[k], t[(k + 1) % 3]);
-        let (a2, c2) = (a.truncate(), c.truncate());
+        let (a2, c2) = (t[k].truncate(), t[(k + 1) % 3].truncate());
         let e = c2 - a2;
         let s = if e.length_squared() > 0.0 {
             ((q - a2).dot(e) / e.length_squared()).clamp(0.0, 1.0)
@@ -200,39 +223,58 @@ fn nearest_on_triangle(t: &[DVec3; 3], q: glam::DVec2) -> (f64, f64) {
         };
         let d2 = (a2 + e * s - q).length_squared();
         if d2 < best.0 {
-            best = (d2, a.z + (c.z - a.z) * s);
+            let mut w = [0.0; 3];
+            w[k] = 1.0 - s;
+            w[(k + 1) % 3] = s;
+            best = (d2, w);
         }
     }
     best
 }
 
-/// Morph target heights of every vertex of `child` (cell-local f32 around `child_origin`): the
-/// height of `parent`'s surface (its surface triangles, cell-local around `parent_origin`) at
-/// the vertex's world x, y, in the child's local frame. Offsets between the frames are taken in
-/// f64. Skirt vertices (after `surface_vertices`) keep their drop below the surface vertex at
-/// the same x, y (so skirts follow the morphed border); a skirt vertex without one, or any
-/// vertex when the parent has no surface, keeps its own height.
+/// Morph targets of every vertex of `child` (cell-local f32 around `child_origin`), as
+/// `[z, u, v]`: the height of `parent`'s surface (its surface triangles, cell-local around
+/// `parent_origin`) at the vertex's world x, y, in the child's local frame, and the parent's
+/// texture coordinates there (`parent_uvs[k]` of parent vertex `k`, interpolated linearly in
+/// the parent triangle). Offsets between the frames are taken in f64. Skirt vertices (after
+/// `surface_vertices`) hang `parent_skirt` metres below the target of the surface vertex at
+/// the same x, y (the parent's skirt depth, so at `t = 1` the skirts match the parent's; their
+/// own drop if `parent_skirt` is not a positive number) and take its texture coordinates; a
+/// skirt vertex without a surface vertex, or any vertex when the parent has no surface, keeps
+/// its own height (and gets uv (0, 0)).
 pub fn morph_targets(
     child_origin: DVec3,
     child: &CellMesh,
     parent_origin: DVec3,
     parent: &CellMesh,
-) -> Vec<f32> {
+    parent_uvs: &[[f32; 2]],
+    parent_skirt: f64,
+) -> Vec<[f32; 3]> {
     let ns_p = (parent.surface_vertices as usize).min(parent.positions.len());
     let pos: Vec<DVec3> = parent.positions[..ns_p]
         .iter()
         .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
         .collect();
     let loc = SurfaceLocator::new(&pos, parent.surface());
+    let uv_of = |k: u32| parent_uvs.get(k as usize).copied().unwrap_or([0.0, 0.0]);
     let off = child_origin - parent_origin;
     let ns = (child.surface_vertices as usize).min(child.positions.len());
-    let mut out: Vec<f32> = child.positions[..ns]
+    let mut out: Vec<[f32; 3]> = child.positions[..ns]
         .iter()
         .map(|p| {
             let q = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) + off;
-            match loc.height_at(q.x, q.y) {
-                Some(h) => (h - off.z) as f32,
-                None => p[2],
+            match loc.locate_internal(q.x, q.y) {
+                Some((k, w)) => {
+                    let (t, i) = (&loc.tris[k], loc.idx[k]);
+                    let h = w[0] * t[0].z + w[1] * t[1].z + w[2] * t[2].z;
+                    let uv = [0, 1].map(|c| {
+                        (w[0] * uv_of(i[0])[c] as f64
+                            + w[1] * uv_of(i[1])[c] as f64
+                            + w[2] * uv_of(i[2])[c] as f64) as f32
+                    });
+                    [(h - off.z) as f32, uv[0], uv[1]]
+                }
+                None => [p[2], 0.0, 0.0],
             }
         })
         .collect();
@@ -244,8 +286,15 @@ pub fn morph_targets(
         .collect();
     for p in &child.positions[ns..] {
         out.push(match surface.get(&key(p)) {
-            Some(&j) => out[j] + (p[2] - child.positions[j][2]),
-            None => p[2],
+            Some(&j) => {
+                let drop = if parent_skirt > 0.0 && parent_skirt.is_finite() {
+                    parent_skirt as f32
+                } else {
+                    child.positions[j][2] - p[2]
+                };
+                [out[j][0] - drop, out[j][1], out[j][2]]
+            }
+            None => [p[2], 0.0, 0.0],
         });
     }
     out
@@ -347,18 +396,28 @@ mod tests {
             surface_vertices: ns,
             surface_triangles: 32,
         };
-        let t = morph_targets(child_origin, &child, parent_origin, &tent());
+        // Parent texture coordinates: ortho over its square (u east, v south).
+        let uvs: Vec<[f32; 2]> =
+            tent().positions.iter().map(|p| [(p[0] + 50.0) / 100.0, (50.0 - p[1]) / 100.0]).collect();
+        let t = morph_targets(child_origin, &child, parent_origin, &tent(), &uvs, 4.5);
         assert_eq!(t.len(), positions.len());
         for (k, p) in positions[..ns as usize].iter().enumerate() {
             let (x, y) = (p[0] as f64 + 25.0, p[1] as f64 + 25.0);
             let want = tent_height(x, y) - 3.0;
-            assert!((t[k] as f64 - want).abs() < 1e-4, "vertex {k} at ({x}, {y}): {} vs {want}", t[k]);
+            assert!((t[k][0] as f64 - want).abs() < 1e-4, "vertex {k} at ({x}, {y}): {:?} vs {want}", t[k]);
+            // Ortho coordinates are affine in x, y: interpolation reproduces them exactly.
+            let (u, v) = ((x + 50.0) / 100.0, (50.0 - y) / 100.0);
+            assert!((t[k][1] as f64 - u).abs() < 1e-6 && (t[k][2] as f64 - v).abs() < 1e-6, "uv of {k}");
         }
         for j in 0..5 {
             let (s, b) = (ns as usize + j, j * 5);
-            assert!((t[s] - (t[b] - 2.0)).abs() < 1e-5, "skirt {j} follows its border vertex");
+            assert!((t[s][0] - (t[b][0] - 4.5)).abs() < 1e-5, "skirt {j} hangs the parent's depth below its border vertex");
+            assert_eq!((t[s][1], t[s][2]), (t[b][1], t[b][2]));
         }
-        assert_eq!(t[t.len() - 1], -7.0, "a skirt vertex without a border vertex is not moved");
+        assert_eq!(t[t.len() - 1][0], -7.0, "a skirt vertex without a border vertex is not moved");
+        // Without a parent skirt depth the skirt keeps its own drop.
+        let t = morph_targets(child_origin, &child, parent_origin, &tent(), &uvs, 0.0);
+        assert!((t[ns as usize][0] - (t[0][0] - 2.0)).abs() < 1e-5);
     }
 
     #[test]

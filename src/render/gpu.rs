@@ -102,11 +102,13 @@ pub struct CellData {
 /// What a cell needs to be morphed towards its parent (see [`super::geomorph`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MorphData {
-    /// Per vertex (surface and skirt), the target height in the cell-local frame, metres.
-    pub targets: Vec<f32>,
-    /// LOD shift of the colour texture to the parent's texel density, mip levels (≥ 0).
+    /// Per vertex (surface and skirt): the target height in the cell-local frame (metres) and
+    /// the parent's texture coordinates of the same surface point, `[z, u, v]`.
+    pub targets: Vec<[f32; 3]>,
+    /// LOD shift of the colour texture to the parent's texel density, mip levels (≥ 0), used
+    /// when the parent's textures are not resident.
     pub colour_shift: f32,
-    /// LOD shift of the normal map to the parent's, mip levels (≥ 0).
+    /// LOD shift of the normal map to the parent's, mip levels (≥ 0), likewise.
     pub normal_shift: f32,
 }
 
@@ -180,6 +182,8 @@ pub struct GpuCell {
     index_count: u32,
     box_lines: wgpu::Buffer,
     textures: wgpu::BindGroup,
+    colour_view: wgpu::TextureView,
+    normal_view: wgpu::TextureView,
     /// World origin of the cell-local frame.
     pub origin: DVec3,
     /// (min_x − origin_x, max_y − origin_y, width, height) of the nominal square, metres.
@@ -200,13 +204,16 @@ impl GpuCell {
 }
 
 /// One cell of a frame and its morph factor (0 = as stored, 1 = its parent's shape and
-/// texel density; ignored for cells without morph targets).
+/// textures; ignored for cells without morph targets).
 #[derive(Clone, Copy)]
 pub struct CellDraw<'a> {
     /// The cell.
     pub cell: &'a GpuCell,
     /// Morph factor in [0, 1].
     pub morph: f32,
+    /// The parent cell, if resident: its textures are blended in by `morph` (without it the
+    /// cell's own textures are sampled coarser instead).
+    pub parent: Option<&'a GpuCell>,
 }
 
 /// Options of one frame.
@@ -256,6 +263,9 @@ pub struct TerrainRenderer {
     pipeline_uv_morph: wgpu::RenderPipeline,
     pipeline_lines: wgpu::RenderPipeline,
     cell_layout: wgpu::BindGroupLayout,
+    parent_layout: wgpu::BindGroupLayout,
+    /// Group 2 of draws without parent textures (1×1 placeholders).
+    no_parent: wgpu::BindGroup,
     frame_layout: wgpu::BindGroupLayout,
     frame_buf: wgpu::Buffer,
     draw_buf: wgpu::Buffer,
@@ -348,9 +358,13 @@ impl TerrainRenderer {
                 },
             ],
         });
+        let parent_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("parent textures"),
+            entries: &[tex(0), tex(1)],
+        });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("terrain"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&cell_layout)],
+            bind_group_layouts: &[Some(&frame_layout), Some(&cell_layout), Some(&parent_layout)],
             immediate_size: 0,
         });
         let pos_layout = wgpu::VertexBufferLayout {
@@ -425,10 +439,10 @@ impl TerrainRenderer {
             "fs_line",
         );
         let morph_layout = wgpu::VertexBufferLayout {
-            array_stride: 4,
+            array_stride: 12,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &[wgpu::VertexAttribute {
-                format: wgpu::VertexFormat::Float32,
+                format: wgpu::VertexFormat::Float32x3,
                 offset: 0,
                 shader_location: 2,
             }],
@@ -467,6 +481,22 @@ impl TerrainRenderer {
             anisotropy_clamp: 8,
             ..Default::default()
         });
+        let placeholder = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("no parent"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let pv = placeholder.create_view(&Default::default());
+        let no_parent = Self::parent_group(device, &parent_layout, &pv, &pv);
         let target = RenderTarget::new(device, width, height);
         let distort = DistortPass::new(device);
         let draw_capacity = 64;
@@ -484,12 +514,36 @@ impl TerrainRenderer {
             pipeline_uv_morph,
             pipeline_lines,
             cell_layout,
+            parent_layout,
+            no_parent,
             frame_layout,
             frame_buf,
             draw_buf,
             draw_capacity,
             frame_group,
             sampler,
+        })
+    }
+
+    fn parent_group(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        colour: &wgpu::TextureView,
+        normal: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("parent textures"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(colour),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(normal),
+                },
+            ],
         })
     }
 
@@ -650,7 +704,7 @@ impl TerrainRenderer {
         let morph = data.morph.as_ref().map(|m| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("morph targets"),
-                contents: &f32_bytes(&m.targets),
+                contents: &f32_bytes(m.targets.as_flattened()),
                 usage: wgpu::BufferUsages::VERTEX,
             })
         });
@@ -716,7 +770,7 @@ impl TerrainRenderer {
         let bytes = pos.len() as u64 * 4
             + idx.len() as u64
             + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
-            + data.morph.as_ref().map_or(0, |m| m.targets.len() as u64 * 4)
+            + data.morph.as_ref().map_or(0, |m| m.targets.len() as u64 * 12)
             + cb
             + nb;
         Ok(GpuCell {
@@ -731,6 +785,8 @@ impl TerrainRenderer {
             index_count: data.mesh.triangles.len() as u32 * 3,
             box_lines,
             textures,
+            colour_view: cv,
+            normal_view: nv,
             origin,
             extent_rel: [
                 (e.min_x - origin.x) as f32,
@@ -837,7 +893,8 @@ impl TerrainRenderer {
                 let mut v: Vec<f32> = cam.mvp_for_origin(c.origin).to_cols_array().to_vec();
                 v.extend_from_slice(&c.extent_rel);
                 v.extend_from_slice(&level_tint(c.level));
-                v.extend_from_slice(&[morph_of(d), c.mip_shift[0], c.mip_shift[1], 0.0]);
+                let has_parent = f32::from(u8::from(d.parent.is_some()));
+                v.extend_from_slice(&[morph_of(d), c.mip_shift[0], c.mip_shift[1], has_parent]);
                 let b = f32_bytes(&v);
                 bytes[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
                     .copy_from_slice(&b);
@@ -850,6 +907,19 @@ impl TerrainRenderer {
             label: Some("frame"),
         });
         let mut triangles = 0u64;
+        // Parent textures of morphing draws (bind groups live until the pass is recorded).
+        let parent_groups: Vec<Option<wgpu::BindGroup>> = draws
+            .iter()
+            .map(|d| match d.parent {
+                Some(p) if morph_of(d) > 0.0 => Some(Self::parent_group(
+                    device,
+                    &self.parent_layout,
+                    &p.colour_view,
+                    &p.normal_view,
+                )),
+                _ => None,
+            })
+            .collect();
         {
             let frame_group = &self.frame_group;
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -901,6 +971,7 @@ impl TerrainRenderer {
                 }
                 pass.set_bind_group(0, frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
                 pass.set_bind_group(1, &c.textures, &[]);
+                pass.set_bind_group(2, parent_groups[i].as_ref().unwrap_or(&self.no_parent), &[]);
                 pass.set_vertex_buffer(0, c.positions.slice(..));
                 pass.set_index_buffer(c.indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..c.index_count, 0, 0..1);
@@ -911,6 +982,7 @@ impl TerrainRenderer {
                 for (i, d) in draws.iter().enumerate() {
                     pass.set_bind_group(0, frame_group, &[(i as u64 * DRAW_STRIDE) as u32]);
                     pass.set_bind_group(1, &d.cell.textures, &[]);
+                    pass.set_bind_group(2, &self.no_parent, &[]);
                     pass.set_vertex_buffer(0, d.cell.box_lines.slice(..));
                     pass.draw(0..24, 0..1);
                 }

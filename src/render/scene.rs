@@ -18,7 +18,7 @@ use super::overlay::{Overlay, stretch_heatmap};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
-use crate::store::{CellMesh, CellRecord, Store};
+use crate::store::{CellMesh, CellRecord, Store, texcoord};
 
 /// How a scene renders.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -178,11 +178,21 @@ impl TerrainScene {
             let morph_data = match parent.filter(|_| morph) {
                 Some(p) => {
                     let prec = &st.manifest.cells[p];
-                    // Positions are the same in every variant; the orthographic mesh is smallest.
-                    let pbytes = st.read_file(&prec.files.mesh)?;
-                    let pmesh = CellMesh::from_bytes(&pbytes, &st.dir.join(&prec.files.mesh.path))?;
+                    // The parent's mesh and texture coordinates as it is drawn in this mode.
+                    let pfiles = active_files(prec, mode);
+                    let pbytes = st.read_file(&pfiles.mesh)?;
+                    let pmesh = CellMesh::from_bytes(&pbytes, &st.dir.join(&pfiles.mesh.path))?;
+                    let puv: Vec<[f32; 2]> =
+                        (0..pmesh.positions.len()).map(|k| texcoord(prec, &pmesh, k)).collect();
                     let targets =
-                        morph_targets(rec.origin.into(), &mesh, prec.origin.into(), &pmesh);
+                        morph_targets(
+                        rec.origin.into(),
+                        &mesh,
+                        prec.origin.into(),
+                        &pmesh,
+                        &puv,
+                        prec.skirt_depth,
+                    );
                     let (pc, pn) = drawn_texels(prec, mode);
                     let (cw, pw) = (rec.extent.width(), prec.extent.width());
                     Some(MorphData {
@@ -389,14 +399,28 @@ impl TerrainScene {
             self.cache.get(i);
         }
         let morphs: Vec<f32> = dl.draw.iter().map(|&i| self.morph_of(i, &cam)).collect();
+        // Parents of morphing cells lend their textures: keep them (or have them loaded).
+        let parent_of = |i: usize| cells[i].key().parent().and_then(|k| self.index.get(k));
+        let parents: Vec<Option<usize>> = dl
+            .draw
+            .iter()
+            .zip(&morphs)
+            .map(|(&i, &m)| parent_of(i).filter(|_| m > 0.0))
+            .collect();
+        for &p in parents.iter().flatten() {
+            if self.cache.get(p).is_none() {
+                self.streamer.request(p);
+            }
+        }
         let cache = &self.cache;
         let draw: Vec<CellDraw> = dl
             .draw
             .iter()
             .zip(morphs)
-            .filter_map(|(&i, morph)| {
+            .zip(parents)
+            .filter_map(|((&i, morph), p)| {
                 let cell: &GpuCell = cache.peek(i)?;
-                Some(CellDraw { cell, morph })
+                Some(CellDraw { cell, morph, parent: p.and_then(|p| cache.peek(p)) })
             })
             .collect();
         report.drawn = draw.len();

@@ -15,8 +15,9 @@ struct Draw {
     extent: vec4<f32>,
     // Overlay colour of the cell's level (linear RGB).
     tint: vec4<f32>,
-    // Geomorphing: x = morph factor t in [0, 1] (0: as stored, 1: the parent's shape and texel
-    // density), y / z = LOD shift of the colour texture / normal map to the parent's, mip levels.
+    // Geomorphing: x = morph factor t in [0, 1] (0: as stored, 1: the parent's shape and
+    // textures); w = 1 if the parent's textures are bound (group 2), else y / z = LOD shift of
+    // the colour texture / normal map to the parent's texel density, mip levels (fallback).
     morph: vec4<f32>,
 };
 
@@ -25,10 +26,15 @@ struct Draw {
 @group(1) @binding(0) var colour_tex: texture_2d<f32>;
 @group(1) @binding(1) var normal_tex: texture_2d<f32>;
 @group(1) @binding(2) var samp: sampler;
+// The parent cell's textures (placeholders unless morphing with a resident parent).
+@group(2) @binding(0) var parent_colour: texture_2d<f32>;
+@group(2) @binding(1) var parent_normal: texture_2d<f32>;
 
 struct VOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) uv: vec2<f32>,
+    // The parent's texture coordinates of the same surface point (geomorphing only).
+    @location(1) puv: vec2<f32>,
 };
 
 // Orthographic cells: u east, v south over the nominal square.
@@ -37,6 +43,7 @@ fn vs_ortho(@location(0) p: vec3<f32>) -> VOut {
     var o: VOut;
     o.pos = draw.mvp * vec4<f32>(p, 1.0);
     o.uv = vec2<f32>((p.x - draw.extent.x) / draw.extent.z, (draw.extent.y - p.y) / draw.extent.w);
+    o.puv = o.uv;
     return o;
 }
 
@@ -46,26 +53,29 @@ fn vs_uv(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>) -> VOut {
     var o: VOut;
     o.pos = draw.mvp * vec4<f32>(p, 1.0);
     o.uv = uv;
+    o.puv = uv;
     return o;
 }
 
-// Geomorphed variants: the height moves to the parent's surface height `zt` by the factor t;
-// texture coordinates stay those of the unmorphed vertex.
+// Geomorphed variants: the height moves to the parent's surface height `m.x` by the factor t;
+// `m.yz` are the parent's texture coordinates of the same point.
 @vertex
-fn vs_ortho_morph(@location(0) p: vec3<f32>, @location(2) zt: f32) -> VOut {
+fn vs_ortho_morph(@location(0) p: vec3<f32>, @location(2) m: vec3<f32>) -> VOut {
     var o: VOut;
-    let q = vec3<f32>(p.xy, mix(p.z, zt, draw.morph.x));
+    let q = vec3<f32>(p.xy, mix(p.z, m.x, draw.morph.x));
     o.pos = draw.mvp * vec4<f32>(q, 1.0);
     o.uv = vec2<f32>((p.x - draw.extent.x) / draw.extent.z, (draw.extent.y - p.y) / draw.extent.w);
+    o.puv = m.yz;
     return o;
 }
 
 @vertex
-fn vs_uv_morph(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>, @location(2) zt: f32) -> VOut {
+fn vs_uv_morph(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>, @location(2) m: vec3<f32>) -> VOut {
     var o: VOut;
-    let q = vec3<f32>(p.xy, mix(p.z, zt, draw.morph.x));
+    let q = vec3<f32>(p.xy, mix(p.z, m.x, draw.morph.x));
     o.pos = draw.mvp * vec4<f32>(q, 1.0);
     o.uv = uv;
+    o.puv = m.yz;
     return o;
 }
 
@@ -90,7 +100,16 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     var c: vec4<f32>;
     var n_raw: vec3<f32>;
     let t = draw.morph.x;
-    if t > 0.0 {
+    if t > 0.0 && draw.morph.w > 0.5 {
+        // Blend towards the parent's textures at the same surface point.
+        let cc = textureSample(colour_tex, samp, i.uv);
+        let cp = textureSample(parent_colour, samp, i.puv);
+        c = mix(cc, cp, t);
+        let nc = textureSample(normal_tex, samp, i.uv).xyz;
+        let np = textureSample(parent_normal, samp, i.puv).xyz;
+        n_raw = mix(nc, np, t) * 2.0 - vec3<f32>(1.0);
+    } else if t > 0.0 {
+        // Parent not resident: the cell's own textures at up to the parent's texel density.
         let gx = dpdx(i.uv);
         let gy = dpdy(i.uv);
         let sc = morph_grad_scale(gx, gy, vec2<f32>(textureDimensions(colour_tex, 0)), draw.morph.y, t);
