@@ -10,6 +10,7 @@ mod render;
 mod reparam;
 mod stats;
 mod view;
+mod view_window;
 
 use std::process::ExitCode;
 

@@ -2,8 +2,10 @@
 //!
 //! Each frame is rendered offscreen by [`TerrainScene`] on a device opened for the window's
 //! surface, read back and written into the surface texture (a copy, so the renderer stays
-//! headless). Keys: WASD move, Q/E down/up, Shift faster, mouse drag look, L levels + boxes,
-//! H stretch heat map, M texture mode, +/− threshold, Esc quit.
+//! headless); the surface and the render target follow window resizes. Keys: WASD move, Q/E
+//! down/up, Shift faster, mouse drag look, Tab or right button capture the mouse for mouse
+//! look, G geomorphing, L levels + boxes, H stretch heat map, M texture mode, +/− threshold,
+//! Esc release the mouse / quit.
 
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -12,28 +14,41 @@ use std::time::Instant;
 
 use anyhow::{Context, anyhow, bail};
 use cliffmap::render::{
-    FlightPath, FlyCamera, FlyInput, FrameReport, GpuContext, Overlay, SceneOptions,
-    TerrainScene, UvMode, adjust_sse,
+    FlightPath, FlyCamera, FlyInput, FrameReport, GeomorphOptions, GpuContext, Overlay,
+    SceneOptions, TerrainScene, UvMode, adjust_sse,
 };
 use cliffmap::store::Store;
 use glam::DVec3;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event::{DeviceEvent, DeviceId, ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
-use winit::window::{Window, WindowId};
+use winit::window::{CursorGrabMode, Window, WindowId};
+
+use super::view_window::{Presenter, capture, release};
 
 /// Flags of `cliffmap view`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The store directory.
     store: PathBuf,
-    /// Window size, e.g. 1280x720 (the render target keeps this size).
+    /// Initial window size, e.g. 1280x720 (the window can be resized).
     #[arg(long, value_parser = super::render::parse_size, default_value = "1280x720")]
     size: (u32, u32),
     /// Initial screen-space error threshold in pixels.
     #[arg(long, default_value_t = 0.5)]
     sse: f64,
+    /// Start with geomorphing on (G toggles it).
+    #[arg(long)]
+    geomorph: bool,
+    /// Exit after presenting this many frames (scripted runs).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Scripted smoke test: during the first frames, resize the window, capture and release
+    /// the mouse and toggle geomorphing, reporting each step on stderr; exits after --frames
+    /// (default 8).
+    #[arg(long, hide = true)]
+    smoke_test: bool,
 }
 
 /// Mouse-look sensitivity, radians per pixel of drag.
@@ -81,6 +96,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if !(a.sse.is_finite() && a.sse > 0.0) {
         bail!("--sse must be a positive number of pixels, got {}", a.sse);
     }
+    if a.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
     if !display_available(|k| std::env::var(k).ok()) {
         bail!(
             "no display available (DISPLAY and WAYLAND_DISPLAY are unset): `cliffmap view` needs a \
@@ -89,46 +107,62 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let event_loop =
         EventLoop::new().map_err(|e| anyhow!("cannot connect to the display: {e}"))?;
+    let exit_after = a.frames.or(a.smoke_test.then_some(8));
     let mut app = App {
         args: a,
         modes,
         path,
+        exit_after,
         state: None,
         error: None,
     };
     event_loop
         .run_app(&mut app)
         .map_err(|e| anyhow!("window event loop failed: {e}"))?;
-    match app.error {
-        Some(e) => Err(e),
-        None => Ok(()),
+    if let Some(e) = app.error {
+        return Err(e);
     }
+    if let (Some(n), Some(s)) = (app.exit_after, &app.state) {
+        if s.presented < n {
+            bail!("only {} of {n} frames could be presented", s.presented);
+        }
+        let (w, h) = s.scene.size();
+        eprintln!("view: {} frames presented, last at {w}x{h}", s.presented);
+    }
+    Ok(())
 }
 
 struct App {
     args: Args,
     modes: Vec<UvMode>,
     path: FlightPath,
+    /// Exit after this many presented frames.
+    exit_after: Option<u64>,
     state: Option<ViewState>,
     error: Option<anyhow::Error>,
 }
 
 struct ViewState {
     window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    bgra: bool,
+    presenter: Presenter,
     scene: TerrainScene,
     cam: FlyCamera,
     fov_y: f64,
-    size: (u32, u32),
     keys: HashSet<KeyCode>,
     dragging: bool,
     cursor: Option<(f64, f64)>,
+    /// Mouse captured for mouse look, and how.
+    captured: Option<CursorGrabMode>,
+    /// The window has no area (minimized): nothing is rendered.
+    minimized: bool,
     mode: usize,
     overlay: Overlay,
     last: Instant,
     report: FrameReport,
+    /// Frames presented / redraws attempted.
+    presented: u64,
+    attempts: u64,
+    smoke: bool,
 }
 
 impl App {
@@ -142,7 +176,7 @@ impl App {
         let attrs = Window::default_attributes()
             .with_title("cliffmap view")
             .with_inner_size(winit::dpi::PhysicalSize::new(w, h))
-            .with_resizable(false);
+            .with_resizable(true);
         let window = Arc::new(el.create_window(attrs).context("cannot create a window")?);
         let size = window.inner_size();
         let (w, h) = (size.width.max(1), size.height.max(1));
@@ -158,42 +192,18 @@ impl App {
             ..Default::default()
         }))
         .map_err(|e| anyhow!("no graphics adapter can draw to the window ({e})"))?;
-        let caps = surface.get_capabilities(&adapter);
-        if !caps.usages.contains(wgpu::TextureUsages::COPY_DST) {
-            bail!("the window surface does not accept copies (COPY_DST) on this adapter");
-        }
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| {
-                matches!(
-                    f,
-                    wgpu::TextureFormat::Rgba8UnormSrgb
-                        | wgpu::TextureFormat::Bgra8UnormSrgb
-                        | wgpu::TextureFormat::Rgba8Unorm
-                        | wgpu::TextureFormat::Bgra8Unorm
-                )
-            })
-            .ok_or_else(|| anyhow!("the window surface offers no 8-bit RGBA/BGRA format"))?;
-        let bgra = matches!(
-            format,
-            wgpu::TextureFormat::Bgra8UnormSrgb | wgpu::TextureFormat::Bgra8Unorm
-        );
         let ctx = GpuContext::from_adapter(adapter)?;
         eprintln!("adapter: {}", ctx.describe());
-        let mut config = surface
-            .get_default_config(&ctx.adapter, w, h)
-            .ok_or_else(|| anyhow!("the window surface is not supported by the adapter"))?;
-        config.format = format;
-        config.usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST;
-        config.view_formats.clear();
-        surface.configure(&ctx.device, &config);
+        let presenter = Presenter::new(surface, &ctx.adapter, &ctx.device, w, h)?;
         let mode = self.modes.len() - 1;
         let mode = if self.modes[mode] == UvMode::Photo && mode > 0 { mode - 1 } else { mode };
         let opts = SceneOptions {
             sse_px: self.args.sse,
             uv_mode: self.modes[mode],
+            geomorph: GeomorphOptions {
+                enabled: self.args.geomorph,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let scene = TerrainScene::open_with_context(&self.args.store, ctx, w, h, opts)?;
@@ -209,20 +219,22 @@ impl App {
         let cam = FlyCamera::look_at(p, t, (extent / 30.0).max(1.0));
         Ok(ViewState {
             window,
-            surface,
-            config,
-            bgra,
+            presenter,
             scene,
             cam,
             fov_y: self.path.fov_y_deg.to_radians(),
-            size: (w, h),
             keys: HashSet::new(),
             dragging: false,
             cursor: None,
+            captured: None,
+            minimized: false,
             mode,
             overlay: Overlay::None,
             last: Instant::now(),
             report: FrameReport::default(),
+            presented: 0,
+            attempts: 0,
+            smoke: self.args.smoke_test,
         })
     }
 }
@@ -238,10 +250,44 @@ impl ViewState {
         }
     }
 
+    fn note(&self, what: &str) {
+        if self.smoke {
+            eprintln!("view: {what}");
+        }
+    }
+
+    /// Captures the mouse for mouse look, or releases it.
+    fn toggle_capture(&mut self) {
+        if self.captured.is_some() {
+            release(&self.window);
+            self.captured = None;
+            self.note("mouse released");
+        } else {
+            self.dragging = false;
+            self.captured = capture(&self.window);
+            match self.captured {
+                Some(m) => self.note(&format!("mouse captured ({m:?})")),
+                None => {
+                    eprintln!("note: this window system cannot capture the mouse; drag to look");
+                    self.note("mouse capture unavailable");
+                }
+            }
+        }
+    }
+
+    fn toggle_geomorph(&mut self) {
+        let on = !self.scene.options().geomorph.enabled;
+        self.scene.set_geomorph(on);
+        self.note(&format!("geomorphing {}", if on { "on" } else { "off" }));
+    }
+
     /// Handles a key press; `Ok(false)` asks to quit.
     fn key(&mut self, code: KeyCode, modes: &[UvMode]) -> anyhow::Result<bool> {
         match code {
+            KeyCode::Escape if self.captured.is_some() => self.toggle_capture(),
             KeyCode::Escape => return Ok(false),
+            KeyCode::Tab => self.toggle_capture(),
+            KeyCode::KeyG => self.toggle_geomorph(),
             KeyCode::KeyL | KeyCode::KeyH => {
                 let o = if code == KeyCode::KeyL { Overlay::Levels } else { Overlay::Stretch };
                 self.overlay = if self.overlay == o { Overlay::None } else { o };
@@ -262,51 +308,61 @@ impl ViewState {
         Ok(true)
     }
 
-    fn redraw(&mut self, modes: &[UvMode]) -> anyhow::Result<()> {
+    /// The window's new inner size: reconfigures the surface and the render target.
+    fn resize(&mut self, width: u32, height: u32) -> anyhow::Result<()> {
+        if width == 0 || height == 0 {
+            self.minimized = true;
+            return Ok(());
+        }
+        self.minimized = false;
+        if (width, height) == self.scene.size() {
+            return Ok(());
+        }
+        self.presenter.resize(&self.scene.gpu().device, width, height);
+        self.scene.resize(width, height)?;
+        self.note(&format!("resized to {width}x{height} (surface and render target)"));
+        Ok(())
+    }
+
+    /// The smoke test's scripted steps, after frame `n` was presented.
+    fn script(&mut self, n: u64) {
+        match n {
+            1 => {
+                let (w, h) = self.scene.size();
+                let want = winit::dpi::PhysicalSize::new((w * 3 / 4).max(64), (h * 3 / 4).max(64));
+                self.note(&format!("requesting {}x{}", want.width, want.height));
+                if let Some(now) = self.window.request_inner_size(want) {
+                    // Applied at once on some platforms (no Resized event follows).
+                    if let Err(e) = self.resize(now.width, now.height) {
+                        eprintln!("error: {e:#}");
+                    }
+                }
+            }
+            3 | 5 => self.toggle_capture(),
+            4 => self.toggle_geomorph(),
+            _ => {}
+        }
+    }
+
+    /// Renders and presents a frame; returns whether one was presented.
+    fn redraw(&mut self, modes: &[UvMode]) -> anyhow::Result<bool> {
         let now = Instant::now();
         let dt = (now - self.last).as_secs_f64().min(0.25);
         self.last = now;
+        if self.minimized {
+            return Ok(false);
+        }
+        self.attempts += 1;
         self.cam.step(self.input(), dt);
-        let (w, h) = self.size;
+        let (w, h) = self.scene.size();
         let model = self.cam.model(w, h, self.fov_y);
         self.report = self.scene.frame(&model, false)?;
-        let mut img = self.scene.read_rgba()?;
-        let frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(&self.scene.gpu().device, &self.config);
-                return Ok(());
-            }
-            _ => return Ok(()),
-        };
-        if self.bgra {
-            for px in img.pixels_mut() {
-                px.0.swap(0, 2);
-            }
+        let img = self.scene.read_rgba()?;
+        let gpu = self.scene.gpu();
+        if !self.presenter.present(&gpu.device, &gpu.queue, img) {
+            return Ok(false);
         }
-        let t = &frame.texture;
-        let (cw, ch) = (w.min(t.width()), h.min(t.height()));
-        self.scene.gpu().queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: t,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            img.as_raw(),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * w),
-                rows_per_image: Some(h),
-            },
-            wgpu::Extent3d {
-                width: cw,
-                height: ch,
-                depth_or_array_layers: 1,
-            },
-        );
-        self.scene.gpu().queue.submit([]);
-        self.scene.gpu().queue.present(frame);
+        self.presented += 1;
         let r = &self.report;
         let ov = match self.overlay {
             Overlay::None => "",
@@ -314,16 +370,18 @@ impl ViewState {
             Overlay::Stretch => " + stretch",
         };
         self.window.set_title(&format!(
-            "cliffmap view — {:.1} ms ({:.1} fps), {} cells, {} triangles, {}{}, SSE {:.3} px",
+            "cliffmap view — {:.1} ms ({:.1} fps), {} cells, {} triangles, {}{}{}, SSE {:.3} px{}",
             r.frame_ms,
             if dt > 0.0 { 1.0 / dt } else { 0.0 },
             r.drawn,
             r.triangles,
             mode_name(modes[self.mode]),
             ov,
+            if self.scene.options().geomorph.enabled { ", geomorph" } else { "" },
             self.scene.options().sse_px,
+            if self.captured.is_some() { " — mouse captured (Tab/Esc releases)" } else { "" },
         ));
-        Ok(())
+        Ok(true)
     }
 }
 
@@ -341,6 +399,16 @@ impl ApplicationHandler for App {
         }
     }
 
+    fn device_event(&mut self, _el: &ActiveEventLoop, _id: DeviceId, event: DeviceEvent) {
+        let Some(s) = self.state.as_mut() else {
+            return;
+        };
+        // Raw motion: works with a locked cursor (and a confined one).
+        if let (DeviceEvent::MouseMotion { delta }, Some(_)) = (event, s.captured) {
+            s.cam.look(delta.0, delta.1, LOOK_RAD_PER_PX);
+        }
+    }
+
     fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(s) = self.state.as_mut() else {
             return;
@@ -350,6 +418,7 @@ impl ApplicationHandler for App {
                 el.exit();
                 Ok(())
             }
+            WindowEvent::Resized(size) => s.resize(size.width, size.height),
             WindowEvent::KeyboardInput { event, .. } => {
                 if let PhysicalKey::Code(code) = event.physical_key {
                     match event.state {
@@ -375,7 +444,11 @@ impl ApplicationHandler for App {
                 }
             }
             WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
-                s.dragging = state == ElementState::Pressed;
+                s.dragging = state == ElementState::Pressed && s.captured.is_none();
+                Ok(())
+            }
+            WindowEvent::MouseInput { state: ElementState::Pressed, button: MouseButton::Right, .. } => {
+                s.toggle_capture();
                 Ok(())
             }
             WindowEvent::CursorMoved { position, .. } => {
@@ -388,12 +461,23 @@ impl ApplicationHandler for App {
             WindowEvent::Focused(false) => {
                 s.keys.clear();
                 s.dragging = false;
+                if s.captured.is_some() {
+                    s.toggle_capture();
+                }
                 Ok(())
             }
             WindowEvent::RedrawRequested => {
                 let r = s.redraw(&self.modes);
-                s.window.request_redraw();
-                r
+                if let Ok(true) = r {
+                    if s.smoke {
+                        s.script(s.presented);
+                    }
+                }
+                match self.exit_after {
+                    Some(n) if s.presented >= n || s.attempts >= 20 * n => el.exit(),
+                    _ => s.window.request_redraw(),
+                }
+                r.map(|_| ())
             }
             _ => Ok(()),
         };
