@@ -69,17 +69,24 @@ impl CellIndex {
 /// (`max_error`, or `epsilon` if that is not a finite non-negative number) and half a texel
 /// of its texture (the texture's own approximation error).
 pub fn cell_error(rec: &CellRecord) -> f64 {
-    let geo = if rec.max_error.is_finite() && rec.max_error >= 0.0 {
-        rec.max_error
-    } else {
-        rec.epsilon.max(0.0)
-    };
+    let geo = geometric_error(rec);
     let texel = if rec.texels > 0 {
         rec.extent.width().abs() / rec.texels as f64
     } else {
         0.0
     };
     geo.max(0.5 * texel)
+}
+
+/// A cell's geometric error in metres (≥ 0): its measured `max_error`, or `epsilon` if that is
+/// not a finite non-negative number — the largest height difference between its surface and
+/// the DEM samples it covers.
+pub fn geometric_error(rec: &CellRecord) -> f64 {
+    if rec.max_error.is_finite() && rec.max_error >= 0.0 {
+        rec.max_error
+    } else {
+        rec.epsilon.max(0.0)
+    }
 }
 
 /// Distance (metres, ≥ 0) from `p` to the nearest point of the cell's world bounding box.
@@ -119,18 +126,18 @@ pub fn select_cells(
     cam: &RenderCamera,
     threshold_px: f64,
 ) -> LodSelection {
-    select_cells_with_margin(cells, index, cam, threshold_px, |_| 0.0)
+    select_cells_with_margin(cells, index, cam, threshold_px, |_| (0.0, 0.0))
 }
 
-/// [`select_cells`] with each cell's bounding box extended by `z_margin(cell index)` metres
-/// (≥ 0) up and down for the frustum test (e.g. the height range a geomorphed cell can reach).
-/// The refinement test is unchanged.
+/// [`select_cells`] with each cell's bounding box extended by `z_margin(cell index) = (up,
+/// down)` metres (each ≥ 0; down in addition to the skirt) for the frustum test (e.g. the
+/// height range a geomorphed cell can reach). The refinement test is unchanged.
 pub fn select_cells_with_margin(
     cells: &[CellRecord],
     index: &CellIndex,
     cam: &RenderCamera,
     threshold_px: f64,
-    z_margin: impl Fn(usize) -> f64,
+    z_margin: impl Fn(usize) -> (f64, f64),
 ) -> LodSelection {
     let frustum = cam.frustum();
     let eye = cam.model.position;
@@ -138,10 +145,11 @@ pub fn select_cells_with_margin(
     let mut stack: Vec<usize> = index.roots().iter().rev().copied().collect();
     while let Some(i) = stack.pop() {
         let rec = &cells[i];
-        let m = z_margin(i).max(0.0);
-        let m = if m.is_finite() { m } else { 0.0 };
-        let lo = DVec3::from(rec.bbox_min) - DVec3::new(0.0, 0.0, rec.skirt_depth.max(0.0) + m) - eye;
-        let hi = DVec3::from(rec.bbox_max) + DVec3::new(0.0, 0.0, m) - eye;
+        let clean = |m: f64| if m.is_finite() { m.max(0.0) } else { 0.0 };
+        let (up, down) = z_margin(i);
+        let (up, down) = (clean(up), clean(down));
+        let lo = DVec3::from(rec.bbox_min) - DVec3::new(0.0, 0.0, rec.skirt_depth.max(0.0) + down) - eye;
+        let hi = DVec3::from(rec.bbox_max) + DVec3::new(0.0, 0.0, up) - eye;
         if !frustum.intersects_aabb(lo, hi) {
             out.culled += 1;
             continue;

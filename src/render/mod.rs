@@ -24,8 +24,8 @@ pub use overlay::{Overlay, heat_colour, stretch_heatmap};
 pub use camera::RenderCamera;
 pub use frustum::Frustum;
 pub use lod::{
-    CellIndex, LodSelection, cell_error, distance_to_bbox, screen_space_error, select_cells,
-    select_cells_with_margin,
+    CellIndex, LodSelection, cell_error, distance_to_bbox, geometric_error, screen_space_error,
+    select_cells, select_cells_with_margin,
 };
 pub use distortion::{DistortedView, DistortionMode};
 pub use geomorph::GeomorphOptions;

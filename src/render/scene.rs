@@ -13,7 +13,9 @@ use super::geomorph::{GeomorphOptions, mip_shift, morph_factor, morph_targets};
 use super::gpu::{
     CellData, CellDraw, FrameOptions, GpuCell, GpuContext, MorphData, TerrainRenderer, UvMode,
 };
-use super::lod::{CellIndex, cell_error, distance_to_bbox, screen_space_error, select_cells_with_margin};
+use super::lod::{
+    CellIndex, distance_to_bbox, geometric_error, screen_space_error, select_cells_with_margin,
+};
 use super::overlay::{Overlay, stretch_heatmap};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
@@ -93,6 +95,8 @@ pub struct TerrainScene {
     cache: LruCache<GpuCell>,
     streamer: Streamer<CellData>,
     opts: SceneOptions,
+    /// The loaders produce morph targets (geomorphing was on when they were started).
+    morph_loaded: bool,
 }
 
 impl TerrainScene {
@@ -148,6 +152,7 @@ impl TerrainScene {
             renderer,
             cache: LruCache::new(opts.budget_bytes),
             streamer,
+            morph_loaded: opts.geomorph.enabled,
             opts,
         })
     }
@@ -213,14 +218,15 @@ impl TerrainScene {
     fn reload(&mut self) {
         self.streamer = Self::streamer(&self.store, &self.index, &self.opts);
         self.cache = LruCache::new(self.opts.budget_bytes);
+        self.morph_loaded = self.opts.geomorph.enabled;
     }
 
-    /// Switches geomorphing on or off. Switching on reloads the cells (they need morph
-    /// targets); switching off takes effect at once (cells are drawn unmorphed).
+    /// Switches geomorphing on or off. Switching off takes effect at once (cells are drawn
+    /// unmorphed, with the same pipelines as a scene that never morphed); switching on reloads
+    /// the cells unless they were loaded with morph targets (geomorphing was on before).
     pub fn set_geomorph(&mut self, enabled: bool) {
-        let reload = enabled && !self.opts.geomorph.enabled;
         self.opts.geomorph.enabled = enabled;
-        if reload {
+        if enabled && !self.morph_loaded {
             self.reload();
         }
     }
@@ -343,13 +349,18 @@ impl TerrainScene {
         let cam = self.render_camera(distorted.as_ref().map_or(model, |d| &d.pinhole));
         let store = Arc::clone(&self.store);
         let cells = &store.manifest.cells;
-        // A morphed cell reaches its parent's surface: up to the parent's error away.
+        // A morphed cell's vertices move to the parent's surface, at most the parent's
+        // geometric error away (its vertices are DEM samples); its skirt reaches the parent's
+        // skirt depth below that.
         let geomorph = self.opts.geomorph.enabled;
         let index = &self.index;
         let sel = select_cells_with_margin(cells, index, &cam, self.opts.sse_px, |i| {
             match cells[i].key().parent().and_then(|k| index.get(k)) {
-                Some(p) if geomorph => cell_error(&cells[p]),
-                _ => 0.0,
+                Some(p) if geomorph => {
+                    let e = geometric_error(&cells[p]);
+                    (e, e + (cells[p].skirt_depth - cells[i].skirt_depth).max(0.0))
+                }
+                _ => (0.0, 0.0),
             }
         });
         self.cache.begin_frame();
