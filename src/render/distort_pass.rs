@@ -2,6 +2,7 @@
 //! into the output target through the camera's radial distortion (`shaders/distort.wgsl`).
 
 use super::distortion::{DistortedView, NEWTON_STEPS};
+use super::gpu::GpuContext;
 use super::target::{COLOR_FORMAT, RenderTarget};
 
 /// Pipeline, sampler and uniform buffer of the distortion pass.
@@ -110,8 +111,7 @@ impl DistortPass {
     /// `src` (the pinhole view's size); `sky` (linear RGB) where no sample exists.
     pub fn encode(
         &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
         src: &RenderTarget,
         dst: &RenderTarget,
@@ -124,8 +124,8 @@ impl DistortPass {
             src.width as f64, src.height as f64, 0.0, 0.0, sky[0], sky[1], sky[2], 1.0,
         ];
         let bytes: Vec<u8> = v.iter().flat_map(|x| (*x as f32).to_le_bytes()).collect();
-        queue.write_buffer(&self.params, 0, &bytes);
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        ctx.queue.write_buffer(&self.params, 0, &bytes);
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("distort"),
             layout: &self.layout,
             entries: &[

@@ -989,7 +989,7 @@ impl TerrainRenderer {
             }
         }
         if let Some((view, out)) = distort {
-            self.distort.encode(device, &self.ctx.queue, &mut enc, target, out, view, sky);
+            self.distort.encode(&self.ctx, &mut enc, target, out, view, sky);
         }
         self.ctx.queue.submit([enc.finish()]);
         device
