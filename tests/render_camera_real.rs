@@ -190,3 +190,115 @@ fn engabreen_img_8937_delta_matches_the_image_shift() {
     // The shift is substantial, so applying the delta with the wrong sign would fail.
     assert!(pu > 10.0, "predicted du {pu}");
 }
+
+/// Sobel gradient magnitude of a grey image.
+fn gradient(img: &image::GrayImage) -> Vec<f64> {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let g = |i: i64, j: i64| img.get_pixel(i.clamp(0, w - 1) as u32, j.clamp(0, h - 1) as u32).0[0] as f64;
+    let mut out = vec![0.0; (w * h) as usize];
+    for j in 0..h {
+        for i in 0..w {
+            let gx = g(i + 1, j - 1) + 2.0 * g(i + 1, j) + g(i + 1, j + 1) - g(i - 1, j - 1) - 2.0 * g(i - 1, j) - g(i - 1, j + 1);
+            let gy = g(i - 1, j + 1) + 2.0 * g(i, j + 1) + g(i + 1, j + 1) - g(i - 1, j - 1) - 2.0 * g(i, j - 1) - g(i + 1, j - 1);
+            out[(j * w + i) as usize] = gx.hypot(gy);
+        }
+    }
+    out
+}
+
+/// For each tile of the lower two thirds of a 4 × 3 grid: the integer shift (within ±`r` px)
+/// of the photo's gradients that best matches the render's (NCC over non-sky render pixels),
+/// as (tile column, tile row, du, dv, ncc).
+fn tile_shifts(render: &image::RgbaImage, photo: &image::GrayImage, sky: [u8; 3], r: i64) -> Vec<(i64, i64, i64, i64, f64)> {
+    let (w, h) = (render.width() as i64, render.height() as i64);
+    let gr = gradient(&image::DynamicImage::ImageRgba8(render.clone()).to_luma8());
+    let gp = gradient(photo);
+    let is_sky = |i: i64, j: i64| {
+        let p = render.get_pixel(i as u32, j as u32).0;
+        (0..3).all(|k| (p[k] as i32 - sky[k] as i32).abs() <= 3)
+    };
+    let mut out = Vec::new();
+    for tj in 1..3 {
+        for ti in 0..4 {
+            let (i0, i1) = ((ti * w / 4).max(r + 1), ((ti + 1) * w / 4).min(w - r - 1));
+            let (j0, j1) = ((tj * h / 3).max(r + 1), ((tj + 1) * h / 3).min(h - r - 1));
+            let mut best = (f64::MIN, 0, 0);
+            for dv in -r..=r {
+                for du in -r..=r {
+                    let (mut sa, mut sb, mut saa, mut sbb, mut sab, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+                    for j in j0..j1 {
+                        for i in i0..i1 {
+                            if is_sky(i, j) {
+                                continue;
+                            }
+                            let (p, q) = (gr[(j * w + i) as usize], gp[((j + dv) * w + i + du) as usize]);
+                            sa += p;
+                            sb += q;
+                            saa += p * p;
+                            sbb += q * q;
+                            sab += p * q;
+                            n += 1.0;
+                        }
+                    }
+                    let c = (sab - sa * sb / n) / ((saa - sa * sa / n) * (sbb - sb * sb / n)).sqrt();
+                    if n > 2000.0 && c > best.0 {
+                        best = (c, du, dv);
+                    }
+                }
+            }
+            out.push((ti, tj, best.1, best.2, best.0));
+        }
+    }
+    out
+}
+
+#[test]
+fn engabreen_render_with_distortion_overlays_the_photo() {
+    use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+    use cliffmap::render::{DistortionMode, FrameOptions, SceneOptions, TerrainScene};
+    // An Engabreen store (ortho textures) rendered from IMG_8902's camera at a quarter of the
+    // photo's size, with and without the lens distortion, against the photo's edges.
+    let t = tempfile::tempdir().unwrap();
+    let dem = common::engabreen_dem();
+    let ortho = common::engabreen_ortho(&dem);
+    let inputs = BuildInputs {
+        dem: &dem,
+        ortho: Some(&ortho),
+        dem_source: "engabreen".into(),
+        ortho_source: Some("engabreen".into()),
+        fingerprint: "render-distortion-engabreen".into(),
+    };
+    let opts = BuildOptions { max_error: 1.0, quiet: true, force: true, ..Default::default() };
+    build_store(&inputs, &opts, t.path()).unwrap();
+    let (w, h) = (1072, 714);
+    let cam = camera_from_json_file(&common::real_data("engabreen/engabreen_camera_IMG_8902.json"), (w, h))
+        .unwrap()
+        .resized(w, h);
+    let photo = image::open(common::real_data("engabreen/IMG_8902.jpg")).unwrap().to_luma8();
+    let photo = image::imageops::resize(&photo, w, h, image::imageops::FilterType::Triangle);
+    let sky = [170, 200, 235];
+    let mut shifts = Vec::new();
+    for mode in [DistortionMode::Auto, DistortionMode::Off] {
+        let opts = SceneOptions {
+            frame: FrameOptions { lit: false, sky, ..Default::default() },
+            distortion: mode,
+            ..Default::default()
+        };
+        let mut scene = TerrainScene::open(t.path(), w, h, opts).unwrap();
+        assert_eq!(scene.frame(&cam, true).unwrap().distorted, mode == DistortionMode::Auto);
+        let s = tile_shifts(&scene.read_rgba().unwrap(), &photo, sky, 6);
+        println!("{mode:?}: per-tile (column, row, du, dv, ncc) {s:.2?}");
+        shifts.push(s);
+    }
+    // Tiles whose edges match well in both renders (NCC ≥ 0.25; the right edge of the middle
+    // row shows cliffs beyond the DEM crop).
+    let reliable: Vec<usize> = (0..8).filter(|&k| shifts[0][k].4 >= 0.25 && shifts[1][k].4 >= 0.25).collect();
+    assert!(reliable.len() >= 6, "only {} tiles match the photo", reliable.len());
+    let len = |s: &(i64, i64, i64, i64, f64)| s.2.abs().max(s.3.abs());
+    for &k in &reliable {
+        assert!(len(&shifts[0][k]) <= 1, "with distortion, tile {:?} is off the photo", shifts[0][k]);
+    }
+    // Without the distortion the image corners are off by 2–3 px (towards the centre: barrel).
+    let corner_off = reliable.iter().filter(|&&k| shifts[0][k].0 % 3 == 0).map(|&k| len(&shifts[1][k])).max().unwrap_or(0);
+    assert!(corner_off >= 2, "without distortion the corner tiles should be off: {:?}", shifts[1]);
+}
