@@ -12,7 +12,8 @@ use crate::camera::CameraModel;
 /// A camera ready for rendering at `model.width × model.height` pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderCamera {
-    /// Pose and intrinsics (distortion is ignored by the rasterizer).
+    /// Pose and intrinsics. The rasterizer is a pinhole and ignores `k1`/`k2`; a distorted
+    /// frame is rasterized through the pinhole view of [`super::DistortedView`] and resampled.
     pub model: CameraModel,
     /// Near plane distance along the optical axis, metres (> 0).
     pub near: f64,
