@@ -349,14 +349,13 @@ impl TerrainScene {
         let cam = self.render_camera(distorted.as_ref().map_or(model, |d| &d.pinhole));
         let store = Arc::clone(&self.store);
         let cells = &store.manifest.cells;
-        // A morphed cell's vertices move to the parent's surface, at most the parent's
+        // A morphing cell's vertices move to the parent's surface, at most the parent's
         // geometric error away (its vertices are DEM samples); its skirt reaches the parent's
-        // skirt depth below that.
-        let geomorph = self.opts.geomorph.enabled;
+        // skirt depth below that. Cells that do not morph keep their boxes.
         let index = &self.index;
         let sel = select_cells_with_margin(cells, index, &cam, self.opts.sse_px, |i| {
             match cells[i].key().parent().and_then(|k| index.get(k)) {
-                Some(p) if geomorph => {
+                Some(p) if self.morph_of(i, &cam) > 0.0 => {
                     let e = geometric_error(&cells[p]);
                     (e, e + (cells[p].skirt_depth - cells[i].skirt_depth).max(0.0))
                 }
