@@ -12,22 +12,30 @@ use cliffmap::render::{FlightPath, GeomorphOptions, SceneOptions, TerrainScene, 
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let store = PathBuf::from(
-        args.first()
-            .ok_or_else(|| anyhow::anyhow!("usage: geomorph_ab STORE [PATH.json] [FRAMES] [WxH]"))?,
-    );
-    let path_file = args.get(1).filter(|s| s.ends_with(".json")).map(PathBuf::from);
+    let store =
+        PathBuf::from(args.first().ok_or_else(|| {
+            anyhow::anyhow!("usage: geomorph_ab STORE [PATH.json] [FRAMES] [WxH]")
+        })?);
+    let path_file = args
+        .get(1)
+        .filter(|s| s.ends_with(".json"))
+        .map(PathBuf::from);
     let rest = &args[1 + usize::from(path_file.is_some())..];
     let frames: usize = rest.first().map(|s| s.parse()).transpose()?.unwrap_or(60);
     let (w, h) = match rest.get(1) {
         Some(s) => {
-            let (a, b) = s.split_once('x').ok_or_else(|| anyhow::anyhow!("size must be WxH"))?;
+            let (a, b) = s
+                .split_once('x')
+                .ok_or_else(|| anyhow::anyhow!("size must be WxH"))?;
             (a.parse()?, b.parse()?)
         }
         None => (960u32, 540u32),
     };
     let opts = SceneOptions {
-        geomorph: GeomorphOptions { enabled: true, ..Default::default() },
+        geomorph: GeomorphOptions {
+            enabled: true,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut scene = TerrainScene::open(&store, w, h, opts)?;
@@ -35,7 +43,8 @@ fn main() -> anyhow::Result<()> {
         Some(p) => FlightPath::from_json_file(p)?,
         None => FlightPath::default_for(&scene.store().manifest)?,
     };
-    let (mut off, mut on, mut ratio, mut morphed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut off, mut on, mut ratio, mut morphed) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (k, cam) in path.cameras(frames.max(2), w, h).iter().enumerate() {
         // Warm frames until nothing is uploaded any more (parents lent for textures included).
         scene.set_geomorph(true);

@@ -29,7 +29,11 @@ fn markers() -> Vec<DVec3> {
     let mut out = Vec::new();
     for j in 1..n {
         for i in 1..n {
-            out.push(DVec3::new(X0 + i as f64 * SPACING, Y0 - j as f64 * SPACING, Z));
+            out.push(DVec3::new(
+                X0 + i as f64 * SPACING,
+                Y0 - j as f64 * SPACING,
+                Z,
+            ));
         }
     }
     out
@@ -57,7 +61,11 @@ fn marker_texture() -> image::RgbaImage {
 
 fn scene(dir: &std::path::Path, mode: DistortionMode) -> TerrainScene {
     let opts = SceneOptions {
-        frame: FrameOptions { lit: false, sky: [250, 250, 250], ..Default::default() },
+        frame: FrameOptions {
+            lit: false,
+            sky: [250, 250, 250],
+            ..Default::default()
+        },
         distortion: mode,
         ..Default::default()
     };
@@ -99,15 +107,24 @@ fn centroid(img: &image::RgbaImage, p: [f64; 2], r: i64) -> Option<[f64; 2]> {
 
 /// Marker centroids in `img` around the positions `predict` gives; (max, rms) error in px and
 /// the number of markers measured (those whose window lies inside the image).
-fn marker_errors(img: &image::RgbaImage, predict: impl Fn(DVec3) -> Option<[f64; 2]>) -> (f64, f64, usize) {
+fn marker_errors(
+    img: &image::RgbaImage,
+    predict: impl Fn(DVec3) -> Option<[f64; 2]>,
+) -> (f64, f64, usize) {
     let r = 10;
     let (mut max, mut sq, mut n) = (0.0f64, 0.0, 0usize);
     for m in markers() {
         let Some(p) = predict(m) else { continue };
-        if p[0] < r as f64 + 2.0 || p[1] < r as f64 + 2.0 || p[0] > W as f64 - r as f64 - 3.0 || p[1] > H as f64 - r as f64 - 3.0 {
+        if p[0] < r as f64 + 2.0
+            || p[1] < r as f64 + 2.0
+            || p[0] > W as f64 - r as f64 - 3.0
+            || p[1] > H as f64 - r as f64 - 3.0
+        {
             continue;
         }
-        let Some(c) = centroid(img, p, r) else { continue };
+        let Some(c) = centroid(img, p, r) else {
+            continue;
+        };
         let e = (c[0] - p[0]).hypot(c[1] - p[1]);
         max = max.max(e);
         sq += e * e;
@@ -118,7 +135,13 @@ fn marker_errors(img: &image::RgbaImage, predict: impl Fn(DVec3) -> Option<[f64;
 
 fn marker_store() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    let s = Synth { levels: 1, size: SIDE, z: Z, finest_error: 0.01, texels: TEXELS };
+    let s = Synth {
+        levels: 1,
+        size: SIDE,
+        z: Z,
+        finest_error: 0.01,
+        texels: TEXELS,
+    };
     let tex = marker_texture();
     write_store_textured(dir.path(), &s, |_| tex.clone(), |_| false);
     dir
@@ -132,11 +155,21 @@ fn markers_land_on_the_distorted_projection() {
     // Barrel (the Engabreen photo's k1) and pincushion with a second coefficient.
     for (k1, k2) in [(-0.11454086509291705, 0.0), (0.06, 0.02)] {
         let cam = camera(k1, k2);
-        let pinhole = CameraModel { k1: 0.0, k2: 0.0, ..cam };
+        let pinhole = CameraModel {
+            k1: 0.0,
+            k2: 0.0,
+            ..cam
+        };
         let r = on.frame(&cam, true).unwrap();
-        assert!(r.distorted, "k1 {k1}: a distorted camera goes through the distortion pass");
+        assert!(
+            r.distorted,
+            "k1 {k1}: a distorted camera goes through the distortion pass"
+        );
         let (pw, ph) = r.pinhole_size;
-        assert!(pw > W && ph > H, "the pinhole view is wider than the frame: {pw}x{ph}");
+        assert!(
+            pw > W && ph > H,
+            "the pinhole view is wider than the frame: {pw}x{ph}"
+        );
         let img = on.read_rgba().unwrap();
         assert!(on.read_depth().is_err(), "no depth for a distorted frame");
         let (max, rms, n) = marker_errors(&img, |p| cam.project(p));
@@ -144,20 +177,32 @@ fn markers_land_on_the_distorted_projection() {
         let shift = markers()
             .iter()
             .filter_map(|&p| Some((cam.project(p)?, pinhole.project(p)?)))
-            .filter(|(d, _)| d[0] > 12.0 && d[1] > 12.0 && d[0] < W as f64 - 13.0 && d[1] < H as f64 - 13.0)
+            .filter(|(d, _)| {
+                d[0] > 12.0 && d[1] > 12.0 && d[0] < W as f64 - 13.0 && d[1] < H as f64 - 13.0
+            })
             .map(|(d, q)| (d[0] - q[0]).hypot(d[1] - q[1]))
             .fold(0.0, f64::max);
-        eprintln!("k1 {k1} k2 {k2}: {n} markers, max {max:.3} px, rms {rms:.3} px (distortion shifts them by up to {shift:.1} px; pinhole view {pw}x{ph})");
+        eprintln!(
+            "k1 {k1} k2 {k2}: {n} markers, max {max:.3} px, rms {rms:.3} px (distortion shifts them by up to {shift:.1} px; pinhole view {pw}x{ph})"
+        );
         assert!(n >= 20, "only {n} markers in view");
-        assert!(shift > 5.0, "the test camera should distort noticeably ({shift:.1} px)");
-        assert!(max <= 1.0 && rms <= 0.5, "k1 {k1} k2 {k2}: markers off the distorted projection by max {max:.3} px, rms {rms:.3} px");
+        assert!(
+            shift > 5.0,
+            "the test camera should distort noticeably ({shift:.1} px)"
+        );
+        assert!(
+            max <= 1.0 && rms <= 0.5,
+            "k1 {k1} k2 {k2}: markers off the distorted projection by max {max:.3} px, rms {rms:.3} px"
+        );
         // With distortion off the same camera renders the pinhole image: the markers sit on the
         // pinhole projection instead (which validates the centroids themselves).
         let r = off.frame(&cam, true).unwrap();
         assert!(!r.distorted);
         let img_off = off.read_rgba().unwrap();
         let (max_p, rms_p, n_p) = marker_errors(&img_off, |p| pinhole.project(p));
-        eprintln!("  --no-distortion: {n_p} markers on the pinhole projection, max {max_p:.3} px, rms {rms_p:.3} px");
+        eprintln!(
+            "  --no-distortion: {n_p} markers on the pinhole projection, max {max_p:.3} px, rms {rms_p:.3} px"
+        );
         assert!(max_p <= 1.0, "pinhole frame: max {max_p:.3} px");
     }
 }
@@ -173,7 +218,11 @@ fn the_resampling_pass_alone_reproduces_the_direct_frame() {
     let mut forced = scene(dir.path(), DistortionMode::Always);
     let r = forced.frame(&cam, true).unwrap();
     assert!(r.distorted);
-    assert_eq!(r.pinhole_size, (W + 4, H + 4), "no distortion: the pinhole view is the frame plus a 2 px margin");
+    assert_eq!(
+        r.pinhole_size,
+        (W + 4, H + 4),
+        "no distortion: the pinhole view is the frame plus a 2 px margin"
+    );
     let b = forced.read_rgba().unwrap();
     let d0 = image_difference(&a, &b, 0).unwrap();
     let d1 = image_difference(&a, &b, 1).unwrap();
@@ -186,6 +235,9 @@ fn the_resampling_pass_alone_reproduces_the_direct_frame() {
     // Identical up to rounding: the pass samples the pinhole image at (f32-rounded) texel
     // centres, and the shifted principal point rasterizes a few edge pixels differently.
     assert!(d0.max_abs <= 2, "a pixel differs by {} levels", d0.max_abs);
-    assert!(d0.frac_over <= 1e-3 && d1.frac_over <= 1e-4, "{d0:?} {d1:?}");
+    assert!(
+        d0.frac_over <= 1e-3 && d1.frac_over <= 1e-4,
+        "{d0:?} {d1:?}"
+    );
     assert!(d0.mean_abs < 0.01, "{d0:?}");
 }

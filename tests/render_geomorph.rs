@@ -20,7 +20,10 @@ const H: u32 = 180;
 const SSE: f64 = 1.0;
 
 fn small_store(out: &Path) {
-    let scene = DemoScene { samples: 129, ..DemoScene::default() };
+    let scene = DemoScene {
+        samples: 129,
+        ..DemoScene::default()
+    };
     let (dem, ortho) = scene.generate().unwrap();
     let inputs = BuildInputs {
         dem: &dem,
@@ -29,7 +32,13 @@ fn small_store(out: &Path) {
         ortho_source: Some("demo".into()),
         fingerprint: "render-geomorph".into(),
     };
-    let opts = BuildOptions { max_error: 0.25, cell_intervals: 16, cell_texels: 64, quiet: true, force: true };
+    let opts = BuildOptions {
+        max_error: 0.25,
+        cell_intervals: 16,
+        cell_texels: 64,
+        quiet: true,
+        force: true,
+    };
     build_store(&inputs, &opts, out).unwrap();
 }
 
@@ -47,11 +56,22 @@ fn morph_targets_of_a_built_store_lie_on_the_parent_surfaces() {
     let index = CellIndex::new(cells);
     let mut checked = 0;
     for (i, rec) in cells.iter().enumerate() {
-        let Some(p) = rec.key().parent().and_then(|k| index.get(k)) else { continue };
+        let Some(p) = rec.key().parent().and_then(|k| index.get(k)) else {
+            continue;
+        };
         let (child, parent) = (mesh(&store, i), mesh(&store, p));
         let prec = &cells[p];
-        let puv: Vec<[f32; 2]> = (0..parent.positions.len()).map(|k| texcoord(prec, &parent, k)).collect();
-        let targets = morph_targets(rec.origin.into(), &child, prec.origin.into(), &parent, &puv, prec.skirt_depth);
+        let puv: Vec<[f32; 2]> = (0..parent.positions.len())
+            .map(|k| texcoord(prec, &parent, k))
+            .collect();
+        let targets = morph_targets(
+            rec.origin.into(),
+            &child,
+            prec.origin.into(),
+            &parent,
+            &puv,
+            prec.skirt_depth,
+        );
         assert_eq!(targets.len(), child.positions.len());
         let off = DVec3::from(rec.origin) - DVec3::from(prec.origin);
         let ns = child.surface_vertices as usize;
@@ -59,20 +79,35 @@ fn morph_targets_of_a_built_store_lie_on_the_parent_surfaces() {
             // Child vertices are DEM samples; the parent surface is within its measured error
             // of every DEM sample.
             let dz = (zt[0] - v[2]).abs() as f64;
-            assert!(dz <= prec.max_error + 1e-3, "cell {} vertex {k}: target {dz:.4} m off, parent error {}", rec.id, prec.max_error);
+            assert!(
+                dz <= prec.max_error + 1e-3,
+                "cell {} vertex {k}: target {dz:.4} m off, parent error {}",
+                rec.id,
+                prec.max_error
+            );
             // Where the parent has a vertex at the same place, the target is its height.
             let w = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64) + off;
             if let Some(q) = parent.positions[..parent.surface_vertices as usize]
                 .iter()
                 .find(|q| (q[0] as f64 - w.x).abs() < 1e-3 && (q[1] as f64 - w.y).abs() < 1e-3)
             {
-                assert!((zt[0] as f64 + off.z - q[2] as f64).abs() < 1e-3, "cell {} vertex {k} on a parent vertex", rec.id);
+                assert!(
+                    (zt[0] as f64 + off.z - q[2] as f64).abs() < 1e-3,
+                    "cell {} vertex {k} on a parent vertex",
+                    rec.id
+                );
             }
         }
         // Skirt vertices hang the parent's skirt depth below the border vertex at the same x, y.
         for (k, v) in child.positions.iter().enumerate().skip(ns) {
-            let j = child.positions[..ns].iter().position(|q| q[0] == v[0] && q[1] == v[1]).unwrap();
-            assert!((targets[j][0] - targets[k][0] - prec.skirt_depth as f32).abs() < 1e-3, "skirt vertex {k}");
+            let j = child.positions[..ns]
+                .iter()
+                .position(|q| q[0] == v[0] && q[1] == v[1])
+                .unwrap();
+            assert!(
+                (targets[j][0] - targets[k][0] - prec.skirt_depth as f32).abs() < 1e-3,
+                "skirt vertex {k}"
+            );
         }
         checked += 1;
     }
@@ -88,7 +123,13 @@ fn camera_at(scene: &TerrainScene, s: f64) -> CameraModel {
     let span = (hi - lo).truncate().length();
     let dir = DVec3::new(-0.55, -0.75, 0.45).normalize();
     let pos = c + dir * span * (1.6 * (1.0 - s) + 0.25 * s);
-    CameraModel::with_fov(pos, rotation_look_at(pos, c).unwrap(), W, H, 55f64.to_radians())
+    CameraModel::with_fov(
+        pos,
+        rotation_look_at(pos, c).unwrap(),
+        W,
+        H,
+        55f64.to_radians(),
+    )
 }
 
 fn selection(scene: &TerrainScene, s: f64) -> Vec<usize> {
@@ -105,7 +146,11 @@ fn switches(scene: &TerrainScene) -> Vec<(f64, f64)> {
     let index = CellIndex::new(cells);
     let refines = |far: &[usize], near: &[usize]| {
         near.iter().any(|&i| {
-            cells[i].key().parent().and_then(|k| index.get(k)).is_some_and(|p| far.contains(&p))
+            cells[i]
+                .key()
+                .parent()
+                .and_then(|k| index.get(k))
+                .is_some_and(|p| far.contains(&p))
         })
     };
     let n = 300;
@@ -144,7 +189,11 @@ fn render(scene: &mut TerrainScene, s: f64) -> Frame {
     let cam = camera_at(scene, s);
     let r = scene.frame(&cam, true).unwrap();
     assert_eq!(r.holes + r.substituted, 0);
-    Frame { rgba: scene.read_rgba().unwrap(), depth: scene.read_depth().unwrap(), morphed: r.morphed }
+    Frame {
+        rgba: scene.read_rgba().unwrap(),
+        depth: scene.read_depth().unwrap(),
+        morphed: r.morphed,
+    }
 }
 
 #[test]
@@ -154,8 +203,14 @@ fn geomorphing_hides_popping_at_lod_switches() {
     let open = |enabled: bool| {
         let opts = SceneOptions {
             sse_px: SSE,
-            frame: FrameOptions { lit: true, ..Default::default() },
-            geomorph: GeomorphOptions { enabled, ..Default::default() },
+            frame: FrameOptions {
+                lit: true,
+                ..Default::default()
+            },
+            geomorph: GeomorphOptions {
+                enabled,
+                ..Default::default()
+            },
             ..Default::default()
         };
         TerrainScene::open(t.path(), W, H, opts).unwrap_or_else(|e| {
@@ -164,15 +219,26 @@ fn geomorphing_hides_popping_at_lod_switches() {
     };
     let (mut off, mut on) = (open(false), open(true));
     let sw = switches(&off);
-    assert!(sw.len() >= 5, "the path crosses only {} LOD refinements", sw.len());
-    eprintln!("| switch | path s | cells far / near | mean abs off | mean abs on | px > 16 off % | px > 16 on % | mean displacement off px | mean displacement on px | morphed cells far / near |");
+    assert!(
+        sw.len() >= 5,
+        "the path crosses only {} LOD refinements",
+        sw.len()
+    );
+    eprintln!(
+        "| switch | path s | cells far / near | mean abs off | mean abs on | px > 16 off % | px > 16 on % | mean displacement off px | mean displacement on px | morphed cells far / near |"
+    );
     let (mut sum_off, mut sum_on, mut disp_off, mut disp_on) = (0.0, 0.0, 0.0f64, 0.0f64);
     for (k, &(a, b)) in sw.iter().enumerate() {
         let (fa, fb) = (render(&mut off, a), render(&mut off, b));
         let (ga, gb) = (render(&mut on, a), render(&mut on, b));
         if let Some(dir) = std::env::var_os("CLIFFMAP_GEOMORPH_DUMP") {
             let dir = Path::new(&dir);
-            for (n, f) in [("off_far", &fa), ("off_near", &fb), ("on_far", &ga), ("on_near", &gb)] {
+            for (n, f) in [
+                ("off_far", &fa),
+                ("off_near", &fb),
+                ("on_far", &ga),
+                ("on_near", &gb),
+            ] {
                 f.rgba.save(dir.join(format!("switch{k}_{n}.png"))).unwrap();
             }
         }
@@ -199,12 +265,27 @@ fn geomorphing_hides_popping_at_lod_switches() {
         disp_off += s_off.mean_px;
         disp_on += s_on.mean_px;
         // Every switch: geomorphing never makes the jump worse (small slack for rasterization).
-        assert!(d_on.mean_abs <= d_off.mean_abs + 0.02, "switch {k}: {d_on:?} vs {d_off:?}");
+        assert!(
+            d_on.mean_abs <= d_off.mean_abs + 0.02,
+            "switch {k}: {d_on:?} vs {d_off:?}"
+        );
         // Just past a switch the new children are fully morphed: the frame draws morphed cells.
-        assert!(gb.morphed > 0 || ga.morphed > 0, "switch {k}: nothing morphed");
+        assert!(
+            gb.morphed > 0 || ga.morphed > 0,
+            "switch {k}: nothing morphed"
+        );
     }
-    eprintln!("total mean abs difference across switches: off {sum_off:.3}, on {sum_on:.3} (ratio {:.3}); summed mean displacement off {disp_off:.3} px, on {disp_on:.3} px", sum_on / sum_off);
+    eprintln!(
+        "total mean abs difference across switches: off {sum_off:.3}, on {sum_on:.3} (ratio {:.3}); summed mean displacement off {disp_off:.3} px, on {disp_on:.3} px",
+        sum_on / sum_off
+    );
     // Measured 2026-12-01 (lavapipe): ratio 0.20 for the image, 0.67 for the surface.
-    assert!(sum_on < 0.35 * sum_off, "geomorphing should cut the popping: on {sum_on:.3} vs off {sum_off:.3}");
-    assert!(disp_on < 0.85 * disp_off, "surface jumps: on {disp_on:.3} px vs off {disp_off:.3} px");
+    assert!(
+        sum_on < 0.35 * sum_off,
+        "geomorphing should cut the popping: on {sum_on:.3} vs off {sum_off:.3}"
+    );
+    assert!(
+        disp_on < 0.85 * disp_off,
+        "surface jumps: on {disp_on:.3} px vs off {disp_off:.3} px"
+    );
 }

@@ -153,7 +153,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             d.pinhole.width,
             d.pinhole.height,
             d.scale,
-            if d.limited { " (view shrunk to the texture size limit: parts are undersampled)" } else { "" }
+            if d.limited {
+                " (view shrunk to the texture size limit: parts are undersampled)"
+            } else {
+                ""
+            }
         );
     }
     let r = scene.frame(&cam, true)?;

@@ -7,7 +7,9 @@ use winit::window::{CursorGrabMode, Window};
 /// Tries the grab modes in order of preference — `Locked` (cursor fixed, raw motion), then
 /// `Confined` (cursor kept inside the window; X11 has no lock) — with `grab`; returns the
 /// first that works, or `None` if the platform supports neither.
-pub fn try_grab<E>(mut grab: impl FnMut(CursorGrabMode) -> Result<(), E>) -> Option<CursorGrabMode> {
+pub fn try_grab<E>(
+    mut grab: impl FnMut(CursorGrabMode) -> Result<(), E>,
+) -> Option<CursorGrabMode> {
     [CursorGrabMode::Locked, CursorGrabMode::Confined]
         .into_iter()
         .find(|&m| grab(m).is_ok())
@@ -100,7 +102,8 @@ impl Presenter {
         mut img: image::RgbaImage,
     ) -> bool {
         let frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(device, &self.config);
                 return false;
@@ -147,7 +150,13 @@ mod tests {
     #[test]
     fn grab_prefers_locked_and_falls_back_to_confined() {
         assert_eq!(try_grab(|_| Ok::<(), ()>(())), Some(CursorGrabMode::Locked));
-        let x11 = |m: CursorGrabMode| if m == CursorGrabMode::Locked { Err(()) } else { Ok(()) };
+        let x11 = |m: CursorGrabMode| {
+            if m == CursorGrabMode::Locked {
+                Err(())
+            } else {
+                Ok(())
+            }
+        };
         assert_eq!(try_grab(x11), Some(CursorGrabMode::Confined));
         assert_eq!(try_grab(|_| Err::<(), ()>(())), None);
     }

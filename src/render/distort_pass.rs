@@ -120,8 +120,26 @@ impl DistortPass {
     ) {
         let (o, p) = (&view.output, &view.pinhole);
         let v = [
-            o.fx, o.fy, o.cx, o.cy, o.k1, o.k2, NEWTON_STEPS as f64, 0.0, p.fx, p.fy, p.cx, p.cy,
-            src.width as f64, src.height as f64, 0.0, 0.0, sky[0], sky[1], sky[2], 1.0,
+            o.fx,
+            o.fy,
+            o.cx,
+            o.cy,
+            o.k1,
+            o.k2,
+            NEWTON_STEPS as f64,
+            0.0,
+            p.fx,
+            p.fy,
+            p.cx,
+            p.cy,
+            src.width as f64,
+            src.height as f64,
+            0.0,
+            0.0,
+            sky[0],
+            sky[1],
+            sky[2],
+            1.0,
         ];
         let bytes: Vec<u8> = v.iter().flat_map(|x| (*x as f32).to_le_bytes()).collect();
         ctx.queue.write_buffer(&self.params, 0, &bytes);

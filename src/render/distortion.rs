@@ -159,7 +159,11 @@ pub fn magnification(k1: f64, k2: f64, r_max: f64) -> f64 {
         let r = r_max * i as f64 / steps as f64;
         let s = (r * r).min(4.0);
         let d = 1.0 + k1 * s + k2 * s * s;
-        let df = if r * r < 4.0 { 1.0 + 3.0 * k1 * s + 5.0 * k2 * s * s } else { d };
+        let df = if r * r < 4.0 {
+            1.0 + 3.0 * k1 * s + 5.0 * k2 * s * s
+        } else {
+            d
+        };
         m = m.max(d).max(df);
     }
     m
@@ -173,7 +177,11 @@ pub fn undistort_radius_f32(k1: f32, k2: f32, rd: f32) -> f32 {
     for _ in 0..NEWTON_STEPS {
         let s = (r * r).min(4.0);
         let d = 1.0 + k1 * s + k2 * s * s;
-        let df = if r * r < 4.0 { 1.0 + 3.0 * k1 * s + 5.0 * k2 * s * s } else { d };
+        let df = if r * r < 4.0 {
+            1.0 + 3.0 * k1 * s + 5.0 * k2 * s * s
+        } else {
+            d
+        };
         if df <= 0.0 {
             break;
         }
@@ -206,15 +214,27 @@ mod tests {
             assert!(!v.limited && v.scale >= 1.0);
             let p = &v.pinhole;
             assert_eq!((p.k1, p.k2), (0.0, 0.0));
-            assert_eq!((p.position, p.world_to_camera), (c.position, c.world_to_camera));
+            assert_eq!(
+                (p.position, p.world_to_camera),
+                (c.position, c.world_to_camera)
+            );
             let (pw, ph) = (p.width as f64, p.height as f64);
             let m = MARGIN_PX - 1e-6;
             for j in 0..=40 {
                 for i in 0..=64 {
-                    let (u, vv) = (-0.5 + 640.0 * i as f64 / 64.0, -0.5 + 427.0 * j as f64 / 40.0);
+                    let (u, vv) = (
+                        -0.5 + 640.0 * i as f64 / 64.0,
+                        -0.5 + 427.0 * j as f64 / 40.0,
+                    );
                     let [su, sv] = v.source_pixel(u, vv).unwrap();
-                    assert!(su >= m - 0.5 && su <= pw - 0.5 - m, "k ({k1},{k2}): u {u} -> {su} of {pw}");
-                    assert!(sv >= m - 0.5 && sv <= ph - 0.5 - m, "k ({k1},{k2}): v {vv} -> {sv} of {ph}");
+                    assert!(
+                        su >= m - 0.5 && su <= pw - 0.5 - m,
+                        "k ({k1},{k2}): u {u} -> {su} of {pw}"
+                    );
+                    assert!(
+                        sv >= m - 0.5 && sv <= ph - 0.5 - m,
+                        "k ({k1},{k2}): v {vv} -> {sv} of {ph}"
+                    );
                     // One output pixel spans at least one pinhole pixel in both directions.
                     let [du, _] = v.source_pixel(u + 0.01, vv).unwrap();
                     let [_, dv] = v.source_pixel(u, vv + 0.01).unwrap();
@@ -233,9 +253,14 @@ mod tests {
         let c = cam(320, 200, 0.0, 0.0);
         let v = DistortedView::new(&c, 4096).unwrap();
         let m = MARGIN_PX;
-        assert_eq!((v.pinhole.width, v.pinhole.height), (320 + 2 * m as u32, 200 + 2 * m as u32));
+        assert_eq!(
+            (v.pinhole.width, v.pinhole.height),
+            (320 + 2 * m as u32, 200 + 2 * m as u32)
+        );
         assert_eq!(v.scale, 1.0);
-        assert!((v.pinhole.cx - (c.cx + m)).abs() < 1e-9 && (v.pinhole.cy - (c.cy + m)).abs() < 1e-9);
+        assert!(
+            (v.pinhole.cx - (c.cx + m)).abs() < 1e-9 && (v.pinhole.cy - (c.cy + m)).abs() < 1e-9
+        );
         let [su, sv] = v.source_pixel(10.0, 20.0).unwrap();
         assert!((su - (10.0 + m)).abs() < 1e-9 && (sv - (20.0 + m)).abs() < 1e-9);
     }
@@ -253,7 +278,11 @@ mod tests {
         e.cy = 1427.5;
         let v = DistortedView::new(&e, 16384).unwrap();
         assert_eq!(v.scale, 1.0);
-        assert!(v.pinhole.width > 4290 + 4 && v.pinhole.width < 4600, "{}", v.pinhole.width);
+        assert!(
+            v.pinhole.width > 4290 + 4 && v.pinhole.width < 4600,
+            "{}",
+            v.pinhole.width
+        );
         // Shrunk to fit a small limit, flagged.
         let small = DistortedView::new(&e, 2048).unwrap();
         assert!(small.limited && small.pinhole.width <= 2048 && small.pinhole.height <= 2048);
@@ -268,10 +297,15 @@ mod tests {
             let c = cam(640, 480, k1, k2);
             for i in 1..=200 {
                 let rd = 0.0035 * i as f64; // up to 0.7
-                let Some([r, _]) = c.undistort(rd, 0.0) else { continue };
+                let Some([r, _]) = c.undistort(rd, 0.0) else {
+                    continue;
+                };
                 let r32 = undistort_radius_f32(k1 as f32, k2 as f32, rd as f32) as f64;
                 // At a focal length of 6000 px this is < 1e-3 px.
-                assert!((r32 - r).abs() < 1.5e-7, "k ({k1},{k2}) rd {rd}: {r32} vs {r}");
+                assert!(
+                    (r32 - r).abs() < 1.5e-7,
+                    "k ({k1},{k2}) rd {rd}: {r32} vs {r}"
+                );
             }
         }
         assert_eq!(undistort_radius_f32(0.0, 0.0, 0.4), 0.4);

@@ -48,8 +48,7 @@ impl Default for GeomorphOptions {
 /// 1 at the switch from the parent, 0 from `band` on. Non-finite ratios (the camera inside a
 /// bounding box) give 0, as does `band ≤ 1`.
 pub fn morph_factor(parent_ratio: f64, own_ratio: Option<f64>, band: f64) -> f32 {
-    if !(band > 1.0 && band.is_finite()) || parent_ratio.is_nan() || parent_ratio == f64::INFINITY
-    {
+    if !(band > 1.0 && band.is_finite()) || parent_ratio.is_nan() || parent_ratio == f64::INFINITY {
         return 0.0;
     }
     let x = parent_ratio.max(1.0).ln();
@@ -72,7 +71,12 @@ pub fn morph_factor(parent_ratio: f64, own_ratio: Option<f64>, band: f64) -> f32
 /// LOD shift (mip levels, ≥ 0) between a cell's texture and its parent's over the same ground:
 /// `log2((texels_c / width_c) / (texels_p / width_p))` — 1 when the parent has as many texels
 /// over twice the width (the store's layout). Non-finite or non-positive inputs give 0.
-pub fn mip_shift(child_texels: u32, child_width: f64, parent_texels: u32, parent_width: f64) -> f32 {
+pub fn mip_shift(
+    child_texels: u32,
+    child_width: f64,
+    parent_texels: u32,
+    parent_width: f64,
+) -> f32 {
     let (tc, tp) = (child_texels as f64, parent_texels as f64);
     let r = (tc / child_width.abs()) / (tp / parent_width.abs());
     if r.is_finite() && r > 1.0 {
@@ -108,7 +112,10 @@ impl SurfaceLocator {
             })
             .copied()
             .collect();
-        let tris: Vec<[DVec3; 3]> = idx.iter().map(|t| t.map(|k| positions[k as usize])).collect();
+        let tris: Vec<[DVec3; 3]> = idx
+            .iter()
+            .map(|t| t.map(|k| positions[k as usize]))
+            .collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in tris.iter().flatten() {
             lo = [lo[0].min(p.x), lo[1].min(p.y)];
@@ -132,8 +139,14 @@ impl SurfaceLocator {
             step,
         };
         for (k, t) in tris.iter().enumerate() {
-            let (bx0, by0) = s.bin(t.iter().map(|p| p.x).fold(f64::INFINITY, f64::min), t.iter().map(|p| p.y).fold(f64::INFINITY, f64::min));
-            let (bx1, by1) = s.bin(t.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max), t.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max));
+            let (bx0, by0) = s.bin(
+                t.iter().map(|p| p.x).fold(f64::INFINITY, f64::min),
+                t.iter().map(|p| p.y).fold(f64::INFINITY, f64::min),
+            );
+            let (bx1, by1) = s.bin(
+                t.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max),
+                t.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max),
+            );
             for by in by0..=by1 {
                 for bx in bx0..=bx1 {
                     s.bins[by * n + bx].push(k as u32);
@@ -147,7 +160,11 @@ impl SurfaceLocator {
     fn bin(&self, x: f64, y: f64) -> (usize, usize) {
         let f = |v: f64, k: usize| {
             let i = ((v - self.min[k]) / self.step[k]).floor();
-            if i.is_nan() { 0 } else { (i.max(0.0) as usize).min(self.n - 1) }
+            if i.is_nan() {
+                0
+            } else {
+                (i.max(0.0) as usize).min(self.n - 1)
+            }
         };
         (f(x, 0), f(y, 1))
     }
@@ -308,7 +325,11 @@ mod tests {
     fn morph_factor_is_one_at_the_switch_and_zero_from_the_band_on() {
         let band = 2.0;
         assert_eq!(morph_factor(1.0, None, band), 1.0);
-        assert_eq!(morph_factor(0.7, None, band), 1.0, "below the threshold: parent shape");
+        assert_eq!(
+            morph_factor(0.7, None, band),
+            1.0,
+            "below the threshold: parent shape"
+        );
         assert_eq!(morph_factor(2.0, None, band), 0.0);
         assert_eq!(morph_factor(5.0, None, band), 0.0);
         // Linear in log ratio: half-way at sqrt(band).
@@ -371,7 +392,11 @@ mod tests {
         let mut positions = Vec::new();
         for j in 0..5 {
             for i in 0..5 {
-                positions.push([-25.0 + 12.5 * i as f32, -25.0 + 12.5 * j as f32, (100 + i) as f32]);
+                positions.push([
+                    -25.0 + 12.5 * i as f32,
+                    -25.0 + 12.5 * j as f32,
+                    (100 + i) as f32,
+                ]);
             }
         }
         let mut triangles = Vec::new();
@@ -397,24 +422,41 @@ mod tests {
             surface_triangles: 32,
         };
         // Parent texture coordinates: ortho over its square (u east, v south).
-        let uvs: Vec<[f32; 2]> =
-            tent().positions.iter().map(|p| [(p[0] + 50.0) / 100.0, (50.0 - p[1]) / 100.0]).collect();
+        let uvs: Vec<[f32; 2]> = tent()
+            .positions
+            .iter()
+            .map(|p| [(p[0] + 50.0) / 100.0, (50.0 - p[1]) / 100.0])
+            .collect();
         let t = morph_targets(child_origin, &child, parent_origin, &tent(), &uvs, 4.5);
         assert_eq!(t.len(), positions.len());
         for (k, p) in positions[..ns as usize].iter().enumerate() {
             let (x, y) = (p[0] as f64 + 25.0, p[1] as f64 + 25.0);
             let want = tent_height(x, y) - 3.0;
-            assert!((t[k][0] as f64 - want).abs() < 1e-4, "vertex {k} at ({x}, {y}): {:?} vs {want}", t[k]);
+            assert!(
+                (t[k][0] as f64 - want).abs() < 1e-4,
+                "vertex {k} at ({x}, {y}): {:?} vs {want}",
+                t[k]
+            );
             // Ortho coordinates are affine in x, y: interpolation reproduces them exactly.
             let (u, v) = ((x + 50.0) / 100.0, (50.0 - y) / 100.0);
-            assert!((t[k][1] as f64 - u).abs() < 1e-6 && (t[k][2] as f64 - v).abs() < 1e-6, "uv of {k}");
+            assert!(
+                (t[k][1] as f64 - u).abs() < 1e-6 && (t[k][2] as f64 - v).abs() < 1e-6,
+                "uv of {k}"
+            );
         }
         for j in 0..5 {
             let (s, b) = (ns as usize + j, j * 5);
-            assert!((t[s][0] - (t[b][0] - 4.5)).abs() < 1e-5, "skirt {j} hangs the parent's depth below its border vertex");
+            assert!(
+                (t[s][0] - (t[b][0] - 4.5)).abs() < 1e-5,
+                "skirt {j} hangs the parent's depth below its border vertex"
+            );
             assert_eq!((t[s][1], t[s][2]), (t[b][1], t[b][2]));
         }
-        assert_eq!(t[t.len() - 1][0], -7.0, "a skirt vertex without a border vertex is not moved");
+        assert_eq!(
+            t[t.len() - 1][0],
+            -7.0,
+            "a skirt vertex without a border vertex is not moved"
+        );
         // Without a parent skirt depth the skirt keeps its own drop.
         let t = morph_targets(child_origin, &child, parent_origin, &tent(), &uvs, 0.0);
         assert!((t[ns as usize][0] - (t[0][0] - 2.0)).abs() < 1e-5);
@@ -422,7 +464,11 @@ mod tests {
 
     #[test]
     fn points_outside_the_surface_take_the_nearest_height() {
-        let pos: Vec<DVec3> = tent().positions.iter().map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+        let pos: Vec<DVec3> = tent()
+            .positions
+            .iter()
+            .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect();
         let loc = SurfaceLocator::new(&pos, &tent().triangles);
         assert!((loc.height_at(0.0, 0.0).unwrap() - 10.0).abs() < 1e-12);
         assert!((loc.height_at(25.0, -10.0).unwrap() - 5.0).abs() < 1e-12);

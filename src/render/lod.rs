@@ -148,7 +148,8 @@ pub fn select_cells_with_margin(
         let clean = |m: f64| if m.is_finite() { m.max(0.0) } else { 0.0 };
         let (up, down) = z_margin(i);
         let (up, down) = (clean(up), clean(down));
-        let lo = DVec3::from(rec.bbox_min) - DVec3::new(0.0, 0.0, rec.skirt_depth.max(0.0) + down) - eye;
+        let lo =
+            DVec3::from(rec.bbox_min) - DVec3::new(0.0, 0.0, rec.skirt_depth.max(0.0) + down) - eye;
         let hi = DVec3::from(rec.bbox_max) + DVec3::new(0.0, 0.0, up) - eye;
         if !frustum.intersects_aabb(lo, hi) {
             out.culled += 1;

@@ -187,17 +187,11 @@ impl TerrainScene {
                     let pfiles = active_files(prec, mode);
                     let pbytes = st.read_file(&pfiles.mesh)?;
                     let pmesh = CellMesh::from_bytes(&pbytes, &st.dir.join(&pfiles.mesh.path))?;
-                    let puv: Vec<[f32; 2]> =
-                        (0..pmesh.positions.len()).map(|k| texcoord(prec, &pmesh, k)).collect();
-                    let targets =
-                        morph_targets(
-                        rec.origin.into(),
-                        &mesh,
-                        prec.origin.into(),
-                        &pmesh,
-                        &puv,
-                        prec.skirt_depth,
-                    );
+                    let puv: Vec<[f32; 2]> = (0..pmesh.positions.len())
+                        .map(|k| texcoord(prec, &pmesh, k))
+                        .collect();
+                    let (o, po) = (rec.origin.into(), prec.origin.into());
+                    let targets = morph_targets(o, &mesh, po, &pmesh, &puv, prec.skirt_depth);
                     let (pc, pn) = drawn_texels(prec, mode);
                     let (cw, pw) = (rec.extent.width(), prec.extent.width());
                     Some(MorphData {
@@ -323,7 +317,11 @@ impl TerrainScene {
         let cells = &self.store.manifest.cells;
         let rec = &cells[i];
         let g = &self.opts.geomorph;
-        let Some(p) = rec.key().parent().and_then(|k| self.index.get(k)).filter(|_| g.enabled)
+        let Some(p) = rec
+            .key()
+            .parent()
+            .and_then(|k| self.index.get(k))
+            .filter(|_| g.enabled)
         else {
             return 0.0;
         };
@@ -357,7 +355,10 @@ impl TerrainScene {
             match cells[i].key().parent().and_then(|k| index.get(k)) {
                 Some(p) if self.morph_of(i, &cam) > 0.0 => {
                     let e = geometric_error(&cells[p]);
-                    (e, e + (cells[p].skirt_depth - cells[i].skirt_depth).max(0.0))
+                    (
+                        e,
+                        e + (cells[p].skirt_depth - cells[i].skirt_depth).max(0.0),
+                    )
                 }
                 _ => (0.0, 0.0),
             }
@@ -430,17 +431,25 @@ impl TerrainScene {
             .zip(parents)
             .filter_map(|((&i, morph), p)| {
                 let cell: &GpuCell = cache.peek(i)?;
-                Some(CellDraw { cell, morph, parent: p.and_then(|p| cache.peek(p)) })
+                Some(CellDraw {
+                    cell,
+                    morph,
+                    parent: p.and_then(|p| cache.peek(p)),
+                })
             })
             .collect();
         report.drawn = draw.len();
-        report.morphed = draw.iter().filter(|d| d.morph > 0.0 && d.cell.can_morph()).count();
+        report.morphed = draw
+            .iter()
+            .filter(|d| d.morph > 0.0 && d.cell.can_morph())
+            .count();
         report.substituted = dl.substituted;
         report.holes = dl.holes;
         report.distorted = distorted.is_some();
         report.pinhole_size = distorted.map_or((0, 0), |d| (d.pinhole.width, d.pinhole.height));
         report.triangles =
-            self.renderer.render(&cam, &draw, &self.opts.frame, distorted.as_ref())?;
+            self.renderer
+                .render(&cam, &draw, &self.opts.frame, distorted.as_ref())?;
         report.gpu_bytes = self.cache.used_bytes();
         report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(report)

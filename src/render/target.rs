@@ -121,7 +121,9 @@ impl RenderTarget {
                 .get_mapped_range(..)
                 .map_err(|e| Error::Gpu(format!("cannot read the readback buffer: {e}")))?;
             for r in 0..height as usize {
-                out.extend_from_slice(&view[r * padded as usize..r * padded as usize + row as usize]);
+                out.extend_from_slice(
+                    &view[r * padded as usize..r * padded as usize + row as usize],
+                );
             }
         }
         buf.unmap();
