@@ -143,7 +143,7 @@ impl TriangleBvh {
 
 /// An `obvhs` ray; negative zeros in the direction become positive zeros (the traversal's
 /// octant logic misses hits for axis-parallel rays with -0.0 components).
-fn make_ray(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Ray {
+pub(crate) fn make_ray(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Ray {
     Ray::new(Vec3A::from(origin), Vec3A::from(dir + Vec3::ZERO), t_min, t_max)
 }
 
@@ -167,7 +167,7 @@ pub fn nearest_brute_force(triangles: &[[Vec3; 3]], origin: Vec3, dir: Vec3, t_m
 
 /// Barycentric weights of `p` (a point on the triangle's plane) clamped to the triangle
 /// and normalized to sum 1; equal weights for a degenerate triangle.
-fn barycentric(tri: &Triangle, p: Vec3) -> [f32; 3] {
+pub(crate) fn barycentric(tri: &Triangle, p: Vec3) -> [f32; 3] {
     let (a, b, c) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
     let (e1, e2, d) = (b - a, c - a, p - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));

@@ -7,6 +7,7 @@
 
 use glam::Vec3;
 
+use super::accel::Caster;
 use super::scene::{LevelScene, NO_TRI};
 use crate::camera::RayCaster;
 
@@ -36,17 +37,17 @@ impl CornerHit {
 
 /// Casts the corner rays of corner row `j` (all `out.len()` = W + 1 columns) from `origin`
 /// (camera centre in the scene's frame).
-pub(crate) fn cast_corner_row(scene: &LevelScene, rays: &RayCaster, origin: Vec3, j: u32, out: &mut [CornerHit]) {
+pub(crate) fn cast_corner_row(scene: &LevelScene, caster: &Caster, rays: &RayCaster, origin: Vec3, j: u32, out: &mut [CornerHit]) {
     let v = j as f64 - 0.5;
     for (i, slot) in out.iter_mut().enumerate() {
-        *slot = cast_corner(scene, rays, origin, i as f64 - 0.5, v);
+        *slot = cast_corner(scene, caster, rays, origin, i as f64 - 0.5, v);
     }
 }
 
-fn cast_corner(scene: &LevelScene, rays: &RayCaster, origin: Vec3, u: f64, v: f64) -> CornerHit {
+fn cast_corner(scene: &LevelScene, caster: &Caster, rays: &RayCaster, origin: Vec3, u: f64, v: f64) -> CornerHit {
     let Some(d) = rays.ray(u, v) else { return CornerHit::MISS };
     let dir = d.as_vec3();
-    let Some(hit) = scene.bvh.nearest(origin, dir, 0.0, f32::INFINITY) else { return CornerHit::MISS };
+    let Some(hit) = caster.nearest(origin, dir) else { return CornerHit::MISS };
     let p = scene.plane(hit.triangle);
     let cos = p[0] * dir.x + p[1] * dir.y + p[2] * dir.z;
     // Back face (or an edge-on / degenerate triangle): the surface is seen from below.

@@ -33,7 +33,10 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::accel::Caster;
 use super::corners::{cast_corner_row, CornerHit};
+use super::viewgrid::ViewGrid;
+use super::RayAccel;
 use super::reconstruct::{reconstruct, CORNER_OFFSETS};
 use super::scene::LevelScene;
 use super::silhouette::crosses_silhouette;
@@ -72,9 +75,15 @@ impl Default for FootprintOptions {
 pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &FootprintOptions) -> FootprintSet {
     let (w, h) = (camera.width, camera.height);
     let origin = (camera.position - scene.frame_origin).as_vec3();
-    if w == 0 || h == 0 || scene.bvh.is_empty() || !origin.is_finite() {
+    if w == 0 || h == 0 || scene.triangle_count() == 0 || !origin.is_finite() {
         return FootprintSet::default();
     }
+    let rays = camera.ray_caster();
+    let caster = match (scene.accel, scene.bvh()) {
+        (RayAccel::Bvh(_), Some(bvh)) => Caster::Bvh(bvh),
+        (RayAccel::ViewGrid(p), _) => Caster::Grid(ViewGrid::build(scene.triangles(), camera, &rays, origin, p)),
+        (RayAccel::Bvh(_), None) => return FootprintSet::default(),
+    };
     // Output buckets: scene cells ordered by manifest index (then scene order).
     let mut order: Vec<usize> = (0..scene.cells.len()).collect();
     order.sort_by_key(|&i| (scene.cells[i].cell, i));
@@ -82,7 +91,7 @@ pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &Footpri
     for (b, &i) in order.iter().enumerate() {
         bucket[i] = b as u32;
     }
-    let ctx = Ctx { scene, rays: camera.ray_caster(), origin, w, h, opts: *opts, bucket: &bucket };
+    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket };
     let bands: Vec<BandOut> = (0..h.div_ceil(BAND_ROWS)).into_par_iter().map(|b| ctx.band(b)).collect();
 
     let mut set = FootprintSet::default();
@@ -135,6 +144,7 @@ enum Outcome {
 
 struct Ctx<'a> {
     scene: &'a LevelScene,
+    caster: &'a Caster<'a>,
     rays: RayCaster,
     origin: Vec3,
     w: u32,
@@ -170,7 +180,7 @@ impl Ctx<'_> {
         let stride = self.w as usize + 1;
         let mut hits = vec![CornerHit::MISS; (j_hi - j_lo + 1) as usize * stride];
         for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
-            cast_corner_row(self.scene, &self.rays, self.origin, j, row);
+            cast_corner_row(self.scene, self.caster, &self.rays, self.origin, j, row);
         }
         let rows = CornerRows { hits, j_lo: j_lo as i64, j_hi: j_hi as i64, stride: stride as i64 };
         let mut out = BandOut::default();

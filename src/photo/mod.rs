@@ -26,6 +26,7 @@
 //! one if the cell has it, else the orthographic one): x right, y down, texel `(i, j)`
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
+mod accel;
 mod accumulate;
 mod blend;
 mod bvh;
@@ -40,7 +41,10 @@ mod reconstruct;
 mod scene;
 mod silhouette;
 mod splat;
+mod viewgrid;
 
+pub use accel::RayAccel;
+pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
 pub use colmap::{read_colmap, read_colmap_specs, read_similarity, Similarity};
 pub use footprint::{photo_footprints, FootprintOptions};

@@ -9,7 +9,10 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{BvhQuality, TriangleBvh};
+use obvhs::triangle::Triangle;
+
+use super::viewgrid::to_triangles;
+use super::{RayAccel, TriangleBvh};
 use crate::error::{Error, Result};
 use crate::store::Store;
 
@@ -33,7 +36,9 @@ pub struct SceneCell {
     pub texels: u32,
 }
 
-/// All cells of one level, as triangles in an f32 frame centred on `frame_origin`, with a BVH.
+/// All cells of one level, as triangles in an f32 frame centred on `frame_origin`, with the
+/// ray-casting acceleration chosen at construction (a BVH, or nothing until a photo's
+/// camera-space grid is built by [`super::photo_footprints`]).
 ///
 /// Triangles are one-sided for the photo stage: the front face is the one the vertices
 /// run counter-clockwise around (seen from above for terrain). Triangles with an index
@@ -43,8 +48,12 @@ pub struct LevelScene {
     pub frame_origin: DVec3,
     /// The cells, in the order given.
     pub cells: Vec<SceneCell>,
-    /// BVH over every cell's triangles.
-    pub bvh: TriangleBvh,
+    /// The acceleration chosen at construction.
+    pub accel: RayAccel,
+    /// Every cell's triangles in the frame (index = BVH triangle index).
+    tris: Vec<Triangle>,
+    /// BVH over `tris` (with [`RayAccel::Bvh`] only).
+    bvh: Option<TriangleBvh>,
     /// Per BVH triangle: `[index into cells, local triangle index]`.
     tri_ref: Vec<[u32; 2]>,
     /// Per BVH triangle: unit normal (frame) and plane offset `n·v0`.
@@ -55,8 +64,9 @@ pub struct LevelScene {
 }
 
 impl LevelScene {
-    /// Builds the scene from in-memory cells.
-    pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, quality: BvhQuality) -> LevelScene {
+    /// Builds the scene from in-memory cells (a BVH is built now with [`RayAccel::Bvh`]).
+    pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, accel: impl Into<RayAccel>) -> LevelScene {
+        let accel = accel.into();
         let mut tris: Vec<[Vec3; 3]> = Vec::new();
         let mut tri_ref = Vec::new();
         let mut planes = Vec::new();
@@ -86,13 +96,17 @@ impl LevelScene {
             }
             adjacency.extend(cell_adjacency(&kept).into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
         }
-        let bvh = TriangleBvh::build(&tris, quality);
-        LevelScene { frame_origin, cells, bvh, tri_ref, planes, adjacency }
+        let bvh = match accel {
+            RayAccel::Bvh(q) => Some(TriangleBvh::build(&tris, q)),
+            RayAccel::ViewGrid(_) => None,
+        };
+        let tris = to_triangles(&tris);
+        LevelScene { frame_origin, cells, accel, tris, bvh, tri_ref, planes, adjacency }
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of
     /// `level` in the store.
-    pub fn from_store(store: &Store, level: u8, frame_origin: DVec3, quality: BvhQuality) -> Result<LevelScene> {
+    pub fn from_store(store: &Store, level: u8, frame_origin: DVec3, accel: impl Into<RayAccel>) -> Result<LevelScene> {
         let levels = store.manifest.quadtree.levels;
         if u32::from(level) >= u32::from(levels) {
             return Err(Error::BadOption(format!(
@@ -125,12 +139,22 @@ impl LevelScene {
                 texels,
             });
         }
-        Ok(LevelScene::new(cells, frame_origin, quality))
+        Ok(LevelScene::new(cells, frame_origin, accel))
     }
 
     /// Number of triangles in the BVH.
     pub fn triangle_count(&self) -> usize {
         self.tri_ref.len()
+    }
+
+    /// The BVH (built with [`RayAccel::Bvh`] only).
+    pub fn bvh(&self) -> Option<&TriangleBvh> {
+        self.bvh.as_ref()
+    }
+
+    /// The scene's triangles (frame coordinates; index = BVH triangle index).
+    pub(crate) fn triangles(&self) -> &[Triangle] {
+        &self.tris
     }
 
     /// `(index into cells, local triangle index)` of BVH triangle `tri`.
@@ -223,11 +247,11 @@ mod tests {
             texcoords: vec![[0.0, 8.0], [8.0, 8.0], [0.0, 0.0], [8.0, 0.0]],
             texels: 8,
         };
-        let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), BvhQuality::Fast);
+        let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), super::super::BvhQuality::Fast);
         assert_eq!(s.triangle_count(), 2);
         assert_eq!(s.triangle_source(1), Some((0, 1)));
         assert_eq!(s.neighbours(0)[1], 1);
-        let h = s.bvh.nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
+        let h = s.bvh().unwrap().nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
         assert_eq!(h.triangle, 0);
         assert!((h.t - 10.0).abs() < 1e-5);
         let p = s.plane(0);

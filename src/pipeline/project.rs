@@ -25,8 +25,8 @@ use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{
-    BlendMode, BvhQuality, CellAccum, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, LevelScene,
-    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, PixelFootprint, blend_cell, collect_pairs,
+    BlendMode, CellAccum, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, LevelScene,
+    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, PixelFootprint, RayAccel, blend_cell, collect_pairs,
     fit_colour_transform, normal_cos_slope, photo_footprints,
 };
 use crate::stats::texel_stretch;
@@ -47,8 +47,8 @@ pub struct ProjectOptions {
     pub footprint: FootprintOptions,
     /// Fit and apply a per-photo colour transform towards the existing texture.
     pub level_colours: bool,
-    /// BVH build preset for the ray casts.
-    pub bvh: BvhQuality,
+    /// Ray-casting acceleration for the pixel-corner rays.
+    pub ray: RayAccel,
     /// Confidence terms and blend ramp.
     pub confidence: ConfidenceParams,
     /// Leveling sample selection and guards.
@@ -65,7 +65,7 @@ impl Default for ProjectOptions {
             blend: BlendMode::Confidence,
             footprint: FootprintOptions::default(),
             level_colours: true,
-            bvh: BvhQuality::default(),
+            ray: RayAccel::default(),
             confidence: ConfidenceParams::default(),
             leveling: LevelingParams::default(),
             leveling_max_pixels: 1 << 20,
@@ -152,7 +152,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
         for (pi, pyr) in pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
-            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.bvh)?;
+            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
             let fs = photo_footprints(&scene, &cam, &opts.footprint);
             drop(scene);
             if level == finest {
@@ -212,7 +212,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         blend: opts.blend.name().to_string(),
         reconstruct: opts.footprint.reconstruct,
         level_colours: opts.level_colours,
-        bvh_quality: opts.bvh.name().to_string(),
+        ray_accel: opts.ray.name(),
         photos: reports,
         levels: level_reports,
     };
@@ -275,7 +275,7 @@ fn estimate_leveling(
     for step in attempts {
         let level = finest - step;
         let (img, cam) = pyr.level(step);
-        let scene = LevelScene::from_store(store, level as u8, cam.position, opts.bvh)?;
+        let scene = LevelScene::from_store(store, level as u8, cam.position, opts.ray)?;
         let fs = photo_footprints(&scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;
