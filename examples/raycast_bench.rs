@@ -8,7 +8,7 @@
 //!
 //! Medians of `RUNS` runs (default 3). Run with:
 //! ```sh
-//! cargo run --release --example raycast_bench -- [STORE_DIR] [RUNS]
+//! cargo run --release --example raycast_bench -- [STORE_DIR] [RUNS] [SHRINK] [METHODS] [LEVEL]
 //! ```
 
 #[path = "bench_util/mod.rs"]
@@ -167,7 +167,11 @@ fn main() -> anyhow::Result<()> {
         println!("Engabreen store built in {t:.1} s (default build options)");
     }
     let store = Store::open(&dir)?;
-    let level = store.manifest.quadtree.levels - 1;
+    // Optional fifth argument: the quadtree level (default the finest) and photo shrink.
+    let level = match args.get(5) {
+        Some(l) => l.parse()?,
+        None => store.manifest.quadtree.levels - 1,
+    };
     let cam = camera_from_json_file(&shared_data("engabreen/engabreen_camera_IMG_8902.json"), (4290, 2856))?;
     // Optional third argument: shrink the photo by this factor (quick runs).
     let shrink: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(1).max(1);
@@ -266,7 +270,7 @@ fn main() -> anyhow::Result<()> {
             max_dt,
             median(full),
             median(full_cpu),
-            set.footprints.len(),
+            set.len(),
             set.rejected_silhouette,
             set.reconstructed,
             set.dropped

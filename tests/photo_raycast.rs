@@ -94,11 +94,12 @@ fn corner_uv(fp: &PixelFootprint, k: usize) -> (f64, f64) {
 }
 
 fn check_sorted(set: &FootprintSet) {
-    for w in set.footprints.windows(2) {
+    let all: Vec<&PixelFootprint> = set.iter().collect();
+    for w in all.windows(2) {
         let key = |f: &PixelFootprint| (f.cell, f.pixel[1], f.pixel[0]);
-        assert!(key(&w[0]) < key(&w[1]), "footprints not sorted by (cell, row, col)");
+        assert!(key(w[0]) < key(w[1]), "footprints not sorted by (cell, row, col)");
     }
-    assert_eq!(set.pixels_hit, set.footprints.len() as u64 + set.rejected_silhouette + set.dropped);
+    assert_eq!(set.pixels_hit, set.len() as u64 + set.rejected_silhouette + set.dropped);
 }
 
 #[test]
@@ -113,8 +114,8 @@ fn flat_wall_gives_analytic_texture_positions_and_reconstructs_the_cell_border()
         assert_eq!(set.pixels_hit, 80 * 60);
         assert_eq!(set.rejected_silhouette, 0);
         assert_eq!(set.dropped, 0);
-        assert_eq!(set.footprints.len(), 80 * 60);
-        for fp in &set.footprints {
+        assert_eq!(set.len(), 80 * 60);
+        for fp in set.iter() {
             for k in 0..4 {
                 let (u, v) = corner_uv(fp, k);
                 let t = wall_tex(&cam, shift, fp.cell, u, v);
@@ -128,14 +129,14 @@ fn flat_wall_gives_analytic_texture_positions_and_reconstructs_the_cell_border()
         }
         // The column of pixels over x = 10 has corners in both cells: reconstructed.
         assert!(set.reconstructed >= 60, "reconstructed {}", set.reconstructed);
-        assert_eq!(set.reconstructed, set.footprints.iter().filter(|f| f.reconstructed > 0).count() as u64);
+        assert_eq!(set.reconstructed, set.iter().filter(|f| f.reconstructed > 0).count() as u64);
 
         // Without reconstruction those pixels are dropped.
         let opts = FootprintOptions { reconstruct: false, ..FootprintOptions::default() };
         let plain = photo_footprints(&scene, &cam, &opts);
         check_sorted(&plain);
         assert_eq!(plain.reconstructed, 0);
-        assert_eq!(plain.footprints.len() as u64, set.footprints.len() as u64 - set.reconstructed);
+        assert_eq!(plain.len() as u64, set.len() as u64 - set.reconstructed);
         assert_eq!(plain.dropped, set.reconstructed);
     }}
 
@@ -150,9 +151,9 @@ fn utm_sized_coordinates_give_the_same_footprints() {
         let shift = DVec3::new(431_000.0, 6_878_000.0, 0.0);
         let cam = wall_camera(shift);
         let far = photo_footprints(&LevelScene::new(two_walls(shift), cam.position + DVec3::new(3.0, -2.0, 1.0), accel), &cam, &FootprintOptions::default());
-        assert_eq!(near.footprints.len(), far.footprints.len());
+        assert_eq!(near.len(), far.len());
         assert_eq!((near.pixels_hit, near.reconstructed, near.dropped), (far.pixels_hit, far.reconstructed, far.dropped));
-        for (a, b) in near.footprints.iter().zip(&far.footprints) {
+        for (a, b) in near.iter().zip(far.iter()) {
             assert_eq!((a.cell, a.pixel, a.reconstructed), (b.cell, b.pixel, b.reconstructed));
             for k in 0..4 {
                 assert!((a.corners[k][0] - b.corners[k][0]).abs() < 2e-3 && (a.corners[k][1] - b.corners[k][1]).abs() < 2e-3);
@@ -183,7 +184,7 @@ fn cameras_facing_away_or_behind_the_surface_see_nothing() {
         assert_eq!(photo_footprints(&ground, &below, &FootprintOptions::default()), FootprintSet::default());
         // The same terrain seen from above is seen.
         let above = camera(DVec3::new(20.0, 20.0, 30.0), DVec3::new(21.0, 20.0, 0.0), 40, 30, 60.0);
-        assert!(!photo_footprints(&ground, &above, &FootprintOptions::default()).footprints.is_empty());
+        assert!(!photo_footprints(&ground, &above, &FootprintOptions::default()).is_empty());
     }}
 
 #[test]
@@ -202,7 +203,7 @@ fn an_occluding_wall_hides_what_is_behind_it() {
             (8.0..=12.0).contains(&p.x) && (3.0..=7.0).contains(&p.z)
         };
         let mut front = 0;
-        for fp in &set.footprints {
+        for fp in set.iter() {
             let any = (0..4).any(|k| {
                 let (u, v) = corner_uv(fp, k);
                 hits_occluder(u, v)
@@ -238,9 +239,9 @@ fn grazing_rays_give_no_nan_and_no_huge_footprints() {
         let opts = FootprintOptions::default();
         let set = photo_footprints(&scene, &cam, &opts);
         check_sorted(&set);
-        assert!(!set.footprints.is_empty());
+        assert!(!set.is_empty());
         assert!(set.dropped > 0, "grazing footprints should be dropped");
-        for fp in &set.footprints {
+        for fp in set.iter() {
             assert!(fp.corners.iter().flatten().all(|c| c.is_finite()), "{fp:?}");
             assert!(fp.cos_view.is_finite() && fp.cos_view > 0.0 && fp.cos_view <= 1.0);
             assert!(fp.distance.is_finite() && fp.distance > 0.0);
@@ -276,10 +277,10 @@ fn silhouette_pixels_are_rejected_and_counted() {
         let off = FootprintOptions { reject_silhouettes: false, ..FootprintOptions::default() };
         let all = photo_footprints(&scene, &cam, &off);
         assert_eq!(all.rejected_silhouette, 0);
-        assert_eq!(all.footprints.len() as u64, set.footprints.len() as u64 + set.rejected_silhouette);
-        let kept: std::collections::HashSet<[u32; 2]> = set.footprints.iter().map(|f| f.pixel).collect();
+        assert_eq!(all.len() as u64, set.len() as u64 + set.rejected_silhouette);
+        let kept: std::collections::HashSet<[u32; 2]> = set.iter().map(|f| f.pixel).collect();
         let mut per_column = vec![0u32; 96];
-        for fp in all.footprints.iter().filter(|f| !kept.contains(&f.pixel)) {
+        for fp in all.iter().filter(|f| !kept.contains(&f.pixel)) {
             per_column[fp.pixel[0] as usize] += 1;
             // The crest projects within a pixel or two of the rejected pixel.
             let x = fp.pixel[0] as f64;
@@ -388,7 +389,7 @@ fn view_grid_and_bvh_give_the_same_footprints() {
     cam.k1 = -0.1;
     let run = |accel: RayAccel| photo_footprints(&LevelScene::new(cells.clone(), cam.position, accel), &cam, &FootprintOptions::default());
     let bvh = run(BvhQuality::Fast.into());
-    assert!(bvh.footprints.len() > 5_000 && bvh.rejected_silhouette > 0, "{} {}", bvh.footprints.len(), bvh.rejected_silhouette);
+    assert!(bvh.len() > 5_000 && bvh.rejected_silhouette > 0, "{} {}", bvh.len(), bvh.rejected_silhouette);
     for accel in [RayAccel::default(), RayAccel::parse("grid:2").unwrap(), RayAccel::parse("grid:40").unwrap()] {
         assert_eq!(run(accel), bvh, "{}", accel.name());
     }

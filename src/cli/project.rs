@@ -72,7 +72,9 @@ fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     // a bad store is reported before any photo is decoded
     cliffmap::store::Store::open(&a.store)?;
+    let t = std::time::Instant::now();
     let photos = load_photos(&a)?;
+    tracing::debug!("project: {} photos decoded in {:.3} s", photos.len(), t.elapsed().as_secs_f64());
     let report = project_store(&a.store, &photos, &options(&a))?;
     if !a.quiet {
         println!("photo textures for {} cells", report.cells_written);

@@ -78,11 +78,11 @@ pub(crate) enum Caster<'a> {
 
 impl Caster<'_> {
     /// Nearest hit (both faces) of the ray from `origin` (the camera centre, scene frame)
-    /// along the unit vector `dir`.
+    /// along the unit vector `dir`, whose point on the undistorted image plane is `xy`.
     #[inline]
-    pub(crate) fn nearest(&self, origin: Vec3, dir: Vec3) -> Option<TriHit> {
+    pub(crate) fn nearest(&self, origin: Vec3, dir: Vec3, xy: [f64; 2]) -> Option<TriHit> {
         match self {
-            Caster::Grid(g) => g.nearest(origin, dir),
+            Caster::Grid(g) => g.nearest_at(origin, dir, xy),
             Caster::Bvh(b) => b.nearest(origin, dir, 0.0, f32::INFINITY),
         }
     }

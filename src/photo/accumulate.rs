@@ -87,9 +87,9 @@ impl PhotoAccum {
     /// Deposits every footprint of `footprints` (all of this accumulator's cell) with the
     /// colour of its pixel in `image` (the image the footprints were cast for) mapped by
     /// `transform`, and confidence from `params`.
-    pub fn add_all(
+    pub fn add_all<'f>(
         &mut self,
-        footprints: &[PixelFootprint],
+        footprints: impl IntoIterator<Item = &'f PixelFootprint>,
         image: &RgbImage,
         transform: &ColourTransform,
         params: &ConfidenceParams,

@@ -17,11 +17,10 @@
 //! pixel corners) are answered by testing every triangle.
 
 use glam::{DMat3, DVec3, Vec3, Vec3A};
-use obvhs::ray::RayHit;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use super::bvh::{barycentric, make_ray};
+use super::bvh::barycentric;
 use super::TriHit;
 use crate::camera::{CameraModel, RayCaster};
 
@@ -46,6 +45,51 @@ impl Default for ViewGridParams {
     }
 }
 
+/// A triangle prepared for rays from one origin: the terms of
+/// [`obvhs::triangle::Triangle::intersect`] that do not depend on the ray direction,
+/// computed with the same operations, so the hit distance is bit-identical to obvhs's.
+#[derive(Clone, Copy, Debug)]
+struct PreTri {
+    /// `v0 − origin`.
+    c: Vec3A,
+    /// `v0 − v1`.
+    e1: Vec3A,
+    /// `v2 − v0`.
+    e2: Vec3A,
+    /// `e1 × e2`.
+    n: Vec3A,
+    /// `n · c`.
+    nc: f32,
+}
+
+impl PreTri {
+    fn new(t: &Triangle, origin: Vec3A) -> PreTri {
+        let e1 = t.v0 - t.v1;
+        let e2 = t.v2 - t.v0;
+        let n = e1.cross(e2);
+        let c = t.v0 - origin;
+        PreTri { c, e1, e2, n, nc: n.dot(c) }
+    }
+
+    /// Distance along `d` to the hit in `[0, tmax]`, or ∞ (Möller–Trumbore as obvhs).
+    #[inline(always)]
+    fn intersect(&self, d: Vec3A, tmax: f32) -> f32 {
+        let r = d.cross(self.c);
+        let inv_det = 1.0 / self.n.dot(d);
+        let u = r.dot(self.e2) * inv_det;
+        let v = r.dot(self.e1) * inv_det;
+        let w = 1.0 - u - v;
+        let signs = u.to_bits() | v.to_bits() | w.to_bits();
+        if inv_det != 0.0 && signs & 0x8000_0000 == 0 {
+            let t = self.nc * inv_det;
+            if t >= 0.0 && t <= tmax {
+                return t;
+            }
+        }
+        f32::INFINITY
+    }
+}
+
 /// One grid entry: a triangle and the smallest camera depth of its clipped part.
 #[derive(Clone, Copy, Debug)]
 struct Entry {
@@ -56,6 +100,8 @@ struct Entry {
 /// Triangles binned by their central projection for one camera centre (see module docs).
 pub struct ViewGrid<'a> {
     tris: &'a [Triangle],
+    /// `tris` prepared for rays from the grid's origin.
+    pre: Vec<PreTri>,
     /// World (= scene frame) to camera rotation.
     rot: DMat3,
     /// Undistorted-plane position of bin (0, 0)'s corner, and bins per unit.
@@ -92,8 +138,9 @@ impl<'a> ViewGrid<'a> {
     /// corners.
     pub(crate) fn build(tris: &'a [Triangle], camera: &CameraModel, rays: &RayCaster, origin: Vec3, params: ViewGridParams) -> ViewGrid<'a> {
         let rot = camera.world_to_camera;
-        let origin = origin.as_dvec3();
-        let mut grid = ViewGrid { tris, rot, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
+        let o = Vec3A::from(origin);
+        let pre = tris.par_iter().map(|t| PreTri::new(t, o)).collect();
+        let mut grid = ViewGrid { tris, pre, rot, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
         let Some([xmin, ymin, xmax, ymax]) = ray_bounds(camera, rays) else { return grid };
         let f = camera.fx.abs().max(camera.fy.abs());
         let bin_px = if params.bin_px.is_finite() && params.bin_px > 0.0 { params.bin_px as f64 } else { 8.0 };
@@ -117,7 +164,7 @@ impl<'a> ViewGrid<'a> {
         let rects: Vec<Option<([u32; 4], f32)>> = tris
             .par_iter()
             .map(|t| {
-                let v = [t.v0, t.v1, t.v2].map(|p| rot * (Vec3::from(p).as_dvec3() - origin));
+                let v = [t.v0, t.v1, t.v2].map(|p| rot * (Vec3::from(p).as_dvec3() - origin.as_dvec3()));
                 let (bb, z_min) = projected_bounds(&v)?;
                 let to_bin = |x: f64, o: f64, n: usize| ((x - o) * scale).floor().clamp(0.0, n as f64 - 1.0) as u32;
                 let (bx0, bx1) = (to_bin(bb[0], gx, nx), to_bin(bb[2], gx, nx));
@@ -179,48 +226,51 @@ impl<'a> ViewGrid<'a> {
     }
 
     /// The nearest hit of the ray `origin + t·dir` (`origin` = the camera centre the grid was
-    /// built for, `dir` a unit vector, scene frame), both faces, `t > 0`.
+    /// built for, `dir` a unit vector, scene frame), both faces, `t ≥ 0`.
     pub fn nearest(&self, origin: Vec3, dir: Vec3) -> Option<TriHit> {
+        let c = self.rot * dir.as_dvec3();
+        let xy = if c.z > 0.0 { [c.x / c.z, c.y / c.z] } else { [f64::NAN; 2] };
+        self.nearest_at(origin, dir, xy)
+    }
+
+    /// [`ViewGrid::nearest`] for a ray whose point on the undistorted image plane is known
+    /// (`xy`; NaN if it points backwards).
+    pub(crate) fn nearest_at(&self, origin: Vec3, dir: Vec3, xy: [f64; 2]) -> Option<TriHit> {
         if !(origin.is_finite() && dir.is_finite()) || dir == Vec3::ZERO {
             return None;
         }
-        let c = self.rot * dir.as_dvec3();
-        let mut ray = make_ray(origin, dir, 0.0, f32::INFINITY);
-        let mut hit = RayHit::none();
-        let bin = (c.z > 0.0).then(|| self.bin_of(c.x / c.z, c.y / c.z)).flatten();
-        match bin {
+        let d = Vec3A::from(dir + Vec3::ZERO);
+        let (mut best_t, mut best) = (f32::INFINITY, u32::MAX);
+        let mut test = |i: u32, tmax: &mut f32| {
+            let t = self.pre[i as usize].intersect(d, *tmax);
+            if t < *tmax {
+                *tmax = t;
+                best = i;
+            }
+        };
+        match self.bin_of(xy[0], xy[1]) {
             Some(b) => {
-                // Depth of a hit at distance t is t·cz (dir is unit).
-                let cz = (c.z * (1.0 + 1e-6)) as f32;
+                // Camera depth of the point at distance t is t·cz (dir is a unit vector).
+                let cz = ((1.0 + 1e-6) / (1.0 + xy[0] * xy[0] + xy[1] * xy[1]).sqrt()) as f32;
                 let (s, e) = (self.starts[b] as usize, self.starts[b + 1] as usize);
                 for en in &self.entries[s..e] {
-                    if en.z_min > ray.tmax * cz {
+                    if en.z_min > best_t * cz {
                         break;
                     }
-                    let t = self.tris[en.tri as usize].intersect(&ray);
-                    if t < ray.tmax {
-                        ray.tmax = t;
-                        hit.t = t;
-                        hit.primitive_id = en.tri;
-                    }
+                    test(en.tri, &mut best_t);
                 }
             }
             None => {
-                for (i, tri) in self.tris.iter().enumerate() {
-                    let t = tri.intersect(&ray);
-                    if t < ray.tmax {
-                        ray.tmax = t;
-                        hit.t = t;
-                        hit.primitive_id = i as u32;
-                    }
+                for i in 0..self.pre.len() as u32 {
+                    test(i, &mut best_t);
                 }
             }
         }
-        if !hit.t.is_finite() {
+        if !best_t.is_finite() {
             return None;
         }
-        let tri = &self.tris[hit.primitive_id as usize];
-        Some(TriHit { triangle: hit.primitive_id, t: hit.t, bary: barycentric(tri, origin + dir * hit.t) })
+        let tri = &self.tris[best as usize];
+        Some(TriHit { triangle: best, t: best_t, bary: barycentric(tri, origin + dir * best_t) })
     }
 
     fn bin_of(&self, x: f64, y: f64) -> Option<usize> {

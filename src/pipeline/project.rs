@@ -14,7 +14,6 @@
 //! same photos give byte-identical files; records and files of an earlier run that this
 //! run does not write are removed. The manifest is written last.
 
-use std::ops::Range;
 use std::path::Path;
 
 use indicatif::{MultiProgress, ProgressBar};
@@ -25,8 +24,8 @@ use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{
-    BlendMode, CellAccum, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, LevelScene,
-    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, PixelFootprint, RayAccel, blend_cell, collect_pairs,
+    BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
+    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
     fit_colour_transform, normal_cos_slope, photo_footprints,
 };
 use crate::stats::texel_stretch;
@@ -134,6 +133,8 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         .collect();
 
     let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    let clock = std::time::Instant::now();
+    let lap = |what: &str| tracing::debug!("project: {what} done at {:.3} s", clock.elapsed().as_secs_f64());
     if opts.level_colours {
         for (i, pyr) in pyramids.iter().enumerate() {
             let (t, n) = estimate_leveling(&store, pyr, finest, opts)?;
@@ -143,6 +144,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             reports[i].colour_samples = n as u64;
             bars[i].inc(1);
         }
+        lap("colour leveling");
     }
 
     let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
@@ -155,13 +157,14 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
             let fs = photo_footprints(&scene, &cam, &opts.footprint);
             drop(scene);
+            lap(&format!("level {level} photo {pi}: {} footprints", fs.len()));
             if level == finest {
                 let r = &mut reports[pi];
                 r.pixels_hit = fs.pixels_hit;
                 r.rejected_silhouette = fs.rejected_silhouette;
                 r.reconstructed_footprints = fs.reconstructed;
             }
-            let groups = group_by_cell(&fs.footprints, &store.manifest.cells, level as u8);
+            let groups = group_by_cell(&fs, &store.manifest.cells, level as u8);
             let cells = &store.manifest.cells;
             let (transform, conf) = (&transforms[pi], &opts.confidence);
             let written: Vec<u64> = accs
@@ -172,12 +175,13 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
                     let Some(range) = range else { return 0 };
                     let texels = active_texels(&cells[ci]);
                     let mut pa = PhotoAccum::new(texels);
-                    pa.add_all(&fs.footprints[range.clone()], img, transform, conf);
+                    pa.add_all(range.iter(), img, transform, conf);
                     acc.get_or_insert_with(|| CellAccum::new(texels, opts.blend)).merge(&pa)
                 })
                 .collect();
             reports[pi].texels_written += written.iter().sum::<u64>();
             bars[pi].inc(1);
+            lap(&format!("level {level} photo {pi}: splat"));
         }
         let level_cells: Vec<usize> = (0..ncells).filter(|&i| store.manifest.cells[i].level as usize == level).collect();
         let results: Vec<Result<CellOutcome>> =
@@ -194,6 +198,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             }
         }
         level_reports.push(lr);
+        lap(&format!("level {level}: cells written"));
     }
     for pb in &bars {
         pb.finish_and_clear();
@@ -224,6 +229,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         &serde_json::to_vec_pretty(&store.manifest).map_err(|e| Error::store(dir, e.to_string()))?,
     )?;
     remove_stale_photo_files(dir, &store.manifest.cells);
+    lap("manifest and stats");
     Ok(ProjectReport { settings, cells_written })
 }
 
@@ -236,24 +242,14 @@ pub(crate) fn remove_stale_photo_files(dir: &Path, cells: &[CellRecord]) {
     }
 }
 
-/// Per manifest cell, the range of `footprints` (sorted by cell) that lies in it; cells not
-/// on `level` (a footprint set from a foreign scene) get none.
-fn group_by_cell(footprints: &[PixelFootprint], cells: &[CellRecord], level: u8) -> Vec<Option<Range<usize>>> {
+/// Per manifest cell, its footprints in `fs`; cells not on `level` (a footprint set from a
+/// foreign scene) get none.
+fn group_by_cell<'a>(fs: &'a FootprintSet, cells: &[CellRecord], level: u8) -> Vec<Option<&'a CellFootprints>> {
     let mut out = vec![None; cells.len()];
-    let mut k = 0;
-    while k < footprints.len() {
-        let cell = footprints[k].cell as usize;
-        let start = k;
-        while k < footprints.len() && footprints[k].cell as usize == cell {
-            k += 1;
-        }
+    for cf in &fs.cells {
+        let cell = cf.cell as usize;
         if cell < cells.len() && cells[cell].level == level {
-            match &mut out[cell] {
-                // footprints are documented as sorted by cell; tolerate a split run by
-                // ignoring the later part rather than mixing orders
-                Some(_) => tracing::warn!("footprints of cell {} are not contiguous; later run ignored", cells[cell].id),
-                slot => *slot = Some(start..k),
-            }
+            out[cell] = Some(cf);
         }
     }
     out
@@ -279,15 +275,15 @@ fn estimate_leveling(
         let fs = photo_footprints(&scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;
-        let groups = group_by_cell(&fs.footprints, cells, level as u8);
+        let groups = group_by_cell(&fs, cells, level as u8);
         let parts: Vec<Result<ColourPairs>> = groups
             .par_iter()
             .enumerate()
-            .filter_map(|(ci, g)| g.clone().map(|r| (ci, r)))
+            .filter_map(|(ci, g)| g.map(|r| (ci, r)))
             .map(|(ci, range)| {
                 let rec = &cells[ci];
                 let mut pa = PhotoAccum::new(active_texels(rec));
-                pa.add_all(&fs.footprints[range], img, &ColourTransform::IDENTITY, &opts.confidence);
+                pa.add_all(range.iter(), img, &ColourTransform::IDENTITY, &opts.confidence);
                 let existing = store.read_active_texture(rec)?;
                 let normals = store.read_active_normal_map(rec)?;
                 check_size(store, rec, existing.dimensions(), normals.dimensions())?;
