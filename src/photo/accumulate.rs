@@ -18,7 +18,7 @@ use image::RgbImage;
 
 use super::confidence::ConfidenceParams;
 use super::level::ColourTransform;
-use super::splat::{SplatKind, footprint_area, splat_footprint};
+use super::splat::{Splat, SplatKind, footprint_shape, splat_polygon};
 use super::PixelFootprint;
 
 /// How several photos' colours combine in a texel.
@@ -66,9 +66,10 @@ impl PhotoAccum {
     /// Deposits a footprint of colour `rgb` (sRGB 0..1) and confidence `conf(area)` (given
     /// the footprint's area in texels², see [`footprint_area`]).
     pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], conf: impl FnOnce(f64) -> f64) {
-        let q = conf(footprint_area(&fp.corners)) as f32;
+        let shape = footprint_shape(&fp.corners);
+        let q = conf(shape.map_or(0.0, |(_, a)| if a.is_finite() { a } else { 0.0 })) as f32;
         let (coverage, weight, colour) = (&mut self.coverage, &mut self.weight, &mut self.colour);
-        let s = splat_footprint(&fp.corners, self.texels, |i, w| {
+        let deposit = |i: usize, w: f64| {
             let w = w as f32;
             coverage[i] += w;
             let wq = w * q;
@@ -76,7 +77,11 @@ impl PhotoAccum {
             for k in 0..3 {
                 colour[i][k] += wq * rgb[k];
             }
-        });
+        };
+        let s = match shape {
+            Some((poly, area)) => splat_polygon(&poly, area, self.texels, deposit),
+            None => Splat { area: 0.0, kind: SplatKind::Skipped },
+        };
         self.kinds[match s.kind {
             SplatKind::Exact => 0,
             SplatKind::Bilinear => 1,
