@@ -42,6 +42,7 @@ mod reconstruct;
 mod scene;
 mod silhouette;
 mod splat;
+mod triangle;
 mod viewgrid;
 
 pub use accel::RayAccel;

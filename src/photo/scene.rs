@@ -79,11 +79,8 @@ impl LevelScene {
             };
             let first = tris.len() as u32;
             let mut kept: Vec<[u32; 3]> = Vec::new();
-            for (ti, t) in c.triangles.iter().enumerate() {
-                let n = c.positions.len().min(c.texcoords.len());
-                if t.iter().any(|&i| i as usize >= n) {
-                    continue;
-                }
+            for ti in morton_order(c) {
+                let t = &c.triangles[ti];
                 let p = [local(t[0]), local(t[1]), local(t[2])];
                 if !p.iter().all(|q| q.is_finite()) {
                     continue;
@@ -190,6 +187,49 @@ impl LevelScene {
     }
 }
 
+/// The cell's valid triangles (vertex indices within its positions and texcoords), ordered
+/// along a Morton curve of their centroids' x-y (ties by index), so that triangles near each
+/// other on the ground are near each other in memory (the ray casts touch them together).
+fn morton_order(c: &SceneCell) -> Vec<usize> {
+    let n = c.positions.len().min(c.texcoords.len());
+    let valid = |t: &[u32; 3]| t.iter().all(|&i| (i as usize) < n);
+    let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+    for p in &c.positions[..n] {
+        for k in 0..2 {
+            if p[k].is_finite() {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    let scale = [0, 1].map(|k| if hi[k] > lo[k] { 65535.0 / (hi[k] - lo[k]) } else { 0.0 });
+    let mut keyed: Vec<(u64, usize)> = c
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| valid(t))
+        .map(|(ti, t)| {
+            let q = [0, 1].map(|k| {
+                let m = t.iter().map(|&i| c.positions[i as usize][k]).sum::<f32>() / 3.0;
+                let v = ((m - lo[k]) * scale[k]).clamp(0.0, 65535.0);
+                if v.is_finite() { v as u32 } else { 0 }
+            });
+            (interleave(q[0]) | interleave(q[1]) << 1, ti)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, ti)| ti).collect()
+}
+
+/// Spreads the low 16 bits of `v` to the even bits.
+fn interleave(v: u32) -> u64 {
+    let mut x = u64::from(v & 0xffff);
+    x = (x | (x << 8)) & 0x00ff_00ff;
+    x = (x | (x << 4)) & 0x0f0f_0f0f;
+    x = (x | (x << 2)) & 0x3333_3333;
+    (x | (x << 1)) & 0x5555_5555
+}
+
 /// For each triangle, the triangle sharing edge k (`v[k] → v[k+1]`), or [`NO_TRI`] on the
 /// boundary and at non-manifold edges (more than two triangles).
 fn cell_adjacency(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
@@ -249,6 +289,8 @@ mod tests {
         };
         let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), super::super::BvhQuality::Fast);
         assert_eq!(s.triangle_count(), 2);
+        // Triangles are stored in Morton order of their centroids: (0, 1, 2) first.
+        assert_eq!(s.triangle_source(0), Some((0, 0)));
         assert_eq!(s.triangle_source(1), Some((0, 1)));
         assert_eq!(s.neighbours(0)[1], 1);
         let h = s.bvh().unwrap().nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();

@@ -20,7 +20,7 @@ use glam::{DMat3, DVec3, Vec3, Vec3A};
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use super::bvh::barycentric;
+use super::triangle::PreTri;
 use super::TriHit;
 use crate::camera::{CameraModel, RayCaster};
 
@@ -42,51 +42,6 @@ pub struct ViewGridParams {
 impl Default for ViewGridParams {
     fn default() -> Self {
         ViewGridParams { bin_px: 8.0 }
-    }
-}
-
-/// A triangle prepared for rays from one origin: the terms of
-/// [`obvhs::triangle::Triangle::intersect`] that do not depend on the ray direction,
-/// computed with the same operations, so the hit distance is bit-identical to obvhs's.
-#[derive(Clone, Copy, Debug)]
-struct PreTri {
-    /// `v0 − origin`.
-    c: Vec3A,
-    /// `v0 − v1`.
-    e1: Vec3A,
-    /// `v2 − v0`.
-    e2: Vec3A,
-    /// `e1 × e2`.
-    n: Vec3A,
-    /// `n · c`.
-    nc: f32,
-}
-
-impl PreTri {
-    fn new(t: &Triangle, origin: Vec3A) -> PreTri {
-        let e1 = t.v0 - t.v1;
-        let e2 = t.v2 - t.v0;
-        let n = e1.cross(e2);
-        let c = t.v0 - origin;
-        PreTri { c, e1, e2, n, nc: n.dot(c) }
-    }
-
-    /// Distance along `d` to the hit in `[0, tmax]`, or ∞ (Möller–Trumbore as obvhs).
-    #[inline(always)]
-    fn intersect(&self, d: Vec3A, tmax: f32) -> f32 {
-        let r = d.cross(self.c);
-        let inv_det = 1.0 / self.n.dot(d);
-        let u = r.dot(self.e2) * inv_det;
-        let v = r.dot(self.e1) * inv_det;
-        let w = 1.0 - u - v;
-        let signs = u.to_bits() | v.to_bits() | w.to_bits();
-        if inv_det != 0.0 && signs & 0x8000_0000 == 0 {
-            let t = self.nc * inv_det;
-            if t >= 0.0 && t <= tmax {
-                return t;
-            }
-        }
-        f32::INFINITY
     }
 }
 
@@ -240,12 +195,13 @@ impl<'a> ViewGrid<'a> {
             return None;
         }
         let d = Vec3A::from(dir + Vec3::ZERO);
-        let (mut best_t, mut best) = (f32::INFINITY, u32::MAX);
+        let (mut best_t, mut best, mut best_uv) = (f32::INFINITY, u32::MAX, [0.0f32; 2]);
         let mut test = |i: u32, tmax: &mut f32| {
-            let t = self.pre[i as usize].intersect(d, *tmax);
+            let (t, uv) = self.pre[i as usize].intersect(d, *tmax);
             if t < *tmax {
                 *tmax = t;
                 best = i;
+                best_uv = uv;
             }
         };
         match self.bin_of(xy[0], xy[1]) {
@@ -269,8 +225,7 @@ impl<'a> ViewGrid<'a> {
         if !best_t.is_finite() {
             return None;
         }
-        let tri = &self.tris[best as usize];
-        Some(TriHit { triangle: best, t: best_t, bary: barycentric(tri, origin + dir * best_t) })
+        Some(TriHit { triangle: best, t: best_t, bary: PreTri::barycentric(best_uv) })
     }
 
     fn bin_of(&self, x: f64, y: f64) -> Option<usize> {
