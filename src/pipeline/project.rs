@@ -135,9 +135,18 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
     let clock = std::time::Instant::now();
     let lap = |what: &str| tracing::debug!("project: {what} done at {:.3} s", clock.elapsed().as_secs_f64());
+    // Footprints cast for the leveling are kept for the main loop while they are few.
+    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
+    let mut cached_len = 0usize;
     if opts.level_colours {
         for (i, pyr) in pyramids.iter().enumerate() {
-            let (t, n) = estimate_leveling(&store, pyr, finest, opts)?;
+            let (t, n, fs) = estimate_leveling(&store, pyr, finest, opts)?;
+            if let Some((level, fs)) = fs {
+                if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
+                    cached_len += fs.len();
+                    cached[i] = Some((level, fs));
+                }
+            }
             transforms[i] = t;
             reports[i].colour_gain = t.gain;
             reports[i].colour_offset = t.offset;
@@ -154,9 +163,14 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
         for (pi, pyr) in pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
-            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
-            let fs = photo_footprints(&scene, &cam, &opts.footprint);
-            drop(scene);
+            let fs = match cached[pi].take() {
+                Some((l, fs)) if l == level => fs,
+                other => {
+                    cached[pi] = other;
+                    let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
+                    photo_footprints(&scene, &cam, &opts.footprint)
+                }
+            };
             lap(&format!("level {level} photo {pi}: {} footprints", fs.len()));
             if level == finest {
                 let r = &mut reports[pi];
@@ -255,13 +269,18 @@ fn group_by_cell<'a>(fs: &'a FootprintSet, cells: &[CellRecord], level: u8) -> V
     out
 }
 
-/// The leveling transform of one photo and its sample count (see the module docs).
+/// Most footprints (over all photos) kept from the leveling casts for the main loop
+/// (about 56 bytes each).
+const MAX_CACHED_FOOTPRINTS: usize = 8 << 20;
+
+/// The leveling transform of one photo, its sample count and the footprints it was fitted
+/// on with their level (see the module docs).
 fn estimate_leveling(
     store: &Store,
     pyr: &PhotoPyramid,
     finest: usize,
     opts: &ProjectOptions,
-) -> Result<(ColourTransform, usize)> {
+) -> Result<(ColourTransform, usize, Option<(usize, FootprintSet)>)> {
     let (w, h) = pyr.level(0).0.dimensions();
     let mut k_est = 0;
     while k_est < finest && (w as u64 >> k_est) * (h as u64 >> k_est) > opts.leveling_max_pixels {
@@ -300,10 +319,10 @@ fn estimate_leveling(
         }
         let (t, n) = fit_colour_transform(&all, &opts.leveling);
         if n > 0 {
-            return Ok((t, n));
+            return Ok((t, n, Some((level, fs))));
         }
     }
-    Ok((ColourTransform::IDENTITY, 0))
+    Ok((ColourTransform::IDENTITY, 0, None))
 }
 
 /// Errors unless the active texture and normal map have the cell's active texture size.
