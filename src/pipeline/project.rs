@@ -80,6 +80,30 @@ pub struct ProjectReport {
     pub settings: PhotoSettings,
     /// Cells (all levels) that got a photo texture.
     pub cells_written: usize,
+    /// Wall-clock seconds each stage of the run took, in order (stage name, seconds): colour
+    /// leveling, then per level and photo the footprints and the splat, and the cells
+    /// written per level. For benchmarks; not stored.
+    pub stage_seconds: Vec<(String, f64)>,
+}
+
+/// Wall-clock durations of consecutive stages (also logged at debug level).
+struct StageTimer {
+    last: std::time::Instant,
+    laps: Vec<(String, f64)>,
+}
+
+impl StageTimer {
+    fn new() -> StageTimer {
+        StageTimer { last: std::time::Instant::now(), laps: Vec::new() }
+    }
+
+    fn lap(&mut self, stage: &str) {
+        let now = std::time::Instant::now();
+        let dt = (now - self.last).as_secs_f64();
+        self.last = now;
+        tracing::debug!("project: {stage}: {dt:.3} s");
+        self.laps.push((stage.to_string(), dt));
+    }
 }
 
 /// Runs `project` on the store in `dir` with `photos` (see the [module docs](self)).
@@ -133,8 +157,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         .collect();
 
     let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
-    let clock = std::time::Instant::now();
-    let lap = |what: &str| tracing::debug!("project: {what} done at {:.3} s", clock.elapsed().as_secs_f64());
+    let mut timer = StageTimer::new();
     // Footprints cast for the leveling are kept for the main loop while they are few.
     let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
     let mut cached_len = 0usize;
@@ -153,7 +176,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             reports[i].colour_samples = n as u64;
             bars[i].inc(1);
         }
-        lap("colour leveling");
+        timer.lap("colour leveling");
     }
 
     let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
@@ -171,7 +194,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
                     photo_footprints(&scene, &cam, &opts.footprint)
                 }
             };
-            lap(&format!("level {level} photo {pi}: {} footprints", fs.len()));
+            timer.lap(&format!("level {level} photo {pi}: footprints"));
             if level == finest {
                 let r = &mut reports[pi];
                 r.pixels_hit = fs.pixels_hit;
@@ -195,7 +218,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
                 .collect();
             reports[pi].texels_written += written.iter().sum::<u64>();
             bars[pi].inc(1);
-            lap(&format!("level {level} photo {pi}: splat"));
+            timer.lap(&format!("level {level} photo {pi}: splat"));
         }
         let level_cells: Vec<usize> = (0..ncells).filter(|&i| store.manifest.cells[i].level as usize == level).collect();
         let results: Vec<Result<CellOutcome>> =
@@ -212,7 +235,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             }
         }
         level_reports.push(lr);
-        lap(&format!("level {level}: cells written"));
+        timer.lap(&format!("level {level}: cells written"));
     }
     for pb in &bars {
         pb.finish_and_clear();
@@ -243,8 +266,8 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         &serde_json::to_vec_pretty(&store.manifest).map_err(|e| Error::store(dir, e.to_string()))?,
     )?;
     remove_stale_photo_files(dir, &store.manifest.cells);
-    lap("manifest and stats");
-    Ok(ProjectReport { settings, cells_written })
+    timer.lap("manifest and stats");
+    Ok(ProjectReport { settings, cells_written, stage_seconds: timer.laps })
 }
 
 /// Removes the photo textures of cells without a photo record (left by an earlier run).
