@@ -56,8 +56,8 @@ pub struct LevelScene {
     bvh: Option<TriangleBvh>,
     /// Per BVH triangle: `[index into cells, local triangle index]`.
     tri_ref: Vec<[u32; 2]>,
-    /// Per BVH triangle: unit normal (frame) and plane offset `n·v0`.
-    planes: Vec<[f32; 4]>,
+    /// Per BVH triangle: what a hit needs, in one place (see [`TriInfo`]).
+    info: Vec<TriInfo>,
     /// Per BVH triangle: the BVH triangle across edge k (`v[k] → v[k+1]`) in the same cell,
     /// or [`NO_TRI`].
     adjacency: Vec<[u32; 3]>,
@@ -69,7 +69,7 @@ impl LevelScene {
         let accel = accel.into();
         let mut tris: Vec<[Vec3; 3]> = Vec::new();
         let mut tri_ref = Vec::new();
-        let mut planes = Vec::new();
+        let mut info = Vec::new();
         let mut adjacency = Vec::new();
         for (ci, c) in cells.iter().enumerate() {
             let offset = c.origin - frame_origin;
@@ -86,7 +86,11 @@ impl LevelScene {
                     continue;
                 }
                 let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-                planes.push([normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32]);
+                info.push(TriInfo {
+                    plane: [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32],
+                    tex: t.map(|i| c.texcoords[i as usize]),
+                    cell: ci as u32,
+                });
                 tris.push(p.map(|q| q.as_vec3()));
                 tri_ref.push([ci as u32, ti as u32]);
                 kept.push(*t);
@@ -98,7 +102,7 @@ impl LevelScene {
             RayAccel::ViewGrid(_) => None,
         };
         let tris = to_triangles(&tris);
-        LevelScene { frame_origin, cells, accel, tris, bvh, tri_ref, planes, adjacency }
+        LevelScene { frame_origin, cells, accel, tris, bvh, tri_ref, info, adjacency }
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of
@@ -162,22 +166,19 @@ impl LevelScene {
     /// Index into `cells` of BVH triangle `tri` (in range).
     #[inline]
     pub(crate) fn cell_of(&self, tri: u32) -> u32 {
-        self.tri_ref[tri as usize][0]
+        self.info[tri as usize].cell
     }
 
     /// Texture positions (texel units) of the three vertices of BVH triangle `tri`.
     #[inline]
     pub(crate) fn tri_texcoords(&self, tri: u32) -> [[f32; 2]; 3] {
-        let [ci, ti] = self.tri_ref[tri as usize];
-        let c = &self.cells[ci as usize];
-        let t = c.triangles[ti as usize];
-        t.map(|i| c.texcoords[i as usize])
+        self.info[tri as usize].tex
     }
 
     /// Unit normal (frame) and plane offset of BVH triangle `tri`.
     #[inline]
     pub(crate) fn plane(&self, tri: u32) -> [f32; 4] {
-        self.planes[tri as usize]
+        self.info[tri as usize].plane
     }
 
     /// Neighbours of BVH triangle `tri` across its edges (see the field).
@@ -185,6 +186,18 @@ impl LevelScene {
     pub(crate) fn neighbours(&self, tri: u32) -> [u32; 3] {
         self.adjacency[tri as usize]
     }
+}
+
+/// Per scene triangle, the data a hit and a silhouette walk read (kept together, so a hit
+/// costs one cache line).
+#[derive(Clone, Copy, Debug)]
+struct TriInfo {
+    /// Unit normal (frame) and plane offset `n·v0`.
+    plane: [f32; 4],
+    /// Texture positions (texel units) of the three vertices.
+    tex: [[f32; 2]; 3],
+    /// Index into the scene's cells.
+    cell: u32,
 }
 
 /// The cell's valid triangles (vertex indices within its positions and texcoords), ordered
