@@ -100,13 +100,23 @@ impl PhotoAccum {
         params: &ConfidenceParams,
     ) {
         let (w, h) = image.dimensions();
+        // The transform of every 8-bit value, per channel (the same numbers as applying it
+        // to each pixel).
+        let lut: [[f32; 256]; 3] = std::array::from_fn(|k| {
+            std::array::from_fn(|v| {
+                let mut rgb = [0.0; 3];
+                rgb[k] = v as f32 / 255.0;
+                transform.apply(rgb)[k]
+            })
+        });
+        let raw = image.as_raw();
         for fp in footprints {
             let [c, r] = fp.pixel;
             if c >= w || r >= h {
                 continue;
             }
-            let px = image.get_pixel(c, r).0;
-            let rgb = transform.apply([px[0], px[1], px[2]].map(|v| v as f32 / 255.0));
+            let o = 3 * (r as usize * w as usize + c as usize);
+            let rgb = [lut[0][raw[o] as usize], lut[1][raw[o + 1] as usize], lut[2][raw[o + 2] as usize]];
             self.add(fp, rgb, |area| params.footprint_confidence(fp.cos_view as f64, area, fp.pixel, w, h));
         }
     }

@@ -37,7 +37,7 @@ use super::accel::Caster;
 use super::corners::{cast_corner_row, CornerHit};
 use super::viewgrid::ViewGrid;
 use super::RayAccel;
-use super::reconstruct::{reconstruct, CORNER_OFFSETS};
+use super::reconstruct::reconstruct;
 use super::scene::LevelScene;
 use super::silhouette::crosses_silhouette;
 use super::{CellFootprints, FootprintSet, PixelFootprint};
@@ -228,7 +228,10 @@ impl Ctx<'_> {
     fn pixel(&self, rows: &CornerRows, c: u32, r: u32) -> Outcome {
         let scene = self.scene;
         let (i0, j0) = (c as i64, r as i64);
-        let q: [CornerHit; 4] = CORNER_OFFSETS.map(|[a, b]| rows.get(i0 + a, j0 + b).copied().unwrap_or(CornerHit::MISS));
+        // Pixel rows r0..r1 of a band always have their corner rows r and r + 1 cast.
+        let s = rows.stride as usize;
+        let k = (j0 - rows.j_lo) as usize * s + c as usize;
+        let q: [CornerHit; 4] = [rows.hits[k], rows.hits[k + 1], rows.hits[k + s + 1], rows.hits[k + s]];
         if q.iter().all(|h| h.is_hit() && h.cell == q[0].cell) {
             return self.full_pixel(&q, c, r);
         }

@@ -15,6 +15,8 @@
 //! to a neighbouring cell). Non-finite corners and footprints whose bounding box exceeds
 //! [`MAX_SPLAT_BBOX`] texels² deposit nothing. Never produces NaN.
 
+use crate::fastmath::{ceil_f, floor_f};
+
 /// Footprints with a smaller area (texels²) use the bilinear fallback.
 pub const MIN_SPLAT_AREA: f64 = 0.1;
 
@@ -125,7 +127,7 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     if area < MIN_SPLAT_AREA {
         if area > 0.0 {
             let c = [0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5, 0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5];
-            let (i0, j0) = (c[0].floor(), c[1].floor());
+            let (i0, j0) = (floor_f(c[0]), floor_f(c[1]));
             let (fx, fy) = (c[0] - i0, c[1] - j0);
             for (di, dj, w) in
                 [(0.0, 0.0, (1.0 - fx) * (1.0 - fy)), (1.0, 0.0, fx * (1.0 - fy)), (0.0, 1.0, (1.0 - fx) * fy), (1.0, 1.0, fx * fy)]
@@ -138,10 +140,10 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
         }
         return Splat { area, kind: SplatKind::Bilinear };
     }
-    let i0 = lo[0].floor().max(0.0);
-    let i1 = hi[0].ceil().min(t);
-    let j0 = lo[1].floor().max(0.0);
-    let j1 = hi[1].ceil().min(t);
+    let i0 = floor_f(lo[0]).max(0.0);
+    let i1 = ceil_f(hi[0]).min(t);
+    let j0 = floor_f(lo[1]).max(0.0);
+    let j1 = ceil_f(hi[1]).min(t);
     if i1 <= i0 || j1 <= j0 {
         return Splat { area, kind: SplatKind::Exact };
     }
@@ -151,8 +153,8 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
         deposit(j0 * n + i0, area);
         return Splat { area, kind: SplatKind::Exact };
     }
-    let (ci0, ci1) = (lo[0].floor(), hi[0].ceil());
-    let (cj0, cj1) = (lo[1].floor(), hi[1].ceil());
+    let (ci0, ci1) = (floor_f(lo[0]), ceil_f(hi[0]));
+    let (cj0, cj1) = (floor_f(lo[1]), ceil_f(hi[1]));
     if ci1 - ci0 <= 2.0 && cj1 - cj0 <= 2.0 {
         // At most 2 × 2 texels: one or two half-plane clips give every piece.
         small_splat(poly, area, [ci0, cj0], [ci1 - ci0 > 1.0, cj1 - cj0 > 1.0], |i, j, w| {
