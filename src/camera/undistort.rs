@@ -169,16 +169,20 @@ impl RayCaster {
     pub(crate) fn row(&self, u0: f64, v: f64, out: &mut [Option<PlaneRay>]) {
         let c = &self.cam;
         let yd = (v - c.cy) / c.fy;
-        let mut ratio = 1.0; // r / rd of the previous ray
+        // r / rd of the last two rays, extrapolated linearly in rd for the next guess.
+        let (mut ratio, mut slope, mut rd_prev) = (1.0, 0.0, f64::NAN);
         for (i, slot) in out.iter_mut().enumerate() {
             let xd = (u0 + i as f64 - c.cx) / c.fx;
             let rd = (xd * xd + yd * yd).sqrt();
             let xy = if rd == 0.0 {
                 Some([0.0, 0.0])
             } else {
-                self.radial.invert_near(rd, rd * ratio).map(|r| {
-                    ratio = r / rd;
-                    [xd * ratio, yd * ratio]
+                let guess = if rd_prev.is_finite() { ratio + slope * (rd - rd_prev) } else { ratio };
+                self.radial.invert_near(rd, rd * guess).map(|r| {
+                    let q = r / rd;
+                    slope = if rd_prev.is_finite() && rd != rd_prev { (q - ratio) / (rd - rd_prev) } else { 0.0 };
+                    (ratio, rd_prev) = (q, rd);
+                    [xd * q, yd * q]
                 })
             };
             *slot = xy.and_then(|[x, y]| {
