@@ -41,17 +41,24 @@ impl BlendMode {
     }
 }
 
+/// The sums of one texel (kept together: a deposit touches one record).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexelSums {
+    /// `A`: deposited footprint area (texels²).
+    pub coverage: f32,
+    /// `Q`: confidence-weighted area.
+    pub weight: f32,
+    /// `C`: confidence-weighted area times colour (sRGB 0..1).
+    pub colour: [f32; 3],
+}
+
 /// One photo's deposits in one `texels × texels` cell texture (row-major per texel).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotoAccum {
     /// Texture side in texels.
     pub texels: u32,
-    /// `A`: deposited footprint area per texel (texels²).
-    pub coverage: Vec<f32>,
-    /// `Q`: confidence-weighted area per texel.
-    pub weight: Vec<f32>,
-    /// `C`: confidence-weighted area times colour (sRGB 0..1) per texel.
-    pub colour: Vec<[f32; 3]>,
+    /// Per texel, row-major: the sums `A`, `Q`, `C`.
+    pub sums: Vec<TexelSums>,
     /// Footprints deposited exactly / by the bilinear fallback / skipped.
     pub kinds: [u64; 3],
 }
@@ -60,7 +67,7 @@ impl PhotoAccum {
     /// An empty accumulator.
     pub fn new(texels: u32) -> PhotoAccum {
         let n = texels as usize * texels as usize;
-        PhotoAccum { texels, coverage: vec![0.0; n], weight: vec![0.0; n], colour: vec![[0.0; 3]; n], kinds: [0; 3] }
+        PhotoAccum { texels, sums: vec![TexelSums::default(); n], kinds: [0; 3] }
     }
 
     /// Deposits a footprint of colour `rgb` (sRGB 0..1) and confidence `conf(area)` (given
@@ -68,14 +75,15 @@ impl PhotoAccum {
     pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], conf: impl FnOnce(f64) -> f64) {
         let shape = footprint_shape(&fp.corners);
         let q = conf(shape.map_or(0.0, |(_, a)| if a.is_finite() { a } else { 0.0 })) as f32;
-        let (coverage, weight, colour) = (&mut self.coverage, &mut self.weight, &mut self.colour);
+        let sums = &mut self.sums;
         let deposit = |i: usize, w: f64| {
             let w = w as f32;
-            coverage[i] += w;
+            let s = &mut sums[i];
+            s.coverage += w;
             let wq = w * q;
-            weight[i] += wq;
+            s.weight += wq;
             for k in 0..3 {
-                colour[i][k] += wq * rgb[k];
+                s.colour[k] += wq * rgb[k];
             }
         };
         let s = match shape {
@@ -124,14 +132,15 @@ impl PhotoAccum {
     /// The photo's confidence at texel `t`: `Q / max(1, A)`, in [0, 1].
     #[inline]
     pub fn confidence(&self, t: usize) -> f32 {
-        (self.weight[t] / self.coverage[t].max(1.0)).clamp(0.0, 1.0)
+        let s = &self.sums[t];
+        (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0)
     }
 
     /// The photo's colour (sRGB 0..1) at texel `t`, if any confident deposit reached it.
     #[inline]
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
-        let q = self.weight[t];
-        (q > 0.0).then(|| self.colour[t].map(|c| (c / q).clamp(0.0, 1.0)))
+        let s = &self.sums[t];
+        (s.weight > 0.0).then(|| s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)))
     }
 }
 
@@ -163,15 +172,15 @@ impl CellAccum {
     /// Adds one photo's deposits (same texture size); returns how many texels it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum) -> u64 {
         let mut written = 0;
-        for t in 0..self.confidence.len().min(p.weight.len()) {
+        for t in 0..self.confidence.len().min(p.sums.len()) {
             let Some(c) = p.colour_at(t) else { continue };
             written += 1;
             let conf = p.confidence(t);
             match self.mode {
                 BlendMode::Confidence => {
-                    self.weight[t] += p.weight[t];
+                    self.weight[t] += p.sums[t].weight;
                     for k in 0..3 {
-                        self.colour[t][k] += p.colour[t][k];
+                        self.colour[t][k] += p.sums[t].colour[k];
                     }
                 }
                 BlendMode::Best => {
@@ -303,7 +312,8 @@ mod tests {
         a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
         for t in 0..16 {
             assert!(a.confidence(t).is_finite());
-            assert!(a.colour[t].iter().chain([&a.weight[t], &a.coverage[t]]).all(|v| v.is_finite()));
+            let s = a.sums[t];
+            assert!(s.colour.iter().chain([&s.weight, &s.coverage]).all(|v| v.is_finite()));
             if let Some(c) = a.colour_at(t) {
                 assert!(c.iter().all(|v| v.is_finite()));
             }

@@ -55,7 +55,7 @@ pub use input::{
     validate_camera, PhotoSpec,
 };
 pub use scene::{LevelScene, SceneCell};
-pub use accumulate::{BlendMode, CellAccum, PhotoAccum};
+pub use accumulate::{BlendMode, CellAccum, PhotoAccum, TexelSums};
 pub use blend::{Blended, blend_cell};
 pub use confidence::{ConfidenceParams, smoothstep};
 pub use level::{ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform, normal_cos_slope};

@@ -168,25 +168,42 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     // each strip into texel pieces at the integer y lines: about 2 half-plane splits per
     // covered texel instead of 4 clips per texel of the box. Strips left/above the texture
     // are cut off first, so pieces stay exact for the texels inside.
-    let mut rest = SPoly::from(poly);
+    // Two buffers each for the rest of the polygon and the rest of a column, used in turn
+    // (no polygon is copied).
+    let mut rest = [SPoly::from(poly), SPoly::EMPTY];
+    let mut r = 0;
+    let mut col = SPoly::EMPTY;
+    let mut crest = [SPoly::EMPTY, SPoly::EMPTY];
     let mut i = ci0;
-    while i < ci1 && rest.n >= 3 {
-        let (col, r) = if i + 1.0 < ci1 { rest.split(0, i + 1.0) } else { (rest, SPoly::EMPTY) };
-        rest = r;
+    while i < ci1 && rest[r].n >= 3 {
+        let last = !(i + 1.0 < ci1);
+        if !last {
+            let (src, dst) = src_dst(&mut rest, r);
+            src.split_into(0, i + 1.0, &mut col, dst);
+            r = 1 - r;
+        }
         if i >= i0 as f64 && i < i1 as f64 {
-            let mut crest = col;
+            crest[0].copy_from(if last { &rest[r] } else { &col });
+            let mut c = 0;
             let mut j = cj0;
-            while j < cj1 && crest.n >= 3 {
-                let (piece, r2) = if j + 1.0 < cj1 { crest.split(1, j + 1.0) } else { (crest, SPoly::EMPTY) };
-                crest = r2;
-                if j >= j0 as f64 && j < j1 as f64 {
-                    let w = piece.area();
-                    if w > 0.0 {
-                        deposit(j as usize * n + i as usize, w);
-                    }
+            while j < cj1 && crest[c].n >= 3 {
+                let w = if j + 1.0 < cj1 {
+                    let (src, dst) = src_dst(&mut crest, c);
+                    c = 1 - c;
+                    src.split_area(1, j + 1.0, dst)
+                } else {
+                    let w = crest[c].area();
+                    crest[c].n = 0;
+                    w
+                };
+                if j >= j0 as f64 && j < j1 as f64 && w > 0.0 {
+                    deposit(j as usize * n + i as usize, w);
                 }
                 j += 1.0;
             }
+        }
+        if last {
+            break;
         }
         i += 1.0;
     }
@@ -265,6 +282,13 @@ fn shoelace(p: &[[f64; 2]]) -> f64 {
     0.5 * a2.abs()
 }
 
+/// The buffer `cur` of a pair to read and the other one to write.
+#[inline]
+fn src_dst(pair: &mut [SPoly; 2], cur: usize) -> (&SPoly, &mut SPoly) {
+    let (a, b) = pair.split_at_mut(1);
+    if cur == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) }
+}
+
 /// Vertex capacity of a polygon piece (a simple quad cut by axis-parallel lines; see
 /// [`SPoly::split`]).
 const SCAP: usize = 24;
@@ -294,10 +318,18 @@ impl SPoly {
         }
     }
 
-    /// Splits at the line `p[axis] = c` into the part with `p[axis] <= c` and the part with
-    /// `p[axis] >= c` (Sutherland-Hodgman against both half-planes in one pass).
-    fn split(&self, axis: usize, c: f64) -> (SPoly, SPoly) {
-        let (mut lo, mut hi) = (SPoly::EMPTY, SPoly::EMPTY);
+    /// Copies the used vertices of `o`.
+    #[inline]
+    fn copy_from(&mut self, o: &SPoly) {
+        self.v[..o.n].copy_from_slice(&o.v[..o.n]);
+        self.n = o.n;
+    }
+
+    /// Splits at the line `p[axis] = c` into the part with `p[axis] <= c` (`lo`) and the part
+    /// with `p[axis] >= c` (`hi`) (Sutherland-Hodgman against both half-planes in one pass).
+    fn split_into(&self, axis: usize, c: f64, lo: &mut SPoly, hi: &mut SPoly) {
+        lo.n = 0;
+        hi.n = 0;
         for k in 0..self.n {
             let (a, b) = (self.v[k], self.v[(k + 1) % self.n]);
             let (da, db) = (a[axis] - c, b[axis] - c);
@@ -315,7 +347,14 @@ impl SPoly {
                 hi.push(q);
             }
         }
-        (lo, hi)
+    }
+
+    /// [`SPoly::split_into`] that keeps only the `>=` part (in `hi`) and returns the area of
+    /// the `<=` part.
+    fn split_area(&self, axis: usize, c: f64, hi: &mut SPoly) -> f64 {
+        let mut lo = SPoly::EMPTY;
+        self.split_into(axis, c, &mut lo, hi);
+        lo.area()
     }
 
     /// Absolute shoelace area.
