@@ -8,6 +8,7 @@
 //! the silhouette walk).
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 use obvhs::triangle::Triangle;
 
@@ -67,35 +68,17 @@ impl LevelScene {
     /// Builds the scene from in-memory cells (a BVH is built now with [`RayAccel::Bvh`]).
     pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, accel: impl Into<RayAccel>) -> LevelScene {
         let accel = accel.into();
-        let mut tris: Vec<[Vec3; 3]> = Vec::new();
-        let mut tri_ref = Vec::new();
-        let mut info = Vec::new();
-        let mut adjacency = Vec::new();
-        for (ci, c) in cells.iter().enumerate() {
-            let offset = c.origin - frame_origin;
-            let local = |i: u32| {
-                let p = c.positions[i as usize];
-                offset + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-            };
+        // Cells in parallel, concatenated in order.
+        let parts: Vec<CellPart> = cells.par_iter().enumerate().map(|(ci, c)| cell_part(ci as u32, c, frame_origin)).collect();
+        let total: usize = parts.iter().map(|p| p.tris.len()).sum();
+        let (mut tris, mut tri_ref, mut info, mut adjacency) =
+            (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
+        for p in parts {
             let first = tris.len() as u32;
-            let mut kept: Vec<[u32; 3]> = Vec::new();
-            for ti in morton_order(c) {
-                let t = &c.triangles[ti];
-                let p = [local(t[0]), local(t[1]), local(t[2])];
-                if !p.iter().all(|q| q.is_finite()) {
-                    continue;
-                }
-                let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-                info.push(TriInfo {
-                    plane: [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32],
-                    tex: t.map(|i| c.texcoords[i as usize]),
-                    cell: ci as u32,
-                });
-                tris.push(p.map(|q| q.as_vec3()));
-                tri_ref.push([ci as u32, ti as u32]);
-                kept.push(*t);
-            }
-            adjacency.extend(cell_adjacency(&kept).into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
+            tris.extend(p.tris);
+            tri_ref.extend(p.tri_ref);
+            info.extend(p.info);
+            adjacency.extend(p.adjacency.into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
         }
         let bvh = match accel {
             RayAccel::Bvh(q) => Some(TriangleBvh::build(&tris, q)),
@@ -119,27 +102,10 @@ impl LevelScene {
         if !frame_origin.is_finite() {
             return Err(Error::BadOption(format!("frame origin {frame_origin} is not finite")));
         }
-        let mut cells = Vec::new();
-        for (index, rec) in store.manifest.cells.iter().enumerate().filter(|(_, r)| r.level == level) {
-            let mesh = store.read_active_mesh(rec)?;
-            let texels = rec.reparam.as_ref().map_or(rec.texels, |r| r.texels);
-            let nv = (mesh.surface_vertices as usize).min(mesh.positions.len());
-            let tx = texels as f32;
-            let texcoords = (0..nv)
-                .map(|i| {
-                    let uv = crate::store::texcoord(rec, &mesh, i);
-                    [uv[0] * tx, uv[1] * tx]
-                })
-                .collect();
-            cells.push(SceneCell {
-                cell: index as u32,
-                origin: DVec3::from_array(rec.origin),
-                positions: mesh.positions[..nv].to_vec(),
-                triangles: mesh.surface().to_vec(),
-                texcoords,
-                texels,
-            });
-        }
+        // Meshes are read and checked in parallel, collected in manifest order.
+        let recs: Vec<(usize, &crate::store::CellRecord)> =
+            store.manifest.cells.iter().enumerate().filter(|(_, r)| r.level == level).collect();
+        let cells = recs.into_par_iter().map(|(index, rec)| scene_cell(store, index, rec)).collect::<Result<Vec<_>>>()?;
         Ok(LevelScene::new(cells, frame_origin, accel))
     }
 
@@ -186,6 +152,65 @@ impl LevelScene {
     pub(crate) fn neighbours(&self, tri: u32) -> [u32; 3] {
         self.adjacency[tri as usize]
     }
+}
+
+/// One cell's share of a scene (adjacency in cell-local triangle numbers).
+struct CellPart {
+    tris: Vec<[Vec3; 3]>,
+    tri_ref: Vec<[u32; 2]>,
+    info: Vec<TriInfo>,
+    adjacency: Vec<[u32; 3]>,
+}
+
+/// The valid triangles of scene cell `ci`, in Morton order, in the frame at `frame_origin`.
+fn cell_part(ci: u32, c: &SceneCell, frame_origin: DVec3) -> CellPart {
+    let offset = c.origin - frame_origin;
+    let local = |i: u32| {
+        let p = c.positions[i as usize];
+        offset + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+    };
+    let mut part = CellPart { tris: Vec::new(), tri_ref: Vec::new(), info: Vec::new(), adjacency: Vec::new() };
+    let mut kept: Vec<[u32; 3]> = Vec::new();
+    for ti in morton_order(c) {
+        let t = &c.triangles[ti];
+        let p = [local(t[0]), local(t[1]), local(t[2])];
+        if !p.iter().all(|q| q.is_finite()) {
+            continue;
+        }
+        let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        part.info.push(TriInfo {
+            plane: [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32],
+            tex: t.map(|i| c.texcoords[i as usize]),
+            cell: ci,
+        });
+        part.tris.push(p.map(|q| q.as_vec3()));
+        part.tri_ref.push([ci, ti as u32]);
+        kept.push(*t);
+    }
+    part.adjacency = cell_adjacency(&kept);
+    part
+}
+
+/// The active mesh of manifest cell `index` as a scene cell.
+fn scene_cell(store: &Store, index: usize, rec: &crate::store::CellRecord) -> Result<SceneCell> {
+    let mesh = store.read_active_mesh(rec)?;
+    let texels = rec.reparam.as_ref().map_or(rec.texels, |r| r.texels);
+    let nv = (mesh.surface_vertices as usize).min(mesh.positions.len());
+    let tx = texels as f32;
+    let texcoords = (0..nv)
+        .map(|i| {
+            let uv = crate::store::texcoord(rec, &mesh, i);
+            [uv[0] * tx, uv[1] * tx]
+        })
+        .collect();
+    Ok(SceneCell {
+        cell: index as u32,
+        origin: DVec3::from_array(rec.origin),
+        positions: mesh.positions[..nv].to_vec(),
+        triangles: mesh.surface().to_vec(),
+        texcoords,
+        texels,
+    })
 }
 
 /// Per scene triangle, the data a hit and a silhouette walk read (kept together, so a hit
