@@ -34,9 +34,16 @@ impl PreTri {
     #[inline(always)]
     pub(crate) fn intersect(&self, d: Vec3A, tmax: f32) -> (f32, [f32; 2]) {
         let r = d.cross(self.c);
-        let inv_det = 1.0 / self.n.dot(d);
-        let u = r.dot(self.e2) * inv_det;
-        let v = r.dot(self.e1) * inv_det;
+        let det = self.n.dot(d);
+        let (a, b) = (r.dot(self.e2), r.dot(self.e1));
+        // u = a / det and v = b / det have the sign bits of a ^ det and b ^ det (for a NaN-free
+        // ray), so a negative one is known before the division: the same decision as below.
+        if ((a.to_bits() ^ det.to_bits()) | (b.to_bits() ^ det.to_bits())) & 0x8000_0000 != 0 {
+            return (f32::INFINITY, [0.0; 2]);
+        }
+        let inv_det = 1.0 / det;
+        let u = a * inv_det;
+        let v = b * inv_det;
         let w = 1.0 - u - v;
         let signs = u.to_bits() | v.to_bits() | w.to_bits();
         if inv_det != 0.0 && signs & 0x8000_0000 == 0 {
