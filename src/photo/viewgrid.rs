@@ -59,6 +59,9 @@ pub struct ViewGrid<'a> {
     pre: Vec<PreTri>,
     /// World (= scene frame) to camera rotation.
     rot: DMat3,
+    /// The optical axis (scene frame), enlarged by 1e-5 so that `t · (fwd · dir)` bounds the
+    /// camera depth of a hit from above despite f32 rounding.
+    fwd: Vec3A,
     /// Undistorted-plane position of bin (0, 0)'s corner, and bins per unit.
     x0: f64,
     y0: f64,
@@ -95,7 +98,8 @@ impl<'a> ViewGrid<'a> {
         let rot = camera.world_to_camera;
         let o = Vec3A::from(origin);
         let pre = tris.par_iter().map(|t| PreTri::new(t, o)).collect();
-        let mut grid = ViewGrid { tris, pre, rot, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
+        let fwd = Vec3A::from((rot.row(2) * (1.0 + 1e-5)).as_vec3());
+        let mut grid = ViewGrid { tris, pre, rot, fwd, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
         let Some([xmin, ymin, xmax, ymax]) = ray_bounds(camera, rays) else { return grid };
         let f = camera.fx.abs().max(camera.fy.abs());
         let bin_px = if params.bin_px.is_finite() && params.bin_px > 0.0 { params.bin_px as f64 } else { 8.0 };
@@ -207,7 +211,7 @@ impl<'a> ViewGrid<'a> {
         match self.bin_of(xy[0], xy[1]) {
             Some(b) => {
                 // Camera depth of the point at distance t is t·cz (dir is a unit vector).
-                let cz = ((1.0 + 1e-6) / (1.0 + xy[0] * xy[0] + xy[1] * xy[1]).sqrt()) as f32;
+                let cz = self.fwd.dot(d);
                 let (s, e) = (self.starts[b] as usize, self.starts[b + 1] as usize);
                 for en in &self.entries[s..e] {
                     if en.z_min > best_t * cz {
