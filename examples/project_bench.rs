@@ -22,37 +22,13 @@ mod bench_util;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use bench_util::{median, shared_data};
-use cliffmap::pipeline::{build_store, project_store, reparam_store, BuildInputs, BuildOptions, ProjectOptions, ReparamOptions};
+use bench_util::{cpu_seconds, median, shared_data};
+use cliffmap::pipeline::{project_store, reparam_store, ProjectOptions, ReparamOptions};
 use cliffmap::photo::{read_photo_list, RayAccel};
-use cliffmap::{Dem, DemLoadOptions, OrthoPlacement};
 
-/// CPU seconds (user + system, all threads) this process has used so far (Linux
-/// `/proc/self/stat`, 100 Hz ticks; NaN elsewhere).
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit_once(')')?.1.split_whitespace().collect::<Vec<_>>();
-            let u: f64 = rest.get(11)?.parse().ok()?;
-            let k: f64 = rest.get(12)?.parse().ok()?;
-            Some((u + k) / 100.0)
-        })
-        .unwrap_or(f64::NAN)
-}
 
 fn engabreen_store(dir: &Path) -> anyhow::Result<()> {
-    let dem_opts = DemLoadOptions {
-        width: Some(507),
-        height: Some(590),
-        spacing: Some(3.0),
-        origin: Some((445302.17, 7396769.45)),
-        ..Default::default()
-    };
-    let dem: Dem = cliffmap::load_dem(&shared_data("engabreen/engabreen_dem_3m_507x590.f32"), &dem_opts)?;
-    let ortho = cliffmap::load_ortho(&shared_data("engabreen/engabreen_ortho_3m_507x590.png"), OrthoPlacement::SameGridAsDem, &dem, 1 << 30)?;
-    let inputs = BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "engabreen".into(), ortho_source: None, fingerprint: "project-bench".into() };
-    build_store(&inputs, &BuildOptions { quiet: true, ..BuildOptions::default() }, dir)?;
+    bench_util::build_engabreen_store(dir, "project-bench")?;
     reparam_store(dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() })?;
     Ok(())
 }

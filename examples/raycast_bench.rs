@@ -16,13 +16,11 @@ mod bench_util;
 
 use std::time::Instant;
 
-use bench_util::{median, shared_data};
+use bench_util::{cpu_seconds, median, shared_data};
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::camera::CameraModel;
 use cliffmap::photo::{nearest_brute_force, photo_footprints, BvhQuality, FootprintOptions, LevelScene, RayAccel, TriangleBvh, ViewGrid};
-use cliffmap::pipeline::{build_store, BuildInputs, BuildOptions};
 use cliffmap::store::Store;
-use cliffmap::{Dem, DemLoadOptions, OrthoPlacement};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -35,20 +33,6 @@ impl Lcg {
     }
 }
 
-/// CPU seconds (user + system, all threads) this process has used so far (Linux
-/// `/proc/self/stat`, 100 Hz ticks; NaN elsewhere).
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit_once(')')?.1.split_whitespace().collect::<Vec<_>>();
-            // Fields after the command: state is index 0, utime 11, stime 12.
-            let u: f64 = rest.get(11)?.parse().ok()?;
-            let k: f64 = rest.get(12)?.parse().ok()?;
-            Some((u + k) / 100.0)
-        })
-        .unwrap_or(f64::NAN)
-}
 
 fn time<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let t = Instant::now();
@@ -108,21 +92,6 @@ fn small_mesh_table() {
     assert_eq!(agree, rays.len(), "BVH and brute force disagree");
 }
 
-fn engabreen_store(dir: &std::path::Path) -> anyhow::Result<f64> {
-    let dem_opts = DemLoadOptions {
-        width: Some(507),
-        height: Some(590),
-        spacing: Some(3.0),
-        origin: Some((445302.17, 7396769.45)),
-        ..Default::default()
-    };
-    let dem: Dem = cliffmap::load_dem(&shared_data("engabreen/engabreen_dem_3m_507x590.f32"), &dem_opts)?;
-    let ortho = cliffmap::load_ortho(&shared_data("engabreen/engabreen_ortho_3m_507x590.png"), OrthoPlacement::SameGridAsDem, &dem, 1 << 30)?;
-    let inputs = BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "engabreen".into(), ortho_source: None, fingerprint: "raycast-bench".into() };
-    let opts = BuildOptions { quiet: true, ..BuildOptions::default() };
-    let (_, t) = time(|| build_store(&inputs, &opts, dir));
-    Ok(t)
-}
 
 /// One acceleration's corner hits: (triangle, t) per corner, row-major, `None` = miss.
 type Hits = Vec<Option<(u32, f32)>>;
@@ -163,7 +132,7 @@ fn main() -> anyhow::Result<()> {
     // A given directory without a manifest gets the store built into it (kept for reruns).
     let dir = args.get(1).map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
     if !dir.join("manifest.json").is_file() {
-        let t = engabreen_store(&dir)?;
+        let t = bench_util::build_engabreen_store(&dir, "raycast-bench")?;
         println!("Engabreen store built in {t:.1} s (default build options)");
     }
     let store = Store::open(&dir)?;
