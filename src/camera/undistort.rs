@@ -153,6 +153,13 @@ pub(crate) struct PlaneRay {
     pub xy: [f64; 2],
 }
 
+/// The ray through `(x, y)` of the undistorted image plane.
+#[inline]
+fn plane_ray(camera_to_world: &glam::DMat3, x: f64, y: f64) -> Option<PlaneRay> {
+    let d = (*camera_to_world * DVec3::new(x, y, 1.0)).try_normalize()?;
+    d.is_finite().then_some(PlaneRay { dir: d, xy: [x, y] })
+}
+
 /// Pixel rays of one camera (see [`CameraModel::pixel_ray`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayCaster {
@@ -169,10 +176,15 @@ impl RayCaster {
     pub(crate) fn row(&self, u0: f64, v: f64, out: &mut [Option<PlaneRay>]) {
         let c = &self.cam;
         let yd = (v - c.cy) / c.fy;
+        let no_distortion = c.k1 == 0.0 && c.k2 == 0.0;
         // r / rd of the last two rays, extrapolated linearly in rd for the next guess.
         let (mut ratio, mut slope, mut rd_prev) = (1.0, 0.0, f64::NAN);
         for (i, slot) in out.iter_mut().enumerate() {
             let xd = (u0 + i as f64 - c.cx) / c.fx;
+            if no_distortion {
+                *slot = plane_ray(&self.camera_to_world, xd, yd);
+                continue;
+            }
             let rd = (xd * xd + yd * yd).sqrt();
             let xy = if rd == 0.0 {
                 Some([0.0, 0.0])
@@ -185,10 +197,7 @@ impl RayCaster {
                     [xd * q, yd * q]
                 })
             };
-            *slot = xy.and_then(|[x, y]| {
-                let d = (self.camera_to_world * DVec3::new(x, y, 1.0)).try_normalize()?;
-                d.is_finite().then_some(PlaneRay { dir: d, xy: [x, y] })
-            });
+            *slot = xy.and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y));
         }
     }
 

@@ -238,7 +238,8 @@ impl<'a> ViewGrid<'a> {
         if !(bx >= 0.0 && by >= 0.0 && bx < self.nx as f64 && by < self.ny as f64) {
             return None;
         }
-        Some(by as usize * self.nx + bx as usize)
+        // (signed conversions: one instruction each on x86-64)
+        Some(by as i64 as usize * self.nx + bx as i64 as usize)
     }
 }
 
