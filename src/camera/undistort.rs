@@ -173,16 +173,23 @@ impl RayCaster {
     /// [`CameraModel::pixel_ray`] has none). Each undistortion starts from its left
     /// neighbour's solution, so a row costs about one Newton step per ray; the directions
     /// equal `pixel_ray`'s to the iteration's tolerance.
+    #[cfg(test)]
     pub(crate) fn row(&self, u0: f64, v: f64, out: &mut [Option<PlaneRay>]) {
+        self.row_with(u0, v, out.len(), |i, r| out[i] = r);
+    }
+
+    /// [`RayCaster::row`] handing each ray to `f(i, ray)` in order instead of storing it.
+    #[inline]
+    pub(crate) fn row_with(&self, u0: f64, v: f64, n: usize, mut f: impl FnMut(usize, Option<PlaneRay>)) {
         let c = &self.cam;
         let yd = (v - c.cy) / c.fy;
         let no_distortion = c.k1 == 0.0 && c.k2 == 0.0;
         // r / rd of the last two rays, extrapolated linearly in rd for the next guess.
         let (mut ratio, mut slope, mut rd_prev) = (1.0, 0.0, f64::NAN);
-        for (i, slot) in out.iter_mut().enumerate() {
+        for i in 0..n {
             let xd = (u0 + i as f64 - c.cx) / c.fx;
             if no_distortion {
-                *slot = plane_ray(&self.camera_to_world, xd, yd);
+                f(i, plane_ray(&self.camera_to_world, xd, yd));
                 continue;
             }
             let rd = (xd * xd + yd * yd).sqrt();
@@ -197,7 +204,7 @@ impl RayCaster {
                     [xd * q, yd * q]
                 })
             };
-            *slot = xy.and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y));
+            f(i, xy.and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y)));
         }
     }
 

@@ -38,20 +38,11 @@ impl CornerHit {
 }
 
 /// Casts the corner rays of corner row `j` (all `out.len()` = W + 1 columns) from `origin`
-/// (camera centre in the scene's frame); `rays` is scratch of the same length.
-pub(crate) fn cast_corner_row(
-    scene: &LevelScene,
-    caster: &Caster,
-    rays: &RayCaster,
-    origin: Vec3,
-    j: u32,
-    scratch: &mut [Option<PlaneRay>],
-    out: &mut [CornerHit],
-) {
-    rays.row(-0.5, j as f64 - 0.5, scratch);
-    for (slot, ray) in out.iter_mut().zip(scratch.iter()) {
-        *slot = ray.map_or(CornerHit::MISS, |r| cast_corner(scene, caster, origin, &r));
-    }
+/// (camera centre in the scene's frame).
+pub(crate) fn cast_corner_row(scene: &LevelScene, caster: &Caster, rays: &RayCaster, origin: Vec3, j: u32, out: &mut [CornerHit]) {
+    rays.row_with(-0.5, j as f64 - 0.5, out.len(), |i, ray| {
+        out[i] = ray.map_or(CornerHit::MISS, |r| cast_corner(scene, caster, origin, &r));
+    });
 }
 
 fn cast_corner(scene: &LevelScene, caster: &Caster, origin: Vec3, ray: &PlaneRay) -> CornerHit {

@@ -174,9 +174,8 @@ impl Ctx<'_> {
         let mut hits = std::mem::take(pool);
         hits.clear();
         hits.resize((j_hi - j_lo + 1) as usize * stride, CornerHit::MISS);
-        let mut scratch = vec![None; stride];
         for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
-            cast_corner_row(self.scene, self.caster, &self.rays, self.origin, j, &mut scratch, row);
+            cast_corner_row(self.scene, self.caster, &self.rays, self.origin, j, row);
         }
         let rows = CornerRows { hits, j_lo: j_lo as i64, j_hi: j_hi as i64, stride: stride as i64 };
         let mut out = BandOut { buckets: vec![Vec::new(); self.scene.cells.len()], ..BandOut::default() };
