@@ -194,6 +194,7 @@ impl<'a> ViewGrid<'a> {
 
     /// [`ViewGrid::nearest`] for a ray whose point on the undistorted image plane is known
     /// (`xy`; NaN if it points backwards).
+    #[inline]
     pub(crate) fn nearest_at(&self, origin: Vec3, dir: Vec3, xy: [f64; 2]) -> Option<TriHit> {
         if !(origin.is_finite() && dir.is_finite()) || dir == Vec3::ZERO {
             return None;
