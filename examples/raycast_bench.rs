@@ -8,7 +8,7 @@
 //!
 //! Medians of `RUNS` runs (default 3). Run with:
 //! ```sh
-//! cargo run --release --example raycast_bench -- [STORE_DIR] [RUNS]
+//! cargo run --release --example raycast_bench -- [STORE_DIR] [RUNS] [SHRINK] [METHODS] [LEVEL]
 //! ```
 
 #[path = "bench_util/mod.rs"]
@@ -16,12 +16,11 @@ mod bench_util;
 
 use std::time::Instant;
 
-use bench_util::{median, shared_data};
+use bench_util::{cpu_seconds, median, shared_data};
 use cliffmap::camera::camera_from_json_file;
-use cliffmap::photo::{nearest_brute_force, photo_footprints, BvhQuality, FootprintOptions, LevelScene, TriangleBvh};
-use cliffmap::pipeline::{build_store, BuildInputs, BuildOptions};
+use cliffmap::camera::CameraModel;
+use cliffmap::photo::{nearest_brute_force, photo_footprints, BvhQuality, FootprintOptions, LevelScene, RayAccel, TriangleBvh, ViewGrid};
 use cliffmap::store::Store;
-use cliffmap::{Dem, DemLoadOptions, OrthoPlacement};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -34,20 +33,6 @@ impl Lcg {
     }
 }
 
-/// CPU seconds (user + system, all threads) this process has used so far (Linux
-/// `/proc/self/stat`, 100 Hz ticks; NaN elsewhere).
-fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/self/stat")
-        .ok()
-        .and_then(|s| {
-            let rest = s.rsplit_once(')')?.1.split_whitespace().collect::<Vec<_>>();
-            // Fields after the command: state is index 0, utime 11, stime 12.
-            let u: f64 = rest.get(11)?.parse().ok()?;
-            let k: f64 = rest.get(12)?.parse().ok()?;
-            Some((u + k) / 100.0)
-        })
-        .unwrap_or(f64::NAN)
-}
 
 fn time<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let t = Instant::now();
@@ -107,20 +92,35 @@ fn small_mesh_table() {
     assert_eq!(agree, rays.len(), "BVH and brute force disagree");
 }
 
-fn engabreen_store(dir: &std::path::Path) -> anyhow::Result<f64> {
-    let dem_opts = DemLoadOptions {
-        width: Some(507),
-        height: Some(590),
-        spacing: Some(3.0),
-        origin: Some((445302.17, 7396769.45)),
-        ..Default::default()
-    };
-    let dem: Dem = cliffmap::load_dem(&shared_data("engabreen/engabreen_dem_3m_507x590.f32"), &dem_opts)?;
-    let ortho = cliffmap::load_ortho(&shared_data("engabreen/engabreen_ortho_3m_507x590.png"), OrthoPlacement::SameGridAsDem, &dem, 1 << 30)?;
-    let inputs = BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "engabreen".into(), ortho_source: None, fingerprint: "raycast-bench".into() };
-    let opts = BuildOptions { quiet: true, ..BuildOptions::default() };
-    let (_, t) = time(|| build_store(&inputs, &opts, dir));
-    Ok(t)
+
+/// One acceleration's corner hits: (triangle, t) per corner, row-major, `None` = miss.
+type Hits = Vec<Option<(u32, f32)>>;
+
+fn cast_all(cam: &CameraModel, w: u32, h: u32, nearest: &(dyn Fn(Vec3) -> Option<(u32, f32)> + Sync)) -> Hits {
+    (0..=h)
+        .into_par_iter()
+        .flat_map_iter(|j| {
+            (0..=w).map(move |i| cam.pixel_ray(i as f64 - 0.5, j as f64 - 0.5).and_then(|d| nearest(d.as_vec3())))
+        })
+        .collect()
+}
+
+/// (same triangle %, same hit/miss %, max |Δt| / t where the triangle agrees).
+fn agreement(a: &Hits, b: &Hits) -> (f64, f64, f64) {
+    let (mut same_tri, mut same_hit, mut max_dt) = (0usize, 0usize, 0.0f64);
+    for (x, y) in a.iter().zip(b) {
+        same_hit += usize::from(x.is_some() == y.is_some());
+        match (x, y) {
+            (Some((ta, da)), Some((tb, db))) if ta == tb => {
+                same_tri += 1;
+                max_dt = max_dt.max(((da - db).abs() / da.max(1e-6)) as f64);
+            }
+            (None, None) => same_tri += 1,
+            _ => {}
+        }
+    }
+    let n = a.len().max(1) as f64;
+    (100.0 * same_tri as f64 / n, 100.0 * same_hit as f64 / n, max_dt)
 }
 
 fn main() -> anyhow::Result<()> {
@@ -132,17 +132,30 @@ fn main() -> anyhow::Result<()> {
     // A given directory without a manifest gets the store built into it (kept for reruns).
     let dir = args.get(1).map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
     if !dir.join("manifest.json").is_file() {
-        let t = engabreen_store(&dir)?;
+        let t = bench_util::build_engabreen_store(&dir, "raycast-bench")?;
         println!("Engabreen store built in {t:.1} s (default build options)");
     }
     let store = Store::open(&dir)?;
-    let level = store.manifest.quadtree.levels - 1;
+    // Optional fifth argument: the quadtree level (default the finest) and photo shrink.
+    let level = match args.get(5) {
+        Some(l) => l.parse()?,
+        None => store.manifest.quadtree.levels - 1,
+    };
     let cam = camera_from_json_file(&shared_data("engabreen/engabreen_camera_IMG_8902.json"), (4290, 2856))?;
     // Optional third argument: shrink the photo by this factor (quick runs).
     let shrink: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(1).max(1);
+    // Optional fourth argument: comma-separated accelerations (RayAccel names).
+    let methods: Vec<RayAccel> = match args.get(4) {
+        Some(list) => list.split(',').map(|m| RayAccel::parse(m).ok_or_else(|| anyhow::anyhow!("bad method {m}"))).collect::<anyhow::Result<_>>()?,
+        None => ["grid:4", "grid:8", "grid:16", "grid:32"]
+            .into_iter()
+            .map(|m| RayAccel::parse(m).expect("valid"))
+            .chain(BvhQuality::ALL.into_iter().map(RayAccel::Bvh))
+            .collect(),
+    };
     let cam = cam.resized(cam.width / shrink, cam.height / shrink);
     let (w, h) = (cam.width, cam.height);
-    let base = LevelScene::from_store(&store, level, cam.position, BvhQuality::Fastest)?;
+    let base = LevelScene::from_store(&store, level, cam.position, BvhQuality::Fast)?;
     let cells = base.cells.clone();
     println!(
         "Finest level {level}: {} cells, {} triangles; camera {w} × {h} = {:.2} M corner rays; {} threads\n",
@@ -151,41 +164,54 @@ fn main() -> anyhow::Result<()> {
         ((w + 1) * (h + 1)) as f64 / 1e6,
         rayon::current_num_threads()
     );
-    println!("| BvhQuality | scene + BVH build s | corner hits | corner rays/s | corner rays s (CPU s) | photo_footprints s (CPU s) | footprints | silhouette | reconstructed | dropped |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
     let origin = Vec3::ZERO; // the frame is centred on the camera
-    for q in BvhQuality::ALL {
+    let bvh = base.bvh().expect("built with a BVH");
+    let reference = cast_all(&cam, w, h, &|d| bvh.nearest(origin, d, 0.0, f32::INFINITY).map(|x| (x.triangle, x.t)));
+    let rays = ((w + 1) * (h + 1)) as f64;
+    let nhit = reference.iter().filter(|x| x.is_some()).count();
+    println!("Reference: BVH (fast) nearest hits, {:.1} % of the corner rays hit.\n", 100.0 * nhit as f64 / rays);
+    println!("| method | scene + accel build s (CPU s) | grid entries / bins | corner rays/s | corner rays s (CPU s) | same triangle as BVH % | same hit/miss % | max rel Δt | photo_footprints s (CPU s) | footprints | silhouette | reconstructed | dropped |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for m in methods {
         let mut build = Vec::new();
+        let mut build_cpu = Vec::new();
         let mut scene = None;
+        let mut stats = None;
         for _ in 0..runs {
-            let (s, t) = time(|| LevelScene::new(cells.clone(), cam.position, q));
+            let c0 = cpu_seconds();
+            let (s, t) = time(|| {
+                let s = LevelScene::new(cells.clone(), cam.position, m);
+                if let RayAccel::ViewGrid(p) = m {
+                    stats = Some(ViewGrid::for_camera(&s, &cam, p).stats());
+                }
+                s
+            });
+            build_cpu.push(cpu_seconds() - c0);
             build.push(t);
             scene = Some(s);
         }
         let scene = scene.expect("runs >= 1");
         let mut cast = Vec::new();
         let mut cast_cpu = Vec::new();
-        let mut nhit = 0;
+        let mut hits = Vec::new();
         for _ in 0..runs {
             let c0 = cpu_seconds();
-            let (n, t) = time(|| {
-                (0..=h)
-                    .into_par_iter()
-                    .map(|j| {
-                        (0..=w)
-                            .filter(|&i| {
-                                cam.pixel_ray(i as f64 - 0.5, j as f64 - 0.5)
-                                    .and_then(|d| scene.bvh.nearest(origin, d.as_vec3(), 0.0, f32::INFINITY))
-                                    .is_some()
-                            })
-                            .count()
-                    })
-                    .sum::<usize>()
+            let (x, t) = time(|| match m {
+                RayAccel::ViewGrid(p) => {
+                    let g = ViewGrid::for_camera(&scene, &cam, p);
+                    cast_all(&cam, w, h, &|d| g.nearest(origin, d).map(|x| (x.triangle, x.t)))
+                }
+                RayAccel::Bvh(_) => {
+                    let b = scene.bvh().expect("built with a BVH");
+                    cast_all(&cam, w, h, &|d| b.nearest(origin, d, 0.0, f32::INFINITY).map(|x| (x.triangle, x.t)))
+                }
             });
             cast_cpu.push(cpu_seconds() - c0);
             cast.push(t);
-            nhit = n;
+            hits = x;
         }
+        let (same_tri, same_hit, max_dt) = agreement(&hits, &reference);
+        drop(hits);
         let mut full = Vec::new();
         let mut full_cpu = Vec::new();
         let mut set = None;
@@ -197,19 +223,23 @@ fn main() -> anyhow::Result<()> {
             set = Some(s);
         }
         let set = set.expect("runs >= 1");
-        let rays = ((w + 1) * (h + 1)) as f64;
         let c = median(cast);
+        let grid = stats.map_or("–".to_string(), |s| format!("{:.2} M / {}×{}", s.entries as f64 / 1e6, s.bins[0], s.bins[1]));
         println!(
-            "| {} | {:.2} | {:.1} % | {:.2} M | {:.2} ({:.1}) | {:.2} ({:.1}) | {} | {} | {} | {} |",
-            q.name(),
+            "| {} | {:.2} ({:.2}) | {} | {:.2} M | {:.2} ({:.1}) | {:.4} | {:.4} | {:.1e} | {:.2} ({:.1}) | {} | {} | {} | {} |",
+            m.name(),
             median(build),
-            100.0 * nhit as f64 / rays,
+            median(build_cpu),
+            grid,
             rays / c / 1e6,
             c,
             median(cast_cpu),
+            same_tri,
+            same_hit,
+            max_dt,
             median(full),
             median(full_cpu),
-            set.footprints.len(),
+            set.len(),
             set.rejected_silhouette,
             set.reconstructed,
             set.dropped

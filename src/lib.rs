@@ -51,6 +51,7 @@ pub mod camera;
 pub mod cells;
 pub mod dem;
 pub mod error;
+mod fastmath;
 pub mod fsutil;
 pub mod georef;
 pub mod geotiff;

@@ -37,3 +37,40 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     let n = v.len();
     if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
+
+/// CPU seconds (user + system, all threads) this process has used so far (Linux
+/// `/proc/self/stat`, 100 Hz ticks; NaN elsewhere).
+pub fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            let rest = s.rsplit_once(')')?.1.split_whitespace().collect::<Vec<_>>();
+            // Fields after the command: state is index 0, utime 11, stime 12.
+            let u: f64 = rest.get(11)?.parse().ok()?;
+            let k: f64 = rest.get(12)?.parse().ok()?;
+            Some((u + k) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
+/// Builds the Engabreen store (3 m lidar DEM + ortho from the shared data, default build
+/// options) into `dir`; returns the build's wall-clock seconds.
+pub fn build_engabreen_store(dir: &Path, fingerprint: &str) -> anyhow::Result<f64> {
+    use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+    use cliffmap::{DemLoadOptions, OrthoPlacement};
+    let dem_opts = DemLoadOptions {
+        width: Some(507),
+        height: Some(590),
+        spacing: Some(3.0),
+        origin: Some((445302.17, 7396769.45)),
+        ..Default::default()
+    };
+    let dem = cliffmap::load_dem(&shared_data("engabreen/engabreen_dem_3m_507x590.f32"), &dem_opts)?;
+    let ortho =
+        cliffmap::load_ortho(&shared_data("engabreen/engabreen_ortho_3m_507x590.png"), OrthoPlacement::SameGridAsDem, &dem, 1 << 30)?;
+    let inputs =
+        BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "engabreen".into(), ortho_source: None, fingerprint: fingerprint.into() };
+    let t = std::time::Instant::now();
+    build_store(&inputs, &BuildOptions { quiet: true, ..BuildOptions::default() }, dir)?;
+    Ok(t.elapsed().as_secs_f64())
+}

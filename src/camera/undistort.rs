@@ -66,6 +66,12 @@ impl Radial {
     /// Undistorted radius `r` with `f(r) = rd` on the first monotone branch, or `None` if `rd`
     /// lies beyond it (or is not finite).
     pub(crate) fn invert(&self, rd: f64) -> Option<f64> {
+        self.invert_near(rd, rd)
+    }
+
+    /// [`Radial::invert`] with Newton started at `guess` (e.g. the solution at a neighbouring
+    /// pixel): the same root to the iteration's tolerance (1e-15 relative), in fewer steps.
+    pub(crate) fn invert_near(&self, rd: f64, guess: f64) -> Option<f64> {
         if !(rd.is_finite() && rd >= 0.0) {
             return None;
         }
@@ -79,7 +85,7 @@ impl Radial {
         if hi_end < 2.0 || rd <= self.f(2.0) {
             // On [0, hi_end] f is increasing: safeguarded Newton.
             let (mut lo, mut hi) = (0.0f64, hi_end);
-            let mut r = rd.min(hi_end);
+            let mut r = if guess.is_finite() && guess >= 0.0 { guess.min(hi_end) } else { rd.min(hi_end) };
             for _ in 0..60 {
                 let fr = self.f(r) - rd;
                 if fr.abs() <= 1e-15 * rd.max(1e-300) {
@@ -139,6 +145,21 @@ fn undistort_with(radial: &Radial, xd: f64, yd: f64) -> Option<[f64; 2]> {
     Some([xd * s, yd * s])
 }
 
+/// A pixel ray: its unit world direction and its point `(x, y)` on the undistorted image
+/// plane (camera frame `c.x / c.z`, `c.y / c.z`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PlaneRay {
+    pub dir: DVec3,
+    pub xy: [f64; 2],
+}
+
+/// The ray through `(x, y)` of the undistorted image plane.
+#[inline]
+fn plane_ray(camera_to_world: &glam::DMat3, x: f64, y: f64) -> Option<PlaneRay> {
+    let d = (*camera_to_world * DVec3::new(x, y, 1.0)).try_normalize()?;
+    d.is_finite().then_some(PlaneRay { dir: d, xy: [x, y] })
+}
+
 /// Pixel rays of one camera (see [`CameraModel::pixel_ray`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayCaster {
@@ -148,6 +169,45 @@ pub(crate) struct RayCaster {
 }
 
 impl RayCaster {
+    /// The rays through the pixel positions `(u0 + i, v)`, `i = 0..out.len()` (`None` where
+    /// [`CameraModel::pixel_ray`] has none). Each undistortion starts from its left
+    /// neighbour's solution, so a row costs about one Newton step per ray; the directions
+    /// equal `pixel_ray`'s to the iteration's tolerance.
+    #[cfg(test)]
+    pub(crate) fn row(&self, u0: f64, v: f64, out: &mut [Option<PlaneRay>]) {
+        self.row_with(u0, v, out.len(), |i, r| out[i] = r);
+    }
+
+    /// [`RayCaster::row`] handing each ray to `f(i, ray)` in order instead of storing it.
+    #[inline]
+    pub(crate) fn row_with(&self, u0: f64, v: f64, n: usize, mut f: impl FnMut(usize, Option<PlaneRay>)) {
+        let c = &self.cam;
+        let yd = (v - c.cy) / c.fy;
+        let no_distortion = c.k1 == 0.0 && c.k2 == 0.0;
+        // r / rd of the last two rays, extrapolated linearly in rd for the next guess.
+        let (mut ratio, mut slope, mut rd_prev) = (1.0, 0.0, f64::NAN);
+        for i in 0..n {
+            let xd = (u0 + i as f64 - c.cx) / c.fx;
+            if no_distortion {
+                f(i, plane_ray(&self.camera_to_world, xd, yd));
+                continue;
+            }
+            let rd = (xd * xd + yd * yd).sqrt();
+            let xy = if rd == 0.0 {
+                Some([0.0, 0.0])
+            } else {
+                let guess = if rd_prev.is_finite() { ratio + slope * (rd - rd_prev) } else { ratio };
+                self.radial.invert_near(rd, rd * guess).map(|r| {
+                    let q = r / rd;
+                    slope = if rd_prev.is_finite() && rd != rd_prev { (q - ratio) / (rd - rd_prev) } else { 0.0 };
+                    (ratio, rd_prev) = (q, rd);
+                    [xd * q, yd * q]
+                })
+            };
+            f(i, xy.and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y)));
+        }
+    }
+
     /// Unit world direction through pixel position `(u, v)`, as [`CameraModel::pixel_ray`].
     pub(crate) fn ray(&self, u: f64, v: f64) -> Option<DVec3> {
         let c = &self.cam;
@@ -211,6 +271,29 @@ mod tests {
         assert!((x * d - 1.2).abs() < 1e-12 && (y * d + 0.5).abs() < 1e-12);
         assert!(c.undistort(f64::NAN, 0.0).is_none());
         assert_eq!(c.undistort(0.0, 0.0), Some([0.0, 0.0]));
+    }
+
+    #[test]
+    fn row_rays_equal_pixel_rays() {
+        for (k1, k2) in [(0.0, 0.0), (-0.115, 0.0), (0.08, -0.01), (-0.2, 0.05)] {
+            let c = cam(k1, k2);
+            let rc = c.ray_caster();
+            let mut row = vec![None; 641];
+            for j in [0, 1, 240, 479, 480] {
+                let v = j as f64 - 0.5;
+                rc.row(-0.5, v, &mut row);
+                for (i, r) in row.iter().enumerate() {
+                    let u = i as f64 - 0.5;
+                    let want = c.pixel_ray(u, v);
+                    assert_eq!(r.is_some(), want.is_some(), "k=({k1},{k2}) ({u},{v})");
+                    if let (Some(r), Some(w)) = (r, want) {
+                        assert!((r.dir - w).length() < 1e-13, "k=({k1},{k2}) ({u},{v}): {:?} vs {w:?}", r.dir);
+                        let cf = c.world_to_camera * r.dir;
+                        assert!((cf.x / cf.z - r.xy[0]).abs() < 1e-12 && (cf.y / cf.z - r.xy[1]).abs() < 1e-12);
+                    }
+                }
+            }
+        }
     }
 
     #[test]

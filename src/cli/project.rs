@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput};
+use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput, RayAccel};
 use cliffmap::pipeline::{ProjectOptions, project_store};
 
 use super::stats::print_summary;
@@ -27,9 +27,14 @@ pub struct Args {
     /// Do not level photo colours (gain/offset per channel) to the existing textures.
     #[arg(long)]
     pub no_level_colours: bool,
-    /// BVH build preset for the ray casts.
-    #[arg(long, default_value = "medium", value_parser = ["fastest", "fast", "medium", "slow", "very-slow"])]
-    pub bvh: String,
+    /// Ray-casting acceleration: `grid` (camera-space bins, default), `grid:BIN_PX` (bin side
+    /// in pixels, default 8), `bvh` or `bvh:PRESET` (an obvhs BVH; presets fastest, fast,
+    /// medium, slow, very-slow). Both give the same nearest hits; see docs/projection.md.
+    #[arg(long, default_value = "grid", value_parser = parse_ray_accel, conflicts_with = "bvh")]
+    pub ray_accel: RayAccel,
+    /// Shorthand for `--ray-accel bvh:PRESET`.
+    #[arg(long, value_parser = ["fastest", "fast", "medium", "slow", "very-slow"])]
+    pub bvh: Option<String>,
     /// No progress bars or summary.
     #[arg(long)]
     pub quiet: bool,
@@ -41,10 +46,17 @@ pub fn options(a: &Args) -> ProjectOptions {
         blend: if a.blend == "best" { BlendMode::Best } else { BlendMode::Confidence },
         footprint: FootprintOptions { reconstruct: !a.no_reconstruct, ..FootprintOptions::default() },
         level_colours: !a.no_level_colours,
-        bvh: BvhQuality::parse(&a.bvh).unwrap_or_default(),
+        ray: match &a.bvh {
+            Some(p) => RayAccel::Bvh(BvhQuality::parse(p).unwrap_or_default()),
+            None => a.ray_accel,
+        },
         quiet: a.quiet,
         ..ProjectOptions::default()
     }
+}
+
+fn parse_ray_accel(s: &str) -> Result<RayAccel, String> {
+    RayAccel::parse(s).ok_or_else(|| format!("'{s}' is not grid, grid:BIN_PX (pixels > 0), bvh or bvh:PRESET"))
 }
 
 /// Reads the photos and their cameras from `--photos` or `--colmap`.
@@ -60,7 +72,9 @@ fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     // a bad store is reported before any photo is decoded
     cliffmap::store::Store::open(&a.store)?;
+    let t = std::time::Instant::now();
     let photos = load_photos(&a)?;
+    tracing::debug!("project: {} photos decoded in {:.3} s", photos.len(), t.elapsed().as_secs_f64());
     let report = project_store(&a.store, &photos, &options(&a))?;
     if !a.quiet {
         println!("photo textures for {} cells", report.cells_written);

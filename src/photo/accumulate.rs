@@ -18,7 +18,7 @@ use image::RgbImage;
 
 use super::confidence::ConfidenceParams;
 use super::level::ColourTransform;
-use super::splat::{SplatKind, footprint_area, splat_footprint};
+use super::splat::{Splat, SplatKind, footprint_shape, splat_polygon};
 use super::PixelFootprint;
 
 /// How several photos' colours combine in a texel.
@@ -41,17 +41,24 @@ impl BlendMode {
     }
 }
 
+/// The sums of one texel (kept together: a deposit touches one record).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexelSums {
+    /// `A`: deposited footprint area (texels²).
+    pub coverage: f32,
+    /// `Q`: confidence-weighted area.
+    pub weight: f32,
+    /// `C`: confidence-weighted area times colour (sRGB 0..1).
+    pub colour: [f32; 3],
+}
+
 /// One photo's deposits in one `texels × texels` cell texture (row-major per texel).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotoAccum {
     /// Texture side in texels.
     pub texels: u32,
-    /// `A`: deposited footprint area per texel (texels²).
-    pub coverage: Vec<f32>,
-    /// `Q`: confidence-weighted area per texel.
-    pub weight: Vec<f32>,
-    /// `C`: confidence-weighted area times colour (sRGB 0..1) per texel.
-    pub colour: Vec<[f32; 3]>,
+    /// Per texel, row-major: the sums `A`, `Q`, `C`.
+    pub sums: Vec<TexelSums>,
     /// Footprints deposited exactly / by the bilinear fallback / skipped.
     pub kinds: [u64; 3],
 }
@@ -60,23 +67,29 @@ impl PhotoAccum {
     /// An empty accumulator.
     pub fn new(texels: u32) -> PhotoAccum {
         let n = texels as usize * texels as usize;
-        PhotoAccum { texels, coverage: vec![0.0; n], weight: vec![0.0; n], colour: vec![[0.0; 3]; n], kinds: [0; 3] }
+        PhotoAccum { texels, sums: vec![TexelSums::default(); n], kinds: [0; 3] }
     }
 
     /// Deposits a footprint of colour `rgb` (sRGB 0..1) and confidence `conf(area)` (given
     /// the footprint's area in texels², see [`footprint_area`]).
     pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], conf: impl FnOnce(f64) -> f64) {
-        let q = conf(footprint_area(&fp.corners)) as f32;
-        let (coverage, weight, colour) = (&mut self.coverage, &mut self.weight, &mut self.colour);
-        let s = splat_footprint(&fp.corners, self.texels, |i, w| {
+        let shape = footprint_shape(&fp.corners);
+        let q = conf(shape.map_or(0.0, |(_, a)| if a.is_finite() { a } else { 0.0 })) as f32;
+        let sums = &mut self.sums;
+        let deposit = |i: usize, w: f64| {
             let w = w as f32;
-            coverage[i] += w;
+            let s = &mut sums[i];
+            s.coverage += w;
             let wq = w * q;
-            weight[i] += wq;
+            s.weight += wq;
             for k in 0..3 {
-                colour[i][k] += wq * rgb[k];
+                s.colour[k] += wq * rgb[k];
             }
-        });
+        };
+        let s = match shape {
+            Some((poly, area)) => splat_polygon(&poly, area, self.texels, deposit),
+            None => Splat { area: 0.0, kind: SplatKind::Skipped },
+        };
         self.kinds[match s.kind {
             SplatKind::Exact => 0,
             SplatKind::Bilinear => 1,
@@ -87,21 +100,31 @@ impl PhotoAccum {
     /// Deposits every footprint of `footprints` (all of this accumulator's cell) with the
     /// colour of its pixel in `image` (the image the footprints were cast for) mapped by
     /// `transform`, and confidence from `params`.
-    pub fn add_all(
+    pub fn add_all<'f>(
         &mut self,
-        footprints: &[PixelFootprint],
+        footprints: impl IntoIterator<Item = &'f PixelFootprint>,
         image: &RgbImage,
         transform: &ColourTransform,
         params: &ConfidenceParams,
     ) {
         let (w, h) = image.dimensions();
+        // The transform of every 8-bit value, per channel (the same numbers as applying it
+        // to each pixel).
+        let lut: [[f32; 256]; 3] = std::array::from_fn(|k| {
+            std::array::from_fn(|v| {
+                let mut rgb = [0.0; 3];
+                rgb[k] = v as f32 / 255.0;
+                transform.apply(rgb)[k]
+            })
+        });
+        let raw = image.as_raw();
         for fp in footprints {
             let [c, r] = fp.pixel;
             if c >= w || r >= h {
                 continue;
             }
-            let px = image.get_pixel(c, r).0;
-            let rgb = transform.apply([px[0], px[1], px[2]].map(|v| v as f32 / 255.0));
+            let o = 3 * (r as usize * w as usize + c as usize);
+            let rgb = [lut[0][raw[o] as usize], lut[1][raw[o + 1] as usize], lut[2][raw[o + 2] as usize]];
             self.add(fp, rgb, |area| params.footprint_confidence(fp.cos_view as f64, area, fp.pixel, w, h));
         }
     }
@@ -109,14 +132,15 @@ impl PhotoAccum {
     /// The photo's confidence at texel `t`: `Q / max(1, A)`, in [0, 1].
     #[inline]
     pub fn confidence(&self, t: usize) -> f32 {
-        (self.weight[t] / self.coverage[t].max(1.0)).clamp(0.0, 1.0)
+        let s = &self.sums[t];
+        (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0)
     }
 
     /// The photo's colour (sRGB 0..1) at texel `t`, if any confident deposit reached it.
     #[inline]
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
-        let q = self.weight[t];
-        (q > 0.0).then(|| self.colour[t].map(|c| (c / q).clamp(0.0, 1.0)))
+        let s = &self.sums[t];
+        (s.weight > 0.0).then(|| s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)))
     }
 }
 
@@ -148,15 +172,15 @@ impl CellAccum {
     /// Adds one photo's deposits (same texture size); returns how many texels it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum) -> u64 {
         let mut written = 0;
-        for t in 0..self.confidence.len().min(p.weight.len()) {
+        for t in 0..self.confidence.len().min(p.sums.len()) {
             let Some(c) = p.colour_at(t) else { continue };
             written += 1;
             let conf = p.confidence(t);
             match self.mode {
                 BlendMode::Confidence => {
-                    self.weight[t] += p.weight[t];
+                    self.weight[t] += p.sums[t].weight;
                     for k in 0..3 {
-                        self.colour[t][k] += p.colour[t][k];
+                        self.colour[t][k] += p.sums[t].colour[k];
                     }
                 }
                 BlendMode::Best => {
@@ -288,7 +312,8 @@ mod tests {
         a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
         for t in 0..16 {
             assert!(a.confidence(t).is_finite());
-            assert!(a.colour[t].iter().chain([&a.weight[t], &a.coverage[t]]).all(|v| v.is_finite()));
+            let s = a.sums[t];
+            assert!(s.colour.iter().chain([&s.weight, &s.coverage]).all(|v| v.is_finite()));
             if let Some(c) = a.colour_at(t) {
                 assert!(c.iter().all(|v| v.is_finite()));
             }

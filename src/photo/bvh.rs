@@ -12,6 +12,8 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
+use super::triangle::PreTri;
+
 /// BVH build quality: slower builds give faster traversal (see docs/projection.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BvhQuality {
@@ -128,8 +130,7 @@ impl TriangleBvh {
         }
         // `hit.primitive_id` indexes the BVH's primitive order; map it to the input order.
         let index = bvh.primitive_indices[hit.primitive_id as usize];
-        let tri = &tris[index as usize];
-        Some(TriHit { triangle: index, t: hit.t, bary: barycentric(tri, origin + dir * hit.t) })
+        Some(exact_hit(&tris[index as usize], index, origin, dir, hit.t))
     }
 
     /// `true` if nothing lies on the ray for `t` in `[t_min, t_max]` (early exit).
@@ -143,7 +144,7 @@ impl TriangleBvh {
 
 /// An `obvhs` ray; negative zeros in the direction become positive zeros (the traversal's
 /// octant logic misses hits for axis-parallel rays with -0.0 components).
-fn make_ray(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Ray {
+pub(crate) fn make_ray(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Ray {
     Ray::new(Vec3A::from(origin), Vec3A::from(dir + Vec3::ZERO), t_min, t_max)
 }
 
@@ -162,12 +163,20 @@ pub fn nearest_brute_force(triangles: &[[Vec3; 3]], origin: Vec3, dir: Vec3, t_m
     let (t, i) = best?;
     let tri = &triangles[i];
     let tri = Triangle { v0: Vec3A::from(tri[0]), v1: Vec3A::from(tri[1]), v2: Vec3A::from(tri[2]) };
-    Some(TriHit { triangle: i as u32, t, bary: barycentric(&tri, origin + dir * t) })
+    Some(exact_hit(&tri, i as u32, origin, dir, t))
+}
+
+/// The hit of `tri` at distance `t` with barycentric weights from the same Möller–Trumbore
+/// test the view grid uses (so every acceleration reports the same weights for a hit).
+fn exact_hit(tri: &Triangle, index: u32, origin: Vec3, dir: Vec3, t: f32) -> TriHit {
+    let (t2, uv) = PreTri::new(tri, Vec3A::from(origin)).intersect(Vec3A::from(dir + Vec3::ZERO), f32::INFINITY);
+    let bary = if t2.is_finite() { PreTri::barycentric(uv) } else { barycentric(tri, origin + dir * t) };
+    TriHit { triangle: index, t, bary }
 }
 
 /// Barycentric weights of `p` (a point on the triangle's plane) clamped to the triangle
 /// and normalized to sum 1; equal weights for a degenerate triangle.
-fn barycentric(tri: &Triangle, p: Vec3) -> [f32; 3] {
+pub(crate) fn barycentric(tri: &Triangle, p: Vec3) -> [f32; 3] {
     let (a, b, c) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
     let (e1, e2, d) = (b - a, c - a, p - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));

@@ -7,14 +7,17 @@
 
 use glam::Vec3;
 
+use super::accel::Caster;
 use super::scene::{LevelScene, NO_TRI};
-use crate::camera::RayCaster;
+use crate::camera::{PlaneRay, RayCaster};
 
-/// The compact result of one corner ray (20 bytes).
+/// The compact result of one corner ray (24 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct CornerHit {
     /// BVH triangle hit (front face), or [`NO_TRI`].
     pub tri: u32,
+    /// Index into the scene's cells of that triangle (unspecified on a miss).
+    pub cell: u32,
     /// Texture position (texel units of the hit cell's active texture).
     pub tex: [f32; 2],
     /// Distance from the camera centre, metres.
@@ -25,7 +28,7 @@ pub(crate) struct CornerHit {
 
 impl CornerHit {
     /// No front-face hit.
-    pub const MISS: CornerHit = CornerHit { tri: NO_TRI, tex: [0.0; 2], t: 0.0, cos: 0.0 };
+    pub const MISS: CornerHit = CornerHit { tri: NO_TRI, cell: u32::MAX, tex: [0.0; 2], t: 0.0, cos: 0.0 };
 
     /// `true` if the ray hit a front face.
     #[inline]
@@ -36,17 +39,15 @@ impl CornerHit {
 
 /// Casts the corner rays of corner row `j` (all `out.len()` = W + 1 columns) from `origin`
 /// (camera centre in the scene's frame).
-pub(crate) fn cast_corner_row(scene: &LevelScene, rays: &RayCaster, origin: Vec3, j: u32, out: &mut [CornerHit]) {
-    let v = j as f64 - 0.5;
-    for (i, slot) in out.iter_mut().enumerate() {
-        *slot = cast_corner(scene, rays, origin, i as f64 - 0.5, v);
-    }
+pub(crate) fn cast_corner_row(scene: &LevelScene, caster: &Caster, rays: &RayCaster, origin: Vec3, j: u32, out: &mut [CornerHit]) {
+    rays.row_with(-0.5, j as f64 - 0.5, out.len(), |i, ray| {
+        out[i] = ray.map_or(CornerHit::MISS, |r| cast_corner(scene, caster, origin, &r));
+    });
 }
 
-fn cast_corner(scene: &LevelScene, rays: &RayCaster, origin: Vec3, u: f64, v: f64) -> CornerHit {
-    let Some(d) = rays.ray(u, v) else { return CornerHit::MISS };
-    let dir = d.as_vec3();
-    let Some(hit) = scene.bvh.nearest(origin, dir, 0.0, f32::INFINITY) else { return CornerHit::MISS };
+fn cast_corner(scene: &LevelScene, caster: &Caster, origin: Vec3, ray: &PlaneRay) -> CornerHit {
+    let dir = ray.dir.as_vec3();
+    let Some(hit) = caster.nearest(origin, dir, ray.xy) else { return CornerHit::MISS };
     let p = scene.plane(hit.triangle);
     let cos = p[0] * dir.x + p[1] * dir.y + p[2] * dir.z;
     // Back face (or an edge-on / degenerate triangle): the surface is seen from below.
@@ -62,5 +63,5 @@ fn cast_corner(scene: &LevelScene, rays: &RayCaster, origin: Vec3, u: f64, v: f6
     if !(tex[0].is_finite() && tex[1].is_finite()) {
         return CornerHit::MISS;
     }
-    CornerHit { tri: hit.triangle, tex, t: hit.t, cos: -cos }
+    CornerHit { tri: hit.triangle, cell: scene.cell_of(hit.triangle), tex, t: hit.t, cos: -cos }
 }

@@ -33,11 +33,14 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::accel::Caster;
 use super::corners::{cast_corner_row, CornerHit};
-use super::reconstruct::{reconstruct, CORNER_OFFSETS};
+use super::viewgrid::ViewGrid;
+use super::RayAccel;
+use super::reconstruct::reconstruct;
 use super::scene::LevelScene;
 use super::silhouette::crosses_silhouette;
-use super::{FootprintSet, PixelFootprint};
+use super::{CellFootprints, FootprintSet, PixelFootprint};
 use crate::camera::{CameraModel, RayCaster};
 
 /// Pixel rows per parallel band.
@@ -72,9 +75,15 @@ impl Default for FootprintOptions {
 pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &FootprintOptions) -> FootprintSet {
     let (w, h) = (camera.width, camera.height);
     let origin = (camera.position - scene.frame_origin).as_vec3();
-    if w == 0 || h == 0 || scene.bvh.is_empty() || !origin.is_finite() {
+    if w == 0 || h == 0 || scene.triangle_count() == 0 || !origin.is_finite() {
         return FootprintSet::default();
     }
+    let rays = camera.ray_caster();
+    let caster = match (scene.accel, scene.bvh()) {
+        (RayAccel::Bvh(_), Some(bvh)) => Caster::Bvh(bvh),
+        (RayAccel::ViewGrid(p), _) => Caster::Grid(ViewGrid::build(scene.triangles(), camera, &rays, origin, p)),
+        (RayAccel::Bvh(_), None) => return FootprintSet::default(),
+    };
     // Output buckets: scene cells ordered by manifest index (then scene order).
     let mut order: Vec<usize> = (0..scene.cells.len()).collect();
     order.sort_by_key(|&i| (scene.cells[i].cell, i));
@@ -82,43 +91,35 @@ pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &Footpri
     for (b, &i) in order.iter().enumerate() {
         bucket[i] = b as u32;
     }
-    let ctx = Ctx { scene, rays: camera.ray_caster(), origin, w, h, opts: *opts, bucket: &bucket };
-    let bands: Vec<BandOut> = (0..h.div_ceil(BAND_ROWS)).into_par_iter().map(|b| ctx.band(b)).collect();
+    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket };
+    let bands: Vec<BandOut> = (0..h.div_ceil(BAND_ROWS))
+        .into_par_iter()
+        .map_init(|| Vec::new(), |hits, b| ctx.band(b, hits))
+        .collect();
 
+    // Every bucket's chunks in band (= row) order: no footprint is copied.
     let mut set = FootprintSet::default();
-    let mut counts = vec![0usize; scene.cells.len() + 1];
-    for b in &bands {
+    let mut cells: Vec<CellFootprints> =
+        order.iter().map(|&i| CellFootprints { cell: scene.cells[i].cell, chunks: Vec::new() }).collect();
+    for b in bands {
         set.pixels_hit += b.pixels_hit;
         set.rejected_silhouette += b.rejected_silhouette;
         set.reconstructed += b.reconstructed;
         set.dropped += b.dropped;
-        for &k in &b.buckets {
-            counts[k as usize + 1] += 1;
+        for (k, chunk) in b.buckets.into_iter().enumerate() {
+            if !chunk.is_empty() {
+                cells[k].chunks.push(chunk);
+            }
         }
     }
-    for k in 1..counts.len() {
-        counts[k] += counts[k - 1];
-    }
-    let total = counts[scene.cells.len()];
-    let mut out = vec![EMPTY; total];
-    for b in &bands {
-        for (fp, &k) in b.footprints.iter().zip(&b.buckets) {
-            out[counts[k as usize]] = *fp;
-            counts[k as usize] += 1;
-        }
-    }
-    set.footprints = out;
+    set.cells = cells.into_iter().filter(|c| !c.chunks.is_empty()).collect();
     set
 }
 
-const EMPTY: PixelFootprint =
-    PixelFootprint { cell: 0, pixel: [0, 0], corners: [[0.0; 2]; 4], cos_view: 0.0, distance: 0.0, reconstructed: 0 };
-
-/// One band's footprints (row-major) with their output buckets, and its counts.
+/// One band's footprints per output bucket (row-major), and its counts.
 #[derive(Default)]
 struct BandOut {
-    footprints: Vec<PixelFootprint>,
-    buckets: Vec<u32>,
+    buckets: Vec<Vec<PixelFootprint>>,
     pixels_hit: u64,
     rejected_silhouette: u64,
     reconstructed: u64,
@@ -135,6 +136,7 @@ enum Outcome {
 
 struct Ctx<'a> {
     scene: &'a LevelScene,
+    caster: &'a Caster<'a>,
     rays: RayCaster,
     origin: Vec3,
     w: u32,
@@ -162,18 +164,21 @@ impl CornerRows {
 }
 
 impl Ctx<'_> {
-    fn band(&self, b: u32) -> BandOut {
+    /// Casts and forms the footprints of pixel rows `b·BAND_ROWS..` (`hits`: reused scratch).
+    fn band(&self, b: u32, pool: &mut Vec<CornerHit>) -> BandOut {
         let r0 = b * BAND_ROWS;
         let r1 = (r0 + BAND_ROWS).min(self.h);
         let j_lo = r0.saturating_sub(1);
         let j_hi = (r1 + 1).min(self.h);
         let stride = self.w as usize + 1;
-        let mut hits = vec![CornerHit::MISS; (j_hi - j_lo + 1) as usize * stride];
+        let mut hits = std::mem::take(pool);
+        hits.clear();
+        hits.resize((j_hi - j_lo + 1) as usize * stride, CornerHit::MISS);
         for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
-            cast_corner_row(self.scene, &self.rays, self.origin, j, row);
+            cast_corner_row(self.scene, self.caster, &self.rays, self.origin, j, row);
         }
         let rows = CornerRows { hits, j_lo: j_lo as i64, j_hi: j_hi as i64, stride: stride as i64 };
-        let mut out = BandOut::default();
+        let mut out = BandOut { buckets: vec![Vec::new(); self.scene.cells.len()], ..BandOut::default() };
         for r in r0..r1 {
             for c in 0..self.w {
                 match self.pixel(&rows, c, r) {
@@ -182,22 +187,55 @@ impl Ctx<'_> {
                     Outcome::Dropped => out.dropped += 1,
                     Outcome::Footprint(fp, bucket) => {
                         out.reconstructed += u64::from(fp.reconstructed > 0);
-                        out.footprints.push(fp);
-                        out.buckets.push(bucket);
+                        out.buckets[bucket as usize].push(fp);
                     }
                 }
                 out.pixels_hit += 1;
             }
         }
+        *pool = rows.hits;
         out
+    }
+
+    /// The common case: all four corners hit the same cell.
+    #[inline]
+    fn full_pixel(&self, q: &[CornerHit; 4], c: u32, r: u32) -> Outcome {
+        let scene = self.scene;
+        if self.opts.reject_silhouettes && !(q[0].tri == q[1].tri && q[0].tri == q[2].tri && q[0].tri == q[3].tri) {
+            for e in 0..4 {
+                let (a, b) = (&q[e], &q[(e + 1) % 4]);
+                if a.tri != b.tri && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex) {
+                    return Outcome::Silhouette;
+                }
+            }
+        }
+        let corners = [q[0].tex, q[1].tex, q[2].tex, q[3].tex];
+        if !footprint_ok(&corners, self.opts.max_area, self.opts.max_extent) {
+            return Outcome::Dropped;
+        }
+        let fp = PixelFootprint {
+            cell: scene.cells[q[0].cell as usize].cell,
+            pixel: [c, r],
+            corners,
+            cos_view: (0.25 * (q[0].cos + q[1].cos + q[2].cos + q[3].cos)).clamp(f32::MIN_POSITIVE, 1.0),
+            distance: 0.25 * (q[0].t + q[1].t + q[2].t + q[3].t),
+            reconstructed: 0,
+        };
+        Outcome::Footprint(fp, self.bucket[q[0].cell as usize])
     }
 
     fn pixel(&self, rows: &CornerRows, c: u32, r: u32) -> Outcome {
         let scene = self.scene;
         let (i0, j0) = (c as i64, r as i64);
-        let q: [CornerHit; 4] = CORNER_OFFSETS.map(|[a, b]| rows.get(i0 + a, j0 + b).copied().unwrap_or(CornerHit::MISS));
+        // Pixel rows r0..r1 of a band always have their corner rows r and r + 1 cast.
+        let s = rows.stride as usize;
+        let k = (j0 - rows.j_lo) as usize * s + c as usize;
+        let q: [CornerHit; 4] = [rows.hits[k], rows.hits[k + 1], rows.hits[k + s + 1], rows.hits[k + s]];
+        if q.iter().all(|h| h.is_hit() && h.cell == q[0].cell) {
+            return self.full_pixel(&q, c, r);
+        }
         // 1. The pixel's cell: most corners, ties to the lowest manifest index.
-        let cells: [u32; 4] = q.map(|h| if h.is_hit() { scene.cell_of(h.tri) } else { u32::MAX });
+        let cells: [u32; 4] = q.map(|h| if h.is_hit() { h.cell } else { u32::MAX });
         let mut best: Option<(usize, u32)> = None; // (votes, scene cell)
         for &ck in cells.iter().filter(|&&x| x != u32::MAX) {
             let votes = cells.iter().filter(|&&x| x == ck).count();

@@ -219,6 +219,7 @@ pub fn fit_colour_transform(pairs: &ColourPairs, params: &LevelingParams) -> (Co
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::photo::TexelSums;
 
     /// A deterministic pseudo-random value in [0, 1).
     fn hash01(i: u64) -> f64 {
@@ -275,9 +276,7 @@ mod tests {
         let mut acc = PhotoAccum::new(2);
         // texel 0: confident; texel 1: confident but steep; texel 2: dark; texel 3: no photo
         for (t, c) in [(0usize, 0.5f32), (1, 0.5), (2, 0.01)] {
-            acc.coverage[t] = 1.0;
-            acc.weight[t] = 1.0;
-            acc.colour[t] = [c; 3];
+            acc.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3] };
         }
         let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
         let mut normals = RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]));

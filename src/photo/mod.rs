@@ -13,7 +13,8 @@
 //! - [`PixelFootprint`]: one photo pixel's footprint in one cell's texture: the four pixel
 //!   corners' texture positions (texel units of the cell's active texture), with the view
 //!   cosine and distance at the pixel centre. [`FootprintSet`] holds every footprint of one
-//!   photo on one quadtree level, plus the counts of rejected and reconstructed pixels.
+//!   photo on one quadtree level (per cell: [`CellFootprints`]), plus the counts of rejected and
+//!   reconstructed pixels.
 //!
 //! - Splatting, blending and leveling (docs/projection.md): [`splat_footprint`] deposits a
 //!   footprint into the texels it covers by exact overlap area; [`PhotoAccum`] /
@@ -26,6 +27,7 @@
 //! one if the cell has it, else the orthographic one): x right, y down, texel `(i, j)`
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
+mod accel;
 mod accumulate;
 mod blend;
 mod bvh;
@@ -40,7 +42,11 @@ mod reconstruct;
 mod scene;
 mod silhouette;
 mod splat;
+mod triangle;
+mod viewgrid;
 
+pub use accel::RayAccel;
+pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
 pub use colmap::{read_colmap, read_colmap_specs, read_similarity, Similarity};
 pub use footprint::{photo_footprints, FootprintOptions};
@@ -49,7 +55,7 @@ pub use input::{
     validate_camera, PhotoSpec,
 };
 pub use scene::{LevelScene, SceneCell};
-pub use accumulate::{BlendMode, CellAccum, PhotoAccum};
+pub use accumulate::{BlendMode, CellAccum, PhotoAccum, TexelSums};
 pub use blend::{Blended, blend_cell};
 pub use confidence::{ConfidenceParams, smoothstep};
 pub use level::{ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform, normal_cos_slope};
@@ -92,10 +98,10 @@ pub struct PixelFootprint {
 }
 
 /// All footprints of one photo on one quadtree level, and what happened to the rest.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct FootprintSet {
-    /// Footprints sorted by (cell, row, column); at most one per pixel.
-    pub footprints: Vec<PixelFootprint>,
+    /// The cells that received footprints, by increasing manifest index.
+    pub cells: Vec<CellFootprints>,
     /// Pixels with at least one corner ray hitting the terrain's front face (= footprints +
     /// rejected_silhouette + dropped).
     pub pixels_hit: u64,
@@ -105,4 +111,58 @@ pub struct FootprintSet {
     pub reconstructed: u64,
     /// Pixels that hit the terrain but whose footprint could not be completed (dropped).
     pub dropped: u64,
+}
+
+impl FootprintSet {
+    /// Number of footprints (at most one per pixel).
+    pub fn len(&self) -> usize {
+        self.cells.iter().map(CellFootprints::len).sum()
+    }
+
+    /// `true` if there are no footprints.
+    pub fn is_empty(&self) -> bool {
+        self.cells.iter().all(|c| c.len() == 0)
+    }
+
+    /// Every footprint, sorted by (cell, row, column).
+    pub fn iter(&self) -> impl Iterator<Item = &PixelFootprint> {
+        self.cells.iter().flat_map(CellFootprints::iter)
+    }
+}
+
+/// Equal footprints in the same order and equal counts (however they are chunked).
+impl PartialEq for FootprintSet {
+    fn eq(&self, o: &Self) -> bool {
+        (self.pixels_hit, self.rejected_silhouette, self.reconstructed, self.dropped)
+            == (o.pixels_hit, o.rejected_silhouette, o.reconstructed, o.dropped)
+            && self.len() == o.len()
+            && self.iter().eq(o.iter())
+    }
+}
+
+/// The footprints of one cell, in (row, column) order, kept in chunks of photo rows as the
+/// ray casting produced them (so they are never copied into one array).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CellFootprints {
+    /// Index of the cell in the manifest's `cells` list.
+    pub cell: u32,
+    /// Consecutive runs of footprints, in order.
+    pub chunks: Vec<Vec<PixelFootprint>>,
+}
+
+impl CellFootprints {
+    /// Number of footprints.
+    pub fn len(&self) -> usize {
+        self.chunks.iter().map(Vec::len).sum()
+    }
+
+    /// `true` if there are none.
+    pub fn is_empty(&self) -> bool {
+        self.chunks.iter().all(Vec::is_empty)
+    }
+
+    /// The footprints in (row, column) order.
+    pub fn iter(&self) -> impl Iterator<Item = &PixelFootprint> {
+        self.chunks.iter().flatten()
+    }
 }

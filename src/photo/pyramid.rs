@@ -3,6 +3,7 @@
 //! footprint/texel ratios, and so the filtering, stay the same on every level.
 
 use image::RgbImage;
+use rayon::prelude::*;
 
 use crate::camera::CameraModel;
 
@@ -16,7 +17,7 @@ pub fn downsample2(img: &RgbImage) -> Option<RgbImage> {
     let src = img.as_raw();
     let sw = img.width() as usize;
     let mut out = vec![0u8; w as usize * h as usize * 3];
-    for (j, row) in out.chunks_exact_mut(w as usize * 3).enumerate() {
+    out.par_chunks_exact_mut(w as usize * 3).enumerate().for_each(|(j, row)| {
         for i in 0..w as usize {
             for k in 0..3 {
                 let at = |r: usize, c: usize| src[(r * sw + c) * 3 + k] as u32;
@@ -24,7 +25,7 @@ pub fn downsample2(img: &RgbImage) -> Option<RgbImage> {
                 row[i * 3 + k] = ((s + 2) / 4) as u8;
             }
         }
-    }
+    });
     RgbImage::from_raw(w, h, out)
 }
 

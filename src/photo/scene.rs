@@ -8,8 +8,12 @@
 //! the silhouette walk).
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
-use super::{BvhQuality, TriangleBvh};
+use obvhs::triangle::Triangle;
+
+use super::viewgrid::to_triangles;
+use super::{RayAccel, TriangleBvh};
 use crate::error::{Error, Result};
 use crate::store::Store;
 
@@ -33,7 +37,9 @@ pub struct SceneCell {
     pub texels: u32,
 }
 
-/// All cells of one level, as triangles in an f32 frame centred on `frame_origin`, with a BVH.
+/// All cells of one level, as triangles in an f32 frame centred on `frame_origin`, with the
+/// ray-casting acceleration chosen at construction (a BVH, or nothing until a photo's
+/// camera-space grid is built by [`super::photo_footprints`]).
 ///
 /// Triangles are one-sided for the photo stage: the front face is the one the vertices
 /// run counter-clockwise around (seen from above for terrain). Triangles with an index
@@ -43,56 +49,48 @@ pub struct LevelScene {
     pub frame_origin: DVec3,
     /// The cells, in the order given.
     pub cells: Vec<SceneCell>,
-    /// BVH over every cell's triangles.
-    pub bvh: TriangleBvh,
+    /// The acceleration chosen at construction.
+    pub accel: RayAccel,
+    /// Every cell's triangles in the frame (index = BVH triangle index).
+    tris: Vec<Triangle>,
+    /// BVH over `tris` (with [`RayAccel::Bvh`] only).
+    bvh: Option<TriangleBvh>,
     /// Per BVH triangle: `[index into cells, local triangle index]`.
     tri_ref: Vec<[u32; 2]>,
-    /// Per BVH triangle: unit normal (frame) and plane offset `n·v0`.
-    planes: Vec<[f32; 4]>,
+    /// Per BVH triangle: what a hit needs, in one place (see [`TriInfo`]).
+    info: Vec<TriInfo>,
     /// Per BVH triangle: the BVH triangle across edge k (`v[k] → v[k+1]`) in the same cell,
     /// or [`NO_TRI`].
     adjacency: Vec<[u32; 3]>,
 }
 
 impl LevelScene {
-    /// Builds the scene from in-memory cells.
-    pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, quality: BvhQuality) -> LevelScene {
-        let mut tris: Vec<[Vec3; 3]> = Vec::new();
-        let mut tri_ref = Vec::new();
-        let mut planes = Vec::new();
-        let mut adjacency = Vec::new();
-        for (ci, c) in cells.iter().enumerate() {
-            let offset = c.origin - frame_origin;
-            let local = |i: u32| {
-                let p = c.positions[i as usize];
-                offset + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-            };
+    /// Builds the scene from in-memory cells (a BVH is built now with [`RayAccel::Bvh`]).
+    pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, accel: impl Into<RayAccel>) -> LevelScene {
+        let accel = accel.into();
+        // Cells in parallel, concatenated in order.
+        let parts: Vec<CellPart> = cells.par_iter().enumerate().map(|(ci, c)| cell_part(ci as u32, c, frame_origin)).collect();
+        let total: usize = parts.iter().map(|p| p.tris.len()).sum();
+        let (mut tris, mut tri_ref, mut info, mut adjacency) =
+            (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
+        for p in parts {
             let first = tris.len() as u32;
-            let mut kept: Vec<[u32; 3]> = Vec::new();
-            for (ti, t) in c.triangles.iter().enumerate() {
-                let n = c.positions.len().min(c.texcoords.len());
-                if t.iter().any(|&i| i as usize >= n) {
-                    continue;
-                }
-                let p = [local(t[0]), local(t[1]), local(t[2])];
-                if !p.iter().all(|q| q.is_finite()) {
-                    continue;
-                }
-                let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-                planes.push([normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32]);
-                tris.push(p.map(|q| q.as_vec3()));
-                tri_ref.push([ci as u32, ti as u32]);
-                kept.push(*t);
-            }
-            adjacency.extend(cell_adjacency(&kept).into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
+            tris.extend(p.tris);
+            tri_ref.extend(p.tri_ref);
+            info.extend(p.info);
+            adjacency.extend(p.adjacency.into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
         }
-        let bvh = TriangleBvh::build(&tris, quality);
-        LevelScene { frame_origin, cells, bvh, tri_ref, planes, adjacency }
+        let bvh = match accel {
+            RayAccel::Bvh(q) => Some(TriangleBvh::build(&tris, q)),
+            RayAccel::ViewGrid(_) => None,
+        };
+        let tris = to_triangles(&tris);
+        LevelScene { frame_origin, cells, accel, tris, bvh, tri_ref, info, adjacency }
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of
     /// `level` in the store.
-    pub fn from_store(store: &Store, level: u8, frame_origin: DVec3, quality: BvhQuality) -> Result<LevelScene> {
+    pub fn from_store(store: &Store, level: u8, frame_origin: DVec3, accel: impl Into<RayAccel>) -> Result<LevelScene> {
         let levels = store.manifest.quadtree.levels;
         if u32::from(level) >= u32::from(levels) {
             return Err(Error::BadOption(format!(
@@ -104,33 +102,26 @@ impl LevelScene {
         if !frame_origin.is_finite() {
             return Err(Error::BadOption(format!("frame origin {frame_origin} is not finite")));
         }
-        let mut cells = Vec::new();
-        for (index, rec) in store.manifest.cells.iter().enumerate().filter(|(_, r)| r.level == level) {
-            let mesh = store.read_active_mesh(rec)?;
-            let texels = rec.reparam.as_ref().map_or(rec.texels, |r| r.texels);
-            let nv = (mesh.surface_vertices as usize).min(mesh.positions.len());
-            let tx = texels as f32;
-            let texcoords = (0..nv)
-                .map(|i| {
-                    let uv = crate::store::texcoord(rec, &mesh, i);
-                    [uv[0] * tx, uv[1] * tx]
-                })
-                .collect();
-            cells.push(SceneCell {
-                cell: index as u32,
-                origin: DVec3::from_array(rec.origin),
-                positions: mesh.positions[..nv].to_vec(),
-                triangles: mesh.surface().to_vec(),
-                texcoords,
-                texels,
-            });
-        }
-        Ok(LevelScene::new(cells, frame_origin, quality))
+        // Meshes are read and checked in parallel, collected in manifest order.
+        let recs: Vec<(usize, &crate::store::CellRecord)> =
+            store.manifest.cells.iter().enumerate().filter(|(_, r)| r.level == level).collect();
+        let cells = recs.into_par_iter().map(|(index, rec)| scene_cell(store, index, rec)).collect::<Result<Vec<_>>>()?;
+        Ok(LevelScene::new(cells, frame_origin, accel))
     }
 
     /// Number of triangles in the BVH.
     pub fn triangle_count(&self) -> usize {
         self.tri_ref.len()
+    }
+
+    /// The BVH (built with [`RayAccel::Bvh`] only).
+    pub fn bvh(&self) -> Option<&TriangleBvh> {
+        self.bvh.as_ref()
+    }
+
+    /// The scene's triangles (frame coordinates; index = BVH triangle index).
+    pub(crate) fn triangles(&self) -> &[Triangle] {
+        &self.tris
     }
 
     /// `(index into cells, local triangle index)` of BVH triangle `tri`.
@@ -141,22 +132,19 @@ impl LevelScene {
     /// Index into `cells` of BVH triangle `tri` (in range).
     #[inline]
     pub(crate) fn cell_of(&self, tri: u32) -> u32 {
-        self.tri_ref[tri as usize][0]
+        self.info[tri as usize].cell
     }
 
     /// Texture positions (texel units) of the three vertices of BVH triangle `tri`.
     #[inline]
     pub(crate) fn tri_texcoords(&self, tri: u32) -> [[f32; 2]; 3] {
-        let [ci, ti] = self.tri_ref[tri as usize];
-        let c = &self.cells[ci as usize];
-        let t = c.triangles[ti as usize];
-        t.map(|i| c.texcoords[i as usize])
+        self.info[tri as usize].tex
     }
 
     /// Unit normal (frame) and plane offset of BVH triangle `tri`.
     #[inline]
     pub(crate) fn plane(&self, tri: u32) -> [f32; 4] {
-        self.planes[tri as usize]
+        self.info[tri as usize].plane
     }
 
     /// Neighbours of BVH triangle `tri` across its edges (see the field).
@@ -164,6 +152,120 @@ impl LevelScene {
     pub(crate) fn neighbours(&self, tri: u32) -> [u32; 3] {
         self.adjacency[tri as usize]
     }
+}
+
+/// One cell's share of a scene (adjacency in cell-local triangle numbers).
+struct CellPart {
+    tris: Vec<[Vec3; 3]>,
+    tri_ref: Vec<[u32; 2]>,
+    info: Vec<TriInfo>,
+    adjacency: Vec<[u32; 3]>,
+}
+
+/// The valid triangles of scene cell `ci`, in Morton order, in the frame at `frame_origin`.
+fn cell_part(ci: u32, c: &SceneCell, frame_origin: DVec3) -> CellPart {
+    let offset = c.origin - frame_origin;
+    let local = |i: u32| {
+        let p = c.positions[i as usize];
+        offset + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+    };
+    let mut part = CellPart { tris: Vec::new(), tri_ref: Vec::new(), info: Vec::new(), adjacency: Vec::new() };
+    let mut kept: Vec<[u32; 3]> = Vec::new();
+    for ti in morton_order(c) {
+        let t = &c.triangles[ti];
+        let p = [local(t[0]), local(t[1]), local(t[2])];
+        if !p.iter().all(|q| q.is_finite()) {
+            continue;
+        }
+        let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        part.info.push(TriInfo {
+            plane: [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32],
+            tex: t.map(|i| c.texcoords[i as usize]),
+            cell: ci,
+        });
+        part.tris.push(p.map(|q| q.as_vec3()));
+        part.tri_ref.push([ci, ti as u32]);
+        kept.push(*t);
+    }
+    part.adjacency = cell_adjacency(&kept);
+    part
+}
+
+/// The active mesh of manifest cell `index` as a scene cell.
+fn scene_cell(store: &Store, index: usize, rec: &crate::store::CellRecord) -> Result<SceneCell> {
+    let mesh = store.read_active_mesh(rec)?;
+    let texels = rec.reparam.as_ref().map_or(rec.texels, |r| r.texels);
+    let nv = (mesh.surface_vertices as usize).min(mesh.positions.len());
+    let tx = texels as f32;
+    let texcoords = (0..nv)
+        .map(|i| {
+            let uv = crate::store::texcoord(rec, &mesh, i);
+            [uv[0] * tx, uv[1] * tx]
+        })
+        .collect();
+    Ok(SceneCell {
+        cell: index as u32,
+        origin: DVec3::from_array(rec.origin),
+        positions: mesh.positions[..nv].to_vec(),
+        triangles: mesh.surface().to_vec(),
+        texcoords,
+        texels,
+    })
+}
+
+/// Per scene triangle, the data a hit and a silhouette walk read (kept together, so a hit
+/// costs one cache line).
+#[derive(Clone, Copy, Debug)]
+struct TriInfo {
+    /// Unit normal (frame) and plane offset `n·v0`.
+    plane: [f32; 4],
+    /// Texture positions (texel units) of the three vertices.
+    tex: [[f32; 2]; 3],
+    /// Index into the scene's cells.
+    cell: u32,
+}
+
+/// The cell's valid triangles (vertex indices within its positions and texcoords), ordered
+/// along a Morton curve of their centroids' x-y (ties by index), so that triangles near each
+/// other on the ground are near each other in memory (the ray casts touch them together).
+fn morton_order(c: &SceneCell) -> Vec<usize> {
+    let n = c.positions.len().min(c.texcoords.len());
+    let valid = |t: &[u32; 3]| t.iter().all(|&i| (i as usize) < n);
+    let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+    for p in &c.positions[..n] {
+        for k in 0..2 {
+            if p[k].is_finite() {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    let scale = [0, 1].map(|k| if hi[k] > lo[k] { 65535.0 / (hi[k] - lo[k]) } else { 0.0 });
+    let mut keyed: Vec<(u64, usize)> = c
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| valid(t))
+        .map(|(ti, t)| {
+            let q = [0, 1].map(|k| {
+                let m = t.iter().map(|&i| c.positions[i as usize][k]).sum::<f32>() / 3.0;
+                let v = ((m - lo[k]) * scale[k]).clamp(0.0, 65535.0);
+                if v.is_finite() { v as u32 } else { 0 }
+            });
+            (interleave(q[0]) | interleave(q[1]) << 1, ti)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, ti)| ti).collect()
+}
+
+/// Spreads the low 16 bits of `v` to the even bits.
+fn interleave(v: u32) -> u64 {
+    let mut x = u64::from(v & 0xffff);
+    x = (x | (x << 8)) & 0x00ff_00ff;
+    x = (x | (x << 4)) & 0x0f0f_0f0f;
+    x = (x | (x << 2)) & 0x3333_3333;
+    (x | (x << 1)) & 0x5555_5555
 }
 
 /// For each triangle, the triangle sharing edge k (`v[k] → v[k+1]`), or [`NO_TRI`] on the
@@ -223,11 +325,13 @@ mod tests {
             texcoords: vec![[0.0, 8.0], [8.0, 8.0], [0.0, 0.0], [8.0, 0.0]],
             texels: 8,
         };
-        let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), BvhQuality::Fast);
+        let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), super::super::BvhQuality::Fast);
         assert_eq!(s.triangle_count(), 2);
+        // Triangles are stored in Morton order of their centroids: (0, 1, 2) first.
+        assert_eq!(s.triangle_source(0), Some((0, 0)));
         assert_eq!(s.triangle_source(1), Some((0, 1)));
         assert_eq!(s.neighbours(0)[1], 1);
-        let h = s.bvh.nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
+        let h = s.bvh().unwrap().nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
         assert_eq!(h.triangle, 0);
         assert!((h.t - 10.0).abs() < 1e-5);
         let p = s.plane(0);

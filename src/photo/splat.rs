@@ -15,6 +15,8 @@
 //! to a neighbouring cell). Non-finite corners and footprints whose bounding box exceeds
 //! [`MAX_SPLAT_BBOX`] texels² deposit nothing. Never produces NaN.
 
+use crate::fastmath::{ceil_f, floor_f};
+
 /// Footprints with a smaller area (texels²) use the bilinear fallback.
 pub const MIN_SPLAT_AREA: f64 = 0.1;
 
@@ -87,21 +89,37 @@ pub fn footprint_area(corners: &[[f32; 2]; 4]) -> f64 {
 /// `j * texels + i`, weight in texels², > 0) for every texel it covers, as described in the
 /// [module docs](self). The weights sum to the footprint's area minus what falls outside
 /// the texture.
-pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
-    const SKIP: Splat = Splat { area: 0.0, kind: SplatKind::Skipped };
+pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, deposit: impl FnMut(usize, f64)) -> Splat {
+    match footprint_shape(corners) {
+        Some((poly, area)) => splat_polygon(&poly, area, texels, deposit),
+        None => SKIP,
+    }
+}
+
+const SKIP: Splat = Splat { area: 0.0, kind: SplatKind::Skipped };
+
+/// The polygon [`splat_footprint`] deposits and its area ([`footprint_polygon`] of the
+/// corners in f64), or `None` for non-finite corners.
+#[inline]
+pub(crate) fn footprint_shape(corners: &[[f32; 2]; 4]) -> Option<([[f64; 2]; 4], f64)> {
     let q = corners.map(|c| [c[0] as f64, c[1] as f64]);
-    if !q.iter().flatten().all(|v| v.is_finite()) || texels == 0 {
+    q.iter().flatten().all(|v| v.is_finite()).then(|| footprint_polygon(&q))
+}
+
+/// [`splat_footprint`] of the polygon `poly` of area `area` (from [`footprint_shape`]).
+pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
+    if texels == 0 {
         return SKIP;
     }
-    let (poly, area) = footprint_polygon(&q);
+    let q = poly;
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in &poly {
+    for p in poly {
         for k in 0..2 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
         }
     }
-    if (hi[0] - lo[0]) * (hi[1] - lo[1]) > MAX_SPLAT_BBOX || !area.is_finite() {
+    if !((hi[0] - lo[0]) * (hi[1] - lo[1]) <= MAX_SPLAT_BBOX) || !area.is_finite() {
         return SKIP;
     }
     let t = texels as f64;
@@ -109,7 +127,7 @@ pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, mut deposit: impl F
     if area < MIN_SPLAT_AREA {
         if area > 0.0 {
             let c = [0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5, 0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5];
-            let (i0, j0) = (c[0].floor(), c[1].floor());
+            let (i0, j0) = (floor_f(c[0]), floor_f(c[1]));
             let (fx, fy) = (c[0] - i0, c[1] - j0);
             for (di, dj, w) in
                 [(0.0, 0.0, (1.0 - fx) * (1.0 - fy)), (1.0, 0.0, fx * (1.0 - fy)), (0.0, 1.0, (1.0 - fx) * fy), (1.0, 1.0, fx * fy)]
@@ -122,10 +140,10 @@ pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, mut deposit: impl F
         }
         return Splat { area, kind: SplatKind::Bilinear };
     }
-    let i0 = lo[0].floor().max(0.0);
-    let i1 = hi[0].ceil().min(t);
-    let j0 = lo[1].floor().max(0.0);
-    let j1 = hi[1].ceil().min(t);
+    let i0 = floor_f(lo[0]).max(0.0);
+    let i1 = ceil_f(hi[0]).min(t);
+    let j0 = floor_f(lo[1]).max(0.0);
+    let j1 = ceil_f(hi[1]).min(t);
     if i1 <= i0 || j1 <= j0 {
         return Splat { area, kind: SplatKind::Exact };
     }
@@ -135,35 +153,140 @@ pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, mut deposit: impl F
         deposit(j0 * n + i0, area);
         return Splat { area, kind: SplatKind::Exact };
     }
+    let (ci0, ci1) = (floor_f(lo[0]), ceil_f(hi[0]));
+    let (cj0, cj1) = (floor_f(lo[1]), ceil_f(hi[1]));
+    if ci1 - ci0 <= 2.0 && cj1 - cj0 <= 2.0 {
+        // At most 2 × 2 texels: one or two half-plane clips give every piece.
+        small_splat(poly, area, [ci0, cj0], [ci1 - ci0 > 1.0, cj1 - cj0 > 1.0], |i, j, w| {
+            if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
+                deposit(j as usize * n + i as usize, w);
+            }
+        });
+        return Splat { area, kind: SplatKind::Exact };
+    }
     // Cut the polygon into column strips at the integer x lines of its bounding box, and
     // each strip into texel pieces at the integer y lines: about 2 half-plane splits per
     // covered texel instead of 4 clips per texel of the box. Strips left/above the texture
     // are cut off first, so pieces stay exact for the texels inside.
-    let (ci0, ci1) = (lo[0].floor(), hi[0].ceil());
-    let (cj0, cj1) = (lo[1].floor(), hi[1].ceil());
-    let mut rest = SPoly::from(&poly);
+    // Two buffers each for the rest of the polygon and the rest of a column, used in turn
+    // (no polygon is copied).
+    let mut rest = [SPoly::from(poly), SPoly::EMPTY];
+    let mut r = 0;
+    let mut col = SPoly::EMPTY;
+    let mut crest = [SPoly::EMPTY, SPoly::EMPTY];
     let mut i = ci0;
-    while i < ci1 && rest.n >= 3 {
-        let (col, r) = if i + 1.0 < ci1 { rest.split(0, i + 1.0) } else { (rest, SPoly::EMPTY) };
-        rest = r;
+    while i < ci1 && rest[r].n >= 3 {
+        let last = !(i + 1.0 < ci1);
+        if !last {
+            let (src, dst) = src_dst(&mut rest, r);
+            src.split_into(0, i + 1.0, &mut col, dst);
+            r = 1 - r;
+        }
         if i >= i0 as f64 && i < i1 as f64 {
-            let mut crest = col;
+            crest[0].copy_from(if last { &rest[r] } else { &col });
+            let mut c = 0;
             let mut j = cj0;
-            while j < cj1 && crest.n >= 3 {
-                let (piece, r2) = if j + 1.0 < cj1 { crest.split(1, j + 1.0) } else { (crest, SPoly::EMPTY) };
-                crest = r2;
-                if j >= j0 as f64 && j < j1 as f64 {
-                    let w = piece.area();
-                    if w > 0.0 {
-                        deposit(j as usize * n + i as usize, w);
-                    }
+            while j < cj1 && crest[c].n >= 3 {
+                let w = if j + 1.0 < cj1 {
+                    let (src, dst) = src_dst(&mut crest, c);
+                    c = 1 - c;
+                    src.split_area(1, j + 1.0, dst)
+                } else {
+                    let w = crest[c].area();
+                    crest[c].n = 0;
+                    w
+                };
+                if j >= j0 as f64 && j < j1 as f64 && w > 0.0 {
+                    deposit(j as usize * n + i as usize, w);
                 }
                 j += 1.0;
             }
         }
+        if last {
+            break;
+        }
         i += 1.0;
     }
     Splat { area, kind: SplatKind::Exact }
+}
+
+/// Pieces of a polygon spanning at most 2 × 2 texels with corner texel `c` (`split[k]`: it
+/// crosses the line `c[k] + 1`): `put(i, j, area)` for each of the (up to four) texels, with
+/// the areas of the parts left of / above the split lines found by half-plane clipping and
+/// the rest by subtraction from `area` (clamped at 0 against rounding).
+fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], split: [bool; 2], mut put: impl FnMut(f64, f64, f64)) {
+    let (x, y) = (c[0] + 1.0, c[1] + 1.0);
+    match split {
+        [false, false] => put(c[0], c[1], area),
+        [true, false] => {
+            let left = clipped_area(poly, 0, x);
+            put(c[0], c[1], left);
+            put(x, c[1], (area - left).max(0.0));
+        }
+        [false, true] => {
+            let top = clipped_area(poly, 1, y);
+            put(c[0], c[1], top);
+            put(c[0], y, (area - top).max(0.0));
+        }
+        [true, true] => {
+            let mut lbuf = [[0.0; 2]; 8];
+            let nl = clip_below(poly, 0, x, &mut lbuf);
+            let left = shoelace(&lbuf[..nl]);
+            let top_left = clipped_area(&lbuf[..nl], 1, y);
+            let top = clipped_area(poly, 1, y);
+            put(c[0], c[1], top_left);
+            put(x, c[1], (top - top_left).max(0.0));
+            put(c[0], y, (left - top_left).max(0.0));
+            put(x, y, (area - left - top + top_left).max(0.0));
+        }
+    }
+}
+
+/// Area of the part of `poly` (at most 8 vertices) with `p[axis] <= c`.
+fn clipped_area(poly: &[[f64; 2]], axis: usize, c: f64) -> f64 {
+    let mut buf = [[0.0; 2]; 16];
+    let n = clip_below(poly, axis, c, &mut buf);
+    shoelace(&buf[..n])
+}
+
+/// Sutherland–Hodgman clip of `poly` to `p[axis] <= c` into `out` (capacity at least twice
+/// the input's); returns the vertex count.
+fn clip_below(poly: &[[f64; 2]], axis: usize, c: f64, out: &mut [[f64; 2]]) -> usize {
+    let mut n = 0;
+    let m = poly.len();
+    for k in 0..m {
+        let (a, b) = (poly[k], poly[(k + 1) % m]);
+        let (da, db) = (a[axis] - c, b[axis] - c);
+        if da <= 0.0 && n < out.len() {
+            out[n] = a;
+            n += 1;
+        }
+        if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) && n < out.len() {
+            let f = da / (da - db);
+            let mut q = [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
+            q[axis] = c;
+            out[n] = q;
+            n += 1;
+        }
+    }
+    n
+}
+
+/// Absolute shoelace area of a polygon.
+fn shoelace(p: &[[f64; 2]]) -> f64 {
+    let mut a2 = 0.0;
+    for k in 0..p.len() {
+        let (a, b) = (p[k], p[(k + 1) % p.len()]);
+        a2 += a[0] * b[1] - a[1] * b[0];
+    }
+    0.5 * a2.abs()
+}
+
+/// The buffer `cur` of a pair to read and the other one to write.
+#[inline]
+fn src_dst(pair: &mut [SPoly; 2], cur: usize) -> (&SPoly, &mut SPoly) {
+    let (a, b) = pair.split_at_mut(1);
+    if cur == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) }
 }
 
 /// Vertex capacity of a polygon piece (a simple quad cut by axis-parallel lines; see
@@ -195,10 +318,18 @@ impl SPoly {
         }
     }
 
-    /// Splits at the line `p[axis] = c` into the part with `p[axis] <= c` and the part with
-    /// `p[axis] >= c` (Sutherland-Hodgman against both half-planes in one pass).
-    fn split(&self, axis: usize, c: f64) -> (SPoly, SPoly) {
-        let (mut lo, mut hi) = (SPoly::EMPTY, SPoly::EMPTY);
+    /// Copies the used vertices of `o`.
+    #[inline]
+    fn copy_from(&mut self, o: &SPoly) {
+        self.v[..o.n].copy_from_slice(&o.v[..o.n]);
+        self.n = o.n;
+    }
+
+    /// Splits at the line `p[axis] = c` into the part with `p[axis] <= c` (`lo`) and the part
+    /// with `p[axis] >= c` (`hi`) (Sutherland-Hodgman against both half-planes in one pass).
+    fn split_into(&self, axis: usize, c: f64, lo: &mut SPoly, hi: &mut SPoly) {
+        lo.n = 0;
+        hi.n = 0;
         for k in 0..self.n {
             let (a, b) = (self.v[k], self.v[(k + 1) % self.n]);
             let (da, db) = (a[axis] - c, b[axis] - c);
@@ -216,7 +347,14 @@ impl SPoly {
                 hi.push(q);
             }
         }
-        (lo, hi)
+    }
+
+    /// [`SPoly::split_into`] that keeps only the `>=` part (in `hi`) and returns the area of
+    /// the `<=` part.
+    fn split_area(&self, axis: usize, c: f64, hi: &mut SPoly) -> f64 {
+        let mut lo = SPoly::EMPTY;
+        self.split_into(axis, c, &mut lo, hi);
+        lo.area()
     }
 
     /// Absolute shoelace area.
@@ -333,6 +471,37 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn small_footprints_match_box_clipping() {
+        // quads of 0.3-1.5 texels: the one- and two-clip cases (1×2, 2×1, 2×2 texels),
+        // convex, concave and self-intersecting, also across the texture border
+        let mut seed = 777u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut exact = 0;
+        for _ in 0..4000 {
+            let c = [rnd() * 5.0 - 0.5, rnd() * 5.0 - 0.5];
+            let s = 0.3 + rnd() * 1.2;
+            let q: [[f32; 2]; 4] = std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);
+            let (sp, v) = collect(q, 4);
+            if sp.kind != SplatKind::Exact {
+                continue;
+            }
+            exact += 1;
+            let (poly, _) = footprint_polygon(&q.map(|p| [p[0] as f64, p[1] as f64]));
+            for j in 0..4 {
+                for i in 0..4 {
+                    let want = polygon_box_area(&poly, [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0]);
+                    let got = v.iter().find(|x| x.0 == j * 4 + i).map_or(0.0, |x| x.1);
+                    assert!((got - want).abs() < 1e-9, "{q:?} texel {i},{j}: {got} vs {want}");
+                }
+            }
+        }
+        assert!(exact > 1000, "{exact}");
     }
 
     #[test]

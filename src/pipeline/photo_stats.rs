@@ -35,7 +35,7 @@ pub(crate) fn add_photos(json: &mut serde_json::Value, manifest: &Manifest) {
             "blend": p.blend,
             "reconstruct": p.reconstruct,
             "level_colours": p.level_colours,
-            "bvh_quality": p.bvh_quality,
+            "ray_accel": p.ray_accel,
         }),
         None => serde_json::Value::Null,
     };

@@ -14,7 +14,6 @@
 //! same photos give byte-identical files; records and files of an earlier run that this
 //! run does not write are removed. The manifest is written last.
 
-use std::ops::Range;
 use std::path::Path;
 
 use indicatif::{MultiProgress, ProgressBar};
@@ -25,8 +24,8 @@ use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{
-    BlendMode, BvhQuality, CellAccum, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, LevelScene,
-    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, PixelFootprint, blend_cell, collect_pairs,
+    BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
+    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
     fit_colour_transform, normal_cos_slope, photo_footprints,
 };
 use crate::stats::texel_stretch;
@@ -47,8 +46,8 @@ pub struct ProjectOptions {
     pub footprint: FootprintOptions,
     /// Fit and apply a per-photo colour transform towards the existing texture.
     pub level_colours: bool,
-    /// BVH build preset for the ray casts.
-    pub bvh: BvhQuality,
+    /// Ray-casting acceleration for the pixel-corner rays.
+    pub ray: RayAccel,
     /// Confidence terms and blend ramp.
     pub confidence: ConfidenceParams,
     /// Leveling sample selection and guards.
@@ -65,7 +64,7 @@ impl Default for ProjectOptions {
             blend: BlendMode::Confidence,
             footprint: FootprintOptions::default(),
             level_colours: true,
-            bvh: BvhQuality::default(),
+            ray: RayAccel::default(),
             confidence: ConfidenceParams::default(),
             leveling: LevelingParams::default(),
             leveling_max_pixels: 1 << 20,
@@ -81,6 +80,30 @@ pub struct ProjectReport {
     pub settings: PhotoSettings,
     /// Cells (all levels) that got a photo texture.
     pub cells_written: usize,
+    /// Wall-clock seconds each stage of the run took, in order (stage name, seconds): colour
+    /// leveling, then per level and photo the footprints and the splat, and the cells
+    /// written per level. For benchmarks; not stored.
+    pub stage_seconds: Vec<(String, f64)>,
+}
+
+/// Wall-clock durations of consecutive stages (also logged at debug level).
+struct StageTimer {
+    last: std::time::Instant,
+    laps: Vec<(String, f64)>,
+}
+
+impl StageTimer {
+    fn new() -> StageTimer {
+        StageTimer { last: std::time::Instant::now(), laps: Vec::new() }
+    }
+
+    fn lap(&mut self, stage: &str) {
+        let now = std::time::Instant::now();
+        let dt = (now - self.last).as_secs_f64();
+        self.last = now;
+        tracing::debug!("project: {stage}: {dt:.3} s");
+        self.laps.push((stage.to_string(), dt));
+    }
 }
 
 /// Runs `project` on the store in `dir` with `photos` (see the [module docs](self)).
@@ -134,15 +157,26 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         .collect();
 
     let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    let mut timer = StageTimer::new();
+    // Footprints cast for the leveling are kept for the main loop while they are few.
+    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
+    let mut cached_len = 0usize;
     if opts.level_colours {
         for (i, pyr) in pyramids.iter().enumerate() {
-            let (t, n) = estimate_leveling(&store, pyr, finest, opts)?;
+            let (t, n, fs) = estimate_leveling(&store, pyr, finest, opts)?;
+            if let Some((level, fs)) = fs {
+                if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
+                    cached_len += fs.len();
+                    cached[i] = Some((level, fs));
+                }
+            }
             transforms[i] = t;
             reports[i].colour_gain = t.gain;
             reports[i].colour_offset = t.offset;
             reports[i].colour_samples = n as u64;
             bars[i].inc(1);
         }
+        timer.lap("colour leveling");
     }
 
     let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
@@ -152,16 +186,22 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
         for (pi, pyr) in pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
-            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.bvh)?;
-            let fs = photo_footprints(&scene, &cam, &opts.footprint);
-            drop(scene);
+            let fs = match cached[pi].take() {
+                Some((l, fs)) if l == level => fs,
+                other => {
+                    cached[pi] = other;
+                    let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
+                    photo_footprints(&scene, &cam, &opts.footprint)
+                }
+            };
+            timer.lap(&format!("level {level} photo {pi}: footprints"));
             if level == finest {
                 let r = &mut reports[pi];
                 r.pixels_hit = fs.pixels_hit;
                 r.rejected_silhouette = fs.rejected_silhouette;
                 r.reconstructed_footprints = fs.reconstructed;
             }
-            let groups = group_by_cell(&fs.footprints, &store.manifest.cells, level as u8);
+            let groups = group_by_cell(&fs, &store.manifest.cells, level as u8);
             let cells = &store.manifest.cells;
             let (transform, conf) = (&transforms[pi], &opts.confidence);
             let written: Vec<u64> = accs
@@ -172,12 +212,13 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
                     let Some(range) = range else { return 0 };
                     let texels = active_texels(&cells[ci]);
                     let mut pa = PhotoAccum::new(texels);
-                    pa.add_all(&fs.footprints[range.clone()], img, transform, conf);
+                    pa.add_all(range.iter(), img, transform, conf);
                     acc.get_or_insert_with(|| CellAccum::new(texels, opts.blend)).merge(&pa)
                 })
                 .collect();
             reports[pi].texels_written += written.iter().sum::<u64>();
             bars[pi].inc(1);
+            timer.lap(&format!("level {level} photo {pi}: splat"));
         }
         let level_cells: Vec<usize> = (0..ncells).filter(|&i| store.manifest.cells[i].level as usize == level).collect();
         let results: Vec<Result<CellOutcome>> =
@@ -194,6 +235,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             }
         }
         level_reports.push(lr);
+        timer.lap(&format!("level {level}: cells written"));
     }
     for pb in &bars {
         pb.finish_and_clear();
@@ -212,7 +254,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         blend: opts.blend.name().to_string(),
         reconstruct: opts.footprint.reconstruct,
         level_colours: opts.level_colours,
-        bvh_quality: opts.bvh.name().to_string(),
+        ray_accel: opts.ray.name(),
         photos: reports,
         levels: level_reports,
     };
@@ -224,7 +266,8 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         &serde_json::to_vec_pretty(&store.manifest).map_err(|e| Error::store(dir, e.to_string()))?,
     )?;
     remove_stale_photo_files(dir, &store.manifest.cells);
-    Ok(ProjectReport { settings, cells_written })
+    timer.lap("manifest and stats");
+    Ok(ProjectReport { settings, cells_written, stage_seconds: timer.laps })
 }
 
 /// Removes the photo textures of cells without a photo record (left by an earlier run).
@@ -236,36 +279,31 @@ pub(crate) fn remove_stale_photo_files(dir: &Path, cells: &[CellRecord]) {
     }
 }
 
-/// Per manifest cell, the range of `footprints` (sorted by cell) that lies in it; cells not
-/// on `level` (a footprint set from a foreign scene) get none.
-fn group_by_cell(footprints: &[PixelFootprint], cells: &[CellRecord], level: u8) -> Vec<Option<Range<usize>>> {
+/// Per manifest cell, its footprints in `fs`; cells not on `level` (a footprint set from a
+/// foreign scene) get none.
+fn group_by_cell<'a>(fs: &'a FootprintSet, cells: &[CellRecord], level: u8) -> Vec<Option<&'a CellFootprints>> {
     let mut out = vec![None; cells.len()];
-    let mut k = 0;
-    while k < footprints.len() {
-        let cell = footprints[k].cell as usize;
-        let start = k;
-        while k < footprints.len() && footprints[k].cell as usize == cell {
-            k += 1;
-        }
+    for cf in &fs.cells {
+        let cell = cf.cell as usize;
         if cell < cells.len() && cells[cell].level == level {
-            match &mut out[cell] {
-                // footprints are documented as sorted by cell; tolerate a split run by
-                // ignoring the later part rather than mixing orders
-                Some(_) => tracing::warn!("footprints of cell {} are not contiguous; later run ignored", cells[cell].id),
-                slot => *slot = Some(start..k),
-            }
+            out[cell] = Some(cf);
         }
     }
     out
 }
 
-/// The leveling transform of one photo and its sample count (see the module docs).
+/// Most footprints (over all photos) kept from the leveling casts for the main loop
+/// (about 56 bytes each).
+const MAX_CACHED_FOOTPRINTS: usize = 8 << 20;
+
+/// The leveling transform of one photo, its sample count and the footprints it was fitted
+/// on with their level (see the module docs).
 fn estimate_leveling(
     store: &Store,
     pyr: &PhotoPyramid,
     finest: usize,
     opts: &ProjectOptions,
-) -> Result<(ColourTransform, usize)> {
+) -> Result<(ColourTransform, usize, Option<(usize, FootprintSet)>)> {
     let (w, h) = pyr.level(0).0.dimensions();
     let mut k_est = 0;
     while k_est < finest && (w as u64 >> k_est) * (h as u64 >> k_est) > opts.leveling_max_pixels {
@@ -275,19 +313,19 @@ fn estimate_leveling(
     for step in attempts {
         let level = finest - step;
         let (img, cam) = pyr.level(step);
-        let scene = LevelScene::from_store(store, level as u8, cam.position, opts.bvh)?;
+        let scene = LevelScene::from_store(store, level as u8, cam.position, opts.ray)?;
         let fs = photo_footprints(&scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;
-        let groups = group_by_cell(&fs.footprints, cells, level as u8);
+        let groups = group_by_cell(&fs, cells, level as u8);
         let parts: Vec<Result<ColourPairs>> = groups
             .par_iter()
             .enumerate()
-            .filter_map(|(ci, g)| g.clone().map(|r| (ci, r)))
+            .filter_map(|(ci, g)| g.map(|r| (ci, r)))
             .map(|(ci, range)| {
                 let rec = &cells[ci];
                 let mut pa = PhotoAccum::new(active_texels(rec));
-                pa.add_all(&fs.footprints[range], img, &ColourTransform::IDENTITY, &opts.confidence);
+                pa.add_all(range.iter(), img, &ColourTransform::IDENTITY, &opts.confidence);
                 let existing = store.read_active_texture(rec)?;
                 let normals = store.read_active_normal_map(rec)?;
                 check_size(store, rec, existing.dimensions(), normals.dimensions())?;
@@ -304,10 +342,10 @@ fn estimate_leveling(
         }
         let (t, n) = fit_colour_transform(&all, &opts.leveling);
         if n > 0 {
-            return Ok((t, n));
+            return Ok((t, n, Some((level, fs))));
         }
     }
-    Ok((ColourTransform::IDENTITY, 0))
+    Ok((ColourTransform::IDENTITY, 0, None))
 }
 
 /// Errors unless the active texture and normal map have the cell's active texture size.

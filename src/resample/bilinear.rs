@@ -1,7 +1,7 @@
 //! Bilinear lookup in the source image, ignoring unknown (alpha 0) and out-of-image taps.
 
 use super::SrcView;
-use super::footprint::floor_i;
+use crate::fastmath::floor_i;
 
 /// Bilinear colour (RGB, 0..=255) at fractional pixel coordinates `(col, row)` (pixel
 /// centres at integers). Taps outside the image or with alpha 0 are dropped and the rest

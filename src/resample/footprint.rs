@@ -158,12 +158,6 @@ impl Footprint {
     }
 }
 
-/// `floor(v)` as an integer without a libm call (exact for |v| < 2^63; saturates beyond).
-#[inline]
-pub(crate) fn floor_i(v: f64) -> i64 {
-    let t = v as i64;
-    t - i64::from((t as f64) > v)
-}
 
 /// One of the two constraints `-eps <= g <= 1 + eps` of a footprint (`g` = alpha or beta,
 /// see [`Footprint::param`]) solved for one coordinate: relative to the footprint origin

@@ -9,7 +9,8 @@
 //! reference (the two agree up to samples lying within rounding of the footprint's edge).
 
 use super::SrcView;
-use super::footprint::{Affine2, Param, Shape, floor_i, inside};
+use super::footprint::{Affine2, Param, Shape, inside};
+use crate::fastmath::{ceil_f, floor_f, floor_i};
 use super::kernel::{MIN_FOOTPRINT_AREA, Scratch, TexelColour, bilinear_at};
 
 /// Largest accepted subtexel count per axis.
@@ -86,21 +87,6 @@ fn max_f(a: f64, b: f64) -> f64 {
 #[inline(always)]
 fn min_f(a: f64, b: f64) -> f64 {
     if a < b { a } else { b }
-}
-
-/// `floor(x)` for |x| < 2^51 in plain arithmetic (no libm call; exact: adding and
-/// subtracting 1.5 * 2^52 rounds to an integer, corrected downwards).
-#[inline(always)]
-fn floor_f(x: f64) -> f64 {
-    const M: f64 = 6_755_399_441_055_744.0;
-    let r = (x + M) - M;
-    if r > x { r - 1.0 } else { r }
-}
-
-/// `ceil(x)` for |x| < 2^51 (see [`floor_f`]).
-#[inline(always)]
-fn ceil_f(x: f64) -> f64 {
-    -floor_f(-x)
 }
 
 /// Colour of texel `(i, j)` of a triangle with map `map` by the subtexel estimate with

@@ -212,8 +212,10 @@ pub struct PhotoSettings {
     pub reconstruct: bool,
     /// Whether per-photo colour leveling towards the ortho was applied.
     pub level_colours: bool,
-    /// BVH build preset used for the ray casts.
-    pub bvh_quality: String,
+    /// Ray-casting acceleration used ([`crate::photo::RayAccel::name`]: `grid:BIN_PX` or
+    /// `bvh:PRESET`; stores written before the grid existed hold the BVH preset alone).
+    #[serde(alias = "bvh_quality")]
+    pub ray_accel: String,
     /// One report per photo, in input order.
     pub photos: Vec<PhotoReport>,
     /// Per quadtree level (root first): texel counts over all cells of the level.
