@@ -18,6 +18,43 @@ pub(crate) struct TexelColour {
     pub fallback: bool,
 }
 
+/// The running area-weighted colour of one texel: `Σ Aᵢ` over every overlapped pixel inside
+/// the image, and `Σ Aᵢ`, `Σ Aᵢ Cᵢ` over the known ones.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct AreaSum {
+    rgb: [f64; 3],
+    known: f64,
+    total: f64,
+}
+
+impl AreaSum {
+    /// Adds overlap `a` (> 0) with a pixel of colour `px` (`None`: unknown).
+    #[inline]
+    pub(crate) fn add(&mut self, a: f64, px: Option<[u8; 3]>) {
+        self.total += a;
+        if let Some(px) = px {
+            self.known += a;
+            for k in 0..3 {
+                self.rgb[k] += a * px[k] as f64;
+            }
+        }
+    }
+
+    /// The texel's colour, or `None` if the total overlap is below [`MIN_FOOTPRINT_AREA`]
+    /// (the caller then falls back to bilinear filtering).
+    #[inline]
+    pub(crate) fn colour(&self) -> Option<TexelColour> {
+        if self.total < MIN_FOOTPRINT_AREA {
+            return None;
+        }
+        Some(if self.known > 0.0 {
+            TexelColour { rgb: self.rgb.map(|v| v / self.known), known: true, fallback: false }
+        } else {
+            TexelColour::default()
+        })
+    }
+}
+
 /// Reusable per-row scratch space (no allocation per texel).
 #[derive(Default)]
 pub(crate) struct Scratch {
@@ -75,8 +112,7 @@ pub(crate) fn texel_colour(
                 .unwrap_or((f64::INFINITY, f64::NEG_INFINITY)),
         );
     }
-    let mut rgb = [0.0; 3];
-    let (mut known, mut total) = (0.0, 0.0);
+    let mut sum = AreaSum::default();
     for r in r0..=r1 {
         let rf = r as f64;
         let Some((xa, xb)) = range_in_strip(&corners, 1, rf - 0.5, rf + 0.5) else {
@@ -109,32 +145,10 @@ pub(crate) fn texel_colour(
                     _ => exact::area(fp, cf, rf),
                 }
             };
-            if a <= 0.0 {
-                continue;
-            }
-            total += a;
-            if let Some(px) = src.get(c, r) {
-                known += a;
-                for k in 0..3 {
-                    rgb[k] += a * px[k] as f64;
-                }
+            if a > 0.0 {
+                sum.add(a, src.get(c, r));
             }
         }
     }
-    if total < MIN_FOOTPRINT_AREA {
-        return bilinear_at(src, fp, true);
-    }
-    if known > 0.0 {
-        TexelColour {
-            rgb: rgb.map(|v| v / known),
-            known: true,
-            fallback: false,
-        }
-    } else {
-        TexelColour {
-            rgb: [0.0; 3],
-            known: false,
-            fallback: false,
-        }
-    }
+    sum.colour().unwrap_or_else(|| bilinear_at(src, fp, true))
 }

@@ -11,7 +11,7 @@
 use super::SrcView;
 use super::footprint::{Affine2, Param, Shape, inside};
 use crate::fastmath::{ceil_f, floor_f, floor_i};
-use super::kernel::{MIN_FOOTPRINT_AREA, Scratch, TexelColour, bilinear_at};
+use super::kernel::{AreaSum, Scratch, TexelColour, bilinear_at};
 
 /// Largest accepted subtexel count per axis.
 pub const MAX_SUBTEXELS: u32 = 64;
@@ -139,8 +139,7 @@ pub(crate) fn texel_colour(
     let pix_rel = |c: i64, p: f64| c as f64 - 0.5 - p;
     sh.strip_extents(0, p0[0], &cs, c0, c1, &mut scratch.col_ranges);
     sh.strip_extents(1, p0[1], &rs, r0, r1, &mut scratch.row_ranges);
-    let mut rgb = [0.0; 3];
-    let (mut known, mut total) = (0.0, 0.0);
+    let mut sum = AreaSum::default();
     for r in r0..=r1 {
         let ylo = pix_rel(r, p0[1]);
         let yhi = ylo + 1.0;
@@ -172,30 +171,12 @@ pub(crate) fn texel_colour(
             } else {
                 area_by_rows(sh, n, x0, x1, y0, y1)
             };
-            if a <= 0.0 {
-                continue;
-            }
-            total += a;
-            if let Some(px) = src.get(c, r) {
-                known += a;
-                for k in 0..3 {
-                    rgb[k] += a * px[k] as f64;
-                }
+            if a > 0.0 {
+                sum.add(a, src.get(c, r));
             }
         }
     }
-    if total < MIN_FOOTPRINT_AREA {
-        return bilinear_at(src, &map.texel_footprint(i, j), true);
-    }
-    if known > 0.0 {
-        TexelColour {
-            rgb: rgb.map(|v| v / known),
-            known: true,
-            fallback: false,
-        }
-    } else {
-        TexelColour::default()
-    }
+    sum.colour().unwrap_or_else(|| bilinear_at(src, &map.texel_footprint(i, j), true))
 }
 
 #[cfg(test)]
@@ -270,7 +251,7 @@ mod tests {
                 m: [[a[0], b[0], p0[0]], [a[1], b[1], p0[1]]],
             };
             let n = [1, 2, 3, 4, 8][trial % 5];
-            let shape = Shape::new(&map, MIN_FOOTPRINT_AREA);
+            let shape = Shape::new(&map, super::super::kernel::MIN_FOOTPRINT_AREA);
             let fast = texel_colour(&src, &map, shape.as_ref(), 0, 0, n, &mut scratch);
             let slow = kernel::texel_colour(
                 &src,
