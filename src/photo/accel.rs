@@ -72,7 +72,7 @@ impl RayAccel {
 
 /// Nearest-hit queries for the rays of one photo.
 pub(crate) enum Caster<'a> {
-    Grid(ViewGrid<'a>),
+    Grid(ViewGrid),
     Bvh(&'a TriangleBvh),
 }
 

@@ -53,8 +53,7 @@ struct Entry {
 }
 
 /// Triangles binned by their central projection for one camera centre (see module docs).
-pub struct ViewGrid<'a> {
-    tris: &'a [Triangle],
+pub struct ViewGrid {
     /// `tris` prepared for rays from the grid's origin.
     pre: Vec<PreTri>,
     /// World (= scene frame) to camera rotation.
@@ -84,22 +83,22 @@ pub struct ViewGridStats {
     pub triangles_binned: usize,
 }
 
-impl<'a> ViewGrid<'a> {
+impl ViewGrid {
     /// Bins the triangles of `scene` for the pixel-corner rays of `camera` (its centre must
     /// be where the rays start; the scene's frame origin is usually at it).
-    pub fn for_camera(scene: &'a super::LevelScene, camera: &CameraModel, params: ViewGridParams) -> ViewGrid<'a> {
+    pub fn for_camera(scene: &super::LevelScene, camera: &CameraModel, params: ViewGridParams) -> ViewGrid {
         let origin = (camera.position - scene.frame_origin).as_vec3();
         ViewGrid::build(scene.triangles(), camera, &camera.ray_caster(), origin, params)
     }
 
     /// Bins `tris` (scene frame, camera centre at `origin`) for the rays of `camera`'s pixel
     /// corners.
-    pub(crate) fn build(tris: &'a [Triangle], camera: &CameraModel, rays: &RayCaster, origin: Vec3, params: ViewGridParams) -> ViewGrid<'a> {
+    pub(crate) fn build(tris: &[Triangle], camera: &CameraModel, rays: &RayCaster, origin: Vec3, params: ViewGridParams) -> ViewGrid {
         let rot = camera.world_to_camera;
         let o = Vec3A::from(origin);
         let pre = tris.par_iter().map(|t| PreTri::new(t, o)).collect();
         let fwd = Vec3A::from((rot.row(2) * (1.0 + 1e-5)).as_vec3());
-        let mut grid = ViewGrid { tris, pre, rot, fwd, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
+        let mut grid = ViewGrid { pre, rot, fwd, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
         let Some([xmin, ymin, xmax, ymax]) = ray_bounds(camera, rays) else { return grid };
         let f = camera.fx.abs().max(camera.fy.abs());
         let bin_px = if params.bin_px.is_finite() && params.bin_px > 0.0 { params.bin_px as f64 } else { 8.0 };
@@ -177,7 +176,7 @@ impl<'a> ViewGrid<'a> {
 
     /// Bin counts and entries.
     pub fn stats(&self) -> ViewGridStats {
-        let mut seen = vec![false; self.tris.len()];
+        let mut seen = vec![false; self.pre.len()];
         for e in &self.entries {
             seen[e.tri as usize] = true;
         }

@@ -3,7 +3,7 @@
 
 use super::distortion::{DistortedView, NEWTON_STEPS};
 use super::gpu::GpuContext;
-use super::target::{COLOR_FORMAT, RenderTarget};
+use super::target::{OPAQUE_TARGET, RenderTarget};
 
 /// Pipeline, sampler and uniform buffer of the distortion pass.
 pub(crate) struct DistortPass {
@@ -17,7 +17,7 @@ pub(crate) struct DistortPass {
 const PARAMS_BYTES: u64 = 80;
 
 impl DistortPass {
-    /// Creates the pipeline (output format [`COLOR_FORMAT`], no depth).
+    /// Creates the pipeline (output format [`COLOR_FORMAT`](super::target::COLOR_FORMAT), no depth).
     pub fn new(device: &wgpu::Device) -> DistortPass {
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("distort.wgsl"),
@@ -75,11 +75,7 @@ impl DistortPass {
                 module: &shader,
                 entry_point: Some("fs_distort"),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOR_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                targets: &OPAQUE_TARGET,
             }),
             multiview_mask: None,
             cache: None,

@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use super::camera::RenderCamera;
 use super::distort_pass::DistortPass;
 use super::distortion::DistortedView;
-use super::target::RenderTarget;
+use super::target::{OPAQUE_TARGET, RenderTarget};
 pub use super::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::error::{Error, Result};
 use crate::store::{CellMesh, CellRecord, texcoord};
@@ -420,11 +420,7 @@ impl TerrainRenderer {
                     module: &shader,
                     entry_point: Some(fragment),
                     compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: COLOR_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    targets: &OPAQUE_TARGET,
                 }),
                 multiview_mask: None,
                 cache: None,
