@@ -9,7 +9,8 @@
 //! lines and each strip into texel pieces at the integer y lines (one-pass
 //! Sutherland-Hodgman splits, about two per covered texel; tested against the resampler's
 //! exact-mode clipping, generalised to any simple polygon). A *collapsed* footprint, of area
-//! below [`MIN_SPLAT_AREA`] texels², deposits its area at its centre with bilinear weights
+//! below [`MIN_SPLAT_AREA`] texels² (a point or a sliver, not merely a pixel much smaller than
+//! a texel), deposits its area at its centre with bilinear weights
 //! over the four nearest texel centres (the weights of a one-texel box around the centre,
 //! as in the resampling fallback). Deposits outside the texture are dropped (they belong
 //! to a neighbouring cell). Non-finite corners and footprints whose bounding box exceeds
@@ -17,8 +18,11 @@
 
 use crate::fastmath::{ceil_f, floor_f};
 
-/// Footprints with a smaller area (texels²) use the bilinear fallback.
-pub const MIN_SPLAT_AREA: f64 = 0.1;
+/// Footprints with a smaller area (texels²) count as collapsed and use the bilinear
+/// fallback: a pixel a thousandth of a texel across or a sliver of (nearly) collinear corners.
+/// Everything larger, however small against the texel, is deposited exactly (box-filtered
+/// by the texel).
+pub const MIN_SPLAT_AREA: f64 = 1e-6;
 
 /// Footprints whose bounding box is larger than this (texels²) are skipped: a single pixel
 /// smeared over thousands of texels carries no usable detail (grazing views).
@@ -435,14 +439,32 @@ mod tests {
     }
 
     #[test]
-    fn small_footprint_is_bilinear_at_centre() {
-        // 0.2 x 0.2 square centred on (2.0, 1.5): halfway between texel centres 1.5 and 2.5 in x
-        let (s, v) = collect([[1.9, 1.4], [2.1, 1.4], [2.1, 1.6], [1.9, 1.6]], 4);
+    fn collapsed_footprint_is_bilinear_at_centre() {
+        // 2^-11 x 2^-11 square (exact in f32) centred on (2.0, 1.5): halfway between texel
+        // centres 1.5 and 2.5 in x, on the centre row in y
+        let h = 1.0 / 4096.0;
+        let (s, v) = collect([[2.0 - h, 1.5 - h], [2.0 + h, 1.5 - h], [2.0 + h, 1.5 + h], [2.0 - h, 1.5 + h]], 4);
         assert_eq!(s.kind, SplatKind::Bilinear);
-        let total: f64 = v.iter().map(|x| x.1).sum();
-        assert!((total - 0.04).abs() < 1e-7);
+        let a = s.area;
+        assert_eq!(a, 4.0 * h as f64 * h as f64);
         assert_eq!(v.len(), 2);
-        assert!(v.iter().all(|x| (x.1 - 0.02).abs() < 1e-7));
+        assert!(v.iter().all(|x| (x.1 - 0.5 * a).abs() < 1e-12));
+    }
+
+    #[test]
+    fn small_footprint_is_exact() {
+        // 0.2 x 0.2 square at [1.7, 1.9] x [1.3, 1.5]: inside texel (1, 1), where the bilinear
+        // fallback would have spread it over four texels
+        let (s, v) = collect([[1.7, 1.3], [1.9, 1.3], [1.9, 1.5], [1.7, 1.5]], 4);
+        assert_eq!(s.kind, SplatKind::Exact);
+        assert_eq!(v.len(), 1);
+        assert_eq!(v[0].0, 4 + 1);
+        assert!((v[0].1 - 0.04).abs() < 1e-7);
+        // straddling x = 2: split by area
+        let (s, v) = collect([[1.95, 1.3], [2.15, 1.3], [2.15, 1.5], [1.95, 1.5]], 4);
+        assert_eq!(s.kind, SplatKind::Exact);
+        let get = |i: usize| v.iter().find(|x| x.0 == i).map_or(0.0, |x| x.1);
+        assert!((get(4 + 1) - 0.01).abs() < 1e-7 && (get(4 + 2) - 0.03).abs() < 1e-7, "{v:?}");
     }
 
     #[test]
