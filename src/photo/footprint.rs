@@ -28,7 +28,11 @@
 //! centre ray: that would double the ray count for a quantity that varies little within a
 //! pixel). Rows are processed in bands in parallel (each band casts its own corner rows
 //! plus one above and below, for the adjacent-footprint rule), collected in order, so the
-//! result does not depend on the thread count.
+//! result does not depend on the thread count. [`for_each_footprint_batch`] hands the
+//! footprints over in batches of bands (in row order) and reuses their buffers, so a
+//! 12-MP photo never holds all of its ~10 M footprints (about 56 bytes each) at once.
+
+use std::sync::Mutex;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -73,16 +77,33 @@ impl Default for FootprintOptions {
 /// Casts rays through every pixel corner of `camera`'s image (undistorted) against `scene`
 /// and returns every pixel's footprint in the texture of the cell it belongs to.
 pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &FootprintOptions) -> FootprintSet {
+    let mut all = FootprintSet::default();
+    for_each_footprint_batch(scene, camera, opts, |batch| all.append(batch));
+    all
+}
+
+/// [`photo_footprints`] in batches of consecutive pixel rows, handed to `sink` in row order
+/// as they are cast (the footprints of the whole photo are never held at once: a batch's
+/// buffers are reused once `sink` returns, and the next batch is cast while `sink` runs).
+/// Each batch is a [`FootprintSet`] of its rows (cells by increasing manifest index, counts
+/// of its rows); `sink` may take its chunks. Concatenating the batches per cell gives exactly
+/// [`photo_footprints`]' result, whatever the thread count.
+pub fn for_each_footprint_batch(
+    scene: &LevelScene,
+    camera: &CameraModel,
+    opts: &FootprintOptions,
+    mut sink: impl FnMut(&mut FootprintSet) + Send,
+) {
     let (w, h) = (camera.width, camera.height);
     let origin = (camera.position - scene.frame_origin).as_vec3();
     if w == 0 || h == 0 || scene.triangle_count() == 0 || !origin.is_finite() {
-        return FootprintSet::default();
+        return;
     }
     let rays = camera.ray_caster();
     let caster = match (scene.accel, scene.bvh()) {
         (RayAccel::Bvh(_), Some(bvh)) => Caster::Bvh(bvh),
         (RayAccel::ViewGrid(p), _) => Caster::Grid(ViewGrid::build(scene.triangles(), camera, &rays, origin, p)),
-        (RayAccel::Bvh(_), None) => return FootprintSet::default(),
+        (RayAccel::Bvh(_), None) => return,
     };
     // Output buckets: scene cells ordered by manifest index (then scene order).
     let mut order: Vec<usize> = (0..scene.cells.len()).collect();
@@ -91,29 +112,64 @@ pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &Footpri
     for (b, &i) in order.iter().enumerate() {
         bucket[i] = b as u32;
     }
-    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket };
-    let bands: Vec<BandOut> = (0..h.div_ceil(BAND_ROWS))
-        .into_par_iter()
-        .map_init(|| Vec::new(), |hits, b| ctx.band(b, hits))
-        .collect();
+    let pools = Pools::default();
+    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket, pools: &pools };
+    let bands = h.div_ceil(BAND_ROWS);
+    let mut pending: Option<FootprintSet> = None;
+    let mut b0 = 0;
+    while b0 < bands || pending.is_some() {
+        let b1 = (b0 + BATCH_BANDS).min(bands);
+        let (next, ()) = rayon::join(
+            || (b0 < b1).then(|| ctx.batch(b0..b1, &order)),
+            || {
+                if let Some(mut done) = pending.take() {
+                    sink(&mut done);
+                    pools.recycle(done);
+                }
+            },
+        );
+        pending = next;
+        b0 = b1;
+    }
+}
 
-    // Every bucket's chunks in band (= row) order: no footprint is copied.
-    let mut set = FootprintSet::default();
-    let mut cells: Vec<CellFootprints> =
-        order.iter().map(|&i| CellFootprints { cell: scene.cells[i].cell, chunks: Vec::new() }).collect();
-    for b in bands {
-        set.pixels_hit += b.pixels_hit;
-        set.rejected_silhouette += b.rejected_silhouette;
-        set.reconstructed += b.reconstructed;
-        set.dropped += b.dropped;
-        for (k, chunk) in b.buckets.into_iter().enumerate() {
-            if !chunk.is_empty() {
-                cells[k].chunks.push(chunk);
+/// Pixel-row bands per batch of [`for_each_footprint_batch`] (with 64-row bands, 256 rows).
+const BATCH_BANDS: u32 = 4;
+
+/// Scratch buffers reused across bands and batches (so a photo's casts touch little fresh
+/// memory).
+#[derive(Default)]
+struct Pools {
+    hits: Mutex<Vec<Vec<CornerHit>>>,
+    chunks: Mutex<Vec<Vec<PixelFootprint>>>,
+}
+
+impl Pools {
+    fn take_hits(&self) -> Vec<CornerHit> {
+        self.hits.lock().map(|mut p| p.pop()).ok().flatten().unwrap_or_default()
+    }
+
+    fn put_hits(&self, v: Vec<CornerHit>) {
+        if let Ok(mut p) = self.hits.lock() {
+            p.push(v);
+        }
+    }
+
+    fn take_chunk(&self) -> Vec<PixelFootprint> {
+        self.chunks.lock().map(|mut p| p.pop()).ok().flatten().unwrap_or_default()
+    }
+
+    /// Keeps the (emptied) chunk buffers of a consumed batch.
+    fn recycle(&self, set: FootprintSet) {
+        if let Ok(mut p) = self.chunks.lock() {
+            for mut chunk in set.cells.into_iter().flat_map(|c| c.chunks) {
+                if chunk.capacity() > 0 {
+                    chunk.clear();
+                    p.push(chunk);
+                }
             }
         }
     }
-    set.cells = cells.into_iter().filter(|c| !c.chunks.is_empty()).collect();
-    set
 }
 
 /// One band's footprints per output bucket (row-major), and its counts.
@@ -143,6 +199,7 @@ struct Ctx<'a> {
     h: u32,
     opts: FootprintOptions,
     bucket: &'a [u32],
+    pools: &'a Pools,
 }
 
 /// The corner rows a band cast: rows `j_lo..=j_hi`, `stride` = W + 1 corners each.
@@ -164,14 +221,37 @@ impl CornerRows {
 }
 
 impl Ctx<'_> {
-    /// Casts and forms the footprints of pixel rows `b·BAND_ROWS..` (`hits`: reused scratch).
-    fn band(&self, b: u32, pool: &mut Vec<CornerHit>) -> BandOut {
+    /// The footprints of bands `bands` (pixel rows `bands.start·BAND_ROWS..`), per cell in
+    /// `order` (scene cells by manifest index), with their counts.
+    fn batch(&self, bands: std::ops::Range<u32>, order: &[usize]) -> FootprintSet {
+        let outs: Vec<BandOut> = bands.into_par_iter().map(|b| self.band(b)).collect();
+        // Every bucket's chunks in band (= row) order: no footprint is copied.
+        let mut set = FootprintSet::default();
+        let mut cells: Vec<CellFootprints> =
+            order.iter().map(|&i| CellFootprints { cell: self.scene.cells[i].cell, chunks: Vec::new() }).collect();
+        for b in outs {
+            set.pixels_hit += b.pixels_hit;
+            set.rejected_silhouette += b.rejected_silhouette;
+            set.reconstructed += b.reconstructed;
+            set.dropped += b.dropped;
+            for (k, chunk) in b.buckets.into_iter().enumerate() {
+                if !chunk.is_empty() {
+                    cells[k].chunks.push(chunk);
+                }
+            }
+        }
+        set.cells = cells.into_iter().filter(|c| !c.chunks.is_empty()).collect();
+        set
+    }
+
+    /// Casts and forms the footprints of pixel rows `b·BAND_ROWS..`.
+    fn band(&self, b: u32) -> BandOut {
         let r0 = b * BAND_ROWS;
         let r1 = (r0 + BAND_ROWS).min(self.h);
         let j_lo = r0.saturating_sub(1);
         let j_hi = (r1 + 1).min(self.h);
         let stride = self.w as usize + 1;
-        let mut hits = std::mem::take(pool);
+        let mut hits = self.pools.take_hits();
         hits.clear();
         hits.resize((j_hi - j_lo + 1) as usize * stride, CornerHit::MISS);
         for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
@@ -187,13 +267,17 @@ impl Ctx<'_> {
                     Outcome::Dropped => out.dropped += 1,
                     Outcome::Footprint(fp, bucket) => {
                         out.reconstructed += u64::from(fp.reconstructed > 0);
-                        out.buckets[bucket as usize].push(fp);
+                        let chunk = &mut out.buckets[bucket as usize];
+                        if chunk.capacity() == 0 {
+                            *chunk = self.pools.take_chunk();
+                        }
+                        chunk.push(fp);
                     }
                 }
                 out.pixels_hit += 1;
             }
         }
-        *pool = rows.hits;
+        self.pools.put_hits(rows.hits);
         out
     }
 

@@ -49,7 +49,7 @@ pub use accel::RayAccel;
 pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
 pub use colmap::{read_colmap, read_colmap_specs, read_similarity, Similarity};
-pub use footprint::{photo_footprints, FootprintOptions};
+pub use footprint::{for_each_footprint_batch, photo_footprints, FootprintOptions};
 pub use input::{
     apply_rotation_delta, fit_camera_to_image, image_size, photo_spec, read_photo_list, read_photo_specs,
     validate_camera, PhotoSpec,
@@ -128,6 +128,44 @@ impl FootprintSet {
     pub fn iter(&self) -> impl Iterator<Item = &PixelFootprint> {
         self.cells.iter().flat_map(CellFootprints::iter)
     }
+
+    /// Adds `other`'s pixel counts (hit, rejected, reconstructed, dropped) to `self`'s.
+    pub fn add_counts(&mut self, other: &FootprintSet) {
+        self.pixels_hit += other.pixels_hit;
+        self.rejected_silhouette += other.rejected_silhouette;
+        self.reconstructed += other.reconstructed;
+        self.dropped += other.dropped;
+    }
+
+    /// Moves the footprints and counts of `later` (a set of later photo rows, e.g. the next
+    /// batch of [`for_each_footprint_batch`]) into `self`: each cell's footprints stay in
+    /// (row, column) order and the cells sorted. Leaves `later` without footprints.
+    pub fn append(&mut self, later: &mut FootprintSet) {
+        self.add_counts(later);
+        let mut merged = Vec::with_capacity(self.cells.len().max(later.cells.len()));
+        let (mut a, mut b) = (std::mem::take(&mut self.cells).into_iter().peekable(), later.cells.drain(..).peekable());
+        loop {
+            let next = match (a.peek(), b.peek()) {
+                (Some(x), Some(y)) if x.cell == y.cell => {
+                    let (mut x, y) = (a.next(), b.next());
+                    if let (Some(x), Some(y)) = (x.as_mut(), y) {
+                        x.chunks.extend(y.chunks);
+                    }
+                    x
+                }
+                (Some(x), Some(y)) if x.cell < y.cell => a.next(),
+                (Some(_), Some(_)) | (None, Some(_)) => b.next(),
+                (Some(_), None) => a.next(),
+                (None, None) => None,
+            };
+            match next {
+                Some(c) => merged.push(c),
+                None => break,
+            }
+        }
+        drop((a, b));
+        self.cells = merged;
+    }
 }
 
 /// Equal footprints in the same order and equal counts (however they are chunked).
@@ -164,5 +202,36 @@ impl CellFootprints {
     /// The footprints in (row, column) order.
     pub fn iter(&self) -> impl Iterator<Item = &PixelFootprint> {
         self.chunks.iter().flatten()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fp(cell: u32, row: u32) -> PixelFootprint {
+        PixelFootprint { cell, pixel: [0, row], corners: [[0.0; 2]; 4], cos_view: 1.0, distance: 1.0, reconstructed: 0 }
+    }
+
+    fn set(cells: &[(u32, &[u32])], hit: u64) -> FootprintSet {
+        FootprintSet {
+            cells: cells.iter().map(|&(c, rows)| CellFootprints { cell: c, chunks: vec![rows.iter().map(|&r| fp(c, r)).collect()] }).collect(),
+            pixels_hit: hit,
+            rejected_silhouette: 1,
+            reconstructed: 2,
+            dropped: 3,
+        }
+    }
+
+    #[test]
+    fn append_merges_cells_in_order_and_keeps_rows_in_order() {
+        let mut a = set(&[(1, &[0, 1]), (4, &[0])], 10);
+        let mut b = set(&[(0, &[2]), (4, &[2, 3]), (7, &[3])], 5);
+        a.append(&mut b);
+        assert!(b.is_empty());
+        assert_eq!(a.cells.iter().map(|c| c.cell).collect::<Vec<_>>(), vec![0, 1, 4, 7]);
+        let rows: Vec<[u32; 2]> = a.iter().map(|f| [f.cell, f.pixel[1]]).collect();
+        assert_eq!(rows, vec![[0, 2], [1, 0], [1, 1], [4, 0], [4, 2], [4, 3], [7, 3]]);
+        assert_eq!((a.pixels_hit, a.rejected_silhouette, a.reconstructed, a.dropped), (15, 2, 4, 6));
     }
 }

@@ -5,9 +5,11 @@
 //! step whose image has at most `leveling_max_pixels`; if that gives too few samples, once
 //! more at full resolution). Then per level, per photo in input order: the level's cells
 //! become a ray-castable scene near the camera, the photo's pyramid image for the level
-//! (halved once per level above the finest) is cast into footprints, which are splatted
-//! per cell in parallel into that photo's accumulator and merged into the level's
-//! per-cell accumulators. Finally every cell of the level that received photo colour gets
+//! (halved once per level above the finest) is cast into footprints batch by batch of
+//! pixel rows; each batch is splatted per cell in parallel into that photo's accumulators
+//! while the next batch is cast (each cell's deposits stay in row order, so the sums do not
+//! depend on the batching), and the accumulators are merged into the level's per-cell
+//! accumulators. Finally every cell of the level that received photo colour gets
 //! `{stem}.photo.png` (the active texture blended with photo colour) and
 //! `{stem}.photo.conf.png` (the photo share), and every cell's steep texels are counted.
 //! Each run starts from the active textures (never from earlier photo textures), so the
@@ -26,7 +28,7 @@ use crate::fsutil::write_atomic;
 use crate::photo::{
     BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
     LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
-    fit_colour_transform, normal_cos_slope, photo_footprints,
+    fit_colour_transform, for_each_footprint_batch, normal_cos_slope, photo_footprints,
 };
 use crate::stats::texel_stretch;
 use crate::store::{
@@ -186,39 +188,45 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
         for (pi, pyr) in pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
-            let fs = match cached[pi].take() {
-                Some((l, fs)) if l == level => fs,
+            let cells = &store.manifest.cells;
+            let (transform, conf) = (&transforms[pi], &opts.confidence);
+            // This photo's deposits per manifest cell, filled batch by batch in row order.
+            let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
+            let counts = match cached[pi].take() {
+                Some((l, fs)) if l == level => {
+                    splat_batch(&fs, &mut pas, cells, level as u8, img, transform, conf);
+                    fs
+                }
                 other => {
                     cached[pi] = other;
                     let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
-                    photo_footprints(&scene, &cam, &opts.footprint)
+                    let mut counts = FootprintSet::default();
+                    for_each_footprint_batch(&scene, &cam, &opts.footprint, |batch| {
+                        splat_batch(batch, &mut pas, cells, level as u8, img, transform, conf);
+                        counts.add_counts(batch);
+                    });
+                    counts
                 }
             };
-            timer.lap(&format!("level {level} photo {pi}: footprints"));
+            timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
             if level == finest {
                 let r = &mut reports[pi];
-                r.pixels_hit = fs.pixels_hit;
-                r.rejected_silhouette = fs.rejected_silhouette;
-                r.reconstructed_footprints = fs.reconstructed;
+                r.pixels_hit = counts.pixels_hit;
+                r.rejected_silhouette = counts.rejected_silhouette;
+                r.reconstructed_footprints = counts.reconstructed;
             }
-            let groups = group_by_cell(&fs, &store.manifest.cells, level as u8);
-            let cells = &store.manifest.cells;
-            let (transform, conf) = (&transforms[pi], &opts.confidence);
             let written: Vec<u64> = accs
                 .par_iter_mut()
-                .zip(groups.par_iter())
+                .zip(pas.par_iter())
                 .enumerate()
-                .map(|(ci, (acc, range))| {
-                    let Some(range) = range else { return 0 };
-                    let texels = active_texels(&cells[ci]);
-                    let mut pa = PhotoAccum::new(texels);
-                    pa.add_all(range.iter(), img, transform, conf);
-                    acc.get_or_insert_with(|| CellAccum::new(texels, opts.blend)).merge(&pa)
+                .map(|(ci, (acc, pa))| {
+                    let Some(pa) = pa else { return 0 };
+                    acc.get_or_insert_with(|| CellAccum::new(active_texels(&cells[ci]), opts.blend)).merge(pa)
                 })
                 .collect();
             reports[pi].texels_written += written.iter().sum::<u64>();
             bars[pi].inc(1);
-            timer.lap(&format!("level {level} photo {pi}: splat"));
+            timer.lap(&format!("level {level} photo {pi}: merge"));
         }
         let level_cells: Vec<usize> = (0..ncells).filter(|&i| store.manifest.cells[i].level as usize == level).collect();
         let results: Vec<Result<CellOutcome>> =
@@ -290,6 +298,38 @@ fn group_by_cell<'a>(fs: &'a FootprintSet, cells: &[CellRecord], level: u8) -> V
         }
     }
     out
+}
+
+/// Splats a batch of one photo's footprints on `level` (cells of other levels are ignored)
+/// into the photo's per-cell accumulators `pas` (indexed by manifest cell, created on first
+/// use), in parallel over cells, each cell's footprints in order.
+fn splat_batch(
+    batch: &FootprintSet,
+    pas: &mut [Option<PhotoAccum>],
+    cells: &[CellRecord],
+    level: u8,
+    img: &image::RgbImage,
+    transform: &ColourTransform,
+    conf: &ConfidenceParams,
+) {
+    // `batch.cells` is sorted by manifest index: pair each with its accumulator.
+    let mut jobs: Vec<(&CellFootprints, &mut Option<PhotoAccum>)> = Vec::with_capacity(batch.cells.len());
+    let mut rest = &mut pas[..];
+    let mut base = 0usize;
+    for cf in &batch.cells {
+        let ci = cf.cell as usize;
+        if ci < base || ci >= base + rest.len() || cells[ci].level != level {
+            continue;
+        }
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(ci - base);
+        let (one, tail) = tail.split_at_mut(1);
+        jobs.push((cf, &mut one[0]));
+        rest = tail;
+        base = ci + 1;
+    }
+    jobs.into_par_iter().for_each(|(cf, pa)| {
+        pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[cf.cell as usize]))).add_all(cf.iter(), img, transform, conf);
+    });
 }
 
 /// Most footprints (over all photos) kept from the leveling casts for the main loop
