@@ -16,7 +16,7 @@
 
 use image::RgbImage;
 
-use super::confidence::ConfidenceParams;
+use super::confidence::{BorderFeather, ConfidenceParams, confidence_with_border};
 use super::level::ColourTransform;
 use super::splat::{Splat, SplatKind, footprint_shape, splat_polygon};
 use super::PixelFootprint;
@@ -50,6 +50,30 @@ pub struct TexelSums {
     pub weight: f32,
     /// `C`: confidence-weighted area times colour (sRGB 0..1).
     pub colour: [f32; 3],
+}
+
+/// A photo image prepared for splatting: its 8-bit values mapped by a colour transform
+/// (per channel, the same numbers as applying the transform to each pixel) and the border
+/// feather of every pixel ([`ConfidenceParams::border_feather`]).
+#[derive(Clone, Debug)]
+pub struct PhotoSamples<'a> {
+    image: &'a RgbImage,
+    lut: [[f32; 256]; 3],
+    feather: BorderFeather,
+}
+
+impl<'a> PhotoSamples<'a> {
+    /// Prepares `image` with `transform` and the feather of `params`.
+    pub fn new(image: &'a RgbImage, transform: &ColourTransform, params: &ConfidenceParams) -> PhotoSamples<'a> {
+        let lut = std::array::from_fn(|k| {
+            std::array::from_fn(|v| {
+                let mut rgb = [0.0; 3];
+                rgb[k] = v as f32 / 255.0;
+                transform.apply(rgb)[k]
+            })
+        });
+        PhotoSamples { image, lut, feather: params.border_feather(image.width(), image.height()) }
+    }
 }
 
 /// One photo's deposits in one `texels × texels` cell texture (row-major per texel).
@@ -99,7 +123,8 @@ impl PhotoAccum {
 
     /// Deposits every footprint of `footprints` (all of this accumulator's cell) with the
     /// colour of its pixel in `image` (the image the footprints were cast for) mapped by
-    /// `transform`, and confidence from `params`.
+    /// `transform`, and confidence from `params`. (Preparing [`PhotoSamples`] once and calling
+    /// [`PhotoAccum::add_samples`] gives the same sums.)
     pub fn add_all<'f>(
         &mut self,
         footprints: impl IntoIterator<Item = &'f PixelFootprint>,
@@ -107,17 +132,13 @@ impl PhotoAccum {
         transform: &ColourTransform,
         params: &ConfidenceParams,
     ) {
-        let (w, h) = image.dimensions();
-        // The transform of every 8-bit value, per channel (the same numbers as applying it
-        // to each pixel).
-        let lut: [[f32; 256]; 3] = std::array::from_fn(|k| {
-            std::array::from_fn(|v| {
-                let mut rgb = [0.0; 3];
-                rgb[k] = v as f32 / 255.0;
-                transform.apply(rgb)[k]
-            })
-        });
-        let raw = image.as_raw();
+        self.add_samples(footprints, &PhotoSamples::new(image, transform, params));
+    }
+
+    /// [`PhotoAccum::add_all`] with the photo's colours and border feather prepared.
+    pub fn add_samples<'f>(&mut self, footprints: impl IntoIterator<Item = &'f PixelFootprint>, photo: &PhotoSamples) {
+        let (w, h) = photo.image.dimensions();
+        let (raw, lut) = (photo.image.as_raw(), &photo.lut);
         for fp in footprints {
             let [c, r] = fp.pixel;
             if c >= w || r >= h {
@@ -125,7 +146,8 @@ impl PhotoAccum {
             }
             let o = 3 * (r as usize * w as usize + c as usize);
             let rgb = [lut[0][raw[o] as usize], lut[1][raw[o + 1] as usize], lut[2][raw[o + 2] as usize]];
-            self.add(fp, rgb, |area| params.footprint_confidence(fp.cos_view as f64, area, fp.pixel, w, h));
+            let border = photo.feather.at(fp.pixel);
+            self.add(fp, rgb, |area| confidence_with_border(fp.cos_view as f64, area, border));
         }
     }
 

@@ -59,26 +59,77 @@ impl ConfidenceParams {
     /// Confidence in [0, 1] of a footprint with view cosine `cos_view`, area `area`
     /// (texels²), for pixel `[col, row]` of a `width × height` image. 0 for NaN inputs.
     pub fn footprint_confidence(&self, cos_view: f64, area: f64, pixel: [u32; 2], width: u32, height: u32) -> f64 {
-        let view = if cos_view.is_nan() { 0.0 } else { cos_view.clamp(0.0, 1.0) };
-        let res = if area.is_nan() { 0.0 } else { 1.0 / area.max(1.0) };
-        view * res * self.border_term(pixel, width, height)
+        confidence_with_border(cos_view, area, self.border_term(pixel, width, height))
+    }
+
+    /// The border feather of every pixel of a `width × height` image, as two tables
+    /// ([`BorderFeather::at`] equals [`ConfidenceParams::border_term`] bit for bit).
+    pub fn border_feather(&self, width: u32, height: u32) -> BorderFeather {
+        // The feather is a non-decreasing function of the distance to the nearest edge, so
+        // the smaller of the column and row terms is the term of the smaller distance.
+        let band = self.feather * width.min(height) as f64;
+        let table = |n: u32| (0..n).map(|i| feather_at(edge_distance(i, n), band)).collect();
+        BorderFeather { cols: table(width), rows: table(height) }
     }
 
     /// The border feather of pixel `[col, row]` in a `width × height` image, in [0, 1].
     pub fn border_term(&self, pixel: [u32; 2], width: u32, height: u32) -> f64 {
         let band = self.feather * width.min(height) as f64;
-        if band <= 0.0 {
-            return 1.0;
-        }
-        let (c, r) = (pixel[0] as f64 + 0.5, pixel[1] as f64 + 0.5);
-        let d = c.min(width as f64 - c).min(r).min(height as f64 - r).max(0.0);
-        smoothstep(d / band)
+        feather_at(edge_distance(pixel[0], width).min(edge_distance(pixel[1], height)), band)
     }
 
     /// Weight in [0, 1] of photo colour for a texel of photo confidence `conf`: smooth
     /// (C¹) and non-decreasing, 0 at or below `ramp[0]`, 1 at or above `ramp[1]`.
     pub fn blend_weight(&self, conf: f64) -> f64 {
         smoothstep((conf - self.ramp[0]) / (self.ramp[1] - self.ramp[0]))
+    }
+}
+
+/// Distance (pixels, >= 0) from the centre of pixel `i` to the nearer end of `0..n`.
+#[inline]
+fn edge_distance(i: u32, n: u32) -> f64 {
+    let c = i as f64 + 0.5;
+    c.min(n as f64 - c).max(0.0)
+}
+
+/// The feather of a pixel centre `d` pixels from the border, for a feather band of `band`
+/// pixels (1 everywhere without a band).
+#[inline]
+fn feather_at(d: f64, band: f64) -> f64 {
+    if band <= 0.0 { 1.0 } else { smoothstep(d / band) }
+}
+
+/// `view · resolution · border` (see the [module docs](self)) of a footprint with view
+/// cosine `cos_view` and area `area` (texels²) and the border feather `border` of its pixel;
+/// 0 for NaN inputs.
+#[inline]
+pub(crate) fn confidence_with_border(cos_view: f64, area: f64, border: f64) -> f64 {
+    let view = if cos_view.is_nan() { 0.0 } else { cos_view.clamp(0.0, 1.0) };
+    let res = if area.is_nan() {
+        0.0
+    } else if area <= 1.0 {
+        1.0
+    } else {
+        1.0 / area
+    };
+    view * res * border
+}
+
+/// The border feather of every pixel of one image ([`ConfidenceParams::border_feather`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BorderFeather {
+    cols: Vec<f64>,
+    rows: Vec<f64>,
+}
+
+impl BorderFeather {
+    /// The feather of pixel `[col, row]`, in [0, 1] (0 outside the image).
+    #[inline]
+    pub fn at(&self, pixel: [u32; 2]) -> f64 {
+        match (self.cols.get(pixel[0] as usize), self.rows.get(pixel[1] as usize)) {
+            (Some(c), Some(r)) => c.min(*r),
+            _ => 0.0,
+        }
     }
 }
 
@@ -107,5 +158,21 @@ mod tests {
         assert!(w.windows(2).all(|x| x[1] >= x[0] && x[1] - x[0] < 0.06));
         assert!(ConfidenceParams { ramp: [0.5, 0.5], ..p }.validate().is_err());
         assert!(ConfidenceParams { feather: -1.0, ..p }.validate().is_err());
+    }
+
+    #[test]
+    fn feather_tables_equal_the_direct_term() {
+        let d = ConfidenceParams::default();
+        for p in [d, ConfidenceParams { feather: 0.0, ..d }, ConfidenceParams { feather: 0.5, ..d }] {
+            for (w, h) in [(1000u32, 800u32), (7, 300), (1, 1)] {
+                let t = p.border_feather(w, h);
+                for r in (0..h).step_by(3) {
+                    for c in (0..w).step_by(5) {
+                        assert_eq!(t.at([c, r]).to_bits(), p.border_term([c, r], w, h).to_bits(), "{w}x{h} {c},{r}");
+                    }
+                }
+                assert_eq!(t.at([w, 0]), 0.0);
+            }
+        }
     }
 }

@@ -55,9 +55,9 @@ pub use input::{
     validate_camera, PhotoSpec,
 };
 pub use scene::{LevelScene, SceneCell};
-pub use accumulate::{BlendMode, CellAccum, PhotoAccum, TexelSums};
+pub use accumulate::{BlendMode, CellAccum, PhotoAccum, PhotoSamples, TexelSums};
 pub use blend::{Blended, blend_cell};
-pub use confidence::{ConfidenceParams, smoothstep};
+pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
 pub use level::{ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform, normal_cos_slope};
 pub use pyramid::{PhotoPyramid, downsample2, half_camera};
 pub use splat::{MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint};

@@ -217,7 +217,10 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
 /// Pieces of a polygon spanning at most 2 × 2 texels with corner texel `c` (`split[k]`: it
 /// crosses the line `c[k] + 1`): `put(i, j, area)` for each of the (up to four) texels, with
 /// the areas of the parts left of / above the split lines found by half-plane clipping and
-/// the rest by subtraction from `area` (clamped at 0 against rounding).
+/// the rest by subtraction from `area` (clamped at 0 against rounding). The clips are
+/// streamed (vertex by vertex into a running shoelace sum, no polygon buffers); the sums are
+/// formed in the same order as clipping into a buffer and taking its shoelace area.
+#[inline]
 fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], split: [bool; 2], mut put: impl FnMut(f64, f64, f64)) {
     let (x, y) = (c[0] + 1.0, c[1] + 1.0);
     match split {
@@ -233,10 +236,14 @@ fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], split: [bool; 2], m
             put(c[0], y, (area - top).max(0.0));
         }
         [true, true] => {
-            let mut lbuf = [[0.0; 2]; 8];
-            let nl = clip_below(poly, 0, x, &mut lbuf);
-            let left = shoelace(&lbuf[..nl]);
-            let top_left = clipped_area(&lbuf[..nl], 1, y);
+            // poly ∩ {x <= X} feeds both its own area and its clip to {y <= Y}.
+            let mut left = Clip::new(0, x, Tee(Area::default(), Clip::new(1, y, Area::default())));
+            for p in poly {
+                left.push(*p);
+            }
+            left.finish();
+            let Tee(l, tl) = left.next;
+            let (left, top_left) = (l.area(), tl.next.area());
             let top = clipped_area(poly, 1, y);
             put(c[0], c[1], top_left);
             put(x, c[1], (top - top_left).max(0.0));
@@ -246,44 +253,131 @@ fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], split: [bool; 2], m
     }
 }
 
-/// Area of the part of `poly` (at most 8 vertices) with `p[axis] <= c`.
-fn clipped_area(poly: &[[f64; 2]], axis: usize, c: f64) -> f64 {
-    let mut buf = [[0.0; 2]; 16];
-    let n = clip_below(poly, axis, c, &mut buf);
-    shoelace(&buf[..n])
+/// Area of the part of the quad `poly` with `p[axis] <= c`.
+#[inline]
+fn clipped_area(poly: &[[f64; 2]; 4], axis: usize, c: f64) -> f64 {
+    let mut clip = Clip::new(axis, c, Area::default());
+    for p in poly {
+        clip.push(*p);
+    }
+    clip.finish();
+    clip.next.area()
 }
 
-/// Sutherland–Hodgman clip of `poly` to `p[axis] <= c` into `out` (capacity at least twice
-/// the input's); returns the vertex count.
-fn clip_below(poly: &[[f64; 2]], axis: usize, c: f64, out: &mut [[f64; 2]]) -> usize {
-    let mut n = 0;
-    let m = poly.len();
-    for k in 0..m {
-        let (a, b) = (poly[k], poly[(k + 1) % m]);
-        let (da, db) = (a[axis] - c, b[axis] - c);
-        if da <= 0.0 && n < out.len() {
-            out[n] = a;
-            n += 1;
+/// A consumer of polygon vertices, in order; `finish` closes the polygon.
+trait VertexSink {
+    fn push(&mut self, p: [f64; 2]);
+    fn finish(&mut self);
+}
+
+/// Running shoelace sum of the pushed polygon: `Σ cross(p_k, p_k+1)` in order, closed by
+/// `cross(p_last, p_0)`.
+#[derive(Default)]
+struct Area {
+    first: [f64; 2],
+    prev: [f64; 2],
+    n: u32,
+    a2: f64,
+}
+
+impl Area {
+    /// Absolute area of the finished polygon.
+    #[inline]
+    fn area(&self) -> f64 {
+        0.5 * self.a2.abs()
+    }
+}
+
+impl VertexSink for Area {
+    #[inline]
+    fn push(&mut self, b: [f64; 2]) {
+        if self.n == 0 {
+            self.first = b;
+        } else {
+            let a = self.prev;
+            self.a2 += a[0] * b[1] - a[1] * b[0];
         }
-        if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) && n < out.len() {
+        self.prev = b;
+        self.n += 1;
+    }
+
+    #[inline]
+    fn finish(&mut self) {
+        if self.n > 0 {
+            let (a, b) = (self.prev, self.first);
+            self.a2 += a[0] * b[1] - a[1] * b[0];
+        }
+    }
+}
+
+/// Both sinks get every vertex.
+struct Tee<A, B>(A, B);
+
+impl<A: VertexSink, B: VertexSink> VertexSink for Tee<A, B> {
+    #[inline]
+    fn push(&mut self, p: [f64; 2]) {
+        self.0.push(p);
+        self.1.push(p);
+    }
+
+    #[inline]
+    fn finish(&mut self) {
+        self.0.finish();
+        self.1.finish();
+    }
+}
+
+/// Streaming Sutherland–Hodgman clip to `p[axis] <= c`: for each edge `a → b` (the closing
+/// edge last) emits `a` if inside and the crossing point if the edge crosses the line.
+struct Clip<S> {
+    axis: usize,
+    c: f64,
+    first: [f64; 2],
+    prev: [f64; 2],
+    n: u32,
+    next: S,
+}
+
+impl<S: VertexSink> Clip<S> {
+    #[inline]
+    fn new(axis: usize, c: f64, next: S) -> Clip<S> {
+        Clip { axis, c, first: [0.0; 2], prev: [0.0; 2], n: 0, next }
+    }
+
+    #[inline]
+    fn edge(&mut self, a: [f64; 2], b: [f64; 2]) {
+        let (da, db) = (a[self.axis] - self.c, b[self.axis] - self.c);
+        if da <= 0.0 {
+            self.next.push(a);
+        }
+        if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
             let f = da / (da - db);
             let mut q = [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
-            q[axis] = c;
-            out[n] = q;
-            n += 1;
+            q[self.axis] = self.c;
+            self.next.push(q);
         }
     }
-    n
 }
 
-/// Absolute shoelace area of a polygon.
-fn shoelace(p: &[[f64; 2]]) -> f64 {
-    let mut a2 = 0.0;
-    for k in 0..p.len() {
-        let (a, b) = (p[k], p[(k + 1) % p.len()]);
-        a2 += a[0] * b[1] - a[1] * b[0];
+impl<S: VertexSink> VertexSink for Clip<S> {
+    #[inline]
+    fn push(&mut self, p: [f64; 2]) {
+        if self.n == 0 {
+            self.first = p;
+        } else {
+            self.edge(self.prev, p);
+        }
+        self.prev = p;
+        self.n += 1;
     }
-    0.5 * a2.abs()
+
+    #[inline]
+    fn finish(&mut self) {
+        if self.n > 0 {
+            self.edge(self.prev, self.first);
+        }
+        self.next.finish();
+    }
 }
 
 /// The buffer `cur` of a pair to read and the other one to write.

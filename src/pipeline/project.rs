@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{
     BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
-    LevelingParams, PhotoAccum, PhotoInput, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
+    LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
     fit_colour_transform, for_each_footprint_batch, normal_cos_slope, photo_footprints,
 };
 use crate::stats::texel_stretch;
@@ -189,12 +189,12 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         for (pi, pyr) in pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
             let cells = &store.manifest.cells;
-            let (transform, conf) = (&transforms[pi], &opts.confidence);
+            let samples = PhotoSamples::new(img, &transforms[pi], &opts.confidence);
             // This photo's deposits per manifest cell, filled batch by batch in row order.
             let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
             let counts = match cached[pi].take() {
                 Some((l, fs)) if l == level => {
-                    splat_batch(&fs, &mut pas, cells, level as u8, img, transform, conf);
+                    splat_batch(&fs, &mut pas, cells, level as u8, &samples);
                     fs
                 }
                 other => {
@@ -202,7 +202,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
                     let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
                     let mut counts = FootprintSet::default();
                     for_each_footprint_batch(&scene, &cam, &opts.footprint, |batch| {
-                        splat_batch(batch, &mut pas, cells, level as u8, img, transform, conf);
+                        splat_batch(batch, &mut pas, cells, level as u8, &samples);
                         counts.add_counts(batch);
                     });
                     counts
@@ -308,9 +308,7 @@ fn splat_batch(
     pas: &mut [Option<PhotoAccum>],
     cells: &[CellRecord],
     level: u8,
-    img: &image::RgbImage,
-    transform: &ColourTransform,
-    conf: &ConfidenceParams,
+    samples: &PhotoSamples,
 ) {
     // `batch.cells` is sorted by manifest index: pair each with its accumulator.
     let mut jobs: Vec<(&CellFootprints, &mut Option<PhotoAccum>)> = Vec::with_capacity(batch.cells.len());
@@ -328,7 +326,7 @@ fn splat_batch(
         base = ci + 1;
     }
     jobs.into_par_iter().for_each(|(cf, pa)| {
-        pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[cf.cell as usize]))).add_all(cf.iter(), img, transform, conf);
+        pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[cf.cell as usize]))).add_samples(cf.iter(), samples);
     });
 }
 
@@ -358,6 +356,7 @@ fn estimate_leveling(
         drop(scene);
         let cells = &store.manifest.cells;
         let groups = group_by_cell(&fs, cells, level as u8);
+        let samples = PhotoSamples::new(img, &ColourTransform::IDENTITY, &opts.confidence);
         let parts: Vec<Result<ColourPairs>> = groups
             .par_iter()
             .enumerate()
@@ -365,7 +364,7 @@ fn estimate_leveling(
             .map(|(ci, range)| {
                 let rec = &cells[ci];
                 let mut pa = PhotoAccum::new(active_texels(rec));
-                pa.add_all(range.iter(), img, &ColourTransform::IDENTITY, &opts.confidence);
+                pa.add_samples(range.iter(), &samples);
                 let existing = store.read_active_texture(rec)?;
                 let normals = store.read_active_normal_map(rec)?;
                 check_size(store, rec, existing.dimensions(), normals.dimensions())?;
