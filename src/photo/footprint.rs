@@ -99,7 +99,7 @@ pub fn for_each_footprint_batch(
     if w == 0 || h == 0 || scene.triangle_count() == 0 || !origin.is_finite() {
         return;
     }
-    let rays = camera.ray_caster();
+    let rays = camera.ray_caster().with_table();
     let caster = match (scene.accel, scene.bvh()) {
         (RayAccel::Bvh(_), Some(bvh)) => Caster::Bvh(bvh),
         (RayAccel::ViewGrid(p), _) => Caster::Grid(ViewGrid::build(scene.triangles(), camera, &rays, origin, p)),
