@@ -9,15 +9,15 @@ use obvhs::triangle::Triangle;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PreTri {
     /// `v0 − origin`.
-    c: Vec3A,
+    pub(crate) c: Vec3A,
     /// `v0 − v1`.
-    e1: Vec3A,
+    pub(crate) e1: Vec3A,
     /// `v2 − v0`.
-    e2: Vec3A,
+    pub(crate) e2: Vec3A,
     /// `e1 × e2`.
-    n: Vec3A,
+    pub(crate) n: Vec3A,
     /// `n · c`.
-    nc: f32,
+    pub(crate) nc: f32,
 }
 
 impl PreTri {

@@ -16,7 +16,7 @@
 //! camera depth, which are ignored. Rays outside the grid (not produced by the photo's
 //! pixel corners) are answered by testing every triangle.
 
-use glam::{DMat3, DVec3, Vec3, Vec3A};
+use glam::{BVec4A, DMat3, DVec3, Vec3, Vec3A, Vec4};
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
@@ -230,6 +230,76 @@ impl ViewGrid {
             return None;
         }
         Some(TriHit { triangle: best, t: best_t, bary: PreTri::barycentric(best_uv) })
+    }
+
+    /// The bin of the undistorted-plane point `xy`, if inside the grid.
+    #[inline]
+    pub(crate) fn bin_at(&self, xy: [f64; 2]) -> Option<usize> {
+        self.bin_of(xy[0], xy[1])
+    }
+
+    /// [`ViewGrid::nearest_at`] for up to four rays whose plane points all lie in bin `bin`
+    /// (`dirs`: finite non-zero unit vectors, scene frame), one SIMD lane per ray: every
+    /// lane does the scalar test's arithmetic in the same order and scans the bin's list
+    /// with the same stopping rule, so each `out[k]` equals `nearest_at` of ray `k`.
+    pub(crate) fn nearest_packet(&self, bin: usize, dirs: &[Vec3], out: &mut [Option<TriHit>]) {
+        let n = dirs.len().min(out.len()).min(4);
+        if n == 0 {
+            return;
+        }
+        let d: [Vec3; 4] = std::array::from_fn(|k| dirs[k.min(n - 1)] + Vec3::ZERO);
+        let (dx, dy, dz) = (
+            Vec4::new(d[0].x, d[1].x, d[2].x, d[3].x),
+            Vec4::new(d[0].y, d[1].y, d[2].y, d[3].y),
+            Vec4::new(d[0].z, d[1].z, d[2].z, d[3].z),
+        );
+        let sp = Vec4::splat;
+        // dot products as glam's SSE2 `Vec3A::dot`: (x·x' + y·y') + z·z'
+        let cz = (sp(self.fwd.x) * dx + sp(self.fwd.y) * dy) + sp(self.fwd.z) * dz;
+        let mut live = BVec4A::from_array([true, n > 1, n > 2, n > 3]);
+        let (mut best_t, mut best_u, mut best_v) = (Vec4::INFINITY, Vec4::ZERO, Vec4::ZERO);
+        let mut best = [u32::MAX; 4];
+        let (s, e) = (self.starts[bin] as usize, self.starts[bin + 1] as usize);
+        for en in &self.entries[s..e] {
+            live &= !sp(en.z_min).cmpgt(best_t * cz);
+            if !live.any() {
+                break;
+            }
+            let p = &self.pre[en.tri as usize];
+            let (c, e1, e2, nn) = (p.c, p.e1, p.e2, p.n);
+            // r = d × c as glam's SSE2 `Vec3A::cross` (no fused multiply-add)
+            let rx = dy * sp(c.z) - dz * sp(c.y);
+            let ry = dz * sp(c.x) - dx * sp(c.z);
+            let rz = dx * sp(c.y) - dy * sp(c.x);
+            let det = (sp(nn.x) * dx + sp(nn.y) * dy) + sp(nn.z) * dz;
+            let a = (rx * sp(e2.x) + ry * sp(e2.y)) + rz * sp(e2.z);
+            let b = (rx * sp(e1.x) + ry * sp(e1.y)) + rz * sp(e1.z);
+            let dneg = det.is_negative_mask();
+            let cand = live & !((a.is_negative_mask() ^ dneg) | (b.is_negative_mask() ^ dneg));
+            if !cand.any() {
+                continue;
+            }
+            let inv = Vec4::ONE / det;
+            let (u, v) = (a * inv, b * inv);
+            let w = (Vec4::ONE - u) - v;
+            let inside = !(u.is_negative_mask() | v.is_negative_mask() | w.is_negative_mask()) & inv.cmpne(Vec4::ZERO);
+            let t = sp(p.nc) * inv;
+            let take = cand & inside & t.cmpge(Vec4::ZERO) & t.cmplt(best_t);
+            if take.any() {
+                best_t = Vec4::select(take, t, best_t);
+                best_u = Vec4::select(take, u, best_u);
+                best_v = Vec4::select(take, v, best_v);
+                for (k, b) in best.iter_mut().enumerate() {
+                    if take.test(k) {
+                        *b = en.tri;
+                    }
+                }
+            }
+        }
+        let (t, u, v) = (best_t.to_array(), best_u.to_array(), best_v.to_array());
+        for k in 0..n {
+            out[k] = t[k].is_finite().then(|| TriHit { triangle: best[k], t: t[k], bary: PreTri::barycentric([u[k], v[k]]) });
+        }
     }
 
     fn bin_of(&self, x: f64, y: f64) -> Option<usize> {
