@@ -8,7 +8,10 @@
 //! (texels²) of quad ∩ texel square: the quad is cut into column strips at the integer x
 //! lines and each strip into texel pieces at the integer y lines (one-pass
 //! Sutherland-Hodgman splits, about two per covered texel; tested against the resampler's
-//! exact-mode clipping, generalised to any simple polygon). A *collapsed* footprint, of area
+//! exact-mode clipping, generalised to any simple polygon). Footprints within 2 × 2 texels
+//! (nearly all of a photo sharper than the texture) get their pieces from three boundary
+//! integrals instead, without clipping or branches per edge (pieces under a billionth of
+//! the footprint, rounding noise, are dropped). A *collapsed* footprint, of area
 //! below [`MIN_SPLAT_AREA`] texels² (a point or a sliver, not merely a pixel much smaller than
 //! a texel), deposits its area at its centre with bilinear weights
 //! over the four nearest texel centres (the weights of a one-texel box around the centre,
@@ -50,12 +53,13 @@ pub struct Splat {
 }
 
 /// Twice the signed area of triangle `a, b, c`.
-#[inline]
+#[inline(always)]
 fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
 /// The polygon to clip (the quad itself if simple, else its convex hull) and its area.
+#[inline(always)]
 pub(crate) fn footprint_polygon(q: &[[f64; 2]; 4]) -> ([[f64; 2]; 4], f64) {
     let (s012, s023) = (cross(q[0], q[1], q[2]), cross(q[0], q[2], q[3]));
     let (s123, s130) = (cross(q[1], q[2], q[3]), cross(q[1], q[3], q[0]));
@@ -104,7 +108,7 @@ const SKIP: Splat = Splat { area: 0.0, kind: SplatKind::Skipped };
 
 /// The polygon [`splat_footprint`] deposits and its area ([`footprint_polygon`] of the
 /// corners in f64), or `None` for non-finite corners.
-#[inline]
+#[inline(always)]
 pub(crate) fn footprint_shape(corners: &[[f32; 2]; 4]) -> Option<([[f64; 2]; 4], f64)> {
     let q = corners.map(|c| [c[0] as f64, c[1] as f64]);
     q.iter().flatten().all(|v| v.is_finite()).then(|| footprint_polygon(&q))
@@ -161,8 +165,10 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     let (cj0, cj1) = (floor_f(lo[1]), ceil_f(hi[1]));
     if ci1 - ci0 <= 2.0 && cj1 - cj0 <= 2.0 {
         // At most 2 × 2 texels: one or two half-plane clips give every piece.
-        small_splat(poly, area, [ci0, cj0], [ci1 - ci0 > 1.0, cj1 - cj0 > 1.0], |i, j, w| {
-            if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
+        // Pieces below a billionth of the footprint are rounding noise of the subtractions.
+        let min_piece = 1e-9 * area;
+        small_splat(poly, [ci0, cj0], [ci1 - ci0 > 1.0, cj1 - cj0 > 1.0], |i, j, w| {
+            if w > min_piece && i >= 0.0 && j >= 0.0 && i < t && j < t {
                 deposit(j as usize * n + i as usize, w);
             }
         });
@@ -215,169 +221,78 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
 }
 
 /// Pieces of a polygon spanning at most 2 × 2 texels with corner texel `c` (`split[k]`: it
-/// crosses the line `c[k] + 1`): `put(i, j, area)` for each of the (up to four) texels, with
-/// the areas of the parts left of / above the split lines found by half-plane clipping and
-/// the rest by subtraction from `area` (clamped at 0 against rounding). The clips are
-/// streamed (vertex by vertex into a running shoelace sum, no polygon buffers); the sums are
-/// formed in the same order as clipping into a buffer and taking its shoelace area.
-#[inline]
-fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], split: [bool; 2], mut put: impl FnMut(f64, f64, f64)) {
+/// crosses the line `c[k] + 1`): `put(i, j, area)` for each of the (up to four) texels.
+///
+/// With `X = c[0] + 1`, `Y = c[1] + 1`, the areas of the polygon's parts in `x ≤ X`
+/// (`L`), `y ≤ Y` (`T`) and both (`TL`) are boundary integrals (Green's theorem) of
+/// `(x − X) dy` over the parts of the polygon's edges inside each region: the region's own
+/// boundary lies on `x = X` (where `x − X = 0`) or `y = Y` (where `dy = 0`) and adds
+/// nothing. Each edge's part inside a region is a parameter interval, so the three areas
+/// (and the whole area `A`, for consistent pieces) take no clipping, no polygon buffer and
+/// no branch per edge; valid for any simple polygon. The pieces are `TL`, `T − TL`,
+/// `L − TL` and `A − L − T + TL` (clamped at 0 against rounding).
+#[inline(always)]
+fn small_splat(poly: &[[f64; 2]; 4], c: [f64; 2], split: [bool; 2], mut put: impl FnMut(f64, f64, f64)) {
     let (x, y) = (c[0] + 1.0, c[1] + 1.0);
+    let [all, l, t, tl] = quadrant_areas(poly, x, y);
     match split {
-        [false, false] => put(c[0], c[1], area),
+        [false, false] => put(c[0], c[1], all),
         [true, false] => {
-            let left = clipped_area(poly, 0, x);
-            put(c[0], c[1], left);
-            put(x, c[1], (area - left).max(0.0));
+            put(c[0], c[1], l);
+            put(x, c[1], (all - l).max(0.0));
         }
         [false, true] => {
-            let top = clipped_area(poly, 1, y);
-            put(c[0], c[1], top);
-            put(c[0], y, (area - top).max(0.0));
+            put(c[0], c[1], t);
+            put(c[0], y, (all - t).max(0.0));
         }
         [true, true] => {
-            // poly ∩ {x <= X} feeds both its own area and its clip to {y <= Y}.
-            let mut left = Clip::new(0, x, Tee(Area::default(), Clip::new(1, y, Area::default())));
-            for p in poly {
-                left.push(*p);
-            }
-            left.finish();
-            let Tee(l, tl) = left.next;
-            let (left, top_left) = (l.area(), tl.next.area());
-            let top = clipped_area(poly, 1, y);
-            put(c[0], c[1], top_left);
-            put(x, c[1], (top - top_left).max(0.0));
-            put(c[0], y, (left - top_left).max(0.0));
-            put(x, y, (area - left - top + top_left).max(0.0));
+            put(c[0], c[1], tl);
+            put(x, c[1], (t - tl).max(0.0));
+            put(c[0], y, (l - tl).max(0.0));
+            put(x, y, (all - l - t + tl).max(0.0));
         }
     }
 }
 
-/// Area of the part of the quad `poly` with `p[axis] <= c`.
-#[inline]
-fn clipped_area(poly: &[[f64; 2]; 4], axis: usize, c: f64) -> f64 {
-    let mut clip = Clip::new(axis, c, Area::default());
-    for p in poly {
-        clip.push(*p);
+/// Areas of the simple polygon `p`: whole, in `x ≤ x0`, in `y ≤ y0`, in both (see
+/// [`small_splat`]).
+#[inline(always)]
+fn quadrant_areas(p: &[[f64; 2]; 4], x0: f64, y0: f64) -> [f64; 4] {
+    let mut sum = [0.0f64; 4];
+    for k in 0..4 {
+        let (a, b) = (p[k], p[(k + 1) & 3]);
+        let (ax, bx) = (a[0] - x0, b[0] - x0);
+        let dy = b[1] - a[1];
+        let [sx0, sx1] = below_interval(ax, bx);
+        let [sy0, sy1] = below_interval(a[1] - y0, b[1] - y0);
+        // ∫ (x − x0) dy over the edge's parameters s ∈ [s0, s1] (empty if s1 <= s0).
+        let part = |s0: f64, s1: f64| {
+            let s1 = s1.max(s0);
+            dy * (s1 - s0) * (ax + 0.5 * (bx - ax) * (s1 + s0))
+        };
+        sum[0] += dy * (0.5 * (ax + bx));
+        sum[1] += part(sx0, sx1);
+        sum[2] += part(sy0, sy1);
+        sum[3] += part(sx0.max(sy0), sx1.min(sy1));
     }
-    clip.finish();
-    clip.next.area()
+    sum.map(f64::abs)
 }
 
-/// A consumer of polygon vertices, in order; `finish` closes the polygon.
-trait VertexSink {
-    fn push(&mut self, p: [f64; 2]);
-    fn finish(&mut self);
-}
-
-/// Running shoelace sum of the pushed polygon: `Σ cross(p_k, p_k+1)` in order, closed by
-/// `cross(p_last, p_0)`.
-#[derive(Default)]
-struct Area {
-    first: [f64; 2],
-    prev: [f64; 2],
-    n: u32,
-    a2: f64,
-}
-
-impl Area {
-    /// Absolute area of the finished polygon.
-    #[inline]
-    fn area(&self) -> f64 {
-        0.5 * self.a2.abs()
-    }
-}
-
-impl VertexSink for Area {
-    #[inline]
-    fn push(&mut self, b: [f64; 2]) {
-        if self.n == 0 {
-            self.first = b;
-        } else {
-            let a = self.prev;
-            self.a2 += a[0] * b[1] - a[1] * b[0];
-        }
-        self.prev = b;
-        self.n += 1;
-    }
-
-    #[inline]
-    fn finish(&mut self) {
-        if self.n > 0 {
-            let (a, b) = (self.prev, self.first);
-            self.a2 += a[0] * b[1] - a[1] * b[0];
-        }
-    }
-}
-
-/// Both sinks get every vertex.
-struct Tee<A, B>(A, B);
-
-impl<A: VertexSink, B: VertexSink> VertexSink for Tee<A, B> {
-    #[inline]
-    fn push(&mut self, p: [f64; 2]) {
-        self.0.push(p);
-        self.1.push(p);
-    }
-
-    #[inline]
-    fn finish(&mut self) {
-        self.0.finish();
-        self.1.finish();
-    }
-}
-
-/// Streaming Sutherland–Hodgman clip to `p[axis] <= c`: for each edge `a → b` (the closing
-/// edge last) emits `a` if inside and the crossing point if the edge crosses the line.
-struct Clip<S> {
-    axis: usize,
-    c: f64,
-    first: [f64; 2],
-    prev: [f64; 2],
-    n: u32,
-    next: S,
-}
-
-impl<S: VertexSink> Clip<S> {
-    #[inline]
-    fn new(axis: usize, c: f64, next: S) -> Clip<S> {
-        Clip { axis, c, first: [0.0; 2], prev: [0.0; 2], n: 0, next }
-    }
-
-    #[inline]
-    fn edge(&mut self, a: [f64; 2], b: [f64; 2]) {
-        let (da, db) = (a[self.axis] - self.c, b[self.axis] - self.c);
-        if da <= 0.0 {
-            self.next.push(a);
-        }
-        if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
-            let f = da / (da - db);
-            let mut q = [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
-            q[self.axis] = self.c;
-            self.next.push(q);
-        }
-    }
-}
-
-impl<S: VertexSink> VertexSink for Clip<S> {
-    #[inline]
-    fn push(&mut self, p: [f64; 2]) {
-        if self.n == 0 {
-            self.first = p;
-        } else {
-            self.edge(self.prev, p);
-        }
-        self.prev = p;
-        self.n += 1;
-    }
-
-    #[inline]
-    fn finish(&mut self) {
-        if self.n > 0 {
-            self.edge(self.prev, self.first);
-        }
-        self.next.finish();
-    }
+/// The parameters `s ∈ [0, 1]` with `da + (db − da)·s <= 0`, as `[s0, s1]` (`s1 < s0` or
+/// `s1 = s0` if none).
+#[inline(always)]
+fn below_interval(da: f64, db: f64) -> [f64; 2] {
+    let dd = db - da;
+    let s = (-da / dd).max(0.0).min(1.0);
+    let lo = if dd < 0.0 { s } else { 0.0 };
+    let hi = if dd > 0.0 {
+        s
+    } else if dd < 0.0 || da <= 0.0 {
+        1.0
+    } else {
+        0.0
+    };
+    [lo, hi]
 }
 
 /// The buffer `cur` of a pair to read and the other one to write.
