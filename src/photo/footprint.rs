@@ -133,8 +133,9 @@ pub fn for_each_footprint_batch(
     }
 }
 
-/// Pixel-row bands per batch of [`for_each_footprint_batch`] (with 64-row bands, 256 rows).
-const BATCH_BANDS: u32 = 4;
+/// Pixel-row bands per batch of [`for_each_footprint_batch`] (with 64-row bands, 128 rows:
+/// about 20 MB of footprints for a 4290-pixel-wide photo, so a batch stays in a 32 MB L3).
+const BATCH_BANDS: u32 = 2;
 
 /// Scratch buffers reused across bands and batches (so a photo's casts touch little fresh
 /// memory).
