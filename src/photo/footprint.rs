@@ -133,9 +133,10 @@ pub fn for_each_footprint_batch(
     }
 }
 
-/// Pixel-row bands per batch of [`for_each_footprint_batch`] (with 64-row bands, 128 rows:
-/// about 20 MB of footprints for a 4290-pixel-wide photo, so a batch stays in a 32 MB L3).
-const BATCH_BANDS: u32 = 2;
+/// Pixel-row bands per batch of [`for_each_footprint_batch`] (with 64-row bands, 512 rows:
+/// about 90 MB of footprints for a 4290-pixel-wide photo; smaller batches leave threads idle
+/// at the join of casting and splatting, docs/projection.md).
+const BATCH_BANDS: u32 = 8;
 
 /// Scratch buffers reused across bands and batches (so a photo's casts touch little fresh
 /// memory).
