@@ -8,8 +8,8 @@
 //! (texels²) of quad ∩ texel square: the quad is cut into column strips at the integer x
 //! lines and each strip into texel pieces at the integer y lines (one-pass
 //! Sutherland-Hodgman splits, about two per covered texel; tested against the resampler's
-//! exact-mode clipping, generalised to any simple polygon). Footprints within 2 × 2 texels
-//! (nearly all of a photo sharper than the texture) get their pieces from three boundary
+//! exact-mode clipping, generalised to any simple polygon). Footprints within 4 × 4 texels
+//! (nearly all of a photo sharper than the texture) get their pieces from boundary
 //! integrals instead, without clipping or branches per edge (pieces under a billionth of
 //! the footprint, rounding noise, are dropped). A *collapsed* footprint, of area
 //! below [`MIN_SPLAT_AREA`] texels² (a point or a sliver, not merely a pixel much smaller than
@@ -163,11 +163,12 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     }
     let (ci0, ci1) = (floor_f(lo[0]), ceil_f(hi[0]));
     let (cj0, cj1) = (floor_f(lo[1]), ceil_f(hi[1]));
-    if ci1 - ci0 <= 2.0 && cj1 - cj0 <= 2.0 {
-        // At most 2 × 2 texels: one or two half-plane clips give every piece.
+    let (nx, ny) = (ci1 - ci0, cj1 - cj0);
+    if nx <= GRID_MAX as f64 && ny <= GRID_MAX as f64 {
+        // At most GRID_MAX × GRID_MAX texels: boundary integrals give every piece.
         // Pieces below a billionth of the footprint are rounding noise of the subtractions.
         let min_piece = 1e-9 * area;
-        small_splat(poly, [ci0, cj0], [ci1 - ci0 > 1.0, cj1 - cj0 > 1.0], |i, j, w| {
+        grid_splat(poly, [ci0, cj0], nx as usize, ny as usize, |i, j, w| {
             if w > min_piece && i >= 0.0 && j >= 0.0 && i < t && j < t {
                 deposit(j as usize * n + i as usize, w);
             }
@@ -220,62 +221,56 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     Splat { area, kind: SplatKind::Exact }
 }
 
-/// Pieces of a polygon spanning at most 2 × 2 texels with corner texel `c` (`split[k]`: it
-/// crosses the line `c[k] + 1`): `put(i, j, area)` for each of the (up to four) texels.
-///
-/// With `X = c[0] + 1`, `Y = c[1] + 1`, the areas of the polygon's parts in `x ≤ X`
-/// (`L`), `y ≤ Y` (`T`) and both (`TL`) are boundary integrals (Green's theorem) of
-/// `(x − X) dy` over the parts of the polygon's edges inside each region: the region's own
-/// boundary lies on `x = X` (where `x − X = 0`) or `y = Y` (where `dy = 0`) and adds
-/// nothing. Each edge's part inside a region is a parameter interval, so the three areas
-/// (and the whole area `A`, for consistent pieces) take no clipping, no polygon buffer and
-/// no branch per edge; valid for any simple polygon. The pieces are `TL`, `T − TL`,
-/// `L − TL` and `A − L − T + TL` (clamped at 0 against rounding).
-#[inline(always)]
-fn small_splat(poly: &[[f64; 2]; 4], c: [f64; 2], split: [bool; 2], mut put: impl FnMut(f64, f64, f64)) {
-    let (x, y) = (c[0] + 1.0, c[1] + 1.0);
-    let [all, l, t, tl] = quadrant_areas(poly, x, y);
-    match split {
-        [false, false] => put(c[0], c[1], all),
-        [true, false] => {
-            put(c[0], c[1], l);
-            put(x, c[1], (all - l).max(0.0));
-        }
-        [false, true] => {
-            put(c[0], c[1], t);
-            put(c[0], y, (all - t).max(0.0));
-        }
-        [true, true] => {
-            put(c[0], c[1], tl);
-            put(x, c[1], (t - tl).max(0.0));
-            put(c[0], y, (l - tl).max(0.0));
-            put(x, y, (all - l - t + tl).max(0.0));
-        }
-    }
-}
+/// Most texels per side of a footprint split by [`grid_splat`] (larger ones are cut into
+/// strips).
+const GRID_MAX: usize = 4;
 
-/// Areas of the simple polygon `p`: whole, in `x ≤ x0`, in `y ≤ y0`, in both (see
-/// [`small_splat`]).
+/// Pieces of a polygon spanning `nx × ny` texels (at most [`GRID_MAX`] each way) from texel
+/// `c`: `put(i, j, area)` for each texel.
+///
+/// With the lines `X_i = c[0] + i`, `Y_j = c[1] + j`, the area `Q(i, j)` of the polygon's part
+/// in `x ≤ X_i, y ≤ Y_j` is a boundary integral (Green's theorem) of `(x − X_i) dy` over
+/// the parts of the polygon's edges inside that quadrant: the quadrant's own boundary lies
+/// on `x = X_i` (where `x − X_i = 0`) or `y = Y_j` (where `dy = 0`) and adds nothing. Each
+/// edge's part inside a quadrant is a parameter interval, so no clipping, no polygon buffer
+/// and no branch per edge is needed; valid for any simple polygon. A texel's piece is
+/// `Q(i+1, j+1) − Q(i, j+1) − Q(i+1, j) + Q(i, j)` (clamped at 0 against rounding), with
+/// the last line of each axis unconstrained.
 #[inline(always)]
-fn quadrant_areas(p: &[[f64; 2]; 4], x0: f64, y0: f64) -> [f64; 4] {
-    let mut sum = [0.0f64; 4];
+fn grid_splat(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, mut put: impl FnMut(f64, f64, f64)) {
+    let (nx, ny) = (nx.clamp(1, GRID_MAX), ny.clamp(1, GRID_MAX));
+    // q[j][i] = |Q(i, j)|; row and column 0 stay 0.
+    let mut q = [[0.0f64; GRID_MAX + 1]; GRID_MAX + 1];
     for k in 0..4 {
-        let (a, b) = (p[k], p[(k + 1) & 3]);
-        let (ax, bx) = (a[0] - x0, b[0] - x0);
+        let (a, b) = (poly[k], poly[(k + 1) & 3]);
         let dy = b[1] - a[1];
-        let [sx0, sx1] = below_interval(ax, bx);
-        let [sy0, sy1] = below_interval(a[1] - y0, b[1] - y0);
-        // ∫ (x − x0) dy over the edge's parameters s ∈ [s0, s1] (empty if s1 <= s0).
-        let part = |s0: f64, s1: f64| {
-            let s1 = s1.max(s0);
-            dy * (s1 - s0) * (ax + 0.5 * (bx - ax) * (s1 + s0))
-        };
-        sum[0] += dy * (0.5 * (ax + bx));
-        sum[1] += part(sx0, sx1);
-        sum[2] += part(sy0, sy1);
-        sum[3] += part(sx0.max(sy0), sx1.min(sy1));
+        let mut xs = [[0.0, 1.0]; GRID_MAX + 1];
+        let mut ys = [[0.0, 1.0]; GRID_MAX + 1];
+        for i in 1..nx {
+            let x = c[0] + i as f64;
+            xs[i] = below_interval(a[0] - x, b[0] - x);
+        }
+        for j in 1..ny {
+            let y = c[1] + j as f64;
+            ys[j] = below_interval(a[1] - y, b[1] - y);
+        }
+        for i in 1..=nx {
+            let ax = a[0] - (c[0] + i as f64);
+            let dx = b[0] - a[0];
+            for j in 1..=ny {
+                let s0 = xs[i][0].max(ys[j][0]);
+                let s1 = xs[i][1].min(ys[j][1]).max(s0);
+                // ∫ (x − X_i) dy over the edge's parameters s ∈ [s0, s1]
+                q[j][i] += dy * (s1 - s0) * (ax + 0.5 * dx * (s1 + s0));
+            }
+        }
     }
-    sum.map(f64::abs)
+    for j in 0..ny {
+        for i in 0..nx {
+            let w = q[j + 1][i + 1].abs() - q[j][i + 1].abs() - q[j + 1][i].abs() + q[j][i].abs();
+            put(c[0] + i as f64, c[1] + j as f64, w.max(0.0));
+        }
+    }
 }
 
 /// The parameters `s ∈ [0, 1]` with `da + (db − da)·s <= 0`, as `[s0, s1]` (`s1 < s0` or
@@ -484,20 +479,21 @@ mod tests {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        for _ in 0..500 {
-            let c = [rnd() * 10.0 - 1.0, rnd() * 10.0 - 1.0];
-            let s = 0.3 + rnd() * 4.0;
+        // sides up to 8.3 texels: the boundary-integral grid (up to 4 × 4) and the strips
+        for _ in 0..1000 {
+            let c = [rnd() * 14.0 - 1.0, rnd() * 14.0 - 1.0];
+            let s = 0.3 + rnd() * 8.0;
             let q: [[f32; 2]; 4] = std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);
-            let (sp, v) = collect(q, 8);
+            let (sp, v) = collect(q, 16);
             let (poly, area) = footprint_polygon(&q.map(|p| [p[0] as f64, p[1] as f64]));
             assert!((sp.area - area).abs() < 1e-12);
             if sp.kind != SplatKind::Exact {
                 continue;
             }
-            for j in 0..8 {
-                for i in 0..8 {
+            for j in 0..16 {
+                for i in 0..16 {
                     let want = polygon_box_area(&poly, [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0]);
-                    let got = v.iter().find(|x| x.0 == j * 8 + i).map_or(0.0, |x| x.1);
+                    let got = v.iter().find(|x| x.0 == j * 16 + i).map_or(0.0, |x| x.1);
                     assert!((got - want).abs() < 1e-9, "{q:?} texel {i},{j}: {got} vs {want}");
                 }
             }
@@ -506,7 +502,7 @@ mod tests {
 
     #[test]
     fn small_footprints_match_box_clipping() {
-        // quads of 0.3-1.5 texels: the one- and two-clip cases (1×2, 2×1, 2×2 texels),
+        // quads of 0.3-1.5 texels: 1×1, 1×2, 2×1 and 2×2 texels,
         // convex, concave and self-intersecting, also across the texture border
         let mut seed = 777u64;
         let mut rnd = || {
