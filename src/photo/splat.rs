@@ -237,7 +237,19 @@ const GRID_MAX: usize = 4;
 /// `Q(i+1, j+1) − Q(i, j+1) − Q(i+1, j) + Q(i, j)` (clamped at 0 against rounding), with
 /// the last line of each axis unconstrained.
 #[inline(always)]
-fn grid_splat(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, mut put: impl FnMut(f64, f64, f64)) {
+fn grid_splat(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, put: impl FnMut(f64, f64, f64)) {
+    // The common shapes with constant bounds (unrolled, sums in registers).
+    match (nx, ny) {
+        (2, 1) => grid_splat_n(poly, c, 2, 1, put),
+        (1, 2) => grid_splat_n(poly, c, 1, 2, put),
+        (2, 2) => grid_splat_n(poly, c, 2, 2, put),
+        _ => grid_splat_n(poly, c, nx, ny, put),
+    }
+}
+
+/// [`grid_splat`] for `nx × ny` texels (inlined, so constant sizes unroll).
+#[inline(always)]
+fn grid_splat_n(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, mut put: impl FnMut(f64, f64, f64)) {
     let (nx, ny) = (nx.clamp(1, GRID_MAX), ny.clamp(1, GRID_MAX));
     // q[j][i] = |Q(i, j)|; row and column 0 stay 0.
     let mut q = [[0.0f64; GRID_MAX + 1]; GRID_MAX + 1];
