@@ -6,7 +6,8 @@
 //! which `f` stops increasing (the smallest positive root of `f'(r) = 1 + 3k1·r² + 5k2·r⁴`
 //! below 2, or 2 if the linear tail `r·d(4)` beyond the clamp does not increase, else ∞).
 //! Distorted radii beyond `f(r_fold)` have no unique ray (the model folds the image there):
-//! they give `None`.
+//! they give `None`. For whole rows of a photo's corner rays the inverse ratio is tabulated
+//! over the image's range (`RayCaster::with_table`), so no ray needs an iteration.
 
 use glam::DVec3;
 

@@ -14,7 +14,8 @@
 //! of the ray among all triangles, as the BVH gives (up to the choice between triangles hit
 //! at the same distance, e.g. on a shared edge), except for hits closer than [`Z_NEAR`] in
 //! camera depth, which are ignored. Rays outside the grid (not produced by the photo's
-//! pixel corners) are answered by testing every triangle.
+//! pixel corners) are answered by testing every triangle. Up to four rays of one bin can be
+//! tested together, one SIMD lane each ([`ViewGrid::nearest_packet`]), with the same hits.
 
 use glam::{BVec4A, DMat3, DVec3, Vec3, Vec3A, Vec4};
 use obvhs::triangle::Triangle;
