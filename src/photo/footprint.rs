@@ -418,6 +418,17 @@ fn first_present(present: &[bool; 4]) -> usize {
 /// `true` if every corner is finite, the quad's area is at most `max_area` and no side or
 /// diagonal is longer than `max_extent`.
 pub(crate) fn footprint_ok(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool {
+    // Fast accept, only where the full test accepts with a wide margin: finite corners in a
+    // bounding box with sides up to max_extent/2 (every side and diagonal is then at most
+    // max_extent/√2) and area up to max_area/2 (the quad's area is at most the box's).
+    let sum = c[0][0] + c[1][0] + c[2][0] + c[3][0] + c[0][1] + c[1][1] + c[2][1] + c[3][1];
+    let (w, h) = (
+        c[0][0].max(c[1][0]).max(c[2][0]).max(c[3][0]) - c[0][0].min(c[1][0]).min(c[2][0]).min(c[3][0]),
+        c[0][1].max(c[1][1]).max(c[2][1]).max(c[3][1]) - c[0][1].min(c[1][1]).min(c[2][1]).min(c[3][1]),
+    );
+    if sum.is_finite() && w <= 0.5 * max_extent && h <= 0.5 * max_extent && w * h <= 0.5 * max_area {
+        return true;
+    }
     if !c.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
         return false;
     }
@@ -448,5 +459,31 @@ mod tests {
         assert!(!footprint_ok(&sliver, 256.0, 64.0));
         let nan = [[0.0, 0.0], [f32::NAN, 0.0], [1.0, 1.0], [0.0, 1.0]];
         assert!(!footprint_ok(&nan, 256.0, 64.0));
+        let inf = [[0.0, 0.0], [f32::INFINITY, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert!(!footprint_ok(&inf, 256.0, 64.0));
+    }
+
+    #[test]
+    fn fast_accept_agrees_with_the_full_size_test() {
+        fn full(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool {
+            let a2: f32 = (0..4).map(|k| c[k][0] * c[(k + 1) % 4][1] - c[(k + 1) % 4][0] * c[k][1]).sum();
+            let len2 = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+            c.iter().flatten().all(|v| v.is_finite())
+                && 0.5 * a2.abs() <= max_area
+                && (0..4).all(|k| len2(c[k], c[(k + 1) % 4]) <= max_extent * max_extent)
+                && len2(c[0], c[2]) <= max_extent * max_extent
+                && len2(c[1], c[3]) <= max_extent * max_extent
+        }
+        let mut seed = 99u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for _ in 0..20000 {
+            let (o, s) = ([rnd() * 200.0, rnd() * 200.0], rnd() * rnd() * 40.0);
+            let q: [[f32; 2]; 4] = std::array::from_fn(|_| [o[0] + s * rnd(), o[1] + s * rnd()]);
+            let (a, e) = (1.0 + rnd() * 30.0, 2.0 + rnd() * 20.0);
+            assert_eq!(footprint_ok(&q, a, e), full(&q, a, e), "{q:?} {a} {e}");
+        }
     }
 }
