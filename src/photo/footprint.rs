@@ -174,14 +174,12 @@ impl Pools {
     }
 }
 
-/// One band's footprints per output bucket (row-major), and its counts.
+/// One band's footprints per output bucket (row-major), and its counts (in a set without
+/// cells).
 #[derive(Default)]
 struct BandOut {
     buckets: Vec<Vec<PixelFootprint>>,
-    pixels_hit: u64,
-    rejected_silhouette: u64,
-    reconstructed: u64,
-    dropped: u64,
+    counts: FootprintSet,
 }
 
 /// What became of one pixel.
@@ -232,10 +230,7 @@ impl Ctx<'_> {
         let mut cells: Vec<CellFootprints> =
             order.iter().map(|&i| CellFootprints { cell: self.scene.cells[i].cell, chunks: Vec::new() }).collect();
         for b in outs {
-            set.pixels_hit += b.pixels_hit;
-            set.rejected_silhouette += b.rejected_silhouette;
-            set.reconstructed += b.reconstructed;
-            set.dropped += b.dropped;
+            set.add_counts(&b.counts);
             for (k, chunk) in b.buckets.into_iter().enumerate() {
                 if !chunk.is_empty() {
                     cells[k].chunks.push(chunk);
@@ -265,10 +260,10 @@ impl Ctx<'_> {
             for c in 0..self.w {
                 match self.pixel(&rows, c, r) {
                     Outcome::Miss => continue,
-                    Outcome::Silhouette => out.rejected_silhouette += 1,
-                    Outcome::Dropped => out.dropped += 1,
+                    Outcome::Silhouette => out.counts.rejected_silhouette += 1,
+                    Outcome::Dropped => out.counts.dropped += 1,
                     Outcome::Footprint(fp, bucket) => {
-                        out.reconstructed += u64::from(fp.reconstructed > 0);
+                        out.counts.reconstructed += u64::from(fp.reconstructed > 0);
                         let chunk = &mut out.buckets[bucket as usize];
                         if chunk.capacity() == 0 {
                             *chunk = self.pools.take_chunk();
@@ -276,7 +271,7 @@ impl Ctx<'_> {
                         chunk.push(fp);
                     }
                 }
-                out.pixels_hit += 1;
+                out.counts.pixels_hit += 1;
             }
         }
         self.pools.put_hits(rows.hits);

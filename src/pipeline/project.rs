@@ -310,23 +310,11 @@ fn splat_batch(
     level: u8,
     samples: &PhotoSamples,
 ) {
-    // `batch.cells` is sorted by manifest index: pair each with its accumulator.
-    let mut jobs: Vec<(&CellFootprints, &mut Option<PhotoAccum>)> = Vec::with_capacity(batch.cells.len());
-    let mut rest = &mut pas[..];
-    let mut base = 0usize;
-    for cf in &batch.cells {
-        let ci = cf.cell as usize;
-        if ci < base || ci >= base + rest.len() || cells[ci].level != level {
-            continue;
+    let groups = group_by_cell(batch, cells, level);
+    pas.par_iter_mut().zip(groups).enumerate().for_each(|(ci, (pa, cf))| {
+        if let Some(cf) = cf {
+            pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[ci]))).add_samples(cf.iter(), samples);
         }
-        let (_, tail) = std::mem::take(&mut rest).split_at_mut(ci - base);
-        let (one, tail) = tail.split_at_mut(1);
-        jobs.push((cf, &mut one[0]));
-        rest = tail;
-        base = ci + 1;
-    }
-    jobs.into_par_iter().for_each(|(cf, pa)| {
-        pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[cf.cell as usize]))).add_samples(cf.iter(), samples);
     });
 }
 
@@ -355,21 +343,19 @@ fn estimate_leveling(
         let fs = photo_footprints(&scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;
-        let groups = group_by_cell(&fs, cells, level as u8);
         let samples = PhotoSamples::new(img, &ColourTransform::IDENTITY, &opts.confidence);
-        let parts: Vec<Result<ColourPairs>> = groups
+        let mut pas: Vec<Option<PhotoAccum>> = vec![None; cells.len()];
+        splat_batch(&fs, &mut pas, cells, level as u8, &samples);
+        let parts: Vec<Result<ColourPairs>> = pas
             .par_iter()
             .enumerate()
-            .filter_map(|(ci, g)| g.map(|r| (ci, r)))
-            .map(|(ci, range)| {
-                let rec = &cells[ci];
-                let mut pa = PhotoAccum::new(active_texels(rec));
-                pa.add_samples(range.iter(), &samples);
+            .filter_map(|(ci, pa)| pa.as_ref().map(|pa| (&cells[ci], pa)))
+            .map(|(rec, pa)| {
                 let existing = store.read_active_texture(rec)?;
                 let normals = store.read_active_normal_map(rec)?;
                 check_size(store, rec, existing.dimensions(), normals.dimensions())?;
                 let mut pairs = ColourPairs::default();
-                collect_pairs(&pa, &existing, &normals, &opts.leveling, &mut pairs);
+                collect_pairs(pa, &existing, &normals, &opts.leveling, &mut pairs);
                 Ok(pairs)
             })
             .collect();
