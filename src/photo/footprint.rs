@@ -92,6 +92,19 @@ pub fn for_each_footprint_batch(
     scene: &LevelScene,
     camera: &CameraModel,
     opts: &FootprintOptions,
+    sink: impl FnMut(&mut FootprintSet) + Send,
+) {
+    for_each_footprint_batch_in(&FootprintBuffers::default(), scene, camera, opts, sink);
+}
+
+/// [`for_each_footprint_batch`] with its scratch memory taken from (and left in) `buffers`,
+/// so that the casts of several photos and levels reuse the same memory. The footprints
+/// are the same.
+pub fn for_each_footprint_batch_in(
+    buffers: &FootprintBuffers,
+    scene: &LevelScene,
+    camera: &CameraModel,
+    opts: &FootprintOptions,
     mut sink: impl FnMut(&mut FootprintSet) + Send,
 ) {
     let (w, h) = (camera.width, camera.height);
@@ -112,8 +125,8 @@ pub fn for_each_footprint_batch(
     for (b, &i) in order.iter().enumerate() {
         bucket[i] = b as u32;
     }
-    let pools = Pools::default();
-    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket, pools: &pools };
+    let pools = buffers;
+    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket, pools };
     let bands = h.div_ceil(BAND_ROWS);
     let mut pending: Option<FootprintSet> = None;
     let mut b0 = 0;
@@ -138,15 +151,23 @@ pub fn for_each_footprint_batch(
 /// at the join of casting and splatting, docs/projection.md).
 const BATCH_BANDS: u32 = 8;
 
-/// Scratch buffers reused across bands and batches (so a photo's casts touch little fresh
-/// memory).
+/// Scratch memory of footprint casts (corner hits and footprint chunks), reused across the
+/// bands and batches of one cast and, when shared ([`for_each_footprint_batch_in`]), across
+/// casts: fresh memory costs a page fault per 4 KiB on first touch. Holds at most what the
+/// largest cast had in use at once; freed when dropped.
 #[derive(Default)]
-struct Pools {
+pub struct FootprintBuffers {
     hits: Mutex<Vec<Vec<CornerHit>>>,
-    chunks: Mutex<Vec<Vec<PixelFootprint>>>,
+    /// Empty chunks by size class ([`CHUNK_SIZES`]).
+    chunks: Mutex<[Vec<Vec<PixelFootprint>>; 3]>,
 }
 
-impl Pools {
+/// Capacities (footprints) of the chunks a band fills per cell: the first chunk of a cell
+/// in a band is small, later ones larger. Chunks never grow (no reallocation, no copy);
+/// a full one is followed by a new one, so every chunk returns to its own size class.
+const CHUNK_SIZES: [usize; 3] = [1 << 12, 1 << 14, 1 << 16];
+
+impl FootprintBuffers {
     fn take_hits(&self) -> Vec<CornerHit> {
         self.hits.lock().map(|mut p| p.pop()).ok().flatten().unwrap_or_default()
     }
@@ -157,17 +178,22 @@ impl Pools {
         }
     }
 
-    fn take_chunk(&self) -> Vec<PixelFootprint> {
-        self.chunks.lock().map(|mut p| p.pop()).ok().flatten().unwrap_or_default()
+    /// An empty chunk of at least the capacity of size class `class`.
+    fn take_chunk(&self, class: usize) -> Vec<PixelFootprint> {
+        let class = class.min(CHUNK_SIZES.len() - 1);
+        let pooled = self.chunks.lock().map(|mut p| p[class].pop()).ok().flatten();
+        pooled.unwrap_or_else(|| Vec::with_capacity(CHUNK_SIZES[class]))
     }
 
-    /// Keeps the (emptied) chunk buffers of a consumed batch.
-    fn recycle(&self, set: FootprintSet) {
+    /// Keeps the (emptied) chunk buffers of `set` (a consumed batch or footprint set) for
+    /// later casts.
+    pub fn recycle(&self, set: FootprintSet) {
         if let Ok(mut p) = self.chunks.lock() {
             for mut chunk in set.cells.into_iter().flat_map(|c| c.chunks) {
-                if chunk.capacity() > 0 {
+                // the largest class the chunk can serve
+                if let Some(class) = CHUNK_SIZES.iter().rposition(|&n| chunk.capacity() >= n) {
                     chunk.clear();
-                    p.push(chunk);
+                    p[class].push(chunk);
                 }
             }
         }
@@ -178,7 +204,8 @@ impl Pools {
 /// cells).
 #[derive(Default)]
 struct BandOut {
-    buckets: Vec<Vec<PixelFootprint>>,
+    /// Per bucket, its chunks in row order.
+    buckets: Vec<Vec<Vec<PixelFootprint>>>,
     counts: FootprintSet,
 }
 
@@ -199,7 +226,7 @@ struct Ctx<'a> {
     h: u32,
     opts: FootprintOptions,
     bucket: &'a [u32],
-    pools: &'a Pools,
+    pools: &'a FootprintBuffers,
 }
 
 /// The corner rows a band cast: rows `j_lo..=j_hi`, `stride` = W + 1 corners each.
@@ -231,10 +258,8 @@ impl Ctx<'_> {
             order.iter().map(|&i| CellFootprints { cell: self.scene.cells[i].cell, chunks: Vec::new() }).collect();
         for b in outs {
             set.add_counts(&b.counts);
-            for (k, chunk) in b.buckets.into_iter().enumerate() {
-                if !chunk.is_empty() {
-                    cells[k].chunks.push(chunk);
-                }
+            for (k, chunks) in b.buckets.into_iter().enumerate() {
+                cells[k].chunks.extend(chunks.into_iter().filter(|c| !c.is_empty()));
             }
         }
         set.cells = cells.into_iter().filter(|c| !c.chunks.is_empty()).collect();
@@ -264,11 +289,15 @@ impl Ctx<'_> {
                     Outcome::Dropped => out.counts.dropped += 1,
                     Outcome::Footprint(fp, bucket) => {
                         out.counts.reconstructed += u64::from(fp.reconstructed > 0);
-                        let chunk = &mut out.buckets[bucket as usize];
-                        if chunk.capacity() == 0 {
-                            *chunk = self.pools.take_chunk();
+                        let chunks = &mut out.buckets[bucket as usize];
+                        match chunks.last_mut() {
+                            Some(chunk) if chunk.len() < chunk.capacity() => chunk.push(fp),
+                            _ => {
+                                let mut chunk = self.pools.take_chunk(chunks.len());
+                                chunk.push(fp);
+                                chunks.push(chunk);
+                            }
                         }
-                        chunk.push(fp);
                     }
                 }
                 out.counts.pixels_hit += 1;

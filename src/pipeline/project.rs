@@ -28,7 +28,7 @@ use crate::fsutil::write_atomic;
 use crate::photo::{
     BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
     LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
-    fit_colour_transform, for_each_footprint_batch, normal_cos_slope, photo_footprints,
+    fit_colour_transform, for_each_footprint_batch_in, normal_cos_slope, FootprintBuffers,
 };
 use crate::stats::texel_stretch;
 use crate::store::{
@@ -113,6 +113,7 @@ impl StageTimer {
 /// failed write; a photo that sees no terrain only logs a warning.
 pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -> Result<ProjectReport> {
     opts.confidence.validate()?;
+    let mut timer = StageTimer::new();
     let mut store = Store::open(dir)?;
     for p in photos {
         if p.image.dimensions() != (p.camera.width, p.camera.height) {
@@ -131,7 +132,9 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     let ncells = store.manifest.cells.len();
     let levels = store.manifest.quadtree.levels as usize;
     let finest = levels.saturating_sub(1);
+    timer.lap("open store");
     let pyramids: Vec<PhotoPyramid> = photos.iter().map(|p| PhotoPyramid::new(&p.image, p.camera, finest)).collect();
+    timer.lap("photo pyramids");
 
     let multi = MultiProgress::new();
     let steps = levels as u64 + opts.level_colours as u64;
@@ -159,13 +162,14 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         .collect();
 
     let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
-    let mut timer = StageTimer::new();
+    // Scratch memory of all casts of this run.
+    let buffers = FootprintBuffers::default();
     // Footprints cast for the leveling are kept for the main loop while they are few.
     let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
     let mut cached_len = 0usize;
     if opts.level_colours {
         for (i, pyr) in pyramids.iter().enumerate() {
-            let (t, n, fs) = estimate_leveling(&store, pyr, finest, opts)?;
+            let (t, n, fs) = estimate_leveling(&store, pyr, finest, opts, &buffers)?;
             if let Some((level, fs)) = fs {
                 if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
                     cached_len += fs.len();
@@ -195,13 +199,16 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             let counts = match cached[pi].take() {
                 Some((l, fs)) if l == level => {
                     splat_batch(&fs, &mut pas, cells, level as u8, &samples);
-                    fs
+                    let mut counts = FootprintSet::default();
+                    counts.add_counts(&fs);
+                    buffers.recycle(fs);
+                    counts
                 }
                 other => {
                     cached[pi] = other;
                     let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
                     let mut counts = FootprintSet::default();
-                    for_each_footprint_batch(&scene, &cam, &opts.footprint, |batch| {
+                    for_each_footprint_batch_in(&buffers, &scene, &cam, &opts.footprint, |batch| {
                         splat_batch(batch, &mut pas, cells, level as u8, &samples);
                         counts.add_counts(batch);
                     });
@@ -329,6 +336,7 @@ fn estimate_leveling(
     pyr: &PhotoPyramid,
     finest: usize,
     opts: &ProjectOptions,
+    buffers: &FootprintBuffers,
 ) -> Result<(ColourTransform, usize, Option<(usize, FootprintSet)>)> {
     let (w, h) = pyr.level(0).0.dimensions();
     let mut k_est = 0;
@@ -340,7 +348,8 @@ fn estimate_leveling(
         let level = finest - step;
         let (img, cam) = pyr.level(step);
         let scene = LevelScene::from_store(store, level as u8, cam.position, opts.ray)?;
-        let fs = photo_footprints(&scene, &cam, &opts.footprint);
+        let mut fs = FootprintSet::default();
+        for_each_footprint_batch_in(buffers, &scene, &cam, &opts.footprint, |batch| fs.append(batch));
         drop(scene);
         let cells = &store.manifest.cells;
         let samples = PhotoSamples::new(img, &ColourTransform::IDENTITY, &opts.confidence);
@@ -369,6 +378,7 @@ fn estimate_leveling(
         if n > 0 {
             return Ok((t, n, Some((level, fs))));
         }
+        buffers.recycle(fs);
     }
     Ok((ColourTransform::IDENTITY, 0, None))
 }
