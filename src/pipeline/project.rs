@@ -3,15 +3,16 @@
 //!
 //! Per photo, the colour leveling (if on) is fitted first on a coarse level (the pyramid
 //! step whose image has at most `leveling_max_pixels`; if that gives too few samples, once
-//! more at full resolution). Then per level, per photo in input order: the level's cells
+//! more at full resolution). Then per level, finest first, per photo in input order: the level's cells
 //! become a ray-castable scene near the camera, the photo's pyramid image for the level
 //! (halved once per level above the finest) is cast into footprints batch by batch of
 //! pixel rows; each batch is splatted per cell in parallel into that photo's accumulators
 //! while the next batch is cast (each cell's deposits stay in row order, so the sums do not
 //! depend on the batching), and the accumulators are merged into the level's per-cell
-//! accumulators. Finally every cell of the level that received photo colour gets
-//! `{stem}.photo.png` (the active texture blended with photo colour) and
-//! `{stem}.photo.conf.png` (the photo share), and every cell's steep texels are counted.
+//! accumulators. Finally (while the next coarser level is cast) every cell of the level
+//! that received photo colour gets `{stem}.photo.png` (the active texture blended with
+//! photo colour) and `{stem}.photo.conf.png` (the photo share), and every cell's steep
+//! texels are counted. Casts share one set of scratch buffers ([`FootprintBuffers`]).
 //! Each run starts from the active textures (never from earlier photo textures), so the
 //! same photos give byte-identical files; records and files of an earlier run that this
 //! run does not write are removed. The manifest is written last.
@@ -103,6 +104,11 @@ impl StageTimer {
         let now = std::time::Instant::now();
         let dt = (now - self.last).as_secs_f64();
         self.last = now;
+        self.note(stage, dt);
+    }
+
+    /// Records a stage that ran alongside others (does not start a new lap).
+    fn note(&mut self, stage: &str, dt: f64) {
         tracing::debug!("project: {stage}: {dt:.3} s");
         self.laps.push((stage.to_string(), dt));
     }
@@ -187,71 +193,84 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
 
     let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
     let mut level_reports = Vec::with_capacity(levels);
-    for level in 0..levels {
-        let step = finest - level;
-        let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
-        for (pi, pyr) in pyramids.iter().enumerate() {
-            let (img, cam) = pyr.level(step);
-            let cells = &store.manifest.cells;
-            let samples = PhotoSamples::new(img, &transforms[pi], &opts.confidence);
-            // This photo's deposits per manifest cell, filled batch by batch in row order.
-            let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
-            let counts = match cached[pi].take() {
-                Some((l, fs)) if l == level => {
-                    splat_batch(&fs, &mut pas, cells, level as u8, &samples);
-                    let mut counts = FootprintSet::default();
-                    counts.add_counts(&fs);
-                    buffers.recycle(fs);
-                    counts
-                }
-                other => {
-                    cached[pi] = other;
-                    let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
-                    let mut counts = FootprintSet::default();
-                    for_each_footprint_batch_in(&buffers, &scene, &cam, &opts.footprint, |batch| {
-                        splat_batch(batch, &mut pas, cells, level as u8, &samples);
-                        counts.add_counts(batch);
-                    });
-                    counts
-                }
-            };
-            timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
-            if level == finest {
-                let r = &mut reports[pi];
-                r.pixels_hit = counts.pixels_hit;
-                r.rejected_silhouette = counts.rejected_silhouette;
-                r.reconstructed_footprints = counts.reconstructed;
-            }
-            let written: Vec<u64> = accs
-                .par_iter_mut()
-                .zip(pas.par_iter())
-                .enumerate()
-                .map(|(ci, (acc, pa))| {
-                    let Some(pa) = pa else { return 0 };
-                    acc.get_or_insert_with(|| CellAccum::new(active_texels(&cells[ci]), opts.blend)).merge(pa)
+    // Finest level first; the cells of each level are blended and written while the next
+    // coarser level is cast and splatted (levels are independent, so the output is the same
+    // as level by level).
+    let mut pending: Option<(usize, Vec<Option<CellAccum>>)> = None;
+    for level in (0..levels).rev().map(Some).chain([None]) {
+        let (finished, projected) = rayon::join(
+            || {
+                pending.take().map(|(l, accs)| {
+                    let t = std::time::Instant::now();
+                    (l, finish_level(&store, l, &accs, opts), t.elapsed().as_secs_f64())
                 })
-                .collect();
-            reports[pi].texels_written += written.iter().sum::<u64>();
-            bars[pi].inc(1);
-            timer.lap(&format!("level {level} photo {pi}: merge"));
-        }
-        let level_cells: Vec<usize> = (0..ncells).filter(|&i| store.manifest.cells[i].level as usize == level).collect();
-        let results: Vec<Result<CellOutcome>> =
-            level_cells.par_iter().map(|&ci| finish_cell(&store, &store.manifest.cells[ci], accs[ci].as_ref(), opts)).collect();
-        let mut lr = PhotoLevelReport { level: level as u8, ..PhotoLevelReport::default() };
-        for (&ci, r) in level_cells.iter().zip(results) {
-            let o = r?;
-            lr.steep_texels += o.steep_texels;
-            if let Some(rec) = o.record {
-                lr.cells_with_photo += 1;
-                lr.photo_texels += rec.photo_texels;
-                lr.steep_photo_texels += rec.steep_photo_texels;
+            },
+            || -> Result<Option<(usize, Vec<Option<CellAccum>>)>> {
+                let Some(level) = level else { return Ok(None) };
+                let step = finest - level;
+                let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
+                for (pi, pyr) in pyramids.iter().enumerate() {
+                    let (img, cam) = pyr.level(step);
+                    let cells = &store.manifest.cells;
+                    let samples = PhotoSamples::new(img, &transforms[pi], &opts.confidence);
+                    // This photo's deposits per manifest cell, filled batch by batch in row order.
+                    let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
+                    let counts = match cached[pi].take() {
+                        Some((l, fs)) if l == level => {
+                            splat_batch(&fs, &mut pas, cells, level as u8, &samples);
+                            let mut counts = FootprintSet::default();
+                            counts.add_counts(&fs);
+                            buffers.recycle(fs);
+                            counts
+                        }
+                        other => {
+                            cached[pi] = other;
+                            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
+                            let mut counts = FootprintSet::default();
+                            for_each_footprint_batch_in(&buffers, &scene, &cam, &opts.footprint, |batch| {
+                                splat_batch(batch, &mut pas, cells, level as u8, &samples);
+                                counts.add_counts(batch);
+                            });
+                            counts
+                        }
+                    };
+                    timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
+                    if level == finest {
+                        let r = &mut reports[pi];
+                        r.pixels_hit = counts.pixels_hit;
+                        r.rejected_silhouette = counts.rejected_silhouette;
+                        r.reconstructed_footprints = counts.reconstructed;
+                    }
+                    let written: Vec<u64> = accs
+                        .par_iter_mut()
+                        .zip(pas.par_iter())
+                        .enumerate()
+                        .map(|(ci, (acc, pa))| {
+                            let Some(pa) = pa else { return 0 };
+                            acc.get_or_insert_with(|| CellAccum::new(active_texels(&cells[ci]), opts.blend)).merge(pa)
+                        })
+                        .collect();
+                    reports[pi].texels_written += written.iter().sum::<u64>();
+                    bars[pi].inc(1);
+                    timer.lap(&format!("level {level} photo {pi}: merge"));
+                }
+                Ok(Some((level, accs)))
+            },
+        );
+        if let Some((l, result, secs)) = finished {
+            let (lr, recs) = result?;
+            for (ci, rec) in recs {
                 records[ci] = Some(rec);
             }
+            level_reports.push(lr);
+            timer.note(&format!("level {l}: cells written (alongside the next level)"), secs);
         }
-        level_reports.push(lr);
-        timer.lap(&format!("level {level}: cells written"));
+        pending = projected?;
+        if level.is_none() {
+            timer.lap("last level: cells written");
+        }
     }
+    level_reports.sort_by_key(|r| r.level);
     for pb in &bars {
         pb.finish_and_clear();
     }
@@ -323,6 +342,33 @@ fn splat_batch(
             pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[ci]))).add_samples(cf.iter(), samples);
         }
     });
+}
+
+/// Blends and writes the photo textures of every cell of `level` from its accumulators
+/// `accs` (indexed by manifest cell): the level's report and the new cell records.
+fn finish_level(
+    store: &Store,
+    level: usize,
+    accs: &[Option<CellAccum>],
+    opts: &ProjectOptions,
+) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>)> {
+    let cells = &store.manifest.cells;
+    let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
+    let results: Vec<Result<CellOutcome>> =
+        level_cells.par_iter().map(|&ci| finish_cell(store, &cells[ci], accs.get(ci).and_then(Option::as_ref), opts)).collect();
+    let mut lr = PhotoLevelReport { level: level as u8, ..PhotoLevelReport::default() };
+    let mut records = Vec::new();
+    for (&ci, r) in level_cells.iter().zip(results) {
+        let o = r?;
+        lr.steep_texels += o.steep_texels;
+        if let Some(rec) = o.record {
+            lr.cells_with_photo += 1;
+            lr.photo_texels += rec.photo_texels;
+            lr.steep_photo_texels += rec.steep_photo_texels;
+            records.push((ci, rec));
+        }
+    }
+    Ok((lr, records))
 }
 
 /// Most footprints (over all photos) kept from the leveling casts for the main loop
