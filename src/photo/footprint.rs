@@ -446,10 +446,16 @@ pub(crate) fn footprint_ok(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) ->
     // bounding box with sides up to max_extent/2 (every side and diagonal is then at most
     // max_extent/√2) and area up to max_area/2 (the quad's area is at most the box's).
     let sum = c[0][0] + c[1][0] + c[2][0] + c[3][0] + c[0][1] + c[1][1] + c[2][1] + c[3][1];
-    let (w, h) = (
-        c[0][0].max(c[1][0]).max(c[2][0]).max(c[3][0]) - c[0][0].min(c[1][0]).min(c[2][0]).min(c[3][0]),
-        c[0][1].max(c[1][1]).max(c[2][1]).max(c[3][1]) - c[0][1].min(c[1][1]).min(c[2][1]).min(c[3][1]),
-    );
+    // Plain comparisons (w and h only count where `sum`, hence every corner, is finite).
+    let side = |k: usize| {
+        let (mut lo, mut hi) = (c[0][k], c[0][k]);
+        for p in &c[1..] {
+            lo = if p[k] < lo { p[k] } else { lo };
+            hi = if p[k] > hi { p[k] } else { hi };
+        }
+        hi - lo
+    };
+    let (w, h) = (side(0), side(1));
     if sum.is_finite() && w <= 0.5 * max_extent && h <= 0.5 * max_extent && w * h <= 0.5 * max_area {
         return true;
     }
