@@ -264,11 +264,10 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             }
             level_reports.push(lr);
             timer.note(&format!("level {l}: cells written (alongside the next level)"), secs);
+            // The time after the next level's casts until these writes were done.
+            timer.lap(&format!("level {l}: rest of its cell writes"));
         }
         pending = projected?;
-        if level.is_none() {
-            timer.lap("last level: cells written");
-        }
     }
     level_reports.sort_by_key(|r| r.level);
     for pb in &bars {
