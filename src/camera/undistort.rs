@@ -157,8 +157,10 @@ pub(crate) struct PlaneRay {
 /// The ray through `(x, y)` of the undistorted image plane.
 #[inline]
 fn plane_ray(camera_to_world: &glam::DMat3, x: f64, y: f64) -> Option<PlaneRay> {
+    // `try_normalize` succeeds only with a finite, positive reciprocal length, so every
+    // component of `d` (at most 1 in magnitude) is finite.
     let d = (*camera_to_world * DVec3::new(x, y, 1.0)).try_normalize()?;
-    d.is_finite().then_some(PlaneRay { dir: d, xy: [x, y] })
+    Some(PlaneRay { dir: d, xy: [x, y] })
 }
 
 /// Pixel rays of one camera (see [`CameraModel::pixel_ray`]).

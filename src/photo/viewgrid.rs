@@ -68,6 +68,9 @@ pub struct ViewGrid {
     scale: f64,
     nx: usize,
     ny: usize,
+    /// `nx` and `ny` as floats (for the bin lookup of every ray).
+    nx_f: f64,
+    ny_f: f64,
     /// CSR: entries of bin `b` are `entries[starts[b]..starts[b + 1]]`.
     starts: Vec<u32>,
     entries: Vec<Entry>,
@@ -99,7 +102,7 @@ impl ViewGrid {
         let o = Vec3A::from(origin);
         let pre = tris.par_iter().map(|t| PreTri::new(t, o)).collect();
         let fwd = Vec3A::from((rot.row(2) * (1.0 + 1e-5)).as_vec3());
-        let mut grid = ViewGrid { pre, rot, fwd, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, starts: vec![0], entries: Vec::new() };
+        let mut grid = ViewGrid { pre, rot, fwd, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, nx_f: 0.0, ny_f: 0.0, starts: vec![0], entries: Vec::new() };
         let Some([xmin, ymin, xmax, ymax]) = ray_bounds(camera, rays) else { return grid };
         let f = camera.fx.abs().max(camera.fy.abs());
         let bin_px = if params.bin_px.is_finite() && params.bin_px > 0.0 { params.bin_px as f64 } else { 8.0 };
@@ -117,6 +120,7 @@ impl ViewGrid {
         grid.y0 = ymin - 1.0 / scale;
         grid.nx = ((w * scale).ceil() as usize + 2).max(1);
         grid.ny = ((h * scale).ceil() as usize + 2).max(1);
+        (grid.nx_f, grid.ny_f) = (grid.nx as f64, grid.ny as f64);
 
         // Per triangle: its bin rectangle and z_min (parallel, in order).
         let (gx, gy, nx, ny) = (grid.x0, grid.y0, grid.nx, grid.ny);
@@ -306,7 +310,7 @@ impl ViewGrid {
     fn bin_of(&self, x: f64, y: f64) -> Option<usize> {
         let bx = (x - self.x0) * self.scale;
         let by = (y - self.y0) * self.scale;
-        if !(bx >= 0.0 && by >= 0.0 && bx < self.nx as f64 && by < self.ny as f64) {
+        if !((bx >= 0.0) & (by >= 0.0) & (bx < self.nx_f) & (by < self.ny_f)) {
             return None;
         }
         // (signed conversions: one instruction each on x86-64)
