@@ -217,6 +217,49 @@ enum Outcome {
     Footprint(PixelFootprint, u32),
 }
 
+/// Silhouette crossings of the pixel edges of one band that neighbouring pixels share,
+/// each walked once, left to right or top to bottom (`crosses_silhouette` of a segment is
+/// evaluated from its left or upper end): the right edge of the previous pixel in the row
+/// and the bottom edges of the previous row. `None` where unknown (the neighbour was not a
+/// one-cell pixel, or stopped before that edge).
+struct EdgeCache {
+    /// Right edge of the previous pixel of this row.
+    right: Option<bool>,
+    /// Bottom edges of the previous row's pixels (read as this row's top edges).
+    above: Vec<Option<bool>>,
+    /// Bottom edges of this row's pixels so far.
+    below: Vec<Option<bool>>,
+}
+
+impl EdgeCache {
+    fn new(w: usize) -> EdgeCache {
+        EdgeCache { right: None, above: vec![None; w], below: vec![None; w] }
+    }
+
+    /// Starts a row: the last row's bottom edges become the top edges.
+    fn next_row(&mut self) {
+        std::mem::swap(&mut self.above, &mut self.below);
+        self.below.fill(None);
+        self.right = None;
+    }
+
+    fn top(&self, c: usize) -> Option<bool> {
+        self.above.get(c).copied().flatten()
+    }
+
+    fn left(&self) -> Option<bool> {
+        self.right
+    }
+
+    /// Records pixel `c`'s right and bottom edges (and moves on to pixel `c + 1`).
+    fn set(&mut self, c: usize, right: Option<bool>, bottom: Option<bool>) {
+        self.right = right;
+        if let Some(b) = self.below.get_mut(c) {
+            *b = bottom;
+        }
+    }
+}
+
 struct Ctx<'a> {
     scene: &'a LevelScene,
     caster: &'a Caster<'a>,
@@ -281,9 +324,13 @@ impl Ctx<'_> {
         }
         let rows = CornerRows { hits, j_lo: j_lo as i64, j_hi: j_hi as i64, stride: stride as i64 };
         let mut out = BandOut { buckets: vec![Vec::new(); self.scene.cells.len()], ..BandOut::default() };
+        // Silhouette crossings of pixel edges shared with the next pixel (its left edge) and
+        // the next row (its top edges), walked in one direction (see `EdgeCache`).
+        let mut edges = EdgeCache::new(self.w as usize);
         for r in r0..r1 {
+            edges.next_row();
             for c in 0..self.w {
-                match self.pixel(&rows, c, r) {
+                match self.pixel(&rows, c, r, &mut edges) {
                     Outcome::Miss => continue,
                     Outcome::Silhouette => out.counts.rejected_silhouette += 1,
                     Outcome::Dropped => out.counts.dropped += 1,
@@ -309,15 +356,33 @@ impl Ctx<'_> {
 
     /// The common case: all four corners hit the same cell.
     #[inline]
-    fn full_pixel(&self, q: &[CornerHit; 4], c: u32, r: u32) -> Outcome {
+    fn full_pixel(&self, q: &[CornerHit; 4], c: u32, r: u32, edges: &mut EdgeCache) -> Outcome {
         let scene = self.scene;
+        let ci = c as usize;
         if self.opts.reject_silhouettes && !(q[0].tri == q[1].tri && q[0].tri == q[2].tri && q[0].tri == q[3].tri) {
-            for e in 0..4 {
-                let (a, b) = (&q[e], &q[(e + 1) % 4]);
-                if a.tri != b.tri && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex) {
-                    return Outcome::Silhouette;
-                }
+            // Edges left to right and top to bottom: top TL→TR, left TL→BL, right TR→BR,
+            // bottom BL→BR; the top and left ones may be known from the neighbours.
+            let walk = |a: &CornerHit, b: &CornerHit| {
+                a.tri != b.tri && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex)
+            };
+            let top = edges.top(ci).unwrap_or_else(|| walk(&q[0], &q[1]));
+            if top || edges.left().unwrap_or_else(|| walk(&q[0], &q[3])) {
+                edges.set(ci, None, None);
+                return Outcome::Silhouette;
             }
+            let right = walk(&q[1], &q[2]);
+            if right {
+                edges.set(ci, Some(true), None);
+                return Outcome::Silhouette;
+            }
+            let bottom = walk(&q[3], &q[2]);
+            edges.set(ci, Some(false), Some(bottom));
+            if bottom {
+                return Outcome::Silhouette;
+            }
+        } else {
+            // all four corners on one triangle: no edge crosses anything
+            edges.set(ci, Some(false), Some(false));
         }
         let corners = [q[0].tex, q[1].tex, q[2].tex, q[3].tex];
         if !footprint_ok(&corners, self.opts.max_area, self.opts.max_extent) {
@@ -334,7 +399,7 @@ impl Ctx<'_> {
         Outcome::Footprint(fp, self.bucket[q[0].cell as usize])
     }
 
-    fn pixel(&self, rows: &CornerRows, c: u32, r: u32) -> Outcome {
+    fn pixel(&self, rows: &CornerRows, c: u32, r: u32, edges: &mut EdgeCache) -> Outcome {
         let scene = self.scene;
         let (i0, j0) = (c as i64, r as i64);
         // Pixel rows r0..r1 of a band always have their corner rows r and r + 1 cast.
@@ -342,8 +407,9 @@ impl Ctx<'_> {
         let k = (j0 - rows.j_lo) as usize * s + c as usize;
         let q: [CornerHit; 4] = [rows.hits[k], rows.hits[k + 1], rows.hits[k + s + 1], rows.hits[k + s]];
         if q.iter().all(|h| h.is_hit() && h.cell == q[0].cell) {
-            return self.full_pixel(&q, c, r);
+            return self.full_pixel(&q, c, r, edges);
         }
+        edges.set(c as usize, None, None);
         // 1. The pixel's cell: most corners, ties to the lowest manifest index.
         let cells: [u32; 4] = q.map(|h| if h.is_hit() { h.cell } else { u32::MAX });
         let mut best: Option<(usize, u32)> = None; // (votes, scene cell)
