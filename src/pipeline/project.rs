@@ -196,6 +196,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     // Finest level first; the cells of each level are blended and written while the next
     // coarser level is cast and splatted (levels are independent, so the output is the same
     // as level by level).
+    let run = LevelRun { store: &store, pyramids: &pyramids, transforms: &transforms, opts, buffers: &buffers, bars: &bars, finest };
     let mut pending: Option<(usize, Vec<Option<CellAccum>>)> = None;
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
@@ -207,54 +208,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             },
             || -> Result<Option<(usize, Vec<Option<CellAccum>>)>> {
                 let Some(level) = level else { return Ok(None) };
-                let step = finest - level;
-                let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
-                for (pi, pyr) in pyramids.iter().enumerate() {
-                    let (img, cam) = pyr.level(step);
-                    let cells = &store.manifest.cells;
-                    let samples = PhotoSamples::new(img, &transforms[pi], &opts.confidence);
-                    // This photo's deposits per manifest cell, filled batch by batch in row order.
-                    let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
-                    let counts = match cached[pi].take() {
-                        Some((l, fs)) if l == level => {
-                            splat_batch(&fs, &mut pas, cells, level as u8, &samples);
-                            let mut counts = FootprintSet::default();
-                            counts.add_counts(&fs);
-                            buffers.recycle(fs);
-                            counts
-                        }
-                        other => {
-                            cached[pi] = other;
-                            let scene = LevelScene::from_store(&store, level as u8, cam.position, opts.ray)?;
-                            let mut counts = FootprintSet::default();
-                            for_each_footprint_batch_in(&buffers, &scene, &cam, &opts.footprint, |batch| {
-                                splat_batch(batch, &mut pas, cells, level as u8, &samples);
-                                counts.add_counts(batch);
-                            });
-                            counts
-                        }
-                    };
-                    timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
-                    if level == finest {
-                        let r = &mut reports[pi];
-                        r.pixels_hit = counts.pixels_hit;
-                        r.rejected_silhouette = counts.rejected_silhouette;
-                        r.reconstructed_footprints = counts.reconstructed;
-                    }
-                    let written: Vec<u64> = accs
-                        .par_iter_mut()
-                        .zip(pas.par_iter())
-                        .enumerate()
-                        .map(|(ci, (acc, pa))| {
-                            let Some(pa) = pa else { return 0 };
-                            acc.get_or_insert_with(|| CellAccum::new(active_texels(&cells[ci]), opts.blend)).merge(pa)
-                        })
-                        .collect();
-                    reports[pi].texels_written += written.iter().sum::<u64>();
-                    bars[pi].inc(1);
-                    timer.lap(&format!("level {level} photo {pi}: merge"));
-                }
-                Ok(Some((level, accs)))
+                Ok(Some((level, run.project_level(level, &mut cached, &mut reports, &mut timer)?)))
             },
         );
         if let Some((l, result, secs)) = finished {
@@ -341,6 +295,80 @@ fn splat_batch(
             pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[ci]))).add_samples(cf.iter(), samples);
         }
     });
+}
+
+/// What every level's projection of a run shares.
+struct LevelRun<'a> {
+    store: &'a Store,
+    pyramids: &'a [PhotoPyramid<'a>],
+    /// Per photo, its colour leveling.
+    transforms: &'a [ColourTransform],
+    opts: &'a ProjectOptions,
+    buffers: &'a FootprintBuffers,
+    bars: &'a [ProgressBar],
+    finest: usize,
+}
+
+impl LevelRun<'_> {
+    /// Casts and splats every photo onto the cells of `level` (using a photo's footprints
+    /// cached from the leveling where they are of this level) and returns the per-cell
+    /// accumulators (indexed by manifest cell); adds to the photos' reports.
+    fn project_level(
+        &self,
+        level: usize,
+        cached: &mut [Option<(usize, FootprintSet)>],
+        reports: &mut [PhotoReport],
+        timer: &mut StageTimer,
+    ) -> Result<Vec<Option<CellAccum>>> {
+        let step = self.finest - level;
+        let mut accs: Vec<Option<CellAccum>> = vec![None; self.store.manifest.cells.len()];
+        for (pi, pyr) in self.pyramids.iter().enumerate() {
+            let (img, cam) = pyr.level(step);
+            let cells = &self.store.manifest.cells;
+            let samples = PhotoSamples::new(img, &self.transforms[pi], &self.opts.confidence);
+            // This photo's deposits per manifest cell, filled batch by batch in row order.
+            let mut pas: Vec<Option<PhotoAccum>> = vec![None; self.store.manifest.cells.len()];
+            let counts = match cached[pi].take() {
+                Some((l, fs)) if l == level => {
+                    splat_batch(&fs, &mut pas, cells, level as u8, &samples);
+                    let mut counts = FootprintSet::default();
+                    counts.add_counts(&fs);
+                    self.buffers.recycle(fs);
+                    counts
+                }
+                other => {
+                    cached[pi] = other;
+                    let scene = LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?;
+                    let mut counts = FootprintSet::default();
+                    for_each_footprint_batch_in(self.buffers, &scene, &cam, &self.opts.footprint, |batch| {
+                        splat_batch(batch, &mut pas, cells, level as u8, &samples);
+                        counts.add_counts(batch);
+                    });
+                    counts
+                }
+            };
+            timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
+            if level == self.finest {
+                let r = &mut reports[pi];
+                r.pixels_hit = counts.pixels_hit;
+                r.rejected_silhouette = counts.rejected_silhouette;
+                r.reconstructed_footprints = counts.reconstructed;
+            }
+            let written: Vec<u64> = accs
+                .par_iter_mut()
+                .zip(pas.par_iter())
+                .enumerate()
+                .map(|(ci, (acc, pa))| {
+                    let Some(pa) = pa else { return 0 };
+                    acc.get_or_insert_with(|| CellAccum::new(active_texels(&cells[ci]), self.opts.blend)).merge(pa)
+                })
+                .collect();
+            reports[pi].texels_written += written.iter().sum::<u64>();
+            self.bars[pi].inc(1);
+            timer.lap(&format!("level {level} photo {pi}: merge"));
+        }
+        Ok(accs)
+    }
 }
 
 /// Blends and writes the photo textures of every cell of `level` from its accumulators
