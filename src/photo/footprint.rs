@@ -77,8 +77,19 @@ impl Default for FootprintOptions {
 /// Casts rays through every pixel corner of `camera`'s image (undistorted) against `scene`
 /// and returns every pixel's footprint in the texture of the cell it belongs to.
 pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &FootprintOptions) -> FootprintSet {
+    photo_footprints_in(&FootprintBuffers::default(), scene, camera, opts)
+}
+
+/// [`photo_footprints`] with its chunks taken from `buffers` (give them back with
+/// [`FootprintBuffers::recycle`] once used). The footprints are the same.
+pub fn photo_footprints_in(
+    buffers: &FootprintBuffers,
+    scene: &LevelScene,
+    camera: &CameraModel,
+    opts: &FootprintOptions,
+) -> FootprintSet {
     let mut all = FootprintSet::default();
-    for_each_footprint_batch(scene, camera, opts, |batch| all.append(batch));
+    for_each_footprint_batch_in(buffers, scene, camera, opts, |batch| all.append(batch));
     all
 }
 
@@ -125,8 +136,7 @@ pub fn for_each_footprint_batch_in(
     for (b, &i) in order.iter().enumerate() {
         bucket[i] = b as u32;
     }
-    let pools = buffers;
-    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket, pools };
+    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket, buffers };
     let bands = h.div_ceil(BAND_ROWS);
     let mut pending: Option<FootprintSet> = None;
     let mut b0 = 0;
@@ -137,7 +147,7 @@ pub fn for_each_footprint_batch_in(
             || {
                 if let Some(mut done) = pending.take() {
                     sink(&mut done);
-                    pools.recycle(done);
+                    buffers.recycle(done);
                 }
             },
         );
@@ -269,7 +279,7 @@ struct Ctx<'a> {
     h: u32,
     opts: FootprintOptions,
     bucket: &'a [u32],
-    pools: &'a FootprintBuffers,
+    buffers: &'a FootprintBuffers,
 }
 
 /// The corner rows a band cast: rows `j_lo..=j_hi`, `stride` = W + 1 corners each.
@@ -316,7 +326,7 @@ impl Ctx<'_> {
         let j_lo = r0.saturating_sub(1);
         let j_hi = (r1 + 1).min(self.h);
         let stride = self.w as usize + 1;
-        let mut hits = self.pools.take_hits();
+        let mut hits = self.buffers.take_hits();
         hits.clear();
         hits.resize((j_hi - j_lo + 1) as usize * stride, CornerHit::MISS);
         for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
@@ -340,7 +350,7 @@ impl Ctx<'_> {
                         match chunks.last_mut() {
                             Some(chunk) if chunk.len() < chunk.capacity() => chunk.push(fp),
                             _ => {
-                                let mut chunk = self.pools.take_chunk(chunks.len());
+                                let mut chunk = self.buffers.take_chunk(chunks.len());
                                 chunk.push(fp);
                                 chunks.push(chunk);
                             }
@@ -350,7 +360,7 @@ impl Ctx<'_> {
                 out.counts.pixels_hit += 1;
             }
         }
-        self.pools.put_hits(rows.hits);
+        self.buffers.put_hits(rows.hits);
         out
     }
 

@@ -49,7 +49,7 @@ pub use accel::RayAccel;
 pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
 pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
 pub use colmap::{read_colmap, read_colmap_specs, read_similarity, Similarity};
-pub use footprint::{for_each_footprint_batch, for_each_footprint_batch_in, photo_footprints, FootprintBuffers, FootprintOptions};
+pub use footprint::{for_each_footprint_batch, for_each_footprint_batch_in, photo_footprints, photo_footprints_in, FootprintBuffers, FootprintOptions};
 pub use input::{
     apply_rotation_delta, fit_camera_to_image, image_size, photo_spec, read_photo_list, read_photo_specs,
     validate_camera, PhotoSpec,

@@ -29,7 +29,7 @@ use crate::fsutil::write_atomic;
 use crate::photo::{
     BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
     LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
-    fit_colour_transform, for_each_footprint_batch_in, normal_cos_slope, FootprintBuffers,
+    fit_colour_transform, for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, FootprintBuffers,
 };
 use crate::stats::texel_stretch;
 use crate::store::{
@@ -421,8 +421,7 @@ fn estimate_leveling(
         let level = finest - step;
         let (img, cam) = pyr.level(step);
         let scene = LevelScene::from_store(store, level as u8, cam.position, opts.ray)?;
-        let mut fs = FootprintSet::default();
-        for_each_footprint_batch_in(buffers, &scene, &cam, &opts.footprint, |batch| fs.append(batch));
+        let fs = photo_footprints_in(buffers, &scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;
         let samples = PhotoSamples::new(img, &ColourTransform::IDENTITY, &opts.confidence);
