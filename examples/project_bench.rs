@@ -91,7 +91,6 @@ fn main() -> anyhow::Result<()> {
             wall[k].push(t0.elapsed().as_secs_f64());
             cpu[k].push(cpu_seconds() - c0);
             stages[k].push(report.stage_seconds);
-            std::fs::remove_dir_all(&work)?;
         }
     }
     let base = median(wall[0].clone());

@@ -9,9 +9,11 @@
 //! lines and each strip into texel pieces at the integer y lines (one-pass
 //! Sutherland-Hodgman splits, about two per covered texel; tested against the resampler's
 //! exact-mode clipping, generalised to any simple polygon). Footprints within 4 × 4 texels
-//! (nearly all of a photo sharper than the texture) get their pieces from boundary
-//! integrals instead, without clipping or branches per edge (pieces under a billionth of
-//! the footprint, rounding noise, are dropped). A *collapsed* footprint, of area
+//! get their pieces from boundary integrals instead, without clipping or branches per edge,
+//! and those within 2 × 2 texels (nearly all of a photo sharper than the texture) from
+//! three of them: the areas left of and above the box's inner lines and of the quadrant
+//! they cut off (pieces under a billionth of the footprint, rounding noise, are dropped;
+//! the common cases are inlined into the caller). A *collapsed* footprint, of area
 //! below [`MIN_SPLAT_AREA`] texels² (a point or a sliver, not merely a pixel much smaller than
 //! a texel), deposits its area at its centre with bilinear weights
 //! over the four nearest texel centres (the weights of a one-texel box around the centre,
@@ -115,11 +117,13 @@ pub(crate) fn footprint_shape(corners: &[[f32; 2]; 4]) -> Option<([[f64; 2]; 4],
 }
 
 /// [`splat_footprint`] of the polygon `poly` of area `area` (from [`footprint_shape`]).
+/// The common cases (footprints within 2 × 2 texels) are inlined into the caller; the rest
+/// is [`splat_collapsed`] and [`splat_large`].
+#[inline(always)]
 pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
     if texels == 0 {
         return SKIP;
     }
-    let q = poly;
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in poly {
         for k in 0..2 {
@@ -135,40 +139,70 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     if !((hi[0] - lo[0]) * (hi[1] - lo[1]) <= MAX_SPLAT_BBOX) || !area.is_finite() {
         return SKIP;
     }
+    if area < MIN_SPLAT_AREA {
+        return splat_collapsed(poly, area, texels, deposit);
+    }
     let t = texels as f64;
     let n = texels as usize;
-    if area < MIN_SPLAT_AREA {
-        if area > 0.0 {
-            let c = [0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5, 0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5];
-            let (i0, j0) = (floor_f(c[0]), floor_f(c[1]));
-            let (fx, fy) = (c[0] - i0, c[1] - j0);
-            for (di, dj, w) in
-                [(0.0, 0.0, (1.0 - fx) * (1.0 - fy)), (1.0, 0.0, fx * (1.0 - fy)), (0.0, 1.0, (1.0 - fx) * fy), (1.0, 1.0, fx * fy)]
-            {
-                let (i, j) = (i0 + di, j0 + dj);
-                if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
-                    deposit(j as usize * n + i as usize, w * area);
-                }
-            }
-        }
-        return Splat { area, kind: SplatKind::Bilinear };
-    }
-    // Texel lines around the bounding box, and the texture's texels among them.
+    // Texel lines around the bounding box.
     let (ci0, ci1) = (floor_f(lo[0]), ceil_f(hi[0]));
     let (cj0, cj1) = (floor_f(lo[1]), ceil_f(hi[1]));
+    let (nx, ny) = (ci1 - ci0, cj1 - cj0);
+    let inside = ci0 >= 0.0 && cj0 >= 0.0 && ci1 <= t && cj1 <= t;
+    if nx == 1.0 && ny == 1.0 && inside {
+        // wholly inside one texel: no clipping needed
+        // (in [0, t): signed conversions, one instruction each on x86-64)
+        deposit(cj0 as i64 as usize * n + ci0 as i64 as usize, area);
+        return Splat { area, kind: SplatKind::Exact };
+    }
+    if nx <= 2.0 && ny <= 2.0 {
+        // One or two texels each way (nearly all footprints of a photo sharper than the
+        // texture): half-plane and quadrant areas in the box's own frame.
+        let min_piece = 1e-9 * area;
+        small_splat(poly, area, [ci0, cj0], nx == 2.0, ny == 2.0, |i, j, w| {
+            if w > min_piece && (inside || (i >= 0.0 && j >= 0.0 && i < t && j < t)) {
+                deposit(j as i64 as usize * n + i as i64 as usize, w);
+            }
+        });
+        return Splat { area, kind: SplatKind::Exact };
+    }
+    splat_large(poly, area, texels, [ci0, ci1, cj0, cj1], deposit)
+}
+
+/// [`splat_polygon`] of a collapsed footprint (area below [`MIN_SPLAT_AREA`]): its area at
+/// its centre, with bilinear weights.
+#[inline(never)]
+fn splat_collapsed(q: &[[f64; 2]; 4], area: f64, texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
+    let (t, n) = (texels as f64, texels as usize);
+    if area > 0.0 {
+        let c = [0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5, 0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5];
+        let (i0, j0) = (floor_f(c[0]), floor_f(c[1]));
+        let (fx, fy) = (c[0] - i0, c[1] - j0);
+        for (di, dj, w) in
+            [(0.0, 0.0, (1.0 - fx) * (1.0 - fy)), (1.0, 0.0, fx * (1.0 - fy)), (0.0, 1.0, (1.0 - fx) * fy), (1.0, 1.0, fx * fy)]
+        {
+            let (i, j) = (i0 + di, j0 + dj);
+            if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
+                deposit(j as usize * n + i as usize, w * area);
+            }
+        }
+    }
+    Splat { area, kind: SplatKind::Bilinear }
+}
+
+/// [`splat_polygon`] of a footprint whose bounding box (texel lines `[ci0, ci1] × [cj0, cj1]`)
+/// spans more than two texels one way.
+#[inline(never)]
+fn splat_large(poly: &[[f64; 2]; 4], area: f64, texels: u32, lines: [f64; 4], mut deposit: impl FnMut(usize, f64)) -> Splat {
+    let [ci0, ci1, cj0, cj1] = lines;
+    let (t, n) = (texels as f64, texels as usize);
+    // The texture's texels among the lines.
     let (i0, i1) = (ci0.max(0.0), ci1.min(t));
     let (j0, j1) = (cj0.max(0.0), cj1.min(t));
     if i1 <= i0 || j1 <= j0 {
         return Splat { area, kind: SplatKind::Exact };
     }
-    // (in [0, t]: signed conversions, one instruction each on x86-64)
-    let (i0, i1, j0, j1) = (i0 as i64 as usize, i1 as i64 as usize, j0 as i64 as usize, j1 as i64 as usize);
     let (nx, ny) = (ci1 - ci0, cj1 - cj0);
-    if nx == 1.0 && ny == 1.0 && ci0 >= 0.0 && cj0 >= 0.0 && ci1 <= t && cj1 <= t {
-        // wholly inside one texel: no clipping needed
-        deposit(j0 * n + i0, area);
-        return Splat { area, kind: SplatKind::Exact };
-    }
     if nx <= GRID_MAX as f64 && ny <= GRID_MAX as f64 {
         // At most GRID_MAX × GRID_MAX texels: boundary integrals give every piece.
         // Pieces below a billionth of the footprint are rounding noise of the subtractions.
@@ -198,7 +232,7 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
             src.split_into(0, i + 1.0, &mut col, dst);
             r = 1 - r;
         }
-        if i >= i0 as f64 && i < i1 as f64 {
+        if i >= i0 && i < i1 {
             crest[0].copy_from(if last { &rest[r] } else { &col });
             let mut c = 0;
             let mut j = cj0;
@@ -212,7 +246,7 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
                     crest[c].n = 0;
                     w
                 };
-                if j >= j0 as f64 && j < j1 as f64 && w > 0.0 {
+                if j >= j0 && j < j1 && w > 0.0 {
                     deposit(j as usize * n + i as usize, w);
                 }
                 j += 1.0;
@@ -224,6 +258,76 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
         i += 1.0;
     }
     Splat { area, kind: SplatKind::Exact }
+}
+
+/// Pieces of a polygon of area `area` whose bounding box spans one or two texels each way
+/// from texel `c` (two in x if `wide`, two in y if `tall`, not both single): `put(i, j,
+/// area)` for each texel of the box, pieces clamped at 0 against rounding.
+///
+/// In the box's frame (origin at `c`) the dividing lines are `x = 1` and `y = 1`. The part
+/// of the polygon left of `x = 1` has the area `|∮ min(x − 1, 0) dy| ` over the polygon's
+/// boundary (Green's theorem; the cut along the line adds nothing), the part above `y = 1`
+/// likewise; the upper-left quadrant needs each edge clipped to `y <= 1` first. The other
+/// pieces follow from these and the total.
+#[inline(always)]
+fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], wide: bool, tall: bool, mut put: impl FnMut(f64, f64, f64)) {
+    let p = poly.map(|v| [v[0] - c[0], v[1] - c[1]]);
+    match (wide, tall) {
+        (true, false) => {
+            let left = below_line_area(&p, 0, 1.0);
+            put(c[0], c[1], left);
+            put(c[0] + 1.0, c[1], (area - left).max(0.0));
+        }
+        (false, true) => {
+            let top = below_line_area(&p, 1, 1.0);
+            put(c[0], c[1], top);
+            put(c[0], c[1] + 1.0, (area - top).max(0.0));
+        }
+        _ => {
+            let (left, top, q) = (below_line_area(&p, 0, 1.0), below_line_area(&p, 1, 1.0), quadrant_area(&p));
+            put(c[0], c[1], q);
+            put(c[0] + 1.0, c[1], (top - q).max(0.0));
+            put(c[0], c[1] + 1.0, (left - q).max(0.0));
+            put(c[0] + 1.0, c[1] + 1.0, (area - left - top + q).max(0.0));
+        }
+    }
+}
+
+/// The mean over `s ∈ [0, 1]` of `min(a + (b − a)·s, 0)`, times 2.
+#[inline(always)]
+fn twice_mean_negative(a: f64, b: f64) -> f64 {
+    // (f − |f|)/2 averaged: the mean of |f| is (|a| + |b|)/2 less |ab|/(|a| + |b|) where
+    // the sign changes
+    let cross = (-(a * b)).max(0.0) / (a.abs() + b.abs()).max(f64::MIN_POSITIVE);
+    a.min(0.0) + b.min(0.0) + cross
+}
+
+/// Area of the part of the simple polygon `p` where coordinate `axis` is at most `c`.
+#[inline(always)]
+fn below_line_area(p: &[[f64; 2]; 4], axis: usize, c: f64) -> f64 {
+    let o = 1 - axis;
+    let mut s = 0.0;
+    for k in 0..4 {
+        let (a, b) = (p[k], p[(k + 1) & 3]);
+        s += (b[o] - a[o]) * twice_mean_negative(a[axis] - c, b[axis] - c);
+    }
+    0.5 * s.abs()
+}
+
+/// Area of the part of the simple polygon `p` in `x <= 1, y <= 1`.
+#[inline(always)]
+fn quadrant_area(p: &[[f64; 2]; 4]) -> f64 {
+    let mut s = 0.0;
+    for k in 0..4 {
+        let (a, b) = (p[k], p[(k + 1) & 3]);
+        // the edge's parameters with y <= 1, and x − 1 at their ends
+        let [s0, s1] = below_interval(a[1] - 1.0, b[1] - 1.0);
+        let len = (s1 - s0).max(0.0);
+        let dx = b[0] - a[0];
+        let (fa, fb) = (a[0] - 1.0 + s0 * dx, a[0] - 1.0 + s1 * dx);
+        s += (b[1] - a[1]) * len * twice_mean_negative(fa, fb);
+    }
+    0.5 * s.abs()
 }
 
 /// Most texels per side of a footprint split by [`grid_splat`] (larger ones are cut into
