@@ -415,7 +415,8 @@ impl Ctx<'_> {
         // Pixel rows r0..r1 of a band always have their corner rows r and r + 1 cast.
         let s = rows.stride as usize;
         let k = (j0 - rows.j_lo) as usize * s + c as usize;
-        let q: [CornerHit; 4] = [rows.hits[k], rows.hits[k + 1], rows.hits[k + s + 1], rows.hits[k + s]];
+        let (top, bottom) = (&rows.hits[k..k + 2], &rows.hits[k + s..k + s + 2]);
+        let q: [CornerHit; 4] = [top[0], top[1], bottom[1], bottom[0]];
         if q.iter().all(|h| h.is_hit() && h.cell == q[0].cell) {
             return self.full_pixel(&q, c, r, edges);
         }
@@ -517,6 +518,7 @@ fn first_present(present: &[bool; 4]) -> usize {
 
 /// `true` if every corner is finite, the quad's area is at most `max_area` and no side or
 /// diagonal is longer than `max_extent`.
+#[inline(always)]
 pub(crate) fn footprint_ok(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool {
     // Fast accept, only where the full test accepts with a wide margin: finite corners in a
     // bounding box with sides up to max_extent/2 (every side and diagonal is then at most
@@ -535,6 +537,12 @@ pub(crate) fn footprint_ok(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) ->
     if sum.is_finite() && w <= 0.5 * max_extent && h <= 0.5 * max_extent && w * h <= 0.5 * max_area {
         return true;
     }
+    footprint_ok_exact(c, max_area, max_extent)
+}
+
+/// [`footprint_ok`] without the fast accept.
+#[inline(never)]
+fn footprint_ok_exact(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool {
     if !c.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
         return false;
     }
