@@ -177,18 +177,41 @@ pub struct CellAccum {
     pub confidence: Vec<f32>,
     /// Per texel: some photo gave it colour.
     pub has_colour: Vec<bool>,
-    /// Blend mode: `Σ_p Q`; best mode: empty.
-    weight: Vec<f32>,
-    /// Blend mode: `Σ_p C`; best mode: the best photo's colour.
-    colour: Vec<[f32; 3]>,
+    /// Per texel, blend mode: `Σ_p Q` and `Σ_p C` (`weight`, `colour`); best mode: the best
+    /// photo's colour (`colour`). `coverage` is not used.
+    sums: Vec<TexelSums>,
 }
 
 impl CellAccum {
     /// An empty accumulator.
     pub fn new(texels: u32, mode: BlendMode) -> CellAccum {
         let n = texels as usize * texels as usize;
-        let weight = if mode == BlendMode::Confidence { vec![0.0; n] } else { Vec::new() };
-        CellAccum { mode, texels, confidence: vec![0.0; n], has_colour: vec![false; n], weight, colour: vec![[0.0; 3]; n] }
+        CellAccum { mode, texels, confidence: vec![0.0; n], has_colour: vec![false; n], sums: vec![TexelSums::default(); n] }
+    }
+
+    /// The accumulator of one photo's deposits `p`, as [`CellAccum::new`] followed by
+    /// [`CellAccum::merge`] of `p`, using `p`'s memory; also returns how many texels `p`
+    /// gave colour.
+    pub fn from_photo(p: PhotoAccum, mode: BlendMode) -> (CellAccum, u64) {
+        let n = p.sums.len();
+        let (mut confidence, mut has_colour) = (vec![0.0; n], vec![false; n]);
+        let mut written = 0;
+        for t in 0..n {
+            if p.colour_at(t).is_some() {
+                written += 1;
+                confidence[t] = p.confidence(t).max(0.0);
+                has_colour[t] = true;
+            }
+        }
+        let texels = p.texels;
+        let mut sums = p.sums;
+        if mode == BlendMode::Best {
+            // the best (only) photo's colour where it gave colour
+            for (s, _) in sums.iter_mut().zip(&has_colour).filter(|(_, h)| **h) {
+                s.colour = s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0));
+            }
+        }
+        (CellAccum { mode, texels, confidence, has_colour, sums }, written)
     }
 
     /// Adds one photo's deposits (same texture size); returns how many texels it gave colour.
@@ -198,17 +221,18 @@ impl CellAccum {
             let Some(c) = p.colour_at(t) else { continue };
             written += 1;
             let conf = p.confidence(t);
+            let s = &mut self.sums[t];
             match self.mode {
                 BlendMode::Confidence => {
-                    self.weight[t] += p.sums[t].weight;
+                    s.weight += p.sums[t].weight;
                     for k in 0..3 {
-                        self.colour[t][k] += p.sums[t].colour[k];
+                        s.colour[k] += p.sums[t].colour[k];
                     }
                 }
                 BlendMode::Best => {
                     // the first photo with colour, then any strictly more confident one
                     if !self.has_colour[t] || conf > self.confidence[t] {
-                        self.colour[t] = c;
+                        s.colour = c;
                     }
                 }
             }
@@ -223,12 +247,10 @@ impl CellAccum {
         if !self.has_colour[t] {
             return None;
         }
+        let s = &self.sums[t];
         Some(match self.mode {
-            BlendMode::Confidence => {
-                let q = self.weight[t];
-                self.colour[t].map(|c| (c / q).clamp(0.0, 1.0))
-            }
-            BlendMode::Best => self.colour[t],
+            BlendMode::Confidence => s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
+            BlendMode::Best => s.colour,
         })
     }
 }
@@ -368,5 +390,30 @@ mod tests {
         }
         let empty = CellAccum::new(1, BlendMode::Best);
         assert!(empty.colour_at(0).is_none());
+    }
+
+    #[test]
+    fn first_photo_adopted_equals_merged() {
+        // a photo covering part of a 4 x 4 texture, then a second one over all of it
+        let img = RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 30) as u8, (y * 30) as u8, 77]));
+        let fps: Vec<PixelFootprint> = (0..8)
+            .flat_map(|r| (0..8).map(move |c| fp([c, r], square(0.3 * c as f32, 0.25 * r as f32, 0.3), 0.7)))
+            .collect();
+        let mut a = PhotoAccum::new(4);
+        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
+        let mut b = PhotoAccum::new(4);
+        b.add_all(&[fp([3, 3], square(0.0, 0.0, 4.0), 0.9)], &img, &ColourTransform::IDENTITY, &params());
+        for mode in [BlendMode::Confidence, BlendMode::Best] {
+            let mut merged = CellAccum::new(4, mode);
+            let n = merged.merge(&a);
+            let (mut adopted, m) = CellAccum::from_photo(a.clone(), mode);
+            assert_eq!(n, m);
+            assert!(n > 0 && n < 16, "{n}");
+            assert_eq!(merged.merge(&b), adopted.merge(&b));
+            for t in 0..16 {
+                assert_eq!(merged.colour_at(t), adopted.colour_at(t), "{mode:?} texel {t}");
+            }
+            assert_eq!((&merged.confidence, &merged.has_colour), (&adopted.confidence, &adopted.has_colour));
+        }
     }
 }

@@ -356,11 +356,15 @@ impl LevelRun<'_> {
             }
             let written: Vec<u64> = accs
                 .par_iter_mut()
-                .zip(pas.par_iter())
-                .enumerate()
-                .map(|(ci, (acc, pa))| {
-                    let Some(pa) = pa else { return 0 };
-                    acc.get_or_insert_with(|| CellAccum::new(active_texels(&cells[ci]), self.opts.blend)).merge(pa)
+                .zip(pas.into_par_iter())
+                .map(|(acc, pa)| match (acc.as_mut(), pa) {
+                    (_, None) => 0,
+                    (Some(acc), Some(pa)) => acc.merge(&pa),
+                    (None, Some(pa)) => {
+                        let (first, n) = CellAccum::from_photo(pa, self.opts.blend);
+                        *acc = Some(first);
+                        n
+                    }
                 })
                 .collect();
             reports[pi].texels_written += written.iter().sum::<u64>();
