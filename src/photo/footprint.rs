@@ -366,7 +366,7 @@ impl Ctx<'_> {
 
     /// The common case: all four corners hit the same cell.
     #[inline]
-    fn full_pixel(&self, q: &[CornerHit; 4], c: u32, r: u32, edges: &mut EdgeCache) -> Outcome {
+    fn full_pixel(&self, q: &[&CornerHit; 4], c: u32, r: u32, edges: &mut EdgeCache) -> Outcome {
         let scene = self.scene;
         let ci = c as usize;
         if self.opts.reject_silhouettes && !(q[0].tri == q[1].tri && q[0].tri == q[2].tri && q[0].tri == q[3].tri) {
@@ -375,17 +375,17 @@ impl Ctx<'_> {
             let walk = |a: &CornerHit, b: &CornerHit| {
                 a.tri != b.tri && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex)
             };
-            let top = edges.top(ci).unwrap_or_else(|| walk(&q[0], &q[1]));
-            if top || edges.left().unwrap_or_else(|| walk(&q[0], &q[3])) {
+            let top = edges.top(ci).unwrap_or_else(|| walk(q[0], q[1]));
+            if top || edges.left().unwrap_or_else(|| walk(q[0], q[3])) {
                 edges.set(ci, None, None);
                 return Outcome::Silhouette;
             }
-            let right = walk(&q[1], &q[2]);
+            let right = walk(q[1], q[2]);
             if right {
                 edges.set(ci, Some(true), None);
                 return Outcome::Silhouette;
             }
-            let bottom = walk(&q[3], &q[2]);
+            let bottom = walk(q[3], q[2]);
             edges.set(ci, Some(false), Some(bottom));
             if bottom {
                 return Outcome::Silhouette;
@@ -416,7 +416,7 @@ impl Ctx<'_> {
         let s = rows.stride as usize;
         let k = (j0 - rows.j_lo) as usize * s + c as usize;
         let (top, bottom) = (&rows.hits[k..k + 2], &rows.hits[k + s..k + s + 2]);
-        let q: [CornerHit; 4] = [top[0], top[1], bottom[1], bottom[0]];
+        let q: [&CornerHit; 4] = [&top[0], &top[1], &bottom[1], &bottom[0]];
         if q.iter().all(|h| h.is_hit() && h.cell == q[0].cell) {
             return self.full_pixel(&q, c, r, edges);
         }
