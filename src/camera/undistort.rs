@@ -274,6 +274,12 @@ impl RayCaster {
         self
     }
 
+    /// `true` if [`RayCaster::row_with`] computes every ray on its own (no distortion, or a
+    /// tabulated one), so a ray does not depend on the row it is cast in.
+    pub(crate) fn rays_independent(&self) -> bool {
+        self.table.is_some() || (self.cam.k1 == 0.0 && self.cam.k2 == 0.0)
+    }
+
     /// [`RayCaster::row`] handing each ray to `f(i, ray)` in order instead of storing it.
     #[inline]
     pub(crate) fn row_with(&self, u0: f64, v: f64, n: usize, mut f: impl FnMut(usize, Option<PlaneRay>)) {

@@ -26,9 +26,10 @@
 //!
 //! `cos_view` and `distance` are the means over the pixel's present corners (no extra
 //! centre ray: that would double the ray count for a quantity that varies little within a
-//! pixel). Rows are processed in bands in parallel (each band casts its own corner rows
-//! plus one above and below, for the adjacent-footprint rule), collected in order, so the
-//! result does not depend on the thread count. [`for_each_footprint_batch`] hands the
+//! pixel). Rows are processed in bands in parallel (each band casts its own corner rows;
+//! the few corners of the rows just above and below that the adjacent-footprint rule asks
+//! for are cast one by one, with the same hits), collected in order, so the result does not
+//! depend on the thread count. [`for_each_footprint_batch`] hands the
 //! footprints over in batches of bands (in row order) and reuses their buffers, so a
 //! 12-MP photo never holds all of its ~10 M footprints (about 56 bytes each) at once.
 
@@ -38,7 +39,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::accel::Caster;
-use super::corners::{cast_corner_row, CornerHit};
+use super::corners::{cast_corner_alone, cast_corner_row, CornerHit};
 use super::viewgrid::ViewGrid;
 use super::RayAccel;
 use super::reconstruct::reconstruct;
@@ -323,8 +324,12 @@ impl Ctx<'_> {
     fn band(&self, b: u32) -> BandOut {
         let r0 = b * BAND_ROWS;
         let r1 = (r0 + BAND_ROWS).min(self.h);
-        let j_lo = r0.saturating_sub(1);
-        let j_hi = (r1 + 1).min(self.h);
+        // Corner rows r0..=r1; the rows just above and below (corners of adjacent footprints
+        // for reconstruction, rarely needed) are cast on demand when rays do not depend on
+        // their row, else with the band.
+        let halo = u32::from(!self.rays.rays_independent());
+        let j_lo = r0.saturating_sub(halo);
+        let j_hi = (r1 + halo).min(self.h);
         let stride = self.w as usize + 1;
         let mut hits = self.buffers.take_hits();
         hits.clear();
@@ -362,6 +367,16 @@ impl Ctx<'_> {
         }
         self.buffers.put_hits(rows.hits);
         out
+    }
+
+    /// Corner `(i, j)` of the photo: from the band's rows, else cast alone (`None` outside
+    /// the corner grid).
+    fn corner(&self, rows: &CornerRows, i: i64, j: i64) -> Option<CornerHit> {
+        if let Some(h) = rows.get(i, j) {
+            return Some(*h);
+        }
+        let inside = (0..rows.stride).contains(&i) && (0..=self.h as i64).contains(&j);
+        inside.then(|| cast_corner_alone(self.scene, self.caster, &self.rays, self.origin, i as u32, j as u32))
     }
 
     /// The common case: all four corners hit the same cell.
@@ -481,7 +496,7 @@ impl Ctx<'_> {
             if !self.opts.reconstruct {
                 return Outcome::Dropped;
             }
-            let grid = |i: i64, j: i64| rows.get(i, j).filter(|h| h.is_hit() && scene.cell_of(h.tri) == cell).map(|h| h.tex);
+            let grid = |i: i64, j: i64| self.corner(rows, i, j).filter(|h| h.is_hit() && scene.cell_of(h.tri) == cell).map(|h| h.tex);
             let Some(m) = reconstruct(&mut corners, i0, j0, grid) else { return Outcome::Dropped };
             made = m;
             if self.opts.reject_silhouettes {
