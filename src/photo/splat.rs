@@ -63,10 +63,14 @@ fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// The polygon to clip (the quad itself if simple, else its convex hull) and its area.
 #[inline(always)]
 pub(crate) fn footprint_polygon(q: &[[f64; 2]; 4]) -> ([[f64; 2]; 4], f64) {
+    // Simple (convex or with one reflex corner) if one diagonal separates the other two
+    // corners: the shoelace area. The second diagonal is only needed if the first fails.
     let (s012, s023) = (cross(q[0], q[1], q[2]), cross(q[0], q[2], q[3]));
+    if s012 * s023 >= 0.0 {
+        return (*q, 0.5 * (s012 + s023).abs());
+    }
     let (s123, s130) = (cross(q[1], q[2], q[3]), cross(q[1], q[3], q[0]));
-    if s012 * s023 >= 0.0 || s123 * s130 >= 0.0 {
-        // simple (convex or with one reflex corner): the shoelace area
+    if s123 * s130 >= 0.0 {
         return (*q, 0.5 * (s012 + s023).abs());
     }
     // Self-intersecting: all four corners lie on the hull; the hull is the vertex order
@@ -347,11 +351,14 @@ const GRID_MAX: usize = 4;
 /// the last line of each axis unconstrained.
 #[inline(always)]
 fn grid_splat(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, put: impl FnMut(f64, f64, f64)) {
-    // The common shapes with constant bounds (unrolled, sums in registers).
+    // The common shapes (those within 2 × 2 texels go to `small_splat`) with constant bounds
+    // (unrolled, sums in registers).
     match (nx, ny) {
-        (2, 1) => grid_splat_n(poly, c, 2, 1, put),
-        (1, 2) => grid_splat_n(poly, c, 1, 2, put),
-        (2, 2) => grid_splat_n(poly, c, 2, 2, put),
+        (3, 1) => grid_splat_n(poly, c, 3, 1, put),
+        (1, 3) => grid_splat_n(poly, c, 1, 3, put),
+        (3, 2) => grid_splat_n(poly, c, 3, 2, put),
+        (2, 3) => grid_splat_n(poly, c, 2, 3, put),
+        (3, 3) => grid_splat_n(poly, c, 3, 3, put),
         _ => grid_splat_n(poly, c, nx, ny, put),
     }
 }
