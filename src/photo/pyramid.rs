@@ -18,11 +18,12 @@ pub fn downsample2(img: &RgbImage) -> Option<RgbImage> {
     let sw = img.width() as usize;
     let mut out = vec![0u8; w as usize * h as usize * 3];
     out.par_chunks_exact_mut(w as usize * 3).enumerate().for_each(|(j, row)| {
-        for i in 0..w as usize {
+        // the two source rows, cropped to an even width
+        let (a, b) = (&src[2 * j * sw * 3..][..6 * w as usize], &src[(2 * j + 1) * sw * 3..][..6 * w as usize]);
+        for ((o, a), b) in row.chunks_exact_mut(3).zip(a.chunks_exact(6)).zip(b.chunks_exact(6)) {
             for k in 0..3 {
-                let at = |r: usize, c: usize| src[(r * sw + c) * 3 + k] as u32;
-                let s = at(2 * j, 2 * i) + at(2 * j, 2 * i + 1) + at(2 * j + 1, 2 * i) + at(2 * j + 1, 2 * i + 1);
-                row[i * 3 + k] = ((s + 2) / 4) as u8;
+                let s = a[k] as u32 + a[k + 3] as u32 + b[k] as u32 + b[k + 3] as u32;
+                o[k] = ((s + 2) / 4) as u8;
             }
         }
     });
