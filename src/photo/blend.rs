@@ -13,6 +13,7 @@ use image::{GrayImage, RgbaImage};
 
 use super::accumulate::CellAccum;
 use super::confidence::ConfidenceParams;
+use crate::fastmath::to_u8;
 
 /// A cell's photo-enhanced texture and its statistics.
 #[derive(Clone, Debug, PartialEq)]
@@ -54,10 +55,10 @@ pub fn blend_cell(existing: &RgbaImage, acc: &CellAccum, params: &ConfidencePara
         let s = beta / (beta + (1.0 - beta) * alpha);
         for k in 0..3 {
             let v = s * p[k] as f64 * 255.0 + (1.0 - s) * px.0[k] as f64;
-            px.0[k] = v.round().clamp(0.0, 255.0) as u8;
+            px.0[k] = to_u8(v);
         }
-        px.0[3] = px.0[3].max((beta * 255.0).round().clamp(0.0, 255.0) as u8);
-        cv.0[0] = (s * 255.0).round().clamp(0.0, 255.0) as u8;
+        px.0[3] = px.0[3].max(to_u8(beta * 255.0));
+        cv.0[0] = to_u8(s * 255.0);
         if s > 0.5 && cov {
             photo_texels += 1;
             steep_photo_texels += st as u64;

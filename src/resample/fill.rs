@@ -3,6 +3,7 @@
 //! and never change alpha.
 
 use image::RgbaImage;
+use crate::fastmath::to_u8;
 
 const N8: [(i64, i64); 8] = [
     (-1, -1),
@@ -202,7 +203,7 @@ pub fn fill_pull_push(image: &mut RgbaImage, assigned: &[bool]) -> usize {
     for (i, (p, &a)) in image.pixels_mut().zip(assigned).enumerate() {
         if !a {
             let c = levels[0].c[i];
-            p.0[..3].copy_from_slice(&c.map(|v| v.round().clamp(0.0, 255.0) as u8));
+            p.0[..3].copy_from_slice(&c.map(to_u8));
             n += 1;
         }
     }
