@@ -173,23 +173,32 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     // Footprints cast for the leveling are kept for the main loop while they are few.
     let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
     let mut cached_len = 0usize;
-    if opts.level_colours {
-        for (i, pyr) in pyramids.iter().enumerate() {
-            let (t, n, fs) = estimate_leveling(&store, pyr, finest, opts, &buffers)?;
-            if let Some((level, fs)) = fs {
-                if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
-                    cached_len += fs.len();
-                    cached[i] = Some((level, fs));
-                }
+    // The first photo's finest scene is built alongside the leveling (which leaves cores
+    // idle in its smaller steps); it is the first scene the level loop needs.
+    let (leveled, first_scene) = rayon::join(
+        || -> Result<Vec<(ColourTransform, usize, Option<(usize, FootprintSet)>)>> {
+            if !opts.level_colours {
+                return Ok(Vec::new());
             }
-            transforms[i] = t;
-            reports[i].colour_gain = t.gain;
-            reports[i].colour_offset = t.offset;
-            reports[i].colour_samples = n as u64;
-            bars[i].inc(1);
+            pyramids.iter().map(|pyr| estimate_leveling(&store, pyr, finest, opts, &buffers)).collect()
+        },
+        || photos.first().map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray)).transpose(),
+    );
+    for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
+        if let Some((level, fs)) = fs {
+            if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
+                cached_len += fs.len();
+                cached[i] = Some((level, fs));
+            }
         }
-        timer.lap("colour leveling");
+        transforms[i] = t;
+        reports[i].colour_gain = t.gain;
+        reports[i].colour_offset = t.offset;
+        reports[i].colour_samples = n as u64;
+        bars[i].inc(1);
     }
+    let mut first_scene = first_scene?;
+    timer.lap(if opts.level_colours { "colour leveling (alongside the first finest scene)" } else { "first finest scene" });
 
     let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
     let mut level_reports = Vec::with_capacity(levels);
@@ -208,7 +217,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             },
             || -> Result<Option<(usize, Vec<Option<CellAccum>>)>> {
                 let Some(level) = level else { return Ok(None) };
-                Ok(Some((level, run.project_level(level, &mut cached, &mut reports, &mut timer)?)))
+                Ok(Some((level, run.project_level(level, &mut cached, &mut first_scene, &mut reports, &mut timer)?)))
             },
         );
         if let Some((l, result, secs)) = finished {
@@ -311,12 +320,14 @@ struct LevelRun<'a> {
 
 impl LevelRun<'_> {
     /// Casts and splats every photo onto the cells of `level` (using a photo's footprints
-    /// cached from the leveling where they are of this level) and returns the per-cell
-    /// accumulators (indexed by manifest cell); adds to the photos' reports.
+    /// cached from the leveling where they are of this level, and `first_scene`, the first
+    /// photo's finest scene, if given) and returns the per-cell accumulators (indexed by
+    /// manifest cell); adds to the photos' reports.
     fn project_level(
         &self,
         level: usize,
         cached: &mut [Option<(usize, FootprintSet)>],
+        first_scene: &mut Option<LevelScene>,
         reports: &mut [PhotoReport],
         timer: &mut StageTimer,
     ) -> Result<Vec<Option<CellAccum>>> {
@@ -338,7 +349,10 @@ impl LevelRun<'_> {
                 }
                 other => {
                     cached[pi] = other;
-                    let scene = LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?;
+                    let scene = match first_scene.take() {
+                        Some(scene) if pi == 0 && level == self.finest => scene,
+                        _ => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
+                    };
                     let mut counts = FootprintSet::default();
                     for_each_footprint_batch_in(self.buffers, &scene, &cam, &self.opts.footprint, |batch| {
                         splat_batch(batch, &mut pas, cells, level as u8, &samples);
