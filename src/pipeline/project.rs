@@ -22,10 +22,9 @@ use std::path::Path;
 use indicatif::{MultiProgress, ProgressBar};
 use rayon::prelude::*;
 
-use super::build::write_png;
 use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
+use crate::fsutil::{encode_png, write_atomic};
 use crate::photo::{
     BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
     LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
@@ -33,8 +32,8 @@ use crate::photo::{
 };
 use crate::stats::texel_stretch;
 use crate::store::{
-    CellRecord, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, Store, active_texels, cell_stem,
-    texcoord,
+    BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, Store,
+    active_texels, cell_stem, texcoord,
 };
 
 /// Texels steeper than this (degrees from horizontal) count as steep.
@@ -207,12 +206,15 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     // as level by level).
     let run = LevelRun { store: &store, pyramids: &pyramids, transforms: &transforms, opts, buffers: &buffers, bars: &bars, finest };
     let mut pending: Option<(usize, Vec<Option<CellAccum>>)> = None;
+    // The photo textures are written on a thread of their own (the fsyncs do not hold up
+    // the workers); all are on disk before the manifest refers to them.
+    let writer = BackgroundWriter::new(dir);
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
             || {
                 pending.take().map(|(l, accs)| {
                     let t = std::time::Instant::now();
-                    (l, finish_level(&store, l, &accs, opts), t.elapsed().as_secs_f64())
+                    (l, finish_level(&store, l, &accs, opts, &writer), t.elapsed().as_secs_f64())
                 })
             },
             || -> Result<Option<(usize, Vec<Option<CellAccum>>)>> {
@@ -232,6 +234,8 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         }
         pending = projected?;
     }
+    writer.finish()?;
+    timer.lap("photo textures on disk");
     level_reports.sort_by_key(|r| r.level);
     for pb in &bars {
         pb.finish_and_clear();
@@ -396,11 +400,12 @@ fn finish_level(
     level: usize,
     accs: &[Option<CellAccum>],
     opts: &ProjectOptions,
+    writer: &BackgroundWriter,
 ) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>)> {
     let cells = &store.manifest.cells;
     let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
     let results: Vec<Result<CellOutcome>> =
-        level_cells.par_iter().map(|&ci| finish_cell(store, &cells[ci], accs.get(ci).and_then(Option::as_ref), opts)).collect();
+        level_cells.par_iter().map(|&ci| finish_cell(store, &cells[ci], accs.get(ci).and_then(Option::as_ref), opts, writer)).collect();
     let mut lr = PhotoLevelReport { level: level as u8, ..PhotoLevelReport::default() };
     let mut records = Vec::new();
     for (&ci, r) in level_cells.iter().zip(results) {
@@ -509,7 +514,23 @@ fn surface_masks(store: &Store, rec: &CellRecord, normals: &image::RgbImage) -> 
     Ok((covered, steep))
 }
 
-fn finish_cell(store: &Store, rec: &CellRecord, acc: Option<&CellAccum>, opts: &ProjectOptions) -> Result<CellOutcome> {
+/// Encodes `img` as PNG and queues it for `dir/rel` on `writer`.
+fn submit_png<P, C>(writer: &BackgroundWriter, dir: &Path, rel: &str, img: &image::ImageBuffer<P, C>) -> Result<FileRef>
+where
+    P: image::PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+    C: std::ops::Deref<Target = [P::Subpixel]>,
+{
+    writer.submit(rel, encode_png(&dir.join(rel), img)?)
+}
+
+fn finish_cell(
+    store: &Store,
+    rec: &CellRecord,
+    acc: Option<&CellAccum>,
+    opts: &ProjectOptions,
+    writer: &BackgroundWriter,
+) -> Result<CellOutcome> {
     let normals = store.read_active_normal_map(rec)?;
     let (covered, steep) = surface_masks(store, rec, &normals)?;
     let steep_texels = steep.iter().filter(|&&s| s).count() as u64;
@@ -523,8 +544,8 @@ fn finish_cell(store: &Store, rec: &CellRecord, acc: Option<&CellAccum>, opts: &
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {
         texels: active_texels(rec),
-        texture: write_png(&store.dir, &format!("{stem}.photo.png"), &b.texture)?,
-        confidence: write_png(&store.dir, &format!("{stem}.photo.conf.png"), &b.confidence)?,
+        texture: submit_png(writer, &store.dir, &format!("{stem}.photo.png"), &b.texture)?,
+        confidence: submit_png(writer, &store.dir, &format!("{stem}.photo.conf.png"), &b.confidence)?,
         photo_texels: b.photo_texels,
         steep_texels: b.steep_texels,
         steep_photo_texels: b.steep_photo_texels,

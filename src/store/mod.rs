@@ -20,6 +20,7 @@ mod files;
 mod manifest;
 mod mesh;
 mod obj;
+mod writer;
 
 use std::path::{Path, PathBuf};
 
@@ -30,6 +31,7 @@ pub use manifest::{
 };
 pub use mesh::CellMesh;
 pub use obj::obj_text;
+pub use writer::BackgroundWriter;
 
 use crate::error::{Error, Result};
 
