@@ -4,7 +4,9 @@
 //! STORE_DIR with the default build and reparam options if it holds no store yet) with
 //! `pipeline::project_store`, the function behind `cliffmap project`: colour leveling, every
 //! level's corner rays and footprints, splatting, blending and the PNG writes. Each run starts
-//! from a fresh copy of the store. The ray-casting accelerations given (default: the view
+//! from a fresh copy of the store; the copies are removed when the benchmark ends (removing
+//! one before the next run makes ext4 without a journal slow to create the next run's files,
+//! docs/projection.md, "Session 7"). The ray-casting accelerations given (default: the view
 //! grid and the BVH) are interleaved run by run, so both see the same machine load; the
 //! photo is decoded once, outside the timings (its decode time is printed).
 //!
