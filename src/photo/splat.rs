@@ -162,15 +162,26 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
     if nx <= 2.0 && ny <= 2.0 {
         // One or two texels each way (nearly all footprints of a photo sharper than the
         // texture): half-plane and quadrant areas in the box's own frame.
-        let min_piece = 1e-9 * area;
-        small_splat(poly, area, [ci0, cj0], nx == 2.0, ny == 2.0, |i, j, w| {
-            if w > min_piece && (inside || (i >= 0.0 && j >= 0.0 && i < t && j < t)) {
-                deposit(j as i64 as usize * n + i as i64 as usize, w);
-            }
-        });
+        small_splat(poly, area, [ci0, cj0], nx == 2.0, ny == 2.0, texel_pieces(area, texels, inside, deposit));
         return Splat { area, kind: SplatKind::Exact };
     }
     splat_large(poly, area, texels, [ci0, ci1, cj0, cj1], deposit)
+}
+
+/// The `put(i, j, piece)` of the piecewise splits (texel `(i, j)` as floats) that deposits a
+/// piece of a footprint of area `area` into a `texels × texels` texture: pieces below a
+/// billionth of the footprint (rounding noise of the subtractions) and texels outside the
+/// texture are dropped; `inside` says the footprint's box lies in the texture.
+#[inline(always)]
+fn texel_pieces(area: f64, texels: u32, inside: bool, mut deposit: impl FnMut(usize, f64)) -> impl FnMut(f64, f64, f64) {
+    let (t, n) = (texels as f64, texels as usize);
+    let min_piece = 1e-9 * area;
+    move |i, j, w| {
+        if w > min_piece && (inside || (i >= 0.0 && j >= 0.0 && i < t && j < t)) {
+            // (in [0, t): signed conversions, one instruction each on x86-64)
+            deposit(j as i64 as usize * n + i as i64 as usize, w);
+        }
+    }
 }
 
 /// [`splat_polygon`] of a collapsed footprint (area below [`MIN_SPLAT_AREA`]): its area at
@@ -209,13 +220,7 @@ fn splat_large(poly: &[[f64; 2]; 4], area: f64, texels: u32, lines: [f64; 4], mu
     let (nx, ny) = (ci1 - ci0, cj1 - cj0);
     if nx <= GRID_MAX as f64 && ny <= GRID_MAX as f64 {
         // At most GRID_MAX × GRID_MAX texels: boundary integrals give every piece.
-        // Pieces below a billionth of the footprint are rounding noise of the subtractions.
-        let min_piece = 1e-9 * area;
-        grid_splat(poly, [ci0, cj0], nx as i64 as usize, ny as i64 as usize, |i, j, w| {
-            if w > min_piece && i >= 0.0 && j >= 0.0 && i < t && j < t {
-                deposit(j as i64 as usize * n + i as i64 as usize, w);
-            }
-        });
+        grid_splat(poly, [ci0, cj0], nx as i64 as usize, ny as i64 as usize, texel_pieces(area, texels, false, deposit));
         return Splat { area, kind: SplatKind::Exact };
     }
     // Cut the polygon into column strips at the integer x lines of its bounding box, and

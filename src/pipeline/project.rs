@@ -173,7 +173,9 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
     let mut cached_len = 0usize;
     // The first photo's finest scene is built alongside the leveling (which leaves cores
-    // idle in its smaller steps); it is the first scene the level loop needs.
+    // idle in its smaller steps); it is the first scene the level loop needs, unless the
+    // leveling casts the finest level itself (a photo of at most `leveling_max_pixels`).
+    let prebuild = !opts.level_colours || pyramids.first().is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
     let (leveled, first_scene) = rayon::join(
         || -> Result<Vec<(ColourTransform, usize, Option<(usize, FootprintSet)>)>> {
             if !opts.level_colours {
@@ -181,7 +183,10 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             }
             pyramids.iter().map(|pyr| estimate_leveling(&store, pyr, finest, opts, &buffers)).collect()
         },
-        || photos.first().map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray)).transpose(),
+        || {
+            let first = photos.first().filter(|_| prebuild);
+            first.map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray)).transpose()
+        },
     );
     for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
         if let Some((level, fs)) = fs {
@@ -434,11 +439,7 @@ fn estimate_leveling(
     opts: &ProjectOptions,
     buffers: &FootprintBuffers,
 ) -> Result<(ColourTransform, usize, Option<(usize, FootprintSet)>)> {
-    let (w, h) = pyr.level(0).0.dimensions();
-    let mut k_est = 0;
-    while k_est < finest && (w as u64 >> k_est) * (h as u64 >> k_est) > opts.leveling_max_pixels {
-        k_est += 1;
-    }
+    let k_est = leveling_step(pyr, finest, opts);
     let attempts: Vec<usize> = if k_est > 0 { vec![k_est, 0] } else { vec![0] };
     for step in attempts {
         let level = finest - step;
@@ -476,6 +477,17 @@ fn estimate_leveling(
         buffers.recycle(fs);
     }
     Ok((ColourTransform::IDENTITY, 0, None))
+}
+
+/// The pyramid step the leveling of `pyr` is fitted on first: the first with at most
+/// `leveling_max_pixels` (at most `finest`).
+fn leveling_step(pyr: &PhotoPyramid, finest: usize, opts: &ProjectOptions) -> usize {
+    let (w, h) = pyr.level(0).0.dimensions();
+    let mut k = 0;
+    while k < finest && (w as u64 >> k) * (h as u64 >> k) > opts.leveling_max_pixels {
+        k += 1;
+    }
+    k
 }
 
 /// Errors unless the active texture and normal map have the cell's active texture size.

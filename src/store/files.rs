@@ -14,7 +14,12 @@ pub fn crc32_hex(bytes: &[u8]) -> String {
 /// Writes `bytes` atomically to `store/rel` and returns its [`FileRef`].
 pub fn write_file(store: &Path, rel: &str, bytes: &[u8]) -> Result<FileRef> {
     write_atomic(&store.join(rel), bytes)?;
-    Ok(FileRef { path: rel.to_string(), bytes: bytes.len() as u64, crc32: crc32_hex(bytes) })
+    Ok(file_ref(rel, bytes))
+}
+
+/// The record of `bytes` stored at `rel` (size and checksum).
+pub(crate) fn file_ref(rel: &str, bytes: &[u8]) -> FileRef {
+    FileRef { path: rel.to_string(), bytes: bytes.len() as u64, crc32: crc32_hex(bytes) }
 }
 
 /// Reads `store/file.path` and checks its size and checksum.

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
-use super::files::crc32_hex;
+use super::files::file_ref;
 use super::manifest::FileRef;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -40,7 +40,7 @@ impl BackgroundWriter {
     /// Queues `bytes` for `dir/rel` and returns the file's record (size and checksum of
     /// `bytes`).
     pub fn submit(&self, rel: &str, bytes: Vec<u8>) -> Result<FileRef> {
-        let file = FileRef { path: rel.to_string(), bytes: bytes.len() as u64, crc32: crc32_hex(&bytes) };
+        let file = file_ref(rel, &bytes);
         let path = self.dir.join(rel);
         let sent = self.tx.as_ref().map(|tx| tx.send((path.clone(), bytes)));
         match sent {
@@ -73,6 +73,7 @@ impl Drop for BackgroundWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::store::crc32_hex;
 
     #[test]
     fn writes_every_file_and_reports_failures() {
