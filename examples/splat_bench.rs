@@ -43,7 +43,7 @@ fn main() {
                 .map(|_| {
                     let mut acc = PhotoAccum::new(256);
                     let t = Instant::now();
-                    acc.add_all(&fps, &img, &ColourTransform::IDENTITY, &params);
+                    acc.add_all(&fps, &img, [1000.0; 2], &ColourTransform::IDENTITY, &params);
                     std::hint::black_box(&acc);
                     fps.len() as f64 / t.elapsed().as_secs_f64() / 1e6
                 })

@@ -20,7 +20,8 @@
 //!   subtexel filtering ([`resample::resample`]).
 //! - [`photo`]: ground-photo projection into the cell textures (BVH ray casts through
 //!   pixel corners, footprints, area-weighted splatting, multi-photo blending).
-//! - [`scene`]: the embedded procedural demo scene.
+//! - [`scene`]: the embedded procedural demo scene (ground truth, exact ray casting).
+//! - [`eval`]: render-space evaluation against the scene's truth, an oracle and a baseline.
 //! - [`camera`]: pinhole cameras and Camera JSON; [`render`]: the wgpu quadtree renderer.
 //!
 //! Guarantees: georeferenced coordinates are f64 (cell meshes are f32 relative to an f64
@@ -49,8 +50,10 @@
 
 pub mod camera;
 pub mod cells;
+pub mod colour;
 pub mod dem;
 pub mod error;
+pub mod eval;
 mod fastmath;
 pub mod fsutil;
 pub mod georef;

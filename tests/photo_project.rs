@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
 use cliffmap::photo::{BlendMode, PhotoInput};
-use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store};
+use cliffmap::pipeline::{
+    BuildInputs, BuildOptions, PhotoTextureOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store,
+};
 use cliffmap::store::Store;
 use cliffmap::{Dem, GridGeoref};
 use glam::DVec3;
@@ -170,15 +172,22 @@ fn e2e_reparam_drops_photo_textures() {
     for (path, _) in &files {
         assert!(!dir.join(path).exists(), "stale {path}");
     }
-    // projecting into the reparameterized cells works and uses their texture size
-    let r = project_store(&dir, &[wall_photo()], &opts()).unwrap();
-    assert!(r.cells_written > 0);
-    let store = Store::open(&dir).unwrap();
-    for c in store.manifest.cells.iter().filter(|c| c.photo.is_some()) {
-        let p = c.photo.as_ref().unwrap();
-        assert_eq!(p.texels, c.reparam.as_ref().map_or(c.texels, |r| r.texels));
-        let img = store.read_png(&p.texture).unwrap();
-        assert_eq!((img.width(), img.height()), (p.texels, p.texels));
+    // projecting into the reparameterized cells works and uses their texture layout, at
+    // their size times a power of two (photo-driven sizes), or exactly their size with the
+    // sizing off
+    for photo_driven in [true, false] {
+        let o = ProjectOptions { texture: PhotoTextureOptions { photo_driven, ..PhotoTextureOptions::default() }, ..opts() };
+        let r = project_store(&dir, &[wall_photo()], &o).unwrap();
+        assert!(r.cells_written > 0);
+        let store = Store::open(&dir).unwrap();
+        for c in store.manifest.cells.iter().filter(|c| c.photo.is_some()) {
+            let p = c.photo.as_ref().unwrap();
+            let base = c.reparam.as_ref().map_or(c.texels, |r| r.texels);
+            let k = p.texels / base;
+            assert!(p.texels % base == 0 && k.is_power_of_two() && (photo_driven || k == 1), "{} {base}", p.texels);
+            let img = store.read_png(&p.texture).unwrap();
+            assert_eq!((img.width(), img.height()), (p.texels, p.texels));
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

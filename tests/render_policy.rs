@@ -297,6 +297,7 @@ fn default_flight_visits_the_steepest_cells_at_low_altitude() {
             void_fraction: 0.0,
         },
         ortho: None,
+        ortho_spacing: None,
         quadtree: cliffmap::cells::Quadtree {
             dem_width: 33,
             dem_height: 33,

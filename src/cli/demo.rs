@@ -31,7 +31,6 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, a: &Args, store: &std::pa
     if !(1..=8).contains(&a.photo_supersample) {
         anyhow::bail!("--photo-supersample must be in 1..=8, got {}", a.photo_supersample);
     }
-    let before = texel_truth(&cliffmap::store::Store::open(store)?, scene, TextureChoice::Active)?;
     let opts = cliffmap::scene::DemoPhotoOptions {
         width: a.photo_width,
         height: a.photo_width / 4 * 3,
@@ -41,6 +40,7 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, a: &Args, store: &std::pa
     let photos = cliffmap::photo::read_photo_list(&list)?;
     let report = project_store(store, &photos, &ProjectOptions { quiet: a.quiet, ..ProjectOptions::default() })?;
     let st = cliffmap::store::Store::open(store)?;
+    let before = texel_truth(&st, scene, TextureChoice::Active)?;
     let after = texel_truth(&st, scene, TextureChoice::Photo)?;
     let (covered_before, covered_after) = texel_truth_covered(&st, scene)?;
     let json = serde_json::json!({

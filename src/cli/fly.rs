@@ -17,9 +17,9 @@ pub enum Mode {
     Ortho,
     /// Every cell reads a UV vertex stream.
     Reparam,
-    /// Each cell as stored (correct rendering).
+    /// Each cell as stored, without photo textures.
     Mixed,
-    /// Like mixed, with photo-enhanced textures where the store has them.
+    /// Each cell's best texture: photo-enhanced, else as stored (the default).
     Photo,
 }
 
@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long, default_value_t = 300)]
     frames: usize,
     /// Texture-coordinate mode.
-    #[arg(long, value_enum, default_value_t = Mode::Mixed)]
+    #[arg(long, value_enum, default_value_t = Mode::Photo)]
     mode: Mode,
     /// Screen-space error threshold in pixels.
     #[arg(long, default_value_t = 0.5)]

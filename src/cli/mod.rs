@@ -86,7 +86,7 @@ pub fn run() -> ExitCode {
 }
 
 /// Parses a byte size such as `8G`, `512M`, `1000000`.
-fn parse_bytes(s: &str) -> Result<u64, String> {
+pub(crate) fn parse_bytes(s: &str) -> Result<u64, String> {
     let s = s.trim();
     let (num, mul) = match s.char_indices().last() {
         Some((i, c)) if c.is_ascii_alphabetic() => {

@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput, RayAccel};
-use cliffmap::pipeline::{ProjectOptions, project_store};
+use cliffmap::colour::ColourSpace;
+use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
 
 use super::stats::print_summary;
 
@@ -18,9 +19,27 @@ pub struct Args {
     /// COLMAP text model directory (cameras.txt, images.txt) instead of --photos.
     #[arg(long)]
     pub colmap: Option<PathBuf>,
-    /// Per texel: blend photos by confidence, or take the most confident photo.
+    /// Per texel: blend photos weighted by coverage and sharpness (the sharpest dominates),
+    /// or take the single best photo.
     #[arg(long, default_value = "confidence", value_parser = ["confidence", "best"])]
     pub blend: String,
+    /// Largest photo texture side in texels (a power of two, 64..=8192): cells the photos
+    /// resolve finely get photo textures up to this size.
+    #[arg(long, default_value_t = 2048)]
+    pub max_photo_texels: u32,
+    /// GPU memory (RGBA8 with mips) all enlarged photo textures may take, e.g. 512M or 2G;
+    /// cells whose photos cover least give way first.
+    #[arg(long, value_parser = super::parse_bytes, default_value = "1G")]
+    pub photo_texture_budget: u64,
+    /// Texels per photo pixel side the photo-driven sizes aim at (0.25..=4).
+    #[arg(long, default_value_t = 1.0)]
+    pub texels_per_pixel: f64,
+    /// Keep every photo texture at its active texture's size (no photo-driven sizes).
+    #[arg(long)]
+    pub fixed_photo_texels: bool,
+    /// Colour space photo colours are averaged and blended in.
+    #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
+    pub colour_space: String,
     /// Do not reconstruct missing footprint corners (pixels at cell borders are dropped).
     #[arg(long)]
     pub no_reconstruct: bool,
@@ -49,6 +68,13 @@ pub fn options(a: &Args) -> ProjectOptions {
         ray: match &a.bvh {
             Some(p) => RayAccel::Bvh(BvhQuality::parse(p).unwrap_or_default()),
             None => a.ray_accel,
+        },
+        colour_space: if a.colour_space == "srgb" { ColourSpace::Srgb } else { ColourSpace::Linear },
+        texture: PhotoTextureOptions {
+            photo_driven: !a.fixed_photo_texels,
+            max_texels: a.max_photo_texels,
+            budget_bytes: a.photo_texture_budget,
+            texels_per_pixel: a.texels_per_pixel,
         },
         quiet: a.quiet,
         ..ProjectOptions::default()
@@ -90,6 +116,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 p.colour_offset,
                 p.colour_samples
             );
+        }
+        for l in &report.settings.levels {
+            if l.cells_with_photo > 0 {
+                println!(
+                    "level {}: {} cells with photo colour, {} enlarged ({} wanted larger), photo textures {:.1} MB (budget {:.1} MB)",
+                    l.level,
+                    l.cells_with_photo,
+                    l.upsized_cells,
+                    l.wanted_larger,
+                    l.photo_texture_bytes as f64 / 1e6,
+                    l.texture_budget_bytes as f64 / 1e6
+                );
+            }
         }
         let store = cliffmap::store::Store::open(&a.store)?;
         let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);

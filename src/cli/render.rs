@@ -32,9 +32,9 @@ pub struct Args {
     /// Tint cells by quadtree level (same as `--overlay levels`).
     #[arg(long)]
     levels: bool,
-    /// Texture source: orthographic files only, the reparameterized variant where a cell has
-    /// one, or additionally the photo-enhanced texture where a cell has one.
-    #[arg(long, value_enum, default_value_t = TextureMode::Reparam)]
+    /// Texture source: each cell's best texture (photo-enhanced, else reparameterized, else
+    /// orthographic; the default), or force the reparameterized or orthographic one.
+    #[arg(long, value_enum, default_value_t = TextureMode::Photo)]
     mode: TextureMode,
     /// Overlay: level colours + bounding boxes, or the per-texel stretch heat map.
     #[arg(long, value_enum, default_value_t = OverlayArg::None)]
@@ -46,6 +46,10 @@ pub struct Args {
     /// distorted like the photo, pixel for pixel).
     #[arg(long)]
     no_distortion: bool,
+    /// Samples per pixel side (1..=4): the frame is rendered this many times larger and
+    /// averaged in linear light (the LOD stays that of the output size).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=4))]
+    supersample: u32,
 }
 
 /// Texture source of `render` (and `view`).
@@ -55,7 +59,7 @@ pub enum TextureMode {
     Ortho,
     /// Each cell's reparameterized variant where it has one (as stored).
     Reparam,
-    /// Like reparam, with photo-enhanced textures where present.
+    /// Each cell's best texture: photo-enhanced where present, else as reparam (the default).
     Photo,
 }
 
@@ -113,8 +117,11 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 
 /// Runs the command.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let (w, h) = a.size;
-    let cam = camera_from_json_file(&a.camera, (w, h))?.resized(w, h);
+    let (ow, oh) = a.size;
+    // supersampled internally, at most 16384 pixels a side
+    let ss = (1..=a.supersample).rev().find(|s| ow * s <= 16384 && oh * s <= 16384).unwrap_or(1);
+    let (w, h) = (ow * ss, oh * ss);
+    let cam = camera_from_json_file(&a.camera, (ow, oh))?.resized(w, h);
     let overlay = match (a.unlit, a.levels, a.overlay.overlay()) {
         // --unlit is the texture colour alone: no overlays.
         (true, _, _) => Overlay::None,
@@ -122,7 +129,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         (false, false, o) => o,
     };
     let opts = SceneOptions {
-        sse_px: a.sse,
+        sse_px: a.sse * ss as f64,
         uv_mode: a.mode.uv_mode(),
         overlay,
         frame: FrameOptions {
@@ -143,7 +150,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
     eprintln!("adapter: {}", scene.gpu().describe());
     if matches!(a.mode, TextureMode::Photo) && !scene.has_photo() {
-        eprintln!("note: the store has no photo-enhanced textures; --mode photo shows reparam");
+        eprintln!("note: the store has no photo-enhanced textures (run `cliffmap project`); showing reparam");
     }
     if let Some(d) = scene.distorted_view(&cam)? {
         eprintln!(
@@ -161,7 +168,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     let r = scene.frame(&cam, true)?;
-    let img = scene.read_rgba()?;
+    let img = cliffmap::render::downsample_rgba(&scene.read_rgba()?, ss);
     write_png_atomic(&a.out, &img).with_context(|| format!("writing {}", a.out.display()))?;
     eprintln!(
         "{}: {} cells ({} culled), {} triangles, {:.1} ms",

@@ -195,8 +195,8 @@ impl App {
         let ctx = GpuContext::from_adapter(adapter)?;
         eprintln!("adapter: {}", ctx.describe());
         let presenter = Presenter::new(surface, &ctx.adapter, &ctx.device, w, h)?;
+        // the best texture the store has (photo, else reparameterized, else ortho)
         let mode = self.modes.len() - 1;
-        let mode = if self.modes[mode] == UvMode::Photo && mode > 0 { mode - 1 } else { mode };
         let opts = SceneOptions {
             sse_px: self.args.sse,
             uv_mode: self.modes[mode],

@@ -1,33 +1,38 @@
 //! Per-texel accumulation of photo colour: one photo's deposits in one cell
-//! ([`PhotoAccum`]) and all photos of a run in one cell ([`CellAccum`], by confidence-weighted
-//! blend or best view).
+//! ([`PhotoAccum`]) and all photos of a run in one cell ([`CellAccum`]: the sharpest
+//! photos win, weighted or best view).
 //!
-//! Colours are accumulated as sRGB-encoded values in [0, 1] (the encoding the photos, the
-//! ortho textures and the resampling stage use), not in linear light: the stores' textures
-//! are averaged in sRGB everywhere else too, so photo and ortho colours stay comparable
-//! (and the per-photo colour leveling is an affine map in the same space).
+//! Colours are accumulated in the working space of a [`ColourSpace`] (linear light by
+//! default: photo bytes decoded after the colour leveling, averaged, encoded when the cell
+//! is blended).
 //!
-//! Per texel `t` and photo `p`, with footprints `f` depositing area `a_ft` (texels²) and
-//! confidence `q_f` ([`super::ConfidenceParams`]):
-//! `A = Σ a_ft` (coverage), `Q = Σ a_ft q_f`, `C = Σ a_ft q_f c_f`; the photo's colour at
-//! the texel is `C / Q` and its confidence `Q / max(1, A)` (a texel only partly covered
-//! counts only partly). Sums are f32 and formed in footprint order, so results do not
-//! depend on threads.
+//! Per texel `t` and photo `p`, with footprints `f` depositing area `a_ft` (texels²), border
+//! feather `φ_f`, surface footprint `r_f` (metres: `distance · pixel angle / cos_view`, the
+//! length of the pixel on the surface where it is foreshortened) and view cosine `cos_f`:
+//! `A = Σ a`, `W = Σ a φ`, `C = Σ a φ c`, `R = Σ a φ r`, `G = Σ a φ / cos`. The photo's colour
+//! at the texel is `C / W` (the box filter of its pixels over the texel), its coverage
+//! confidence `W / max(1, A)` (a texel only partly covered counts partly), and its
+//! resolution there ([`CellContext::photo_resolution`]) `R/W + ε·cos θ·G/W`: the pixel size on
+//! the surface plus the displacement an error `ε` of the cell's TIN causes along the photo's
+//! rays. Sums are f32 and formed in footprint order, so results do not depend on threads.
 
 use image::RgbImage;
 
-use super::confidence::{BorderFeather, ConfidenceParams, confidence_with_border};
+use super::confidence::{BorderFeather, ConfidenceParams};
 use super::level::ColourTransform;
-use super::splat::{Splat, SplatKind, footprint_shape, splat_polygon};
+use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
 use super::PixelFootprint;
+use crate::colour::ColourSpace;
 
 /// How several photos' colours combine in a texel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BlendMode {
-    /// Average of the photos' colours weighted by their confidence-weighted coverage `Q`.
+    /// Average of the photos' colours weighted by coverage confidence × resolution^−γ
+    /// ([`ConfidenceParams::sharpness_power`]): the sharpest photo dominates, photos of
+    /// similar resolution are averaged.
     #[default]
     Confidence,
-    /// The colour of the photo with the highest texel confidence (first photo on ties).
+    /// The colour of the photo with the highest such weight (first photo on ties).
     Best,
 }
 
@@ -46,33 +51,49 @@ impl BlendMode {
 pub struct TexelSums {
     /// `A`: deposited footprint area (texels²).
     pub coverage: f32,
-    /// `Q`: confidence-weighted area.
+    /// `W`: feathered area.
     pub weight: f32,
-    /// `C`: confidence-weighted area times colour (sRGB 0..1).
+    /// `C`: feathered area times colour (working space 0..1).
     pub colour: [f32; 3],
+    /// `R`: feathered area times the surface footprint (metres).
+    pub footprint: f32,
+    /// `G`: feathered area over the view cosine.
+    pub grazing: f32,
 }
 
-/// A photo image prepared for splatting: its 8-bit values mapped by a colour transform
-/// (per channel, the same numbers as applying the transform to each pixel) and the border
-/// feather of every pixel ([`ConfidenceParams::border_feather`]).
+/// A photo image prepared for splatting: its 8-bit values mapped by a colour transform and
+/// decoded into the working colour space (per channel, the same numbers as transforming and
+/// decoding each pixel), the border feather of every pixel
+/// ([`ConfidenceParams::border_feather`]) and the angle a pixel subtends.
 #[derive(Clone, Debug)]
 pub struct PhotoSamples<'a> {
     image: &'a RgbImage,
     lut: [[f32; 256]; 3],
     feather: BorderFeather,
+    /// Radians per pixel: `1 / √(fx·fy)` of the camera the footprints were cast with.
+    pixel_angle: f32,
 }
 
 impl<'a> PhotoSamples<'a> {
-    /// Prepares `image` with `transform` and the feather of `params`.
-    pub fn new(image: &'a RgbImage, transform: &ColourTransform, params: &ConfidenceParams) -> PhotoSamples<'a> {
+    /// Prepares `image` (cast with a camera of focal lengths `fx`, `fy` pixels) with
+    /// `transform` (applied to sRGB values) and the feather of `params`, decoding into `space`.
+    pub fn new(
+        image: &'a RgbImage,
+        focal_px: [f64; 2],
+        transform: &ColourTransform,
+        params: &ConfidenceParams,
+        space: ColourSpace,
+    ) -> PhotoSamples<'a> {
         let lut = std::array::from_fn(|k| {
             std::array::from_fn(|v| {
                 let mut rgb = [0.0; 3];
                 rgb[k] = v as f32 / 255.0;
-                transform.apply(rgb)[k]
+                space.decode(transform.apply(rgb)[k])
             })
         });
-        PhotoSamples { image, lut, feather: params.border_feather(image.width(), image.height()) }
+        let f = (focal_px[0] * focal_px[1]).sqrt();
+        let pixel_angle = if f.is_finite() && f > 0.0 { (1.0 / f) as f32 } else { 0.0 };
+        PhotoSamples { image, lut, feather: params.border_feather(image.width(), image.height()), pixel_angle }
     }
 }
 
@@ -81,25 +102,38 @@ impl<'a> PhotoSamples<'a> {
 pub struct PhotoAccum {
     /// Texture side in texels.
     pub texels: u32,
-    /// Per texel, row-major: the sums `A`, `Q`, `C`.
+    /// Factor (a power of two, >= 1) from the footprints' texel units (the cell's active
+    /// texture) to this texture's.
+    pub scale: u32,
+    /// Per texel, row-major: the sums.
     pub sums: Vec<TexelSums>,
     /// Footprints deposited exactly / by the bilinear fallback / skipped.
     pub kinds: [u64; 3],
 }
 
 impl PhotoAccum {
-    /// An empty accumulator.
+    /// An empty accumulator for footprints in this texture's texel units.
     pub fn new(texels: u32) -> PhotoAccum {
-        let n = texels as usize * texels as usize;
-        PhotoAccum { texels, sums: vec![TexelSums::default(); n], kinds: [0; 3] }
+        PhotoAccum::with_scale(texels, 1)
     }
 
-    /// Deposits a footprint of colour `rgb` (sRGB 0..1) and confidence `conf(area)` (given
-    /// the footprint's area in texels², see [`footprint_area`]).
-    pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], conf: impl FnOnce(f64) -> f64) {
-        let shape = footprint_shape(&fp.corners);
-        let q = conf(shape.map_or(0.0, |(_, a)| if a.is_finite() { a } else { 0.0 })) as f32;
+    /// An empty accumulator of `texels` side for footprints given in texel units of a
+    /// texture `scale` times smaller (`scale` a power of two; corners are multiplied by it,
+    /// exactly, and the size guard [`MAX_SPLAT_BBOX`] applies in the footprints' units).
+    pub fn with_scale(texels: u32, scale: u32) -> PhotoAccum {
+        let n = texels as usize * texels as usize;
+        PhotoAccum { texels, scale: scale.max(1), sums: vec![TexelSums::default(); n], kinds: [0; 3] }
+    }
+
+    /// Deposits a footprint of colour `rgb` (working space 0..1) with border feather
+    /// `feather`, surface footprint `footprint_m` (metres) and `1 / cos_view` `grazing`.
+    pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], feather: f32, footprint_m: f32, grazing: f32) {
+        let sc = self.scale as f32;
+        let corners = if self.scale == 1 { fp.corners } else { fp.corners.map(|c| [c[0] * sc, c[1] * sc]) };
+        let shape = footprint_shape(&corners);
         let sums = &mut self.sums;
+        let q = feather;
+        let (qr, qg) = (q * footprint_m, q * grazing);
         let deposit = |i: usize, w: f64| {
             let w = w as f32;
             let s = &mut sums[i];
@@ -109,9 +143,12 @@ impl PhotoAccum {
             for k in 0..3 {
                 s.colour[k] += wq * rgb[k];
             }
+            s.footprint += w * qr;
+            s.grazing += w * qg;
         };
+        let bbox = MAX_SPLAT_BBOX * (self.scale as f64 * self.scale as f64);
         let s = match shape {
-            Some((poly, area)) => splat_polygon(&poly, area, self.texels, deposit),
+            Some((poly, area)) => splat_polygon_limited(&poly, area, self.texels, bbox, deposit),
             None => Splat { area: 0.0, kind: SplatKind::Skipped },
         };
         self.kinds[match s.kind {
@@ -122,20 +159,22 @@ impl PhotoAccum {
     }
 
     /// Deposits every footprint of `footprints` (all of this accumulator's cell) with the
-    /// colour of its pixel in `image` (the image the footprints were cast for) mapped by
-    /// `transform`, and confidence from `params`. (Preparing [`PhotoSamples`] once and calling
+    /// colour of its pixel in `image` (the image the footprints were cast for, by a camera
+    /// of focal lengths `focal_px`) mapped by `transform`, feather from `params`, averaged
+    /// in linear light. (Preparing [`PhotoSamples`] once and calling
     /// [`PhotoAccum::add_samples`] gives the same sums.)
     pub fn add_all<'f>(
         &mut self,
         footprints: impl IntoIterator<Item = &'f PixelFootprint>,
         image: &RgbImage,
+        focal_px: [f64; 2],
         transform: &ColourTransform,
         params: &ConfidenceParams,
     ) {
-        self.add_samples(footprints, &PhotoSamples::new(image, transform, params));
+        self.add_samples(footprints, &PhotoSamples::new(image, focal_px, transform, params, ColourSpace::Linear));
     }
 
-    /// [`PhotoAccum::add_all`] with the photo's colours and border feather prepared.
+    /// [`PhotoAccum::add_all`] with the photo's colours, border feather and pixel angle prepared.
     pub fn add_samples<'f>(&mut self, footprints: impl IntoIterator<Item = &'f PixelFootprint>, photo: &PhotoSamples) {
         let (w, h) = photo.image.dimensions();
         let (raw, lut) = (photo.image.as_raw(), &photo.lut);
@@ -146,24 +185,114 @@ impl PhotoAccum {
             }
             let o = 3 * (r as usize * w as usize + c as usize);
             let rgb = [lut[0][raw[o] as usize], lut[1][raw[o + 1] as usize], lut[2][raw[o + 2] as usize]];
-            let border = photo.feather.at(fp.pixel);
-            self.add(fp, rgb, |area| confidence_with_border(fp.cos_view as f64, area, border));
+            let border = photo.feather.at(fp.pixel) as f32;
+            let grazing = 1.0 / fp.cos_view.max(MIN_COS_VIEW);
+            let footprint = fp.distance * photo.pixel_angle * grazing;
+            if !(grazing.is_finite() && footprint.is_finite()) {
+                self.kinds[2] += 1;
+                continue;
+            }
+            self.add(fp, rgb, border, footprint, grazing);
         }
     }
 
-    /// The photo's confidence at texel `t`: `Q / max(1, A)`, in [0, 1].
+    /// The photo's coverage confidence at texel `t`: `W / max(1, A)`, in [0, 1].
     #[inline]
     pub fn confidence(&self, t: usize) -> f32 {
         let s = &self.sums[t];
         (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0)
     }
 
-    /// The photo's colour (sRGB 0..1) at texel `t`, if any confident deposit reached it.
+    /// The photo's colour (working space 0..1) at texel `t`, if any feathered deposit
+    /// reached it.
     #[inline]
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
         let s = &self.sums[t];
         (s.weight > 0.0).then(|| s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)))
     }
+
+    /// The mean surface footprint (metres) and mean `1 / cos_view` of the photo's deposits at
+    /// texel `t` (NaN without deposits).
+    #[inline]
+    pub fn footprint_at(&self, t: usize) -> [f32; 2] {
+        let s = &self.sums[t];
+        [s.footprint / s.weight, s.grazing / s.weight]
+    }
+}
+
+/// View cosines below this count as this (a ray grazing the surface).
+const MIN_COS_VIEW: f32 = 1e-3;
+
+/// Surface slopes whose cosine is below this count as this in [`CellContext`] (an ortho
+/// pixel smeared over ~20 ortho pixels of wall height).
+pub const MIN_COS_SLOPE: f32 = 0.05;
+
+/// What the resolution rule needs to know about one cell (docs/projection.md, "Blending").
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellContext {
+    /// Side of the cell's existing (active) texture and normal map, texels.
+    pub base_texels: u32,
+    /// Per existing texel (row-major), the cosine of the surface slope from the normal map
+    /// (1 = flat, 0 = vertical).
+    pub cos_slope: Vec<f32>,
+    /// The cell TIN's vertical error bound `ε` (metres): its surface lies within `ε` of the
+    /// DEM vertically, so within `ε·cos θ` along the surface normal.
+    pub max_error: f32,
+    /// Ground sample distance the existing texture resolves (metres): the larger of the
+    /// ortho's pixel spacing and the existing texture's texel size on the ground.
+    pub existing_ground: f32,
+    /// The existing texture's texel size on the ground (metres; of the orthographic texture,
+    /// which reparameterized ones are resampled from).
+    pub texel_ground: f32,
+}
+
+impl CellContext {
+    /// A context for a flat cell (every cosine 1) of `base_texels` side.
+    pub fn flat(base_texels: u32, max_error: f32, existing_ground: f32) -> CellContext {
+        let n = base_texels as usize * base_texels as usize;
+        CellContext { base_texels, cos_slope: vec![1.0; n], max_error, existing_ground, texel_ground: existing_ground }
+    }
+
+    /// The existing texel under texel `t` of a texture `scale` times finer.
+    #[inline]
+    pub fn base_index(&self, t: usize, texels: u32, scale: u32) -> usize {
+        let (x, y) = (t % texels as usize, t / texels as usize);
+        let s = scale.max(1) as usize;
+        (y / s) * self.base_texels as usize + x / s
+    }
+
+    /// The cosine of the slope at existing texel `b` (1 outside the map).
+    #[inline]
+    pub fn cos_at(&self, b: usize) -> f32 {
+        self.cos_slope.get(b).copied().unwrap_or(1.0)
+    }
+
+    /// A photo's resolution (metres) on existing texel `b` from its mean surface footprint
+    /// and mean `1 / cos_view` there: `r + ε·cos θ·g`, the pixel size plus the displacement
+    /// the TIN's error causes along the photo's rays.
+    #[inline]
+    pub fn photo_resolution(&self, b: usize, footprint: [f32; 2]) -> f32 {
+        footprint[0] + self.max_error * self.cos_at(b) * footprint[1]
+    }
+
+    /// The existing texture's resolution (metres) on existing texel `b`:
+    /// `ground / max(cos θ, 0.05) + ε`, its ground sample distance stretched along the
+    /// fall line, plus the TIN's displacement of a vertical ortho ray.
+    #[inline]
+    pub fn existing_resolution(&self, b: usize) -> f32 {
+        self.existing_ground / self.cos_at(b).max(MIN_COS_SLOPE) + self.max_error
+    }
+}
+
+/// The merged sums of one texel over photos.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct MergedSums {
+    /// Σ selection weights (best mode: the best photo's).
+    weight: f32,
+    /// Σ weight · colour (best mode: the best photo's colour).
+    colour: [f32; 3],
+    /// Σ weight · resolution (best mode: the best photo's resolution).
+    resolution: f32,
 }
 
 /// All photos' contributions to one cell texture on one level.
@@ -173,66 +302,60 @@ pub struct CellAccum {
     pub mode: BlendMode,
     /// Texture side in texels.
     pub texels: u32,
-    /// Per texel: the highest single-photo confidence ([`PhotoAccum::confidence`]), in [0, 1].
+    /// Factor from the existing texture's texels to this texture's (a power of two).
+    pub scale: u32,
+    /// Per texel: the highest single-photo coverage confidence, in [0, 1].
     pub confidence: Vec<f32>,
     /// Per texel: some photo gave it colour.
     pub has_colour: Vec<bool>,
-    /// Per texel, blend mode: `Σ_p Q` and `Σ_p C` (`weight`, `colour`); best mode: the best
-    /// photo's colour (`colour`). `coverage` is not used.
-    sums: Vec<TexelSums>,
+    /// The cell's context of the resolution rule.
+    pub context: CellContext,
+    /// γ of the selection weight `confidence · resolution^−γ`.
+    sharpness: f32,
+    sums: Vec<MergedSums>,
 }
 
 impl CellAccum {
-    /// An empty accumulator.
-    pub fn new(texels: u32, mode: BlendMode) -> CellAccum {
+    /// An empty accumulator of `texels` side, `scale` times the existing texture's.
+    pub fn new(texels: u32, scale: u32, mode: BlendMode, context: CellContext, params: &ConfidenceParams) -> CellAccum {
         let n = texels as usize * texels as usize;
-        CellAccum { mode, texels, confidence: vec![0.0; n], has_colour: vec![false; n], sums: vec![TexelSums::default(); n] }
-    }
-
-    /// The accumulator of one photo's deposits `p`, as [`CellAccum::new`] followed by
-    /// [`CellAccum::merge`] of `p`, using `p`'s memory; also returns how many texels `p`
-    /// gave colour.
-    pub fn from_photo(p: PhotoAccum, mode: BlendMode) -> (CellAccum, u64) {
-        let n = p.sums.len();
-        let (mut confidence, mut has_colour) = (vec![0.0; n], vec![false; n]);
-        let mut written = 0;
-        for t in 0..n {
-            if p.colour_at(t).is_some() {
-                written += 1;
-                confidence[t] = p.confidence(t).max(0.0);
-                has_colour[t] = true;
-            }
+        CellAccum {
+            mode,
+            texels,
+            scale: scale.max(1),
+            confidence: vec![0.0; n],
+            has_colour: vec![false; n],
+            context,
+            sharpness: params.sharpness_power as f32,
+            sums: vec![MergedSums::default(); n],
         }
-        let texels = p.texels;
-        let mut sums = p.sums;
-        if mode == BlendMode::Best {
-            // the best (only) photo's colour where it gave colour
-            for (s, _) in sums.iter_mut().zip(&has_colour).filter(|(_, h)| **h) {
-                s.colour = s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0));
-            }
-        }
-        (CellAccum { mode, texels, confidence, has_colour, sums }, written)
     }
 
     /// Adds one photo's deposits (same texture size); returns how many texels it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum) -> u64 {
         let mut written = 0;
-        for t in 0..self.confidence.len().min(p.sums.len()) {
+        let n = self.confidence.len().min(p.sums.len());
+        for t in 0..n {
             let Some(c) = p.colour_at(t) else { continue };
             written += 1;
             let conf = p.confidence(t);
+            let b = self.context.base_index(t, self.texels, self.scale);
+            let res = self.context.photo_resolution(b, p.footprint_at(t)).max(1e-6);
+            let w = conf * res.powf(-self.sharpness);
+            let w = if w.is_finite() { w } else { 0.0 };
             let s = &mut self.sums[t];
             match self.mode {
                 BlendMode::Confidence => {
-                    s.weight += p.sums[t].weight;
+                    s.weight += w;
                     for k in 0..3 {
-                        s.colour[k] += p.sums[t].colour[k];
+                        s.colour[k] += w * c[k];
                     }
+                    s.resolution += w * res;
                 }
                 BlendMode::Best => {
-                    // the first photo with colour, then any strictly more confident one
-                    if !self.has_colour[t] || conf > self.confidence[t] {
-                        s.colour = c;
+                    // the first photo with colour, then any strictly better one
+                    if !self.has_colour[t] || w > s.weight {
+                        *s = MergedSums { weight: w, colour: c, resolution: res };
                     }
                 }
             }
@@ -242,16 +365,28 @@ impl CellAccum {
         written
     }
 
-    /// The combined photo colour (sRGB 0..1) at texel `t`, if any photo gave it colour.
+    /// The combined photo colour (working space 0..1) at texel `t`, if any photo gave it colour.
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
         if !self.has_colour[t] {
             return None;
         }
         let s = &self.sums[t];
         Some(match self.mode {
-            BlendMode::Confidence => s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
+            BlendMode::Confidence if s.weight > 0.0 => s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
+            BlendMode::Confidence => [0.0; 3],
             BlendMode::Best => s.colour,
         })
+    }
+
+    /// The combined photo resolution (metres) at texel `t` (the weighted mean of the photos',
+    /// or the best photo's); infinite without usable colour.
+    pub fn resolution_at(&self, t: usize) -> f32 {
+        let s = &self.sums[t];
+        match self.mode {
+            BlendMode::Confidence if s.weight > 0.0 => s.resolution / s.weight,
+            BlendMode::Best if self.has_colour[t] && s.weight > 0.0 => s.resolution,
+            _ => f32::INFINITY,
+        }
     }
 }
 
@@ -272,6 +407,11 @@ mod tests {
         ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() }
     }
 
+    /// Samples of `img` averaged as sRGB values, focal length 1000 px.
+    fn srgb_samples<'a>(img: &'a RgbImage) -> PhotoSamples<'a> {
+        PhotoSamples::new(img, [1000.0; 2], &ColourTransform::IDENTITY, &params(), ColourSpace::Srgb)
+    }
+
     #[test]
     fn constant_colour_stays_constant_under_any_footprints() {
         let img = RgbImage::from_pixel(40, 40, image::Rgb([200, 40, 90]));
@@ -287,23 +427,28 @@ mod tests {
                 fp([c, r], [map(cf, rf), map(cf + 1.0, rf), map(cf + 1.0, rf + 1.0), map(cf, rf + 1.0)], 0.8)
             })
             .collect();
-        let mut a = PhotoAccum::new(8);
-        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
-        let want = [200.0 / 255.0, 40.0 / 255.0, 90.0 / 255.0];
-        let mut n = 0;
-        for t in 0..64 {
-            if let Some(c) = a.colour_at(t) {
-                n += 1;
-                for k in 0..3 {
-                    assert!((c[k] - want[k]).abs() < 1e-5, "texel {t}: {c:?}");
+        for space in [ColourSpace::Linear, ColourSpace::Srgb] {
+            let mut a = PhotoAccum::new(8);
+            a.add_samples(&fps, &PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params(), space));
+            let want = [200u8, 40, 90].map(|v| space.decode_u8(v));
+            let mut n = 0;
+            for t in 0..64 {
+                if let Some(c) = a.colour_at(t) {
+                    n += 1;
+                    for k in 0..3 {
+                        assert!((c[k] - want[k]).abs() < 1e-5, "texel {t}: {c:?}");
+                    }
+                    let q = a.confidence(t);
+                    assert!((0.0..=1.0 + 1e-6).contains(&q), "{q}");
+                    // every pixel is 10 m away, 1 mrad, seen at cos 0.8
+                    let [r, g] = a.footprint_at(t);
+                    assert!((r - 0.01 / 0.8).abs() < 1e-6 && (g - 1.25).abs() < 1e-5, "{r} {g}");
                 }
-                let q = a.confidence(t);
-                assert!((0.0..=0.8 + 1e-6).contains(&q), "{q}");
             }
+            assert!(n >= 49, "{n} texels coloured");
+            // interior texels are fully covered: full confidence (the view angle is in the resolution)
+            assert!((a.confidence(3 * 8 + 3) - 1.0).abs() < 1e-4);
         }
-        assert!(n >= 49, "{n} texels coloured");
-        // interior texels are fully covered: confidence = the view cosine
-        assert!((a.confidence(3 * 8 + 3) - 0.8).abs() < 1e-4);
     }
 
     #[test]
@@ -313,7 +458,7 @@ mod tests {
         let fps: Vec<PixelFootprint> =
             (0..6).flat_map(|r| (0..6).map(move |c| fp([c, r], square(c as f32, r as f32, 1.0), 1.0))).collect();
         let mut a = PhotoAccum::new(6);
-        a.add_all(&fps, &tex, &ColourTransform::IDENTITY, &params());
+        a.add_samples(&fps, &srgb_samples(&tex));
         for (x, y, p) in tex.enumerate_pixels() {
             let c = a.colour_at((y * 6 + x) as usize).unwrap();
             for k in 0..3 {
@@ -321,26 +466,50 @@ mod tests {
             }
             assert!((a.confidence((y * 6 + x) as usize) - 1.0).abs() < 1e-6);
         }
-        // 2x2 photo pixels per texel: each texel gets the box average of its four pixels
+        // 2x2 photo pixels per texel: each texel gets the box average of its four pixels,
+        // of the sRGB values or of the linear intensities
         let fine = RgbImage::from_fn(12, 12, |x, y| image::Rgb([(x * 20) as u8, (y * 20) as u8, ((x + y) % 3 * 50) as u8]));
         let fps: Vec<PixelFootprint> = (0..12)
             .flat_map(|r| (0..12).map(move |c| fp([c, r], square(c as f32 * 0.5, r as f32 * 0.5, 0.5), 1.0)))
             .collect();
-        let mut a = PhotoAccum::new(6);
-        a.add_all(&fps, &fine, &ColourTransform::IDENTITY, &params());
-        for j in 0..6u32 {
-            for i in 0..6u32 {
-                let c = a.colour_at((j * 6 + i) as usize).unwrap();
-                for k in 0..3 {
-                    let mean: f32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
-                        .iter()
-                        .map(|(dx, dy)| fine.get_pixel(2 * i + dx, 2 * j + dy).0[k] as f32)
-                        .sum::<f32>()
-                        / 4.0;
-                    assert!((c[k] * 255.0 - mean).abs() < 1e-3, "texel {i},{j} ch {k}: {} vs {mean}", c[k] * 255.0);
+        for space in [ColourSpace::Srgb, ColourSpace::Linear] {
+            let mut a = PhotoAccum::new(6);
+            a.add_samples(&fps, &PhotoSamples::new(&fine, [1000.0; 2], &ColourTransform::IDENTITY, &params(), space));
+            for j in 0..6u32 {
+                for i in 0..6u32 {
+                    let c = a.colour_at((j * 6 + i) as usize).unwrap();
+                    for k in 0..3 {
+                        let mean: f32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                            .iter()
+                            .map(|(dx, dy)| space.decode_u8(fine.get_pixel(2 * i + dx, 2 * j + dy).0[k]))
+                            .sum::<f32>()
+                            / 4.0;
+                        assert!((c[k] - mean).abs() < 1e-5, "{space:?} texel {i},{j} ch {k}: {} vs {mean}", c[k]);
+                    }
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_finer_texture_gets_the_same_deposits_as_scaled_footprints() {
+        let img = RgbImage::from_fn(16, 16, |x, y| image::Rgb([(x * 13) as u8, (y * 11) as u8, ((x ^ y) * 9) as u8]));
+        let fps: Vec<PixelFootprint> = (0..16)
+            .flat_map(|r| (0..16).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                let (x, y) = (0.37 * c as f32 + 0.1, 0.29 * r as f32 + 0.05 * c as f32);
+                fp([c, r], [[x, y], [x + 0.37, y + 0.05], [x + 0.4, y + 0.33], [x, y + 0.29]], 0.6)
+            })
+            .collect();
+        let doubled: Vec<PixelFootprint> =
+            fps.iter().map(|f| PixelFootprint { corners: f.corners.map(|c| [2.0 * c[0], 2.0 * c[1]]), ..*f }).collect();
+        let s = srgb_samples(&img);
+        let mut scaled = PhotoAccum::with_scale(16, 2);
+        scaled.add_samples(&fps, &s);
+        let mut direct = PhotoAccum::new(16);
+        direct.add_samples(&doubled, &s);
+        assert_eq!(scaled.sums, direct.sums);
+        assert!(scaled.sums.iter().filter(|t| t.weight > 0.0).count() > 100);
     }
 
     #[test]
@@ -353,67 +522,66 @@ mod tests {
             fp([3, 0], [[0.5, 0.5], [3.5, 3.5], [3.5, 0.5], [0.5, 3.5]], 1.0),
         ];
         let mut a = PhotoAccum::new(4);
-        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
+        a.add_all(&fps, &img, [1000.0; 2], &ColourTransform::IDENTITY, &params());
         for t in 0..16 {
             assert!(a.confidence(t).is_finite());
             let s = a.sums[t];
-            assert!(s.colour.iter().chain([&s.weight, &s.coverage]).all(|v| v.is_finite()));
+            assert!(s.colour.iter().chain([&s.weight, &s.coverage, &s.footprint, &s.grazing]).all(|v| v.is_finite()));
             if let Some(c) = a.colour_at(t) {
                 assert!(c.iter().all(|v| v.is_finite()));
+                assert!(a.footprint_at(t).iter().all(|v| v.is_finite()));
             }
         }
         assert_eq!(a.kinds[2], 1); // the NaN footprint
     }
 
     #[test]
-    fn blend_and_best_view() {
+    fn the_sharper_photo_wins() {
+        // two photos of one texel: red from 10 m, blue from 40 m (4x coarser)
         let red = RgbImage::from_pixel(1, 1, image::Rgb([255, 0, 0]));
         let blue = RgbImage::from_pixel(1, 1, image::Rgb([0, 0, 255]));
-        let one = |cos: f32, img: &RgbImage| {
+        let one = |dist: f32, img: &RgbImage| {
             let mut a = PhotoAccum::new(1);
-            a.add_all(&[fp([0, 0], square(0.0, 0.0, 1.0), cos)], img, &ColourTransform::IDENTITY, &params());
+            let f = PixelFootprint { distance: dist, ..fp([0, 0], square(0.0, 0.0, 1.0), 1.0) };
+            a.add_samples(&[f], &srgb_samples(img));
             a
         };
-        let (a, b) = (one(0.9, &red), one(0.3, &blue));
-        for (mode, first_red) in [(BlendMode::Confidence, true), (BlendMode::Best, true), (BlendMode::Best, false)] {
-            let mut acc = CellAccum::new(1, mode);
+        let (a, b) = (one(10.0, &red), one(40.0, &blue));
+        let ctx = CellContext::flat(1, 0.0, 1.0);
+        for (mode, first_red) in [(BlendMode::Confidence, true), (BlendMode::Confidence, false), (BlendMode::Best, true), (BlendMode::Best, false)] {
+            let mut acc = CellAccum::new(1, 1, mode, ctx.clone(), &params());
             let written = if first_red { acc.merge(&a) + acc.merge(&b) } else { acc.merge(&b) + acc.merge(&a) };
             assert_eq!(written, 2);
             let c = acc.colour_at(0).unwrap();
-            assert!((acc.confidence[0] - 0.9).abs() < 1e-6);
+            assert!((acc.confidence[0] - 1.0).abs() < 1e-6);
             match mode {
-                BlendMode::Confidence => {
-                    assert!((c[0] - 0.75).abs() < 1e-6 && (c[2] - 0.25).abs() < 1e-6, "{c:?}")
-                }
+                // weights 1 : 4^-4: red with 255/256 of the weight
+                BlendMode::Confidence => assert!((c[0] - 256.0 / 257.0).abs() < 1e-5 && c[2] < 0.004, "{c:?}"),
                 BlendMode::Best => assert_eq!(c, [1.0, 0.0, 0.0]),
             }
+            assert!(acc.resolution_at(0) < 0.0105, "{}", acc.resolution_at(0));
         }
-        let empty = CellAccum::new(1, BlendMode::Best);
+        let empty = CellAccum::new(1, 1, BlendMode::Best, ctx, &params());
         assert!(empty.colour_at(0).is_none());
+        assert_eq!(empty.resolution_at(0), f32::INFINITY);
     }
 
     #[test]
-    fn first_photo_adopted_equals_merged() {
-        // a photo covering part of a 4 x 4 texture, then a second one over all of it
-        let img = RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 30) as u8, (y * 30) as u8, 77]));
-        let fps: Vec<PixelFootprint> = (0..8)
-            .flat_map(|r| (0..8).map(move |c| fp([c, r], square(0.3 * c as f32, 0.25 * r as f32, 0.3), 0.7)))
-            .collect();
-        let mut a = PhotoAccum::new(4);
-        a.add_all(&fps, &img, &ColourTransform::IDENTITY, &params());
-        let mut b = PhotoAccum::new(4);
-        b.add_all(&[fp([3, 3], square(0.0, 0.0, 4.0), 0.9)], &img, &ColourTransform::IDENTITY, &params());
-        for mode in [BlendMode::Confidence, BlendMode::Best] {
-            let mut merged = CellAccum::new(4, mode);
-            let n = merged.merge(&a);
-            let (mut adopted, m) = CellAccum::from_photo(a.clone(), mode);
-            assert_eq!(n, m);
-            assert!(n > 0 && n < 16, "{n}");
-            assert_eq!(merged.merge(&b), adopted.merge(&b));
-            for t in 0..16 {
-                assert_eq!(merged.colour_at(t), adopted.colour_at(t), "{mode:?} texel {t}");
-            }
-            assert_eq!((&merged.confidence, &merged.has_colour), (&adopted.confidence, &adopted.has_colour));
-        }
+    fn resolution_rule_terms() {
+        // a 2 x 2 existing texture: flat, 60°, vertical and 87°; ortho of 1 m, TIN error 0.5 m
+        let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.5, 0.0, 0.05], max_error: 0.5, existing_ground: 1.0, texel_ground: 0.25 };
+        assert_eq!(ctx.existing_resolution(0), 1.5);
+        assert_eq!(ctx.existing_resolution(1), 2.5);
+        assert_eq!(ctx.existing_resolution(2), 20.5);
+        assert_eq!(ctx.existing_resolution(3), 20.5);
+        // a photo pixel of 0.1 m seen at cos 0.25 (g = 4): on flat ground the TIN error moves
+        // it by 2 m, on the vertical texel not at all
+        assert_eq!(ctx.photo_resolution(0, [0.1, 4.0]), 2.1);
+        assert_eq!(ctx.photo_resolution(2, [0.1, 4.0]), 0.1);
+        // texels of a 4x finer texture map onto the existing ones
+        assert_eq!(ctx.base_index(0, 8, 4), 0);
+        assert_eq!(ctx.base_index(7, 8, 4), 1);
+        assert_eq!(ctx.base_index(4 * 8 + 3, 8, 4), 2);
+        assert_eq!(ctx.base_index(63, 8, 4), 3);
     }
 }

@@ -1,24 +1,29 @@
 //! Merging the accumulated photo colour of a cell with its existing texture.
 //!
-//! Per texel with photo colour `p` and texel confidence `c` (the highest single-photo
-//! confidence), the photo's weight is `β = ConfidenceParams::blend_weight(c)`, a smooth
-//! ramp, so photo colour fades in across the edge of photo coverage instead of ending in a
-//! seam. The existing texel (alpha `α`, the known fraction of its colour) counts with
-//! weight `(1 − β)·α`, so the photo's share of the result is `s = β / (β + (1 − β) α)`
-//! (`s = β` on fully known texels, 1 where the existing colour is unknown and the photo saw
-//! the texel, 0 where `β = 0`). Result: `rgb = s·p + (1 − s)·existing`, alpha
-//! `max(α, β)`; the confidence map stores `s` (0..255).
+//! Per texel with photo colour `p`, coverage confidence `c` (the highest single-photo one)
+//! and photo resolution `r_p`, against the existing texture's resolution `r_e` there
+//! ([`CellContext`]), the photo's weight is `β = blend_weight(c) · resolution_weight(r_e /
+//! r_p)` ([`ConfidenceParams::photo_weight`]): photo colour fades in across the edge of photo
+//! coverage instead of ending in a seam, and only where the photo resolves the surface more
+//! finely than the existing texture does. The existing texel (alpha `α`, the known fraction
+//! of its colour) counts with weight `(1 − β)·α`, so the photo's share of the result is
+//! `s = β / (β + (1 − β) α)` (`s = β` on fully known texels, 1 where the existing colour is
+//! unknown and the photo saw the texel, 0 where `β = 0`). Result: `rgb = s·p + (1 − s)·existing`
+//! mixed in the working [`ColourSpace`], alpha `max(α, β)`; the confidence map stores `s`
+//! (0..255). A photo texture finer than the existing one (`scale` > 1) starts from the
+//! existing texture magnified bilinearly (texel centres, edges clamped); texels the photos
+//! do not reach keep that colour.
 
 use image::{GrayImage, RgbaImage};
 
-use super::accumulate::CellAccum;
+use super::accumulate::{CellAccum, CellContext};
 use super::confidence::ConfidenceParams;
-use crate::fastmath::to_u8;
+use crate::colour::ColourSpace;
 
 /// A cell's photo-enhanced texture and its statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Blended {
-    /// RGBA8 texture, same size and layout as the existing one.
+    /// RGBA8 texture of the accumulator's size, with the existing texture's layout.
     pub texture: RgbaImage,
     /// Per texel the photo's share `s` of the colour, 0..255.
     pub confidence: GrayImage,
@@ -30,12 +35,45 @@ pub struct Blended {
     pub steep_photo_texels: u64,
 }
 
-/// Blends `acc` into `existing` (same size) as described in the [module docs](self).
-/// `covered[t]` marks texels on the cell's surface and `steep[t]` those steeper than the
-/// steep threshold (both row-major, of the texture's size; shorter slices count as false).
-pub fn blend_cell(existing: &RgbaImage, acc: &CellAccum, params: &ConfidenceParams, covered: &[bool], steep: &[bool]) -> Blended {
+/// `existing` magnified `scale` times (a power of two) by bilinear interpolation between
+/// texel centres (edges clamped), RGBA channels each; `scale` 1 returns a copy.
+pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
     let (w, h) = existing.dimensions();
-    let mut texture = existing.clone();
+    if scale <= 1 || w == 0 || h == 0 {
+        return existing.clone();
+    }
+    let s = scale as f64;
+    RgbaImage::from_fn(w * scale, h * scale, |x, y| {
+        let u = ((x as f64 + 0.5) / s - 0.5).clamp(0.0, (w - 1) as f64);
+        let v = ((y as f64 + 0.5) / s - 0.5).clamp(0.0, (h - 1) as f64);
+        let (x0, y0) = (u.floor() as u32, v.floor() as u32);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (u - x0 as f64, v - y0 as f64);
+        let (a, b, c, d) = (existing.get_pixel(x0, y0).0, existing.get_pixel(x1, y0).0, existing.get_pixel(x0, y1).0, existing.get_pixel(x1, y1).0);
+        image::Rgba(std::array::from_fn(|k| {
+            let top = a[k] as f64 * (1.0 - fx) + b[k] as f64 * fx;
+            let bottom = c[k] as f64 * (1.0 - fx) + d[k] as f64 * fx;
+            crate::fastmath::to_u8(top * (1.0 - fy) + bottom * fy)
+        }))
+    })
+}
+
+/// Blends `acc` into `existing` (the cell's existing texture, `acc.scale` times smaller than
+/// `acc`) as described in the [module docs](self), mixing in `space` (the space `acc`'s
+/// colours are in). `covered[t]` marks texels on the cell's surface and `steep[t]` those
+/// steeper than the steep threshold (both row-major, of the accumulator's size; shorter
+/// slices count as false).
+pub fn blend_cell(
+    existing: &RgbaImage,
+    acc: &CellAccum,
+    params: &ConfidenceParams,
+    space: ColourSpace,
+    covered: &[bool],
+    steep: &[bool],
+) -> Blended {
+    let mut texture = magnify(existing, acc.scale);
+    let (w, h) = texture.dimensions();
+    let ctx: &CellContext = &acc.context;
     let mut conf = GrayImage::new(w, h);
     let (mut photo_texels, mut steep_texels, mut steep_photo_texels) = (0, 0, 0);
     let n = (w as usize * h as usize).min(acc.confidence.len());
@@ -47,18 +85,20 @@ pub fn blend_cell(existing: &RgbaImage, acc: &CellAccum, params: &ConfidencePara
             continue;
         }
         let Some(p) = acc.colour_at(t) else { continue };
-        let beta = params.blend_weight(acc.confidence[t] as f64);
-        if beta <= 0.0 {
+        let b = ctx.base_index(t, acc.texels, acc.scale);
+        let ratio = ctx.existing_resolution(b) as f64 / acc.resolution_at(t) as f64;
+        let beta = params.photo_weight(acc.confidence[t] as f64, ratio);
+        if !(beta > 0.0) {
             continue;
         }
         let alpha = px.0[3] as f64 / 255.0;
         let s = beta / (beta + (1.0 - beta) * alpha);
         for k in 0..3 {
-            let v = s * p[k] as f64 * 255.0 + (1.0 - s) * px.0[k] as f64;
-            px.0[k] = to_u8(v);
+            let e = space.decode_u8(px.0[k]) as f64;
+            px.0[k] = space.encode_u8((s * p[k] as f64 + (1.0 - s) * e) as f32);
         }
-        px.0[3] = px.0[3].max(to_u8(beta * 255.0));
-        cv.0[0] = to_u8(s * 255.0);
+        px.0[3] = px.0[3].max(crate::fastmath::to_u8(beta * 255.0));
+        cv.0[0] = crate::fastmath::to_u8(s * 255.0);
         if s > 0.5 && cov {
             photo_texels += 1;
             steep_photo_texels += st as u64;
@@ -70,53 +110,58 @@ pub fn blend_cell(existing: &RgbaImage, acc: &CellAccum, params: &ConfidencePara
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::photo::{BlendMode, ColourTransform, PhotoAccum, PixelFootprint};
+    use crate::photo::{BlendMode, ColourTransform, PhotoAccum, PhotoSamples, PixelFootprint};
     use image::RgbImage;
 
-    #[test]
-    fn photo_where_confident_existing_where_not_smooth_between() {
-        // 32 x 1 texels; the photo's view cosine falls from 1 to 0 along x
-        let n = 32u32;
-        let img = RgbImage::from_pixel(n, 1, image::Rgb([250, 250, 250]));
-        let params = ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() };
-        let fps: Vec<PixelFootprint> = (0..n)
+    fn footprints(n: u32, scale_cos: bool) -> Vec<PixelFootprint> {
+        (0..n)
             .map(|i| {
                 let x = i as f32;
                 PixelFootprint {
                     cell: 0,
                     pixel: [i, 0],
                     corners: [[x, 0.0], [x + 1.0, 0.0], [x + 1.0, 1.0], [x, 1.0]],
-                    cos_view: 1.0 - i as f32 / (n - 1) as f32,
+                    cos_view: if scale_cos { 1.0 - i as f32 / n as f32 } else { 1.0 },
                     distance: 5.0,
                     reconstructed: 0,
                 }
             })
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn photo_where_it_resolves_more_existing_where_not_smooth_between() {
+        // 32 x 1 texels; the photo's view cosine falls from 1 to 1/32 along x, so its
+        // resolution on the surface coarsens from 5 mm to 16 cm against 4 cm of the ortho
+        let n = 32u32;
+        let img = RgbImage::from_pixel(n, 1, image::Rgb([250, 250, 250]));
+        let params = ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() };
         let mut pa = PhotoAccum::new(n);
-        pa.add_all(&fps, &img, &ColourTransform::IDENTITY, &params);
-        let mut acc = CellAccum::new(n, BlendMode::Confidence);
+        pa.add_samples(&footprints(n, true), &PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params, ColourSpace::Srgb));
+        let ctx = CellContext::flat(n, 0.0, 0.04);
+        let mut acc = CellAccum::new(n, 1, BlendMode::Confidence, ctx, &params);
         acc.merge(&pa);
         let mut existing = RgbaImage::from_pixel(n, n, image::Rgba([10, 10, 10, 255]));
-        // an unknown existing texel that the photo sees with low confidence
-        existing.put_pixel(29, 0, image::Rgba([0, 0, 0, 0]));
+        // an unknown existing texel where the photo is coarse
+        existing.put_pixel(30, 0, image::Rgba([0, 0, 0, 0]));
         let covered = vec![true; (n * n) as usize];
         let steep: Vec<bool> = (0..n * n).map(|t| t % 2 == 0).collect();
-        let b = blend_cell(&existing, &acc, &params, &covered, &steep);
+        let b = blend_cell(&existing, &acc, &params, ColourSpace::Srgb, &covered, &steep);
         let r: Vec<u8> = (0..n).map(|i| b.texture.get_pixel(i, 0).0[0]).collect();
         let s: Vec<u8> = (0..n).map(|i| b.confidence.get_pixel(i, 0).0[0]).collect();
-        // confident texels: photo colour, confidence 255
+        // where the photo is 4x finer: photo colour, share 255
         assert_eq!((r[0], s[0]), (250, 255));
-        // no confidence: existing colour, untouched
-        assert_eq!((r[30], s[30]), (10, 0));
-        assert_eq!(b.texture.get_pixel(30, 0).0, [10, 10, 10, 255]);
-        // in between: monotone and without jumps larger than the ramp allows
-        for i in 0..28 {
-            assert!(r[i + 1] <= r[i] && r[i] - r[i + 1] <= 40, "{r:?}");
+        assert_eq!((r[15], s[15]), (250, 255), "{r:?}");
+        // coarser: existing colour, untouched
+        assert_eq!((r[31], s[31]), (10, 0));
+        // in between: monotone
+        for i in 0..30 {
+            assert!(r[i + 1] <= r[i], "{r:?}");
         }
         assert!(r.iter().any(|&v| v > 10 && v < 250), "no ramp: {r:?}");
         // the unknown existing texel takes the photo colour wherever the photo has weight
-        if params.blend_weight(acc.confidence[29] as f64) > 0.0 {
-            assert_eq!((r[29], s[29]), (250, 255));
+        if s[30] > 0 {
+            assert_eq!((r[30], s[30]), (250, 255), "{r:?} {s:?}");
         }
         // rows the photo did not reach are unchanged
         assert_eq!(b.texture.get_pixel(5, 3).0, [10, 10, 10, 255]);
@@ -124,5 +169,82 @@ mod tests {
         let photo = s.iter().filter(|&&v| v > 127).count() as u64;
         assert_eq!(b.photo_texels, photo);
         assert_eq!(b.steep_photo_texels, s.iter().step_by(2).filter(|&&v| v > 127).count() as u64);
+    }
+
+    #[test]
+    fn a_larger_texture_never_lowers_the_photo_share() {
+        // the same photo (a sheared grid of pixels of varying view angle) splatted into the
+        // existing texture's size and into 2x and 4x finer textures: every fully covered
+        // texel of the larger textures has exactly the share of the existing texel under it,
+        // and the mean share over the surface does not fall
+        let params = ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() };
+        // (pixels half an existing texel wide: 2 and 4 texels wide in the finer textures)
+        let img = RgbImage::from_fn(12, 12, |x, y| image::Rgb([(x * 20) as u8, (y * 20) as u8, 90]));
+        let fps: Vec<PixelFootprint> = (0..12)
+            .flat_map(|r| (0..12).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                let (x, y) = (1.0 + 0.5 * c as f32 + 0.04 * r as f32, 1.0 + 0.45 * r as f32);
+                PixelFootprint {
+                    cell: 0,
+                    pixel: [c, r],
+                    corners: [[x, y], [x + 0.5, y], [x + 0.54, y + 0.45], [x + 0.04, y + 0.45]],
+                    cos_view: 0.5 + 0.3 * c as f32 / 12.0,
+                    distance: 100.0,
+                    reconstructed: 0,
+                }
+            })
+            .collect();
+        let base = 8u32;
+        let existing = RgbaImage::from_pixel(base, base, image::Rgba([10, 60, 10, 255]));
+        let ctx = CellContext { base_texels: base, cos_slope: (0..64).map(|i| 0.3 + 0.7 * (i % 8) as f32 / 8.0).collect(), max_error: 0.02, existing_ground: 0.15, texel_ground: 0.15 };
+        let samples = PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params, ColourSpace::Linear);
+        let mut shares = Vec::new();
+        for scale in [1u32, 2, 4] {
+            let t = base * scale;
+            let mut pa = PhotoAccum::with_scale(t, scale);
+            pa.add_samples(&fps, &samples);
+            let mut acc = CellAccum::new(t, scale, BlendMode::Confidence, ctx.clone(), &params);
+            acc.merge(&pa);
+            let b = blend_cell(&existing, &acc, &params, ColourSpace::Linear, &[], &[]);
+            assert_eq!(b.texture.dimensions(), (t, t));
+            shares.push((scale, b.confidence.clone(), acc.confidence.clone()));
+        }
+        // over the surface the photo covers fully at the existing size, the mean share of
+        // the finer textures is no lower, and no texel's share falls by more than rounding
+        // and the averaging of the view angle over a smaller texel
+        let (_, c1, k1) = &shares[0];
+        let full: Vec<(u32, u32)> =
+            (0..base).flat_map(|y| (0..base).map(move |x| (x, y))).filter(|&(x, y)| k1[(y * base + x) as usize] > 0.999).collect();
+        assert!(full.len() >= 16, "{}", full.len());
+        // (the photo and the existing texture resolve about equally: shares in between)
+        assert!(full.iter().any(|&(x, y)| (40..215).contains(&c1.get_pixel(x, y).0[0])), "no intermediate share");
+        let mean1 = full.iter().map(|&(x, y)| c1.get_pixel(x, y).0[0] as f64).sum::<f64>() / full.len() as f64;
+        for (scale, c, _) in &shares[1..] {
+            let mut sum = 0.0;
+            for &(bx, by) in &full {
+                for dy in 0..*scale {
+                    for dx in 0..*scale {
+                        let (a, b) = (c.get_pixel(bx * scale + dx, by * scale + dy).0[0] as i32, c1.get_pixel(bx, by).0[0] as i32);
+                        assert!(b - a <= 12, "scale {scale} texel {bx},{by}+{dx},{dy}: {a} < {b}");
+                        sum += a as f64;
+                    }
+                }
+            }
+            let mean = sum / (full.len() as f64 * (*scale as f64).powi(2));
+            assert!(mean >= mean1 - 0.5, "scale {scale}: mean share {mean} < {mean1}");
+        }
+    }
+
+    #[test]
+    fn magnify_keeps_constants_and_centres() {
+        let img = RgbaImage::from_fn(4, 4, |x, y| image::Rgba([(x * 60) as u8, (y * 60) as u8, 7, 255]));
+        assert_eq!(magnify(&img, 1), img);
+        let m = magnify(&img, 2);
+        assert_eq!(m.dimensions(), (8, 8));
+        // corners clamp to the corner texels; between centres it interpolates
+        assert_eq!(m.get_pixel(0, 0).0, [0, 0, 7, 255]);
+        assert_eq!(m.get_pixel(7, 7).0, [180, 180, 7, 255]);
+        assert_eq!(m.get_pixel(1, 0).0[0], 15);
+        assert_eq!(m.get_pixel(2, 0).0[0], 45);
     }
 }

@@ -1,35 +1,51 @@
-//! How much to trust one photo pixel's colour in a texel, and how photo confidence turns
-//! into the weight of photo colour against the existing texture.
+//! How much to trust photo colour in a texel, and how that trust turns into the weight of
+//! photo colour against the existing texture (docs/projection.md, "Blending").
 //!
-//! A footprint's confidence is the product of three terms, each in [0, 1]:
-//! - **view**: the cosine between the ray and the surface normal (1 head-on, → 0 grazing);
-//! - **resolution**: `1 / max(1, area)` with `area` the footprint's area in texels²: photo
-//!   pixels no larger than a texel carry full detail, a pixel spread over `a` texels
-//!   carries `1/a` of a texel's detail;
-//! - **border feather**: `smoothstep(d / (feather · min(w, h)))` with `d` the distance
-//!   (pixels) from the pixel centre to the nearest image edge, so photo coverage fades out
-//!   towards the image border instead of ending in a seam (and vignetting is avoided).
-//!
-//! Per texel a photo's confidence is its confidence-weighted coverage, `Σ a·q / max(1, Σ a)`
-//! (see [`super::accumulate`]); the weight of photo colour is [`ConfidenceParams::blend_weight`]
-//! of it, a smoothstep ramp from `ramp[0]` (no photo) to `ramp[1]` (photo only).
+//! - **Border feather** (per photo pixel): `smoothstep(d / (feather · min(w, h)))` with `d`
+//!   the distance (pixels) from the pixel centre to the nearest image edge, so photo coverage
+//!   fades out towards the image border instead of ending in a seam (and vignetting is
+//!   avoided).
+//! - **Coverage confidence** (per texel and photo): the feathered fraction of the texel the
+//!   photo's footprints cover, `Σ a·φ / max(1, Σ a)` ([`super::accumulate`]). The weight of
+//!   photo colour rises with it along [`ConfidenceParams::blend_weight`], a smoothstep ramp
+//!   from `ramp[0]` (no photo) to `ramp[1]`.
+//! - **Resolution** (per texel): what each source resolves there, in metres on the surface
+//!   ([`super::CellContext`]): the photo's pixel footprint `distance / (f · cos_view)` plus the
+//!   displacement the TIN's error causes along its rays, against the existing texture's
+//!   ground sample distance stretched along the fall line. The photo's weight rises with
+//!   `log2(existing / photo)` along [`ConfidenceParams::resolution_weight`] (default: none
+//!   while the photo is coarser, full when it is 4× finer). Neither term depends on the
+//!   size of the texture the photo is splatted into, so a larger texture never lowers the
+//!   photo's share (tested).
+//! - Between photos, each texel weights a photo by its coverage confidence times its
+//!   resolution to the power `−sharpness_power`, so the sharpest photo wins.
 
 use crate::error::{Error, Result};
 
-/// Parameters of the confidence terms and the blend ramp.
+/// Parameters of the confidence terms and the blend ramps.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConfidenceParams {
     /// Width of the border feather as a fraction of the image's shorter side, in [0, 0.5]
-    /// (0 = no feather). Default 0.05.
+    /// (0 = no feather). Default 0.01 (12 px of a 1200-px photo: a 5 % band cost 2–10 % of
+    /// the photos' gain in the render-space evaluation, docs/evaluation.md).
     pub feather: f64,
-    /// Texel confidence at which photo colour starts to count, and at which it replaces the
-    /// existing colour entirely; `0 <= ramp[0] < ramp[1] <= 1`. Default `[0.05, 0.35]`.
+    /// Coverage confidence at which photo colour starts to count, and at which it counts
+    /// fully; `0 <= ramp[0] < ramp[1] <= 1`. Default `[0.05, 0.35]`.
     pub ramp: [f64; 2],
+    /// `log2(existing resolution / photo resolution)` at which photo colour starts to count,
+    /// and at which it counts fully; `lo < hi`. Default `[0, 2]`: a photo must resolve the
+    /// surface at least as finely as the existing texture to count and 4× as finely to
+    /// replace it (with `[-1, 1]`, flat ground seen at grazing angles took photo colour at
+    /// par and lost 0.4 dB in the evaluation, docs/evaluation.md).
+    pub resolution_ramp: [f64; 2],
+    /// γ of the per-texel photo weight `confidence · resolution^−γ` between photos, in
+    /// [0, 16]. Default 4 (a photo 2× sharper weighs 16×).
+    pub sharpness_power: f64,
 }
 
 impl Default for ConfidenceParams {
     fn default() -> Self {
-        ConfidenceParams { feather: 0.05, ramp: [0.05, 0.35] }
+        ConfidenceParams { feather: 0.01, ramp: [0.05, 0.35], resolution_ramp: [0.0, 2.0], sharpness_power: 4.0 }
     }
 }
 
@@ -53,13 +69,14 @@ impl ConfidenceParams {
         if !(lo >= 0.0 && lo < hi && hi <= 1.0) {
             return Err(Error::BadOption(format!("confidence ramp must satisfy 0 <= lo < hi <= 1, got [{lo}, {hi}]")));
         }
+        let [rlo, rhi] = self.resolution_ramp;
+        if !(rlo.is_finite() && rhi.is_finite() && rlo < rhi) {
+            return Err(Error::BadOption(format!("resolution ramp must satisfy lo < hi, got [{rlo}, {rhi}]")));
+        }
+        if !(0.0..=16.0).contains(&self.sharpness_power) {
+            return Err(Error::BadOption(format!("sharpness power must be in [0, 16], got {}", self.sharpness_power)));
+        }
         Ok(())
-    }
-
-    /// Confidence in [0, 1] of a footprint with view cosine `cos_view`, area `area`
-    /// (texels²), for pixel `[col, row]` of a `width × height` image. 0 for NaN inputs.
-    pub fn footprint_confidence(&self, cos_view: f64, area: f64, pixel: [u32; 2], width: u32, height: u32) -> f64 {
-        confidence_with_border(cos_view, area, self.border_term(pixel, width, height))
     }
 
     /// The border feather of every pixel of a `width × height` image, as two tables
@@ -83,6 +100,24 @@ impl ConfidenceParams {
     pub fn blend_weight(&self, conf: f64) -> f64 {
         smoothstep((conf - self.ramp[0]) / (self.ramp[1] - self.ramp[0]))
     }
+
+    /// Weight in [0, 1] of photo colour for the resolution ratio `ratio` = existing
+    /// resolution / photo resolution (both metres on the surface; > 1: the photo is finer):
+    /// smooth and non-decreasing in the ratio, 0 at or below `2^resolution_ramp[0]`, 1 at or
+    /// above `2^resolution_ramp[1]`; 0 for NaN, 1 for an infinite ratio.
+    pub fn resolution_weight(&self, ratio: f64) -> f64 {
+        if ratio.is_nan() || ratio <= 0.0 {
+            return 0.0;
+        }
+        let [lo, hi] = self.resolution_ramp;
+        smoothstep((ratio.log2() - lo) / (hi - lo))
+    }
+
+    /// The photo's weight `β` in [0, 1] on a texel: [`Self::blend_weight`] of its coverage
+    /// confidence times [`Self::resolution_weight`] of the resolution ratio.
+    pub fn photo_weight(&self, conf: f64, ratio: f64) -> f64 {
+        self.blend_weight(conf) * self.resolution_weight(ratio)
+    }
 }
 
 /// Distance (pixels, >= 0) from the centre of pixel `i` to the nearer end of `0..n`.
@@ -97,22 +132,6 @@ fn edge_distance(i: u32, n: u32) -> f64 {
 #[inline]
 fn feather_at(d: f64, band: f64) -> f64 {
     if band <= 0.0 { 1.0 } else { smoothstep(d / band) }
-}
-
-/// `view · resolution · border` (see the [module docs](self)) of a footprint with view
-/// cosine `cos_view` and area `area` (texels²) and the border feather `border` of its pixel;
-/// 0 for NaN inputs.
-#[inline]
-pub(crate) fn confidence_with_border(cos_view: f64, area: f64, border: f64) -> f64 {
-    let view = if cos_view.is_nan() { 0.0 } else { cos_view.clamp(0.0, 1.0) };
-    let res = if area.is_nan() {
-        0.0
-    } else if area <= 1.0 {
-        1.0
-    } else {
-        1.0 / area
-    };
-    view * res * border
 }
 
 /// The border feather of every pixel of one image ([`ConfidenceParams::border_feather`]).
@@ -138,26 +157,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn terms_and_ramp() {
+    fn terms_and_ramps() {
         let p = ConfidenceParams::default();
         p.validate().unwrap();
-        // centre pixel, head-on, small footprint: full confidence
-        assert_eq!(p.footprint_confidence(1.0, 0.3, [500, 400], 1000, 800), 1.0);
-        // a pixel spread over 4 texels and viewed at 60 degrees
-        assert!((p.footprint_confidence(0.5, 4.0, [500, 400], 1000, 800) - 0.125).abs() < 1e-12);
         // the border pixel is (almost) untrusted, and the feather rises monotonically
-        assert!(p.footprint_confidence(1.0, 1.0, [0, 400], 1000, 800) < 0.01);
+        assert!(p.border_term([0, 400], 1000, 800) < 0.02);
         let f: Vec<f64> = (0..50).map(|c| p.border_term([c, 400], 1000, 800)).collect();
         assert!(f.windows(2).all(|w| w[0] <= w[1]) && f[49] == 1.0);
-        assert_eq!(p.footprint_confidence(f64::NAN, 1.0, [500, 400], 1000, 800), 0.0);
-        // ramp: 0 below, 1 above, smooth and monotone in between
+        // coverage ramp: 0 below, 1 above, smooth and monotone in between
         assert_eq!(p.blend_weight(0.0), 0.0);
         assert_eq!(p.blend_weight(0.9), 1.0);
         assert!((p.blend_weight(0.2) - 0.5).abs() < 1e-12);
         let w: Vec<f64> = (0..=100).map(|k| p.blend_weight(k as f64 / 100.0)).collect();
         assert!(w.windows(2).all(|x| x[1] >= x[0] && x[1] - x[0] < 0.06));
+        // resolution ramp: none up to par, half when 2x finer, full when 4x finer
+        assert_eq!(p.resolution_weight(0.5), 0.0);
+        assert_eq!(p.resolution_weight(1.0), 0.0);
+        assert!((p.resolution_weight(2.0) - 0.5).abs() < 1e-12);
+        assert_eq!(p.resolution_weight(4.0), 1.0);
+        assert_eq!(p.resolution_weight(f64::INFINITY), 1.0);
+        assert_eq!(p.resolution_weight(f64::NAN), 0.0);
+        assert_eq!(p.resolution_weight(0.0), 0.0);
+        let r: Vec<f64> = (0..=200).map(|k| p.resolution_weight(2f64.powf(k as f64 / 50.0 - 2.0))).collect();
+        assert!(r.windows(2).all(|x| x[1] >= x[0]));
+        assert_eq!(p.photo_weight(0.9, 4.0), 1.0);
+        assert!((p.photo_weight(0.2, 2.0) - 0.25).abs() < 1e-12);
         assert!(ConfidenceParams { ramp: [0.5, 0.5], ..p }.validate().is_err());
         assert!(ConfidenceParams { feather: -1.0, ..p }.validate().is_err());
+        assert!(ConfidenceParams { resolution_ramp: [1.0, 1.0], ..p }.validate().is_err());
+        assert!(ConfidenceParams { sharpness_power: f64::NAN, ..p }.validate().is_err());
     }
 
     #[test]

@@ -2,11 +2,13 @@
 //! (sRGB values in [0, 1]) that brings a photo's exposure and white balance to the existing
 //! (ortho-derived) texture before blending.
 //!
-//! Samples are texels where both colours are trustworthy and comparable: the photo's texel
-//! confidence is at least `min_confidence`, the existing texel is fully known (alpha 255),
-//! the surface is flat (normal-map slope below `max_slope_deg`, where the top-down ortho
-//! sees the same surface as the photo) and well lit (luminance of both colours inside
-//! `luminance`, i.e. neither in deep shadow nor clipped). With fewer than `min_samples`
+//! Samples are texels where both colours are trustworthy and comparable ([`collect_pairs`]):
+//! the photo covers the texel (coverage confidence at least `min_confidence`) and resolves
+//! it no worse than the ortho, the existing texel is fully known (alpha 255), the surface is
+//! flat (normal-map slope below `max_slope_deg`, where the top-down ortho sees the same
+//! surface as the photo) and well lit (luminance of both colours inside `luminance`, i.e.
+//! neither in deep shadow nor clipped); colours are compared as block means at the
+//! ortho's resolution. With fewer than `min_samples`
 //! samples the photo keeps the identity map. Per channel the line is fitted by iteratively
 //! reweighted least squares with Huber weights (scale from the median absolute deviation),
 //! which ignores the minority of samples where photo and ortho show different things
@@ -14,9 +16,10 @@
 //! (standard deviation below `min_spread`) only gets an offset (the median difference);
 //! a fitted gain outside `gain_range` is implausible and that channel keeps the identity.
 
-use image::{RgbImage, RgbaImage};
+use image::RgbaImage;
 
-use super::accumulate::PhotoAccum;
+use super::accumulate::{CellContext, PhotoAccum};
+use super::confidence::ConfidenceParams;
 
 /// A per-channel affine colour map on sRGB values in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,32 +97,67 @@ pub fn normal_cos_slope(px: [u8; 3]) -> f64 {
     if len > 0.0 { n[2] / len } else { 1.0 }
 }
 
-/// Appends the sample texels of one cell: photo deposits `acc` (untransformed colours),
-/// the cell's existing texture and its normal map (both of the accumulator's size; on a
-/// size mismatch nothing is added). Returns the number of samples added.
+/// Appends the samples of one cell: photo deposits `acc` (untransformed sRGB colours, at
+/// the existing texture's size), the cell's existing texture and its [`CellContext`] (the
+/// slopes of its normal map). A texel qualifies where the existing colour is fully known,
+/// the surface is flat and the photo's coverage confidence reaches `min_confidence`, and
+/// the photo resolves the surface at least as finely as the existing texture does (its
+/// resolution weight `weights.resolution_weight` at least 1/2: grazing views of flat ground
+/// smear each pixel over metres). Colours are averaged over blocks of `k × k` texels whose
+/// texels all qualify, `k` the power of two that makes a block as large as the existing
+/// texture's ground sample distance, so that the photo is compared at the ortho's
+/// resolution and its finer detail does not bias the gain low. Both block means must be well
+/// lit. On a size mismatch nothing is added. Returns the number of samples added.
 pub fn collect_pairs(
     acc: &PhotoAccum,
     existing: &RgbaImage,
-    normals: &RgbImage,
+    ctx: &CellContext,
+    weights: &ConfidenceParams,
     params: &LevelingParams,
     out: &mut ColourPairs,
 ) -> usize {
     let t = acc.texels;
-    if existing.dimensions() != (t, t) || normals.dimensions() != (t, t) {
+    if existing.dimensions() != (t, t) || ctx.base_texels != t || acc.scale != 1 {
         return 0;
     }
     let before = out.photo.len();
-    let cos_max = params.max_slope_deg.to_radians().cos();
-    for (i, (e, n)) in existing.pixels().zip(normals.pixels()).enumerate() {
-        if e.0[3] != 255 || acc.confidence(i) < params.min_confidence || normal_cos_slope(n.0) < cos_max {
-            continue;
+    let cos_max = params.max_slope_deg.to_radians().cos() as f32;
+    let ratio = ctx.existing_ground / ctx.texel_ground.max(1e-9);
+    let mut k = 1u32;
+    while (k as f32) < ratio && k < 16 && 2 * k <= t {
+        k *= 2;
+    }
+    let qualifies = |i: usize| -> Option<([f32; 3], [f32; 3])> {
+        let e = existing.as_raw().get(4 * i..4 * i + 4)?;
+        if e[3] != 255 || acc.confidence(i) < params.min_confidence || ctx.cos_at(i) < cos_max {
+            return None;
         }
-        let Some(p) = acc.colour_at(i) else { continue };
-        let e = [e.0[0], e.0[1], e.0[2]].map(|v| v as f32 / 255.0);
-        let lum = params.luminance;
-        if [luminance(p), luminance(e)].iter().all(|&l| l >= lum[0] && l <= lum[1]) {
-            out.photo.push(p);
-            out.existing.push(e);
+        let p = acc.colour_at(i)?;
+        let r = ctx.existing_resolution(i) as f64 / ctx.photo_resolution(i, acc.footprint_at(i)) as f64;
+        if weights.resolution_weight(r) < 0.5 {
+            return None;
+        }
+        Some((p, [e[0], e[1], e[2]].map(|v| v as f32 / 255.0)))
+    };
+    let lum = params.luminance;
+    for by in (0..t - t % k).step_by(k as usize) {
+        'block: for bx in (0..t - t % k).step_by(k as usize) {
+            let (mut sp, mut se) = ([0.0f32; 3], [0.0f32; 3]);
+            for y in by..by + k {
+                for x in bx..bx + k {
+                    let Some((p, e)) = qualifies((y * t + x) as usize) else { continue 'block };
+                    for c in 0..3 {
+                        sp[c] += p[c];
+                        se[c] += e[c];
+                    }
+                }
+            }
+            let n = (k * k) as f32;
+            let (p, e) = (sp.map(|v| v / n), se.map(|v| v / n));
+            if [luminance(p), luminance(e)].iter().all(|&l| l >= lum[0] && l <= lum[1]) {
+                out.photo.push(p);
+                out.existing.push(e);
+            }
         }
     }
     out.photo.len() - before
@@ -272,18 +310,30 @@ mod tests {
     }
 
     #[test]
-    fn collects_only_flat_bright_confident_texels() {
+    fn collects_only_flat_bright_confident_sharp_texels() {
         let mut acc = PhotoAccum::new(2);
-        // texel 0: confident; texel 1: confident but steep; texel 2: dark; texel 3: no photo
-        for (t, c) in [(0usize, 0.5f32), (1, 0.5), (2, 0.01)] {
-            acc.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3] };
+        // texel 0: confident and sharp; texel 1: steep; texel 2: dark; texel 3: smeared (a
+        // pixel of 5 m on ground the ortho resolves to 1 m)
+        for (t, c, r) in [(0usize, 0.5f32, 0.1f32), (1, 0.5, 0.1), (2, 0.01, 0.1), (3, 0.5, 5.0)] {
+            acc.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3], footprint: r, grazing: 1.0 };
         }
         let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
-        let mut normals = RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]));
-        normals.put_pixel(1, 0, image::Rgb([255, 128, 128])); // horizontal normal: vertical wall
+        let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.0, 1.0, 1.0], max_error: 0.0, existing_ground: 1.0, texel_ground: 1.0 };
+        let w = ConfidenceParams::default();
         let mut pairs = ColourPairs::default();
-        assert_eq!(collect_pairs(&acc, &existing, &normals, &LevelingParams::default(), &mut pairs), 1);
+        assert_eq!(collect_pairs(&acc, &existing, &ctx, &w, &LevelingParams::default(), &mut pairs), 1);
         assert_eq!(pairs.photo, vec![[0.5; 3]]);
-        assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &normals, &LevelingParams::default(), &mut pairs), 0);
+        assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &ctx, &w, &LevelingParams::default(), &mut pairs), 0);
+        // texels of half the ortho's spacing: 2 x 2 blocks, which texel 1 spoils here
+        let half = CellContext { texel_ground: 0.5, ..ctx.clone() };
+        assert_eq!(collect_pairs(&acc, &existing, &half, &w, &LevelingParams::default(), &mut pairs), 0);
+        let mut flat = acc.clone();
+        for t in 0..4 {
+            flat.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [0.2 + 0.1 * t as f32; 3], footprint: 0.1, grazing: 1.0 };
+        }
+        let ok = CellContext { cos_slope: vec![1.0; 4], ..half };
+        let mut pairs = ColourPairs::default();
+        assert_eq!(collect_pairs(&flat, &existing, &ok, &w, &LevelingParams::default(), &mut pairs), 1);
+        assert!((pairs.photo[0][0] - 0.35).abs() < 1e-6);
     }
 }

@@ -41,6 +41,7 @@ mod pyramid;
 mod reconstruct;
 mod scene;
 mod silhouette;
+mod sizing;
 mod splat;
 mod triangle;
 mod viewgrid;
@@ -55,11 +56,12 @@ pub use input::{
     validate_camera, PhotoSpec,
 };
 pub use scene::{LevelScene, SceneCell};
-pub use accumulate::{BlendMode, CellAccum, PhotoAccum, PhotoSamples, TexelSums};
-pub use blend::{Blended, blend_cell};
+pub use accumulate::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE, PhotoAccum, PhotoSamples, TexelSums};
+pub use blend::{Blended, blend_cell, magnify};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
 pub use level::{ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform, normal_cos_slope};
-pub use pyramid::{PhotoPyramid, downsample2, half_camera};
+pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
+pub use sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
 pub use splat::{MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint};
 
 use std::path::PathBuf;

@@ -6,10 +6,17 @@ use image::RgbImage;
 use rayon::prelude::*;
 
 use crate::camera::CameraModel;
+use crate::colour::ColourSpace;
 
 /// Halves an image: pixel `(i, j)` is the mean (rounded) of pixels `(2i..2i+2, 2j..2j+2)`;
 /// an odd last column or row is cropped. `None` if a side is below 2 pixels.
 pub fn downsample2(img: &RgbImage) -> Option<RgbImage> {
+    downsample2_in(img, ColourSpace::Srgb)
+}
+
+/// [`downsample2`] averaging in `space` (linear light: the four values decoded, averaged
+/// and encoded again, rounded in the encoding).
+pub fn downsample2_in(img: &RgbImage, space: ColourSpace) -> Option<RgbImage> {
     let (w, h) = (img.width() / 2, img.height() / 2);
     if w == 0 || h == 0 {
         return None;
@@ -22,8 +29,16 @@ pub fn downsample2(img: &RgbImage) -> Option<RgbImage> {
         let (a, b) = (&src[2 * j * sw * 3..][..6 * w as usize], &src[(2 * j + 1) * sw * 3..][..6 * w as usize]);
         for ((o, a), b) in row.chunks_exact_mut(3).zip(a.chunks_exact(6)).zip(b.chunks_exact(6)) {
             for k in 0..3 {
-                let s = a[k] as u32 + a[k + 3] as u32 + b[k] as u32 + b[k + 3] as u32;
-                o[k] = ((s + 2) / 4) as u8;
+                o[k] = match space {
+                    ColourSpace::Srgb => {
+                        let s = a[k] as u32 + a[k + 3] as u32 + b[k] as u32 + b[k + 3] as u32;
+                        ((s + 2) / 4) as u8
+                    }
+                    ColourSpace::Linear => {
+                        let d = crate::colour::decode_u8;
+                        crate::colour::encode_u8(0.25 * (d(a[k]) + d(a[k + 3]) + d(b[k]) + d(b[k + 3])))
+                    }
+                };
             }
         }
     });
@@ -47,16 +62,27 @@ pub struct PhotoPyramid<'a> {
 }
 
 impl<'a> PhotoPyramid<'a> {
-    /// Builds `steps` halvings (fewer if the image becomes smaller than 2 pixels).
+    /// Builds `steps` halvings (fewer if the image becomes smaller than 2 pixels), each
+    /// averaging 2 × 2 pixels as sRGB values.
     pub fn new(image: &'a RgbImage, camera: CameraModel, steps: usize) -> PhotoPyramid<'a> {
+        PhotoPyramid::new_in(image, camera, steps, ColourSpace::Srgb)
+    }
+
+    /// [`PhotoPyramid::new`] averaging in `space`.
+    pub fn new_in(image: &'a RgbImage, camera: CameraModel, steps: usize, space: ColourSpace) -> PhotoPyramid<'a> {
         let mut coarser: Vec<(RgbImage, CameraModel)> = Vec::new();
         for _ in 0..steps {
             let (img, cam) = coarser.last().map_or((image, &camera), |(i, c)| (i, c));
-            let Some(next) = downsample2(img) else { break };
+            let Some(next) = downsample2_in(img, space) else { break };
             let cam = half_camera(cam);
             coarser.push((next, cam));
         }
         PhotoPyramid { full: image, camera, coarser }
+    }
+
+    /// Halvings available (images after step 0).
+    pub fn steps(&self) -> usize {
+        self.coarser.len()
     }
 
     /// Image and camera after `step` halvings (the coarsest available if fewer exist).

@@ -124,7 +124,20 @@ pub(crate) fn footprint_shape(corners: &[[f32; 2]; 4]) -> Option<([[f64; 2]; 4],
 /// The common cases (footprints within 2 × 2 texels) are inlined into the caller; the rest
 /// is [`splat_collapsed`] and [`splat_large`].
 #[inline(always)]
-pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
+pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, deposit: impl FnMut(usize, f64)) -> Splat {
+    splat_polygon_limited(poly, area, texels, MAX_SPLAT_BBOX, deposit)
+}
+
+/// [`splat_polygon`] with the size guard at `max_bbox` texels² instead of [`MAX_SPLAT_BBOX`]
+/// (for footprints scaled into a finer texture).
+#[inline(always)]
+pub(crate) fn splat_polygon_limited(
+    poly: &[[f64; 2]; 4],
+    area: f64,
+    texels: u32,
+    max_bbox: f64,
+    mut deposit: impl FnMut(usize, f64),
+) -> Splat {
     if texels == 0 {
         return SKIP;
     }
@@ -140,7 +153,7 @@ pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, mut de
             }
         }
     }
-    if !((hi[0] - lo[0]) * (hi[1] - lo[1]) <= MAX_SPLAT_BBOX) || !area.is_finite() {
+    if !((hi[0] - lo[0]) * (hi[1] - lo[1]) <= max_bbox) || !area.is_finite() {
         return SKIP;
     }
     if area < MIN_SPLAT_AREA {

@@ -148,6 +148,7 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
             void_fraction: dem.void_fraction(),
         },
         ortho: inp.ortho_source.clone(),
+        ortho_spacing: inp.ortho.map(|o| o.georef.spacing_x.max(o.georef.spacing_y)),
         quadtree: tree,
         max_error: opts.max_error,
         cell_texels: opts.cell_texels,

@@ -20,7 +20,7 @@ pub use build::{BuildInputs, BuildOptions, build_store, write_stats};
 pub use derived_ortho::derived_ortho;
 pub use mesh::{LocalMesh, local_mesh};
 pub use progress::progress_bar;
-pub use project::{ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store};
+pub use project::{PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store};
 pub use reparam::{ReparamOptions, TextureMemory, reparam_store, texture_memory};
 
 #[allow(unused_imports)]

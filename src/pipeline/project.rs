@@ -25,9 +25,11 @@ use rayon::prelude::*;
 use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
 use crate::fsutil::{encode_png, write_atomic};
+use crate::colour::ColourSpace;
 use crate::photo::{
-    BlendMode, CellAccum, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet, LevelScene,
-    LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
+    SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes,
+    BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet,
+    LevelScene, LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
     fit_colour_transform, for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, FootprintBuffers,
 };
 use crate::stats::texel_stretch;
@@ -56,6 +58,10 @@ pub struct ProjectOptions {
     pub leveling: LevelingParams,
     /// The leveling is fitted on the first pyramid image with at most this many pixels.
     pub leveling_max_pixels: u64,
+    /// The space photo colours are averaged and blended in.
+    pub colour_space: ColourSpace,
+    /// Photo texture sizes.
+    pub texture: PhotoTextureOptions,
     /// Hide progress bars.
     pub quiet: bool,
 }
@@ -70,8 +76,45 @@ impl Default for ProjectOptions {
             confidence: ConfidenceParams::default(),
             leveling: LevelingParams::default(),
             leveling_max_pixels: 1 << 20,
+            colour_space: ColourSpace::Linear,
+            texture: PhotoTextureOptions::default(),
             quiet: false,
         }
+    }
+}
+
+/// How large the photo textures are (docs/projection.md, "Texture sizes").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotoTextureOptions {
+    /// Size each cell's photo texture by the finest detail the photos deliver on it
+    /// ([`SizingBins`]); `false`: every photo texture has its active texture's size.
+    pub photo_driven: bool,
+    /// Largest photo texture side, texels (a power of two, 64..=8192). Default 2048.
+    pub max_texels: u32,
+    /// GPU bytes (RGBA8 with mips) the enlarged photo textures of all levels may take
+    /// together: 3/4 for the finest level, a quarter of the previous share for each coarser
+    /// one. Default 1 GiB.
+    pub budget_bytes: u64,
+    /// Texels per photo pixel side the sizing aims at, in [0.25, 4]. Default 1.
+    pub texels_per_pixel: f64,
+}
+
+impl Default for PhotoTextureOptions {
+    fn default() -> Self {
+        PhotoTextureOptions { photo_driven: true, max_texels: 2048, budget_bytes: 1 << 30, texels_per_pixel: 1.0 }
+    }
+}
+
+impl PhotoTextureOptions {
+    /// Rejects a cap that is not a power of two in 64..=8192.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.max_texels.is_power_of_two() && (64..=8192).contains(&self.max_texels)) {
+            return Err(Error::BadOption(format!("--max-photo-texels must be a power of two in 64..=8192, got {}", self.max_texels)));
+        }
+        if !(0.25..=4.0).contains(&self.texels_per_pixel) {
+            return Err(Error::BadOption(format!("--texels-per-pixel must be in [0.25, 4], got {}", self.texels_per_pixel)));
+        }
+        Ok(())
     }
 }
 
@@ -118,6 +161,7 @@ impl StageTimer {
 /// failed write; a photo that sees no terrain only logs a warning.
 pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -> Result<ProjectReport> {
     opts.confidence.validate()?;
+    opts.texture.validate()?;
     let mut timer = StageTimer::new();
     let mut store = Store::open(dir)?;
     for p in photos {
@@ -138,7 +182,8 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     let levels = store.manifest.quadtree.levels as usize;
     let finest = levels.saturating_sub(1);
     timer.lap("open store");
-    let pyramids: Vec<PhotoPyramid> = photos.iter().map(|p| PhotoPyramid::new(&p.image, p.camera, finest)).collect();
+    let pyramids: Vec<PhotoPyramid> =
+        photos.iter().map(|p| PhotoPyramid::new_in(&p.image, p.camera, finest + SIZING_STEPS, opts.colour_space)).collect();
     timer.lap("photo pyramids");
 
     let multi = MultiProgress::new();
@@ -210,19 +255,19 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     // coarser level is cast and splatted (levels are independent, so the output is the same
     // as level by level).
     let run = LevelRun { store: &store, pyramids: &pyramids, transforms: &transforms, opts, buffers: &buffers, bars: &bars, finest };
-    let mut pending: Option<(usize, Vec<Option<CellAccum>>)> = None;
+    let mut pending: Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))> = None;
     // The photo textures are written on a thread of their own (the fsyncs do not hold up
     // the workers); all are on disk before the manifest refers to them.
     let writer = BackgroundWriter::new(dir);
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
             || {
-                pending.take().map(|(l, accs)| {
+                pending.take().map(|(l, (accs, sizing))| {
                     let t = std::time::Instant::now();
-                    (l, finish_level(&store, l, &accs, opts, &writer), t.elapsed().as_secs_f64())
+                    (l, finish_level(&store, l, &accs, &sizing, opts, &writer), t.elapsed().as_secs_f64())
                 })
             },
-            || -> Result<Option<(usize, Vec<Option<CellAccum>>)>> {
+            || -> Result<Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))>> {
                 let Some(level) = level else { return Ok(None) };
                 Ok(Some((level, run.project_level(level, &mut cached, &mut first_scene, &mut reports, &mut timer)?)))
             },
@@ -260,6 +305,10 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         reconstruct: opts.footprint.reconstruct,
         level_colours: opts.level_colours,
         ray_accel: opts.ray.name(),
+        colour_space: opts.colour_space.name().to_string(),
+        photo_driven_sizes: opts.texture.photo_driven,
+        max_photo_texels: opts.texture.max_texels,
+        photo_texture_budget: opts.texture.budget_bytes,
         photos: reports,
         levels: level_reports,
     };
@@ -299,20 +348,48 @@ fn group_by_cell<'a>(fs: &'a FootprintSet, cells: &[CellRecord], level: u8) -> V
 
 /// Splats a batch of one photo's footprints on `level` (cells of other levels are ignored)
 /// into the photo's per-cell accumulators `pas` (indexed by manifest cell, created on first
-/// use), in parallel over cells, each cell's footprints in order.
+/// use with the cell's photo texture scale `scales[cell]`), in parallel over cells, each
+/// cell's footprints in order.
 fn splat_batch(
     batch: &FootprintSet,
     pas: &mut [Option<PhotoAccum>],
     cells: &[CellRecord],
+    scales: &[u32],
     level: u8,
     samples: &PhotoSamples,
 ) {
     let groups = group_by_cell(batch, cells, level);
     pas.par_iter_mut().zip(groups).enumerate().for_each(|(ci, (pa, cf))| {
         if let Some(cf) = cf {
-            pa.get_or_insert_with(|| PhotoAccum::new(active_texels(&cells[ci]))).add_samples(cf.iter(), samples);
+            let scale = scales.get(ci).copied().unwrap_or(1).max(1);
+            pa.get_or_insert_with(|| PhotoAccum::with_scale(active_texels(&cells[ci]) * scale, scale)).add_samples(cf.iter(), samples);
         }
     });
+}
+
+/// The resolution rule's view of cell `rec` ([`CellContext`]): slopes from its active normal
+/// map, its TIN's measured error, and the ground sample distance of its existing texture
+/// (the larger of the ortho's spacing, when the store records it, and the texel size).
+fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContext> {
+    let normals = store.read_active_normal_map(rec)?;
+    let t = active_texels(rec);
+    if normals.dimensions() != (t, t) {
+        return Err(Error::store(store.dir.join(&active_normal_path(rec)), format!("normal map {:?} is not the cell's {t}x{t} texels", normals.dimensions())));
+    }
+    let texel = rec.extent.width().max(rec.extent.height()) / rec.texels.max(1) as f64;
+    let ground = store.manifest.ortho_spacing.unwrap_or(0.0).max(texel);
+    Ok(CellContext {
+        base_texels: t,
+        cos_slope: normals.pixels().map(|p| normal_cos_slope(p.0).abs() as f32).collect(),
+        max_error: rec.max_error.max(0.0) as f32,
+        existing_ground: ground as f32,
+        texel_ground: texel as f32,
+    })
+}
+
+/// Path of the cell's active normal map (for messages).
+fn active_normal_path(rec: &CellRecord) -> String {
+    rec.reparam.as_ref().map_or(&rec.files.normal, |r| &r.files.normal).path.clone()
 }
 
 /// What every level's projection of a run shares.
@@ -339,18 +416,31 @@ impl LevelRun<'_> {
         first_scene: &mut Option<LevelScene>,
         reports: &mut [PhotoReport],
         timer: &mut StageTimer,
-    ) -> Result<Vec<Option<CellAccum>>> {
+    ) -> Result<(Vec<Option<CellAccum>>, LevelSizing)> {
         let step = self.finest - level;
-        let mut accs: Vec<Option<CellAccum>> = vec![None; self.store.manifest.cells.len()];
+        let ncells = self.store.manifest.cells.len();
+        let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
+        // This level's scenes, one per photo, built once for the sizing and the main casts.
+        let mut scenes: Vec<Option<LevelScene>> = (0..self.pyramids.len()).map(|_| None).collect();
+        if let Some(scene) = first_scene.take() {
+            if level == self.finest {
+                scenes[0] = Some(scene);
+            } else {
+                *first_scene = Some(scene);
+            }
+        }
+        let sizing = self.size_level(level, cached, &mut scenes)?;
+        timer.lap(&format!("level {level}: texture sizes"));
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
             let cells = &self.store.manifest.cells;
-            let samples = PhotoSamples::new(img, &self.transforms[pi], &self.opts.confidence);
+            let samples =
+                PhotoSamples::new(img, [cam.fx, cam.fy], &self.transforms[pi], &self.opts.confidence, self.opts.colour_space);
             // This photo's deposits per manifest cell, filled batch by batch in row order.
-            let mut pas: Vec<Option<PhotoAccum>> = vec![None; self.store.manifest.cells.len()];
+            let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
             let counts = match cached[pi].take() {
                 Some((l, fs)) if l == level => {
-                    splat_batch(&fs, &mut pas, cells, level as u8, &samples);
+                    splat_batch(&fs, &mut pas, cells, &sizing.scales, level as u8, &samples);
                     let mut counts = FootprintSet::default();
                     counts.add_counts(&fs);
                     self.buffers.recycle(fs);
@@ -358,13 +448,13 @@ impl LevelRun<'_> {
                 }
                 other => {
                     cached[pi] = other;
-                    let scene = match first_scene.take() {
-                        Some(scene) if pi == 0 && level == self.finest => scene,
-                        _ => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
+                    let scene = match scenes[pi].take() {
+                        Some(scene) => scene,
+                        None => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
                     };
                     let mut counts = FootprintSet::default();
                     for_each_footprint_batch_in(self.buffers, &scene, &cam, &self.opts.footprint, |batch| {
-                        splat_batch(batch, &mut pas, cells, level as u8, &samples);
+                        splat_batch(batch, &mut pas, cells, &sizing.scales, level as u8, &samples);
                         counts.add_counts(batch);
                     });
                     counts
@@ -377,25 +467,123 @@ impl LevelRun<'_> {
                 r.rejected_silhouette = counts.rejected_silhouette;
                 r.reconstructed_footprints = counts.reconstructed;
             }
-            let written: Vec<u64> = accs
+            let written: Vec<Result<u64>> = accs
                 .par_iter_mut()
                 .zip(pas.into_par_iter())
-                .map(|(acc, pa)| match (acc.as_mut(), pa) {
-                    (_, None) => 0,
-                    (Some(acc), Some(pa)) => acc.merge(&pa),
+                .enumerate()
+                .map(|(ci, (acc, pa))| match (acc.as_mut(), pa) {
+                    (_, None) => Ok(0),
+                    (Some(acc), Some(pa)) => Ok(acc.merge(&pa)),
                     (None, Some(pa)) => {
-                        let (first, n) = CellAccum::from_photo(pa, self.opts.blend);
+                        let ctx = cell_context(self.store, &cells[ci])?;
+                        let mut first = CellAccum::new(pa.texels, pa.scale, self.opts.blend, ctx, &self.opts.confidence);
+                        let n = first.merge(&pa);
                         *acc = Some(first);
-                        n
+                        Ok(n)
                     }
                 })
                 .collect();
-            reports[pi].texels_written += written.iter().sum::<u64>();
+            for w in written {
+                reports[pi].texels_written += w?;
+            }
             self.bars[pi].inc(1);
             timer.lap(&format!("level {level} photo {pi}: merge"));
         }
-        Ok(accs)
+        Ok((accs, sizing))
     }
+
+    /// The photo texture scale of every cell of `level` (indexed by manifest cell; 1 for
+    /// other levels): from sizing casts of each photo's image two halvings coarser than the
+    /// level's (or from its footprints cached from the leveling), [`SizingBins`] per cell,
+    /// then [`choose_scales`] within this level's share of the budget (see
+    /// [`PhotoTextureOptions`]). Fills `scenes` with the photos' scenes it built.
+    fn size_level(
+        &self,
+        level: usize,
+        cached: &[Option<(usize, FootprintSet)>],
+        scenes: &mut [Option<LevelScene>],
+    ) -> Result<LevelSizing> {
+        let cells = &self.store.manifest.cells;
+        let topt = &self.opts.texture;
+        let mut out = LevelSizing { scales: vec![1; cells.len()], ..LevelSizing::default() };
+        if !topt.photo_driven {
+            return Ok(out);
+        }
+        let step = self.finest - level;
+        let mut bins: Vec<Option<SizingBins>> = vec![None; cells.len()];
+        let mut add = |fs: &FootprintSet, side_scale: f32| {
+            for cf in &fs.cells {
+                let ci = cf.cell as usize;
+                if ci < cells.len() && cells[ci].level as usize == level {
+                    let base = active_texels(&cells[ci]);
+                    let b = bins[ci].get_or_insert_with(SizingBins::default);
+                    for fp in cf.iter() {
+                        b.add(fp, base, side_scale);
+                    }
+                }
+            }
+        };
+        for (pi, pyr) in self.pyramids.iter().enumerate() {
+            match &cached[pi] {
+                Some((l, fs)) if *l == level => add(fs, 1.0),
+                _ => {
+                    let (_, cam) = pyr.level(step);
+                    let scene = match scenes[pi].take() {
+                        Some(s) => s,
+                        None => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
+                    };
+                    let coarse = (step + SIZING_STEPS).min(pyr.steps());
+                    let (_, ccam) = pyr.level(coarse);
+                    let fs = photo_footprints_in(self.buffers, &scene, &ccam, &self.opts.footprint);
+                    add(&fs, 0.5f32.powi((coarse - step) as i32));
+                    self.buffers.recycle(fs);
+                    scenes[pi] = Some(scene);
+                }
+            }
+        }
+        let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
+        let requests: Vec<SizeRequest> = level_cells
+            .iter()
+            .map(|&ci| {
+                let base = active_texels(&cells[ci]);
+                let max_scale = (topt.max_texels / base.max(1)).max(1);
+                match &bins[ci] {
+                    Some(b) => SizeRequest {
+                        base_texels: base,
+                        scale: b.wanted_scale(max_scale, topt.texels_per_pixel),
+                        covered: b.covered() as f64 / (SIZING_BINS * SIZING_BINS) as f64,
+                    },
+                    None => SizeRequest { base_texels: base, scale: 1, covered: 0.0 },
+                }
+            })
+            .collect();
+        // the finest level's share is 3/4 of the budget, each coarser one a quarter of that
+        let share = 0.75 * 0.25f64.powi(step as i32);
+        out.budget_bytes = (topt.budget_bytes as f64 * share) as u64;
+        let granted = choose_scales(&requests, out.budget_bytes);
+        for ((&ci, &g), r) in level_cells.iter().zip(&granted).zip(&requests) {
+            out.scales[ci] = g;
+            out.wanted += (r.scale > 1) as u64;
+            out.upsized += (g > 1) as u64;
+        }
+        Ok(out)
+    }
+}
+
+/// Pyramid halvings between a level's image and its sizing cast's.
+const SIZING_STEPS: usize = 2;
+
+/// The photo texture sizes of one level.
+#[derive(Clone, Debug, Default)]
+struct LevelSizing {
+    /// Per manifest cell, the factor of its photo texture's side over its active texture's.
+    scales: Vec<u32>,
+    /// Cells that wanted a larger photo texture.
+    wanted: u64,
+    /// Cells that got one.
+    upsized: u64,
+    /// This level's share of the budget, bytes.
+    budget_bytes: u64,
 }
 
 /// Blends and writes the photo textures of every cell of `level` from its accumulators
@@ -404,6 +592,7 @@ fn finish_level(
     store: &Store,
     level: usize,
     accs: &[Option<CellAccum>],
+    sizing: &LevelSizing,
     opts: &ProjectOptions,
     writer: &BackgroundWriter,
 ) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>)> {
@@ -411,15 +600,22 @@ fn finish_level(
     let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
     let results: Vec<Result<CellOutcome>> =
         level_cells.par_iter().map(|&ci| finish_cell(store, &cells[ci], accs.get(ci).and_then(Option::as_ref), opts, writer)).collect();
-    let mut lr = PhotoLevelReport { level: level as u8, ..PhotoLevelReport::default() };
+    let mut lr = PhotoLevelReport {
+        level: level as u8,
+        wanted_larger: sizing.wanted,
+        upsized_cells: sizing.upsized,
+        texture_budget_bytes: sizing.budget_bytes,
+        ..PhotoLevelReport::default()
+    };
     let mut records = Vec::new();
     for (&ci, r) in level_cells.iter().zip(results) {
         let o = r?;
         lr.steep_texels += o.steep_texels;
         if let Some(rec) = o.record {
             lr.cells_with_photo += 1;
-            lr.photo_texels += rec.photo_texels;
-            lr.steep_photo_texels += rec.steep_photo_texels;
+            lr.photo_texture_bytes += texture_bytes(rec.texels);
+            lr.photo_texels += o.photo_base;
+            lr.steep_photo_texels += o.steep_photo_base;
             records.push((ci, rec));
         }
     }
@@ -448,19 +644,20 @@ fn estimate_leveling(
         let fs = photo_footprints_in(buffers, &scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;
-        let samples = PhotoSamples::new(img, &ColourTransform::IDENTITY, &opts.confidence);
+        // (the leveling compares sRGB values at the existing texture's size)
+        let samples = PhotoSamples::new(img, [cam.fx, cam.fy], &ColourTransform::IDENTITY, &opts.confidence, ColourSpace::Srgb);
         let mut pas: Vec<Option<PhotoAccum>> = vec![None; cells.len()];
-        splat_batch(&fs, &mut pas, cells, level as u8, &samples);
+        splat_batch(&fs, &mut pas, cells, &[], level as u8, &samples);
         let parts: Vec<Result<ColourPairs>> = pas
             .par_iter()
             .enumerate()
             .filter_map(|(ci, pa)| pa.as_ref().map(|pa| (&cells[ci], pa)))
             .map(|(rec, pa)| {
                 let existing = store.read_active_texture(rec)?;
-                let normals = store.read_active_normal_map(rec)?;
-                check_size(store, rec, existing.dimensions(), normals.dimensions())?;
+                let ctx = cell_context(store, rec)?;
+                check_size(store, rec, existing.dimensions(), (ctx.base_texels, ctx.base_texels))?;
                 let mut pairs = ColourPairs::default();
-                collect_pairs(pa, &existing, &normals, &opts.leveling, &mut pairs);
+                collect_pairs(pa, &existing, &ctx, &opts.confidence, &opts.leveling, &mut pairs);
                 Ok(pairs)
             })
             .collect();
@@ -503,27 +700,28 @@ fn check_size(store: &Store, rec: &CellRecord, tex: (u32, u32), nrm: (u32, u32))
     Ok(())
 }
 
-/// A finished cell: its photo record (if it got photo colour) and its steep texel count.
+/// A finished cell: its photo record (if it got photo colour) and its steep texel count
+/// (in texels of its active texture).
 struct CellOutcome {
     record: Option<PhotoCellRecord>,
     steep_texels: u64,
+    /// Covered steep texels with mostly photo colour, in texels of the active texture
+    /// (the photo texture's count divided by the squared scale).
+    steep_photo_base: u64,
+    /// Covered texels with mostly photo colour, likewise.
+    photo_base: u64,
 }
 
-/// Steep and covered masks of a cell's active texture (row-major): covered = texel centre
-/// on a surface triangle in texture space, steep = covered and normal-map slope above
-/// [`STEEP_SLOPE_DEG`].
-fn surface_masks(store: &Store, rec: &CellRecord, normals: &image::RgbImage) -> Result<(Vec<bool>, Vec<bool>)> {
+/// Which texel centres of a `texels × texels` texture of cell `rec` (active layout) lie on a
+/// surface triangle in texture space (row-major).
+fn covered_mask(store: &Store, rec: &CellRecord, texels: u32) -> Result<Vec<bool>> {
     let mesh = store.read_active_mesh(rec)?;
     let ns = (mesh.surface_vertices as usize).min(mesh.positions.len());
     let positions: Vec<[f64; 3]> = mesh.positions[..ns].iter().map(|p| p.map(f64::from)).collect();
     let uvs: Vec<[f64; 2]> = (0..ns).map(|i| texcoord(rec, &mesh, i).map(f64::from)).collect();
     let triangles: Vec<[u32; 3]> =
         mesh.surface().iter().copied().filter(|t| t.iter().all(|&k| (k as usize) < ns)).collect();
-    let t = active_texels(rec);
-    let covered: Vec<bool> = texel_stretch(&positions, &triangles, &uvs, t, 1.0).iter().map(|s| !s.is_nan()).collect();
-    let cos_steep = STEEP_SLOPE_DEG.to_radians().cos();
-    let steep = covered.iter().zip(normals.pixels()).map(|(&c, n)| c && normal_cos_slope(n.0) < cos_steep).collect();
-    Ok((covered, steep))
+    Ok(texel_stretch(&positions, &triangles, &uvs, texels, 1.0).iter().map(|s| !s.is_nan()).collect())
 }
 
 /// Encodes `img` as PNG and queues it for `dir/rel` on `writer`.
@@ -543,24 +741,37 @@ fn finish_cell(
     opts: &ProjectOptions,
     writer: &BackgroundWriter,
 ) -> Result<CellOutcome> {
-    let normals = store.read_active_normal_map(rec)?;
-    let (covered, steep) = surface_masks(store, rec, &normals)?;
-    let steep_texels = steep.iter().filter(|&&s| s).count() as u64;
-    let Some(acc) = acc else { return Ok(CellOutcome { record: None, steep_texels }) };
+    let cos_steep = STEEP_SLOPE_DEG.to_radians().cos() as f32;
+    let Some(acc) = acc else {
+        let normals = store.read_active_normal_map(rec)?;
+        let covered = covered_mask(store, rec, active_texels(rec))?;
+        let steep_texels =
+            covered.iter().zip(normals.pixels()).filter(|(c, n)| **c && (normal_cos_slope(n.0) as f32) < cos_steep).count() as u64;
+        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0 });
+    };
     let existing = store.read_active_texture(rec)?;
-    check_size(store, rec, existing.dimensions(), normals.dimensions())?;
-    let b = blend_cell(&existing, acc, &opts.confidence, &covered, &steep);
+    let ctx = &acc.context;
+    check_size(store, rec, existing.dimensions(), (ctx.base_texels, ctx.base_texels))?;
+    let covered = covered_mask(store, rec, acc.texels)?;
+    let steep: Vec<bool> = covered
+        .iter()
+        .enumerate()
+        .map(|(t, &c)| c && ctx.cos_at(ctx.base_index(t, acc.texels, acc.scale)) < cos_steep)
+        .collect();
+    let b = blend_cell(&existing, acc, &opts.confidence, opts.colour_space, &covered, &steep);
+    let area = (acc.scale as u64).pow(2);
+    let steep_texels = b.steep_texels / area;
     if b.confidence.pixels().all(|p| p.0[0] == 0) {
-        return Ok(CellOutcome { record: None, steep_texels });
+        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0 });
     }
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {
-        texels: active_texels(rec),
+        texels: acc.texels,
         texture: submit_png(writer, &store.dir, &format!("{stem}.photo.png"), &b.texture)?,
         confidence: submit_png(writer, &store.dir, &format!("{stem}.photo.conf.png"), &b.confidence)?,
         photo_texels: b.photo_texels,
         steep_texels: b.steep_texels,
         steep_photo_texels: b.steep_photo_texels,
     };
-    Ok(CellOutcome { record: Some(record), steep_texels })
+    Ok(CellOutcome { record: Some(record), steep_texels, steep_photo_base: b.steep_photo_texels / area, photo_base: b.photo_texels / area })
 }

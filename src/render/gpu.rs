@@ -123,7 +123,8 @@ pub enum UvMode {
     /// Like `Mixed`, but every cell reads a UV vertex stream (computed on the CPU for cells
     /// without stored UVs).
     Reparam,
-    /// Like `Mixed`, with each cell's photo-enhanced texture (`rec.photo`) where it has one.
+    /// Like `Mixed`, with each cell's photo-enhanced texture (`rec.photo`) where it has one:
+    /// every cell's best texture (the default of [`super::SceneOptions`]).
     Photo,
 }
 

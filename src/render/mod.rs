@@ -6,7 +6,7 @@
 //! [`resolve_draw_list`]), geomorphing towards parent cells ([`geomorph`]) and the pinhole view
 //! of distorted cameras ([`distortion`]). GPU side: [`gpu`] (headless wgpu: cell uploads,
 //! pipelines, offscreen frames, the distortion pass, PNG readback) and [`TerrainScene`] (a store
-//! with cache, loaders and frames).
+//! with cache, loaders and frames); [`downsample_rgba`] reduces supersampled frames.
 
 mod cache;
 mod camera;
@@ -17,6 +17,7 @@ pub mod geomorph;
 mod lod;
 mod overlay;
 mod stream;
+mod supersample;
 mod target;
 
 pub use cache::LruCache;
@@ -30,6 +31,7 @@ pub use lod::{
 pub use distortion::{DistortedView, DistortionMode};
 pub use geomorph::GeomorphOptions;
 pub use stream::{DrawList, Streamer, resolve_draw_list};
+pub use supersample::downsample_rgba;
 
 pub mod accuracy;
 pub mod gpu;

@@ -29,7 +29,8 @@ pub struct SceneOptions {
     pub sse_px: f64,
     /// GPU memory budget for cached cells, bytes.
     pub budget_bytes: u64,
-    /// Texture-coordinate mode (and texture source).
+    /// Texture-coordinate mode (and texture source); default [`UvMode::Photo`], each cell's
+    /// best texture.
     pub uv_mode: UvMode,
     /// Overlay (stretch replaces the colour textures; levels tints and draws boxes).
     pub overlay: Overlay,
@@ -48,7 +49,7 @@ impl Default for SceneOptions {
         SceneOptions {
             sse_px: 0.5,
             budget_bytes: 512 << 20,
-            uv_mode: UvMode::Mixed,
+            uv_mode: UvMode::Photo,
             overlay: Overlay::None,
             loader_threads: 1,
             frame: FrameOptions::default(),

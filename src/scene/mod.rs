@@ -5,8 +5,8 @@
 //! walls, an escarpment (cliff band) and fractal hills. Its colour is a **solid texture**
 //! ([`DemoScene::surface_colour`]): a function of the 3D surface point (rock strata by height
 //! with fine detail, noise, vegetation on gentle slopes), so later stages can compare any
-//! texel with ground truth. The ortho image is the top-down, area-averaged view of it, which
-//! smears the walls exactly as real orthophotos do.
+//! texel with ground truth. The ortho image is the top-down, area-averaged view of it (in
+//! linear light), which smears the walls exactly as real orthophotos do.
 //!
 //! Ground truth for photo projection: [`DemoScene::photo_shots`] places ground cameras
 //! from the scene's geometry, [`DemoScene::render_truth_photo`] ray-traces what they see,
@@ -17,14 +17,17 @@
 //! y = 6 878 000), so the whole pipeline is exercised at realistic magnitudes.
 
 mod photos;
+mod tracer;
 mod truth;
 
 pub use photos::{DemoPhotoOptions, PhotoShot, SKY_COLOUR};
+pub use tracer::{DemHit, DemTracer};
 pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_covered, texel_truth_with};
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use rayon::prelude::*;
 
+use crate::colour::{linear_to_srgb, srgb_to_linear};
 use crate::dem::Dem;
 use crate::error::Result;
 use crate::georef::GridGeoref;
@@ -43,20 +46,62 @@ pub struct DemoScene {
     pub origin_x: f64,
     /// World y of the north-west sample centre.
     pub origin_y: f64,
+    /// Heights of the scene's walls.
+    pub relief: Relief,
+    /// Factor on the demo cameras' candidate distances from their targets (> 0; 1 = the
+    /// default 150–350 m).
+    pub photo_distance: f64,
+}
+
+/// Heights of the demo scene's three kinds of wall, metres (each >= 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Relief {
+    /// Height of the plateau above its surroundings (~89° walls). Default 70.
+    pub plateau: f64,
+    /// Depth of the canyon (~80° walls, steeper when deeper). Default 90.
+    pub canyon: f64,
+    /// Height of the escarpment (~85° wall). Default 45.
+    pub escarpment: f64,
+}
+
+impl Default for Relief {
+    fn default() -> Self {
+        Relief { plateau: 70.0, canyon: 90.0, escarpment: 45.0 }
+    }
 }
 
 impl Default for DemoScene {
     fn default() -> Self {
-        DemoScene { seed: 7, samples: 513, spacing: 2.0, origin_x: 431_000.0, origin_y: 6_878_000.0 }
+        DemoScene {
+            seed: 7,
+            samples: 513,
+            spacing: 2.0,
+            origin_x: 431_000.0,
+            origin_y: 6_878_000.0,
+            relief: Relief::default(),
+            photo_distance: 1.0,
+        }
     }
 }
 
-/// Height of the plateau above its surroundings, metres.
-const PLATEAU_HEIGHT: f64 = 70.0;
+impl DemoScene {
+    /// A second evaluation scene unlike the default one: a 1-m DEM of 1025² samples, taller
+    /// walls (plateau 110 m, canyon 120 m, escarpment 65 m) and cameras at 0.7 × the default
+    /// distances, with another seed.
+    pub fn tall_walls() -> DemoScene {
+        DemoScene {
+            seed: 23,
+            samples: 1025,
+            spacing: 1.0,
+            relief: Relief { plateau: 110.0, canyon: 120.0, escarpment: 65.0 },
+            photo_distance: 0.7,
+            ..DemoScene::default()
+        }
+    }
+}
+
 /// Corner rounding of the plateau (its walls stand this far outside the rectangle), metres.
 const PLATEAU_ROUNDING: f64 = 4.0;
-/// Depth of the canyon, metres.
-const CANYON_DEPTH: f64 = 90.0;
 
 /// Noise sources, built once per scene.
 struct Noises {
@@ -85,17 +130,17 @@ impl DemoScene {
         let v = s / l;
         // Rolling hills and a gentle tilt.
         let mut h = 600.0 + 28.0 * n.hills.get([e, s]) + 2.0 * n.detail.get([e, s]) - 40.0 * v;
-        // Escarpment: a cliff band across the south of the scene, 45 m high, ~85° wall.
+        // Escarpment: a cliff band across the south of the scene (45 m high by default), ~85° wall.
         let line = self.escarpment_line(n, e);
-        h += 45.0 * smoothstep(-2.0, 2.0, line - s);
-        // Box-like plateau (mesa): rounded rectangle, 70 m high, ~89° walls.
+        h += self.relief.escarpment * smoothstep(-2.0, 2.0, line - s);
+        // Box-like plateau (mesa): rounded rectangle (70 m high by default), ~89° walls.
         let [cx, cy, hx, hy] = self.plateau_rect();
         let (dx, dy) = ((e - cx).abs() - hx, (s - cy).abs() - hy);
         let sd = (dx.max(0.0).hypot(dy.max(0.0))) + dx.max(dy).min(0.0) - PLATEAU_ROUNDING;
-        h += PLATEAU_HEIGHT * smoothstep(0.6, -0.6, sd);
-        // Meandering canyon, 90 m deep with a 20 m floor and ~80° walls.
+        h += self.relief.plateau * smoothstep(0.6, -0.6, sd);
+        // Meandering canyon (90 m deep by default) with a 20 m floor and ~80° walls.
         let d = (e - self.canyon_axis(s)).abs();
-        h -= CANYON_DEPTH * (1.0 - smoothstep(10.0, 26.0, d));
+        h -= self.relief.canyon * (1.0 - smoothstep(10.0, 26.0, d));
         h
     }
 
@@ -145,7 +190,8 @@ impl DemoScene {
             .collect();
         let georef = GridGeoref::new(self.origin_x, self.origin_y, sp);
         let dem = Dem::from_heights(w, w, heights, georef)?;
-        // Ortho: 4x4 supersampled top-down view of the solid texture.
+        // Ortho: 4x4 supersampled top-down view of the solid texture, averaged in linear light
+        // (as a camera integrates).
         const SS: usize = 4;
         let pixels: Vec<[u8; 4]> = (0..w * w)
             .into_par_iter()
@@ -162,11 +208,11 @@ impl DemoScene {
                         let slope = (gx.hypot(gy) / 0.5).atan().to_degrees();
                         let c = surface_colour(&n, self, self.origin_x + e, self.origin_y - s, z, slope);
                         for k in 0..3 {
-                            acc[k] += c[k];
+                            acc[k] += srgb_to_linear(c[k]);
                         }
                     }
                 }
-                let q = |v: f64| (v / (SS * SS) as f64 * 255.0).round().clamp(0.0, 255.0) as u8;
+                let q = |v: f64| (linear_to_srgb(v / (SS * SS) as f64) * 255.0).round().clamp(0.0, 255.0) as u8;
                 [q(acc[0]), q(acc[1]), q(acc[2]), 255]
             })
             .collect();

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
@@ -12,7 +12,8 @@ use crate::camera::{CameraModel, camera_to_json, rotation_look_at};
 use crate::dem::Dem;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::photo::{BvhQuality, TriangleBvh};
+use super::tracer::DemTracer;
+use crate::colour::{linear_to_srgb, srgb_to_linear};
 
 /// Colour (sRGB 8-bit) of rays that miss the terrain in [`DemoScene::render_truth_photo`].
 pub const SKY_COLOUR: [u8; 3] = [170, 200, 235];
@@ -21,6 +22,8 @@ pub const SKY_COLOUR: [u8; 3] = [170, 200, 235];
 const PHOTO_SIZE: (u32, u32) = (1600, 1200);
 /// Vertical field of view of the demo photos, degrees.
 const PHOTO_FOV_Y_DEG: f64 = 40.0;
+/// Vertical field of view of the novel evaluation views, degrees.
+const VIEW_FOV_Y_DEG: f64 = 35.0;
 /// Eye height above the ground, metres.
 const EYE_HEIGHT: f64 = 1.7;
 /// Radial distortion of the one distorted demo camera (barrel, like a wide-angle zoom).
@@ -133,7 +136,7 @@ impl DemoScene {
         let e1 = self.canyon_axis(s1);
         aims.push(Aim {
             name: "canyon",
-            target: [e1, s1, self.height_local(n, e1, s1) + 0.4 * super::CANYON_DEPTH],
+            target: [e1, s1, self.height_local(n, e1, s1) + 0.4 * self.relief.canyon],
             outward: [0.0, -1.0],
             distances: &[160.0, 130.0, 100.0],
             k1: 0.0,
@@ -152,6 +155,7 @@ impl DemoScene {
         let mut shots = Vec::new();
         for aim in self.aims(&n) {
             for &d in aim.distances {
+                let d = d * self.photo_distance;
                 let mut e = aim.target[0] + d * aim.outward[0];
                 let mut s = aim.target[1] + d * aim.outward[1];
                 if aim.name == "canyon" {
@@ -180,6 +184,55 @@ impl DemoScene {
         shots
     }
 
+    /// Novel views for render-space evaluation (docs/evaluation.md): per photo target, a
+    /// `width × height` pinhole view with a 35° vertical field of view that looks at the same
+    /// point from elsewhere: turned 25–40° around the target (either side) at 0.6–1.0 × the
+    /// photo's distance, 12 m above the ground (inside the canyon: further up-canyon, 15 m
+    /// above its floor), the first candidate with a clear line of sight. Deterministic.
+    pub fn novel_views(&self, width: u32, height: u32) -> Vec<PhotoShot> {
+        let n = self.noises();
+        let l = self.size_m();
+        let margin = 0.02 * l;
+        let inside = |e: f64, s: f64| (margin..=l - margin).contains(&e) && (margin..=l - margin).contains(&s);
+        let photos = self.photo_shots();
+        let mut views = Vec::new();
+        for aim in self.aims(&n) {
+            let Some(photo) = photos.iter().find(|p| p.name == aim.name) else { continue };
+            let t = self.world(aim.target[0], aim.target[1], aim.target[2]);
+            let d = (photo.camera.position - t).truncate().length();
+            let mut candidates = Vec::new();
+            if aim.name == "canyon" {
+                for k in [1.3, 1.15, 1.5] {
+                    let s = aim.target[1] - k * d;
+                    let e = self.canyon_axis(s);
+                    candidates.push([e, s, self.height_local(&n, e, s) + 15.0]);
+                }
+            } else {
+                for k in [0.8, 1.0, 0.6] {
+                    for deg in [25.0f64, -25.0, 40.0, -40.0] {
+                        let (sn, cs) = deg.to_radians().sin_cos();
+                        let o = [cs * aim.outward[0] - sn * aim.outward[1], sn * aim.outward[0] + cs * aim.outward[1]];
+                        let (e, s) = (aim.target[0] + k * d * o[0], aim.target[1] + k * d * o[1]);
+                        if inside(e, s) {
+                            candidates.push([e, s, self.height_local(&n, e, s) + 12.0]);
+                        }
+                    }
+                }
+            }
+            for eye in candidates {
+                if !inside(eye[0], eye[1]) || !self.line_of_sight(&n, eye, aim.target, 3.0) {
+                    continue;
+                }
+                let pos = self.world(eye[0], eye[1], eye[2]);
+                let Some(rot) = rotation_look_at(pos, t) else { continue };
+                let camera = CameraModel::with_fov(pos, rot, width, height, VIEW_FOV_Y_DEG.to_radians());
+                views.push(PhotoShot { name: format!("view_{}", aim.name), camera });
+                break;
+            }
+        }
+        views
+    }
+
     /// The cameras of [`DemoScene::photo_shots`].
     pub fn photo_cameras(&self) -> Vec<CameraModel> {
         self.photo_shots().into_iter().map(|s| s.camera).collect()
@@ -189,7 +242,7 @@ impl DemoScene {
     /// triangles per quad (BVH in an f32 frame centred on the camera), each hit coloured by
     /// [`DemoScene::surface_colour`] at the hit point with the slope of the hit triangle,
     /// [`SKY_COLOUR`] for misses. `supersample` (1..=8) rays per pixel side, stratified,
-    /// averaged in sRGB (like the demo ortho). Radial distortion is applied (rays through
+    /// averaged in linear light (like the demo ortho). Radial distortion is applied (rays through
     /// undistorted pixel positions). Deterministic whatever the thread count.
     pub fn render_truth_photo(&self, dem: &Dem, camera: &CameraModel, supersample: u32) -> Result<RgbImage> {
         if !(1..=8).contains(&supersample) {
@@ -205,27 +258,7 @@ impl DemoScene {
         if pixels > 400_000_000 {
             return Err(Error::BadOption(format!("truth photo of {pixels} rays is too large")));
         }
-        let (w, h) = (dem.width, dem.height);
-        let world = |r: usize, c: usize| {
-            let (x, y) = dem.georef.world(r as f64, c as f64);
-            DVec3::new(x, y, dem.at(r, c) as f64)
-        };
-        // Triangle 2q is (r,c) (r+1,c) (r+1,c+1), 2q+1 is (r,c) (r+1,c+1) (r,c+1), q = r·(w−1)+c.
-        let corners = |i: usize| {
-            let q = i / 2;
-            let (r, c) = (q / (w - 1), q % (w - 1));
-            if i % 2 == 0 {
-                [(r, c), (r + 1, c), (r + 1, c + 1)]
-            } else {
-                [(r, c), (r + 1, c + 1), (r, c + 1)]
-            }
-        };
-        let origin = camera.position;
-        let tris: Vec<[Vec3; 3]> = (0..2 * (w - 1) * (h - 1))
-            .into_par_iter()
-            .map(|i| corners(i).map(|(r, c)| (world(r, c) - origin).as_vec3()))
-            .collect();
-        let bvh = TriangleBvh::build(&tris, BvhQuality::Medium);
+        let tracer = DemTracer::new(dem, camera.position)?;
         let n = self.noises();
         let ss = supersample as usize;
         let cw = camera.width as usize;
@@ -239,14 +272,14 @@ impl DemoScene {
                         for sx in 0..ss {
                             let u = col as f64 - 0.5 + (sx as f64 + 0.5) / ss as f64;
                             let v = row as f64 - 0.5 + (sy as f64 + 0.5) / ss as f64;
-                            let c = self.trace(&n, &bvh, camera, &corners, &world, u, v);
+                            let c = self.trace(&n, &tracer, camera, u, v);
                             for k in 0..3 {
-                                acc[k] += c[k];
+                                acc[k] += srgb_to_linear(c[k]);
                             }
                         }
                     }
                     for a in acc {
-                        out.push((a / (ss * ss) as f64 * 255.0).round().clamp(0.0, 255.0) as u8);
+                        out.push((linear_to_srgb(a / (ss * ss) as f64) * 255.0).round().clamp(0.0, 255.0) as u8);
                     }
                 }
                 out
@@ -257,26 +290,11 @@ impl DemoScene {
     }
 
     /// Colour (sRGB 0..1) seen along the ray through pixel position (u, v).
-    #[allow(clippy::too_many_arguments)]
-    fn trace(
-        &self,
-        n: &Noises,
-        bvh: &TriangleBvh,
-        camera: &CameraModel,
-        corners: &impl Fn(usize) -> [(usize, usize); 3],
-        world: &impl Fn(usize, usize) -> DVec3,
-        u: f64,
-        v: f64,
-    ) -> [f64; 3] {
+    fn trace(&self, n: &Noises, tracer: &DemTracer, camera: &CameraModel, u: f64, v: f64) -> [f64; 3] {
         let sky = SKY_COLOUR.map(|c| c as f64 / 255.0);
         let Some(dir) = camera.pixel_ray(u, v) else { return sky };
-        let Some(hit) = bvh.nearest(Vec3::ZERO, dir.as_vec3(), 0.0, f32::INFINITY) else { return sky };
-        let p = corners(hit.triangle as usize).map(|(r, c)| world(r, c));
-        let b = hit.bary.map(|x| x as f64);
-        let x = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
-        let normal = (p[1] - p[0]).cross(p[2] - p[0]);
-        let slope = (normal.z.abs() / normal.length()).clamp(0.0, 1.0).acos().to_degrees();
-        surface_colour(n, self, x.x, x.y, x.z, slope)
+        let Some(hit) = tracer.nearest(camera.position, dir, f64::INFINITY) else { return sky };
+        surface_colour(n, self, hit.point.x, hit.point.y, hit.point.z, hit.slope_deg)
     }
 
     /// Renders every [`DemoScene::photo_shots`] photo (resized to `opts`' size) with

@@ -13,7 +13,9 @@ use crate::store::{CellRecord, Store, texcoord};
 /// Which texture of each cell to evaluate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TextureChoice {
-    /// The active texture: the reparameterized one if the cell has it, else the orthographic.
+    /// The active texture: the reparameterized one if the cell has it, else the orthographic
+    /// (magnified to the photo texture's size where the cell has a larger one, so that both
+    /// choices score the same points).
     Active,
     /// The photo-enhanced texture (`rec.photo`) where the cell has one, else the active one.
     Photo,
@@ -126,19 +128,26 @@ pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Re
         photo_cells += usize::from(which == TextureChoice::Photo && rec.photo.is_some());
     }
     let mut report = texel_truth_with(store, scene, level, |rec| {
-        let file = match (&rec.photo, which) {
-            (Some(p), TextureChoice::Photo) => &p.texture,
-            _ => rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture),
-        };
-        Ok(store.read_png(file)?.to_rgba8())
+        let active = rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture);
+        match (&rec.photo, which) {
+            (Some(p), TextureChoice::Photo) => Ok(store.read_png(&p.texture)?.to_rgba8()),
+            (Some(p), TextureChoice::Active) => {
+                // on the photo texture's texels, so that both choices score the same points
+                let img = store.read_png(active)?.to_rgba8();
+                let k = if img.width() > 0 && p.texels % img.width() == 0 { p.texels / img.width() } else { 1 };
+                Ok(crate::photo::magnify(&img, k))
+            }
+            (None, _) => Ok(store.read_png(active)?.to_rgba8()),
+        }
     })?;
     report.photo_cells = photo_cells;
     Ok(report)
 }
 
 /// Evaluates the finest level's photo-covered texels only (photo weight > 0.5 in the cell's
-/// confidence map), before projection (active texture) and after (photo texture), so both
-/// reports score exactly the same texels: the gain where photos actually contributed.
+/// confidence map), before projection (active texture, magnified to the photo texture's
+/// size where that is larger) and after (photo texture), so both reports score exactly the
+/// same texels: the gain where photos actually contributed.
 pub fn texel_truth_covered(store: &Store, scene: &DemoScene) -> Result<(TruthReport, TruthReport)> {
     let level = store.manifest.quadtree.levels.saturating_sub(1);
     let masked = |photo: bool| {
@@ -152,6 +161,10 @@ pub fn texel_truth_covered(store: &Store, scene: &DemoScene) -> Result<(TruthRep
             };
             let mut img = store.read_png(if photo { &p.texture } else { active })?.to_rgba8();
             let conf = store.read_png(&p.confidence)?.to_luma8();
+            if !photo && conf.width() > img.width() && img.width() > 0 && conf.width() % img.width() == 0 {
+                // a photo texture larger than the active one: compare on its texels
+                img = crate::photo::magnify(&img, conf.width() / img.width());
+            }
             if conf.dimensions() != img.dimensions() {
                 return Err(crate::Error::store(
                     store.dir.join(&p.confidence.path),

@@ -96,17 +96,20 @@ pub struct CellRecord {
 /// if the cell has one, else orthographic) with photo colour merged in, and its confidence.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhotoCellRecord {
-    /// Texture side in texels (equal to the active texture's).
+    /// Texture side in texels: the active texture's times a power of two (photo-driven
+    /// sizes, docs/projection.md "Texture sizes").
     pub texels: u32,
-    /// RGBA8 PNG enhanced colour texture, same layout as the active texture.
+    /// RGBA8 PNG enhanced colour texture, the active texture's layout (same texture
+    /// coordinates) at `texels`.
     pub texture: FileRef,
     /// 8-bit greyscale PNG: per texel, the weight of photo colour in the result (0..255 = 0..1).
     pub confidence: FileRef,
-    /// Texels whose colour now comes mainly from photos (photo weight > 0.5).
+    /// Texels whose colour now comes mainly from photos (photo weight > 0.5), in texels of
+    /// the photo texture.
     pub photo_texels: u64,
-    /// Covered texels whose surface slope exceeds 60 degrees.
+    /// Covered texels whose surface slope exceeds 60 degrees (photo texture's texels).
     pub steep_texels: u64,
-    /// Steep texels whose colour now comes mainly from photos.
+    /// Steep texels whose colour now comes mainly from photos (photo texture's texels).
     pub steep_photo_texels: u64,
 }
 
@@ -185,6 +188,10 @@ pub struct Manifest {
     pub dem: DemInfo,
     /// Ortho source, or `None` if textures were derived from the DEM (hypsometric tint + hillshade).
     pub ortho: Option<String>,
+    /// Ground sample distance of the ortho image (metres, the larger of its two spacings);
+    /// `None` without an ortho or for stores written before 2026-12-03.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ortho_spacing: Option<f64>,
     /// Quadtree shape.
     pub quadtree: Quadtree,
     /// Error bound of the finest level; level l uses `max_error * 2^(finest - l)`.
@@ -216,11 +223,28 @@ pub struct PhotoSettings {
     /// `bvh:PRESET`; stores written before the grid existed hold the BVH preset alone).
     #[serde(alias = "bvh_quality")]
     pub ray_accel: String,
+    /// Colour space photo colours were averaged and blended in ("linear" or "srgb"; stores
+    /// written before 2026-12-03 averaged sRGB values).
+    #[serde(default = "srgb_name")]
+    pub colour_space: String,
+    /// Whether photo textures were sized by the detail the photos deliver.
+    #[serde(default)]
+    pub photo_driven_sizes: bool,
+    /// Largest photo texture side allowed, texels (0 in older stores: the active size).
+    #[serde(default)]
+    pub max_photo_texels: u32,
+    /// GPU bytes the enlarged photo textures of all levels were allowed.
+    #[serde(default)]
+    pub photo_texture_budget: u64,
     /// One report per photo, in input order.
     pub photos: Vec<PhotoReport>,
     /// Per quadtree level (root first): texel counts over all cells of the level.
     #[serde(default)]
     pub levels: Vec<PhotoLevelReport>,
+}
+
+fn srgb_name() -> String {
+    "srgb".to_string()
 }
 
 /// Texel counts of one quadtree level after `cliffmap project` (all cells of the level,
@@ -237,6 +261,18 @@ pub struct PhotoLevelReport {
     pub steep_texels: u64,
     /// Steep covered texels whose colour now comes mainly from photos.
     pub steep_photo_texels: u64,
+    /// Cells whose photos resolve finer detail than their active texture holds.
+    #[serde(default)]
+    pub wanted_larger: u64,
+    /// Cells that got a photo texture larger than their active texture.
+    #[serde(default)]
+    pub upsized_cells: u64,
+    /// GPU bytes (RGBA8 with mips) of the level's photo textures.
+    #[serde(default)]
+    pub photo_texture_bytes: u64,
+    /// The level's share of the budget for enlarged photo textures, bytes.
+    #[serde(default)]
+    pub texture_budget_bytes: u64,
 }
 
 /// What one photo contributed to the store. `texels_written` is summed over all levels; the

@@ -218,6 +218,7 @@ pub fn write_store_textured(
             void_fraction: 0.0,
         },
         ortho: None,
+        ortho_spacing: None,
         quadtree: Quadtree {
             dem_width: n + 1,
             dem_height: n + 1,

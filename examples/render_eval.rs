@@ -1,0 +1,146 @@
+//! Render-space evaluation of photo fidelity (docs/evaluation.md): builds a generated scene's
+//! store, projects its ray-traced ground photos, renders novel views with cliffmap (ortho,
+//! reparam and photo modes, unlit) and scores them against the exact ground truth, the
+//! oracle (ideal projective texturing from the same photos) and the baseline (the ortho
+//! draped at the exact hit points).
+//!
+//! ```text
+//! cargo run --release --example render_eval -- OUT [--scene demo|tall] [--max-error M]
+//!     [--cell-texels T] [--mixed-resolution] [--photo-width W] [--photo-supersample N]
+//!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
+//!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K] [--feather F] [--resolution-ramp LO,HI] [--best]
+//!     [--render-supersample N]
+//! ```
+//! Writes OUT/store, OUT/photos, OUT/views/VIEW_{baseline,oracle,truth,ortho,reparam,photo}.png,
+//! OUT/views/VIEW_classes.png (red steep, green flat, blue covered by a photo),
+//! OUT/views/VIEW_side_by_side.png (ortho | reparam | photo | truth) and OUT/eval.json, and
+//! prints the table of gains. `--reuse` keeps an existing OUT/store and OUT/photos.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use cliffmap::eval::{ReferenceSources, gains_table, reference_images, render_views, score_view, side_by_side};
+use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store};
+use cliffmap::render::UvMode;
+use cliffmap::scene::{DemTracer, DemoPhotoOptions, DemoScene};
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let out = PathBuf::from(args.first().ok_or_else(|| anyhow::anyhow!("usage: render_eval OUT [options]"))?);
+    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|s| s.as_str());
+    let has = |name: &str| args.iter().any(|a| a == name);
+    let scene = match flag("--scene").unwrap_or("demo") {
+        "demo" => DemoScene::default(),
+        "tall" => DemoScene::tall_walls(),
+        s => anyhow::bail!("unknown --scene {s} (demo or tall)"),
+    };
+    let max_error: f64 = flag("--max-error").unwrap_or("0.5").parse()?;
+    let cell_texels: u32 = flag("--cell-texels").unwrap_or("256").parse()?;
+    let photo_width: u32 = flag("--photo-width").unwrap_or("1600").parse()?;
+    let photo_ss: u32 = flag("--photo-supersample").unwrap_or("2").parse()?;
+    let ss: u32 = flag("--supersample").unwrap_or("2").parse()?;
+    let sigma: f64 = flag("--sigma").unwrap_or("2").parse()?;
+    let (vw, vh) = match flag("--view-size") {
+        Some(s) => {
+            let (a, b) = s.split_once('x').ok_or_else(|| anyhow::anyhow!("--view-size WxH"))?;
+            (a.parse()?, b.parse()?)
+        }
+        None => (1280u32, 720u32),
+    };
+    let t0 = Instant::now();
+    let (dem, ortho) = scene.generate()?;
+    let store = out.join("store");
+    let photos_dir = out.join("photos");
+    let list = photos_dir.join("photos.json");
+    if !(has("--reuse") && store.join("manifest.json").exists() && list.exists()) {
+        let inputs = BuildInputs {
+            dem: &dem,
+            ortho: Some(&ortho),
+            dem_source: format!("eval:{:?}", scene.seed),
+            ortho_source: Some("eval".into()),
+            fingerprint: format!("render_eval:{scene:?}"),
+        };
+        let opts = BuildOptions { max_error, cell_texels, quiet: true, force: true, ..BuildOptions::default() };
+        build_store(&inputs, &opts, &store)?;
+        reparam_store(&store, &ReparamOptions { quiet: true, mixed_resolution: has("--mixed-resolution"), ..ReparamOptions::default() })?;
+        let popts = DemoPhotoOptions { width: photo_width, height: photo_width / 4 * 3, supersample: photo_ss };
+        scene.write_demo_photos(&dem, &photos_dir, &popts)?;
+        eprintln!("store and photos: {:.1} s", t0.elapsed().as_secs_f64());
+        let photos = cliffmap::photo::read_photo_list(&list)?;
+        let t = Instant::now();
+        let mut popts = ProjectOptions { quiet: true, ..ProjectOptions::default() };
+        if flag("--colour-space") == Some("srgb") {
+            popts.colour_space = cliffmap::colour::ColourSpace::Srgb;
+        }
+        if has("--fixed-photo-texels") {
+            popts.texture.photo_driven = false;
+        }
+        if let Some(m) = flag("--max-photo-texels") {
+            popts.texture.max_texels = m.parse()?;
+        }
+        if let Some(m) = flag("--texels-per-pixel") {
+            popts.texture.texels_per_pixel = m.parse()?;
+        }
+        if let Some(m) = flag("--feather") {
+            popts.confidence.feather = m.parse()?;
+        }
+        if let Some(m) = flag("--resolution-ramp") {
+            let (a, b) = m.split_once(',').ok_or_else(|| anyhow::anyhow!("--resolution-ramp LO,HI"))?;
+            popts.confidence.resolution_ramp = [a.parse()?, b.parse()?];
+        }
+        if has("--best") {
+            popts.blend = cliffmap::photo::BlendMode::Best;
+        }
+        let r = project_store(&store, &photos, &popts)?;
+        let bytes: u64 = r.settings.levels.iter().map(|l| l.photo_texture_bytes).sum();
+        eprintln!("photo textures: {:.1} MB (GPU, with mips)", bytes as f64 / 1e6);
+        eprintln!("project: {} cells in {:.1} s", r.cells_written, t.elapsed().as_secs_f64());
+    }
+    let photos = cliffmap::photo::read_photo_list(&list)?;
+    let views = scene.novel_views(vw, vh);
+    let centre = dem.georef.world(dem.height as f64 / 2.0, dem.width as f64 / 2.0);
+    let tracer = DemTracer::new(&dem, glam::DVec3::new(centre.0, centre.1, 0.5 * (dem.height_range().0 + dem.height_range().1) as f64))?;
+    let src = ReferenceSources { scene: &scene, tracer: &tracer, ortho: &ortho, photos: &photos };
+    let cams: Vec<_> = views.iter().map(|v| v.camera).collect();
+    let modes = [("ortho", UvMode::Ortho), ("reparam", UvMode::Mixed), ("photo", UvMode::Photo)];
+    let t = Instant::now();
+    let render_ss: u32 = flag("--render-supersample").unwrap_or("2").parse()?;
+    let renders = render_views(&store, &cams, &modes.map(|m| m.1), 0.5, render_ss)?;
+    eprintln!("renders: {:.1} s", t.elapsed().as_secs_f64());
+    let st = cliffmap::store::Store::open(&store)?;
+    let finest = st.manifest.quadtree.levels.saturating_sub(1);
+    let tin = cliffmap::eval::TinTracer::new(&st, finest, tracer.origin())?;
+    let vdir = out.join("views");
+    std::fs::create_dir_all(&vdir)?;
+    let mut reports = Vec::new();
+    for (vi, v) in views.iter().enumerate() {
+        let t = Instant::now();
+        let r = reference_images(&src, &v.camera, ss)?;
+        eprintln!("{}: reference {:.1} s", v.name, t.elapsed().as_secs_f64());
+        let mut methods: Vec<(String, image::RgbImage)> =
+            modes.iter().enumerate().map(|(mi, (name, _))| (name.to_string(), renders[mi][vi].clone())).collect();
+        // the ortho draped on the store's finest TIN (its geometry, no texturing)
+        methods.push(("tin_baseline".into(), cliffmap::eval::tin_baseline(&tin, &ortho, &v.camera, ss)?));
+        for (name, img) in [("truth", &r.truth), ("oracle", &r.oracle), ("baseline", &r.baseline)] {
+            img.save(vdir.join(format!("{}_{name}.png", v.name)))?;
+        }
+        // pixel classes: red = steep, green = flat, blue = covered by a photo (black: sky)
+        let classes = image::RgbImage::from_fn(vw, vh, |x, y| {
+            let c = r.classes[(y * vw + x) as usize];
+            let on = |bit: u8| if c & bit != 0 { 255 } else { 0 };
+            image::Rgb([on(cliffmap::eval::STEEP), on(cliffmap::eval::FLAT), on(cliffmap::eval::COVERED)])
+        });
+        classes.save(vdir.join(format!("{}_classes.png", v.name)))?;
+        for (name, img) in &methods {
+            img.save(vdir.join(format!("{}_{name}.png", v.name)))?;
+        }
+        if let Some(s) = side_by_side(&[&methods[0].1, &methods[1].1, &methods[2].1, &r.truth]) {
+            s.save(vdir.join(format!("{}_side_by_side.png", v.name)))?;
+        }
+        reports.push(score_view(&v.name, &r, &methods, sigma)?);
+    }
+    println!("{}", gains_table(&reports));
+    std::fs::write(out.join("eval.json"), serde_json::to_string_pretty(&reports)?)?;
+    eprintln!("total {:.1} s", t0.elapsed().as_secs_f64());
+    Ok(())
+}
