@@ -8,7 +8,8 @@
 //! cargo run --release --example render_eval -- OUT [--scene demo|tall] [--max-error M]
 //!     [--cell-texels T] [--mixed-resolution] [--photo-width W] [--photo-supersample N]
 //!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
-//!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K] [--feather F] [--resolution-ramp LO,HI] [--best]
+//!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
+//!     [--photo-texture-budget-mb MB] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N]
 //! ```
 //! Writes OUT/store, OUT/photos, OUT/views/VIEW_{baseline,oracle,truth,ortho,reparam,photo}.png,
@@ -19,9 +20,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cliffmap::eval::{ReferenceSources, gains_table, reference_images, render_views, score_view, side_by_side};
+use cliffmap::eval::{EvalOptions, ReferenceSources, evaluate_views, gains_table, write_view_images};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store};
-use cliffmap::render::UvMode;
 use cliffmap::scene::{DemTracer, DemoPhotoOptions, DemoScene};
 
 fn main() -> anyhow::Result<()> {
@@ -78,6 +78,9 @@ fn main() -> anyhow::Result<()> {
         if let Some(m) = flag("--max-photo-texels") {
             popts.texture.max_texels = m.parse()?;
         }
+        if let Some(m) = flag("--photo-texture-budget-mb") {
+            popts.texture.budget_bytes = m.parse::<u64>()? << 20;
+        }
         if let Some(m) = flag("--texels-per-pixel") {
             popts.texture.texels_per_pixel = m.parse()?;
         }
@@ -99,45 +102,22 @@ fn main() -> anyhow::Result<()> {
     let photos = cliffmap::photo::read_photo_list(&list)?;
     let views = scene.novel_views(vw, vh);
     let centre = dem.georef.world(dem.height as f64 / 2.0, dem.width as f64 / 2.0);
-    let tracer = DemTracer::new(&dem, glam::DVec3::new(centre.0, centre.1, 0.5 * (dem.height_range().0 + dem.height_range().1) as f64))?;
+    let mid = 0.5 * (dem.height_range().0 + dem.height_range().1) as f64;
+    let tracer = DemTracer::new(&dem, glam::DVec3::new(centre.0, centre.1, mid))?;
     let src = ReferenceSources { scene: &scene, tracer: &tracer, ortho: &ortho, photos: &photos };
-    let cams: Vec<_> = views.iter().map(|v| v.camera).collect();
-    let modes = [("ortho", UvMode::Ortho), ("reparam", UvMode::Mixed), ("photo", UvMode::Photo)];
+    let eopts = EvalOptions {
+        supersample: ss,
+        render_supersample: flag("--render-supersample").unwrap_or("2").parse()?,
+        sigma_px: sigma,
+        ..EvalOptions::default()
+    };
     let t = Instant::now();
-    let render_ss: u32 = flag("--render-supersample").unwrap_or("2").parse()?;
-    let renders = render_views(&store, &cams, &modes.map(|m| m.1), 0.5, render_ss)?;
-    eprintln!("renders: {:.1} s", t.elapsed().as_secs_f64());
-    let st = cliffmap::store::Store::open(&store)?;
-    let finest = st.manifest.quadtree.levels.saturating_sub(1);
-    let tin = cliffmap::eval::TinTracer::new(&st, finest, tracer.origin())?;
+    let (reports, images) = evaluate_views(&store, &src, &views, &eopts)?;
+    eprintln!("evaluation of {} views: {:.1} s", views.len(), t.elapsed().as_secs_f64());
     let vdir = out.join("views");
     std::fs::create_dir_all(&vdir)?;
-    let mut reports = Vec::new();
-    for (vi, v) in views.iter().enumerate() {
-        let t = Instant::now();
-        let r = reference_images(&src, &v.camera, ss)?;
-        eprintln!("{}: reference {:.1} s", v.name, t.elapsed().as_secs_f64());
-        let mut methods: Vec<(String, image::RgbImage)> =
-            modes.iter().enumerate().map(|(mi, (name, _))| (name.to_string(), renders[mi][vi].clone())).collect();
-        // the ortho draped on the store's finest TIN (its geometry, no texturing)
-        methods.push(("tin_baseline".into(), cliffmap::eval::tin_baseline(&tin, &ortho, &v.camera, ss)?));
-        for (name, img) in [("truth", &r.truth), ("oracle", &r.oracle), ("baseline", &r.baseline)] {
-            img.save(vdir.join(format!("{}_{name}.png", v.name)))?;
-        }
-        // pixel classes: red = steep, green = flat, blue = covered by a photo (black: sky)
-        let classes = image::RgbImage::from_fn(vw, vh, |x, y| {
-            let c = r.classes[(y * vw + x) as usize];
-            let on = |bit: u8| if c & bit != 0 { 255 } else { 0 };
-            image::Rgb([on(cliffmap::eval::STEEP), on(cliffmap::eval::FLAT), on(cliffmap::eval::COVERED)])
-        });
-        classes.save(vdir.join(format!("{}_classes.png", v.name)))?;
-        for (name, img) in &methods {
-            img.save(vdir.join(format!("{}_{name}.png", v.name)))?;
-        }
-        if let Some(s) = side_by_side(&[&methods[0].1, &methods[1].1, &methods[2].1, &r.truth]) {
-            s.save(vdir.join(format!("{}_side_by_side.png", v.name)))?;
-        }
-        reports.push(score_view(&v.name, &r, &methods, sigma)?);
+    for v in &images {
+        write_view_images(&vdir, v)?;
     }
     println!("{}", gains_table(&reports));
     std::fs::write(out.join("eval.json"), serde_json::to_string_pretty(&reports)?)?;

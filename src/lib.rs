@@ -54,6 +54,7 @@ pub mod colour;
 pub mod dem;
 pub mod error;
 pub mod eval;
+mod font;
 mod fastmath;
 pub mod fsutil;
 pub mod georef;

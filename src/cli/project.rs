@@ -106,9 +106,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         println!("photo textures for {} cells", report.cells_written);
         for p in &report.settings.photos {
             println!(
-                "{}: {} texels written, {} pixels hit, {} silhouette pixels rejected, {} footprints reconstructed, gain {:.3?}, offset {:.3?} ({} samples)",
+                "{}: {} texels written, {} supplied, {} pixels hit, {} silhouette pixels rejected, {} footprints reconstructed, gain {:.3?}, offset {:.3?} ({} samples)",
                 p.name,
                 p.texels_written,
+                p.texels_supplied,
                 p.pixels_hit,
                 p.rejected_silhouette,
                 p.reconstructed_footprints,

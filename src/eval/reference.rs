@@ -42,7 +42,8 @@ pub struct Reference {
     /// Ground truth: the solid texture at the exact hit points.
     pub truth: RgbImage,
     /// The oracle: per ray, the photo with the finest surface footprint that sees the hit
-    /// point (bilinear at its projection), else the ortho.
+    /// point, sampled at its projection filtered over the ray's footprint
+    /// ([`oracle_colour`]), else the ortho.
     pub oracle: RgbImage,
     /// The baseline: the ortho draped at the exact hit points (bilinear).
     pub baseline: RgbImage,
@@ -63,13 +64,28 @@ pub const VISIBILITY_TOLERANCE_M: f64 = 0.1;
 pub const VISIBILITY_TOLERANCE_REL: f64 = 0.003;
 
 /// The photo whose surface footprint at `hit` (seen from the view ray) is finest among
-/// those that see it: `(index, pixel [u, v], footprint m)`. The footprint is
+/// those that see it cleanly: `(index, pixel [u, v], footprint m)`. The footprint is
 /// `distance / (f · |cos|)` with `f = √(fx·fy)` and the angle between the photo's ray and the
 /// surface normal: the length of a pixel on the surface along the direction it is
-/// foreshortened in. Visibility: see [`VISIBILITY_TOLERANCE_M`].
+/// foreshortened in. A photo sees the point if its ray towards it meets the surface no more
+/// than [`VISIBILITY_TOLERANCE_M`] + [`VISIBILITY_TOLERANCE_REL`] · distance before it, and sees
+/// it cleanly if moreover the rays through the centres of the 2 × 2 pixels the point falls
+/// between all hit the surface within that tolerance (or 10 %) of where they meet the
+/// surface's tangent plane at the point: a point next to one of the photo's silhouettes would
+/// take sky or an occluder's colour.
 pub fn finest_photo(src: &ReferenceSources, hit: &DemHit) -> Option<(usize, [f64; 2], f64)> {
-    let mut best: Option<(usize, [f64; 2], f64)> = None;
-    for (i, p) in src.photos.iter().enumerate() {
+    finest_photo_with(src.photos, hit, |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t))
+}
+
+/// [`finest_photo`] among `photos` against another surface, given by `cast(from, unit
+/// direction, t_max)`: the distance of the ray's nearest hit within `t_max`.
+pub fn finest_photo_with(
+    photos: &[PhotoInput],
+    hit: &DemHit,
+    cast: impl Fn(DVec3, DVec3, f64) -> Option<f64>,
+) -> Option<(usize, [f64; 2], f64)> {
+    let mut candidates: Vec<(usize, [f64; 2], f64, f64)> = Vec::new();
+    for (i, p) in photos.iter().enumerate() {
         let cam = &p.camera;
         let Some([u, v]) = cam.project(hit.point) else { continue };
         if !(u >= 0.0 && v >= 0.0 && u <= (cam.width - 1) as f64 && v <= (cam.height - 1) as f64) {
@@ -78,32 +94,103 @@ pub fn finest_photo(src: &ReferenceSources, hit: &DemHit) -> Option<(usize, [f64
         let d = hit.point - cam.position;
         let dist = d.length();
         let cos = (d / dist).dot(hit.normal).abs();
-        if cos <= 1e-6 {
+        if cos <= 1e-6 || !dist.is_finite() {
             continue;
         }
-        let footprint = dist / ((cam.fx * cam.fy).sqrt() * cos);
-        if best.is_some_and(|b| b.2 <= footprint) {
-            continue;
-        }
-        if src.tracer.sees(cam.position, hit.point, VISIBILITY_TOLERANCE_M + VISIBILITY_TOLERANCE_REL * dist) {
-            best = Some((i, [u, v], footprint));
-        }
+        candidates.push((i, [u, v], dist / ((cam.fx * cam.fy).sqrt() * cos), dist));
     }
-    best
+    candidates.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
+    candidates.into_iter().find_map(|(i, uv, footprint, dist)| {
+        let cam = &photos[i].camera;
+        let tol = VISIBILITY_TOLERANCE_M + VISIBILITY_TOLERANCE_REL * dist;
+        let seen = cast(cam.position, (hit.point - cam.position) / dist, dist + tol).is_none_or(|t| t >= dist - tol);
+        if !seen {
+            return None;
+        }
+        let (x0, y0) = (uv[0].floor(), uv[1].floor());
+        let clean = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].iter().all(|(dx, dy)| {
+            let (x, y) = ((x0 + dx).min((cam.width - 1) as f64), (y0 + dy).min((cam.height - 1) as f64));
+            let Some(dir) = cam.pixel_ray(x, y) else { return false };
+            // where the ray would meet the surface's tangent plane at the point
+            let dn = dir.dot(hit.normal);
+            let plane = if dn.abs() > 1e-9 { (hit.point - cam.position).dot(hit.normal) / dn } else { dist };
+            let expect = if plane > 0.0 && plane.is_finite() { plane } else { dist };
+            let slack = tol.max(0.1 * expect);
+            cast(cam.position, dir, expect + slack).is_some_and(|t| (t - expect).abs() <= slack)
+        });
+        clean.then_some((i, uv, footprint))
+    })
 }
 
-/// Bilinear sample (sRGB 0..1) of `img` at pixel position `[u, v]` (pixel-centre convention,
-/// clamped to the image).
-fn bilinear_rgb(img: &RgbImage, u: f64, v: f64) -> [f64; 3] {
+/// A photo's pyramid of 2 × 2 halvings in linear light, for oracle samples filtered over
+/// the view pixel's footprint in the photo (as a renderer's mip mapping would: a photo
+/// finer than the view is area-averaged, not point-sampled).
+pub struct PhotoMips {
+    levels: Vec<RgbImage>,
+}
+
+impl PhotoMips {
+    /// The pyramid of `image` (level 0 = the image, down to 2 pixels a side).
+    pub fn new(image: &RgbImage) -> PhotoMips {
+        let mut levels = vec![image.clone()];
+        while let Some(next) = levels.last().and_then(|l| crate::photo::downsample2_in(l, crate::colour::ColourSpace::Linear)) {
+            levels.push(next);
+        }
+        PhotoMips { levels }
+    }
+
+    /// The colour (sRGB 0..1) at pixel `[u, v]` of level 0 filtered over `scale` pixels:
+    /// trilinear between the levels around `log2(scale)` (level 0, bilinear, for `scale <= 1`),
+    /// interpolated in linear light.
+    pub fn sample(&self, u: f64, v: f64, scale: f64) -> [f64; 3] {
+        let top = (self.levels.len() - 1) as f64;
+        let l = if scale > 1.0 { scale.log2().min(top) } else { 0.0 };
+        let l0 = l.floor();
+        let t = l - l0;
+        let at = |k: usize| {
+            let f = (1u64 << k) as f64;
+            bilinear_linear(&self.levels[k], (u + 0.5) / f - 0.5, (v + 0.5) / f - 0.5)
+        };
+        let a = at(l0 as usize);
+        let c = if t > 0.0 { at(l0 as usize + 1) } else { a };
+        std::array::from_fn(|k| linear_to_srgb(a[k] * (1.0 - t) + c[k] * t))
+    }
+}
+
+/// Bilinear sample in linear light of `img` at `[u, v]` (pixel-centre convention, clamped).
+fn bilinear_linear(img: &RgbImage, u: f64, v: f64) -> [f64; 3] {
     let (w, h) = img.dimensions();
     let u = u.clamp(0.0, (w - 1) as f64);
     let v = v.clamp(0.0, (h - 1) as f64);
     let (x0, y0) = (u.floor() as u32, v.floor() as u32);
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
     let (fx, fy) = (u - x0 as f64, v - y0 as f64);
-    let p = |x, y| img.get_pixel(x, y).0.map(|c| c as f64 / 255.0);
+    let p = |x, y| img.get_pixel(x, y).0.map(|c| crate::colour::decode_u8(c) as f64);
     let (a, b, c, d) = (p(x0, y0), p(x1, y0), p(x0, y1), p(x1, y1));
     std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+}
+
+/// The oracle's colour (sRGB 0..1) at `hit`, seen along a view ray from `eye` whose
+/// sub-pixel subtends `pixel_angle` radians: the finest photo that sees it cleanly
+/// ([`finest_photo_with`] with the surface `cast`), filtered over the view sub-pixel's footprint in that photo
+/// (`√(area of the view sub-pixel on the surface / area of a photo pixel there)` photo
+/// pixels); `None` if no photo sees it.
+pub fn oracle_colour(
+    photos: &[PhotoInput],
+    mips: &[PhotoMips],
+    hit: &DemHit,
+    eye: DVec3,
+    pixel_angle: f64,
+    cast: impl Fn(DVec3, DVec3, f64) -> Option<f64>,
+) -> Option<[f64; 3]> {
+    let (i, [u, v], _) = finest_photo_with(photos, hit, cast)?;
+    let cam = &photos[i].camera;
+    let (dv, dp) = (hit.point - eye, hit.point - cam.position);
+    let (lv, lp) = (dv.length(), dp.length());
+    let (cv, cp) = ((dv / lv).dot(hit.normal).abs().max(1e-6), (dp / lp).dot(hit.normal).abs().max(1e-6));
+    let photo_angle = 1.0 / (cam.fx * cam.fy).sqrt();
+    let scale = (lv * pixel_angle) / (lp * photo_angle) * (cp / cv).sqrt();
+    Some(mips.get(i)?.sample(u, v, scale))
 }
 
 /// Bilinear sample (sRGB 0..1) of the ortho's colour at world `(x, y)` (clamped to the image;
@@ -142,6 +229,8 @@ pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersampl
     let colour = src.scene.surface_colour_fn();
     let sky = SKY_COLOUR.map(|c| c as f64 / 255.0);
     let ss = supersample as usize;
+    let mips: Vec<PhotoMips> = src.photos.iter().map(|p| PhotoMips::new(&p.image)).collect();
+    let pixel_angle = 1.0 / ((camera.fx * camera.fy).sqrt() * ss as f64);
     let (w, h) = (camera.width as usize, camera.height as usize);
     let cast = |u: f64, v: f64| -> Option<DemHit> {
         let dir: DVec3 = camera.pixel_ray(u, v)?;
@@ -164,10 +253,9 @@ pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersampl
                             Some(hit) => {
                                 let p = hit.point;
                                 let base = ortho_colour(src.ortho, p.x, p.y);
-                                let oracle = match finest_photo(src, &hit) {
-                                    Some((i, [pu, pv], _)) => bilinear_rgb(&src.photos[i].image, pu, pv),
-                                    None => base,
-                                };
+                                let cast = |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t);
+                                let oracle =
+                                    oracle_colour(src.photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(base);
                                 [colour(p.x, p.y, p.z, hit.slope_deg), oracle, base]
                             }
                         };

@@ -79,8 +79,14 @@ impl ViewReport {
     /// `method`'s gain on steep covered pixels as a fraction of the oracle's:
     /// `[full resolution, low-pass]`.
     pub fn oracle_fraction(&self, method: &str) -> Option<[f64; 2]> {
+        self.fraction_of(method, ORACLE)
+    }
+
+    /// `method`'s gain on steep covered pixels as a fraction of `reference`'s (e.g. the
+    /// oracle on the store's TIN): `[full resolution, low-pass]`.
+    pub fn fraction_of(&self, method: &str, reference: &str) -> Option<[f64; 2]> {
         let g = self.gain(method, Class::SteepCovered)?;
-        let o = self.gain(ORACLE, Class::SteepCovered)?;
+        let o = self.gain(reference, Class::SteepCovered)?;
         Some([g[0] / o[0], g[1] / o[1]])
     }
 }
@@ -134,7 +140,7 @@ pub fn score_view(view: &str, r: &Reference, methods: &[(String, RgbImage)], sig
 /// pixels (full / low-pass), the fraction of the oracle's gain, and flat pixels.
 pub fn gains_table(reports: &[ViewReport]) -> String {
     let mut s = String::from(
-        "| view | method | steep covered: PSNR dB (full / low-pass) | gain over baseline | share of oracle gain | flat: gain (full / low-pass) |\n|---|---|---|---|---|---|\n",
+        "| view | method | steep covered: PSNR dB (full / low-pass) | gain over baseline | share of oracle gain | share of TIN oracle gain | flat: gain over baseline (full / low-pass) |\n|---|---|---|---|---|---|---|\n",
     );
     for r in reports {
         for m in &r.methods {
@@ -142,14 +148,18 @@ pub fn gains_table(reports: &[ViewReport]) -> String {
             let g = r.gain(&m.method, Class::SteepCovered).unwrap_or([f64::NAN; 2]);
             let f = r.oracle_fraction(&m.method).unwrap_or([f64::NAN; 2]);
             let fl = r.gain(&m.method, Class::Flat).unwrap_or([f64::NAN; 2]);
-            let share = if m.method == BASELINE || m.method == ORACLE {
-                "".to_string()
+            let reference = m.method == BASELINE || m.method == ORACLE || m.method.starts_with("tin_");
+            let pct = |f: [f64; 2]| if reference || f[0].is_nan() { String::new() } else { format!("{:.0} % / {:.0} %", 100.0 * f[0], 100.0 * f[1]) };
+            let share = pct(f);
+            let tin_share = pct(r.fraction_of(&m.method, "tin_oracle").unwrap_or([f64::NAN; 2]));
+            let view = if m.method == BASELINE {
+                format!("{} ({} steep covered, {} flat px)", r.view, sc.pixels, m.flat.pixels)
             } else {
-                format!("{:.0} % / {:.0} %", 100.0 * f[0], 100.0 * f[1])
+                r.view.clone()
             };
             s += &format!(
-                "| {} | {} | {:.2} / {:.2} | {:+.2} / {:+.2} | {} | {:+.2} / {:+.2} |\n",
-                r.view, m.method, sc.psnr, sc.psnr_low, g[0], g[1], share, fl[0], fl[1]
+                "| {} | {} | {:.2} / {:.2} | {:+.2} / {:+.2} | {} | {} | {:+.2} / {:+.2} |\n",
+                view, m.method, sc.psnr, sc.psnr_low, g[0], g[1], share, tin_share, fl[0], fl[1]
             );
         }
     }

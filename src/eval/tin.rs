@@ -1,18 +1,19 @@
-//! The baseline on the store's own geometry: the ortho draped at the hit points of rays cast
-//! against one level's TIN surfaces (not the DEM). Against the DEM-draped baseline it
-//! separates what the TIN's geometric error costs from what texturing and filtering cost.
+//! References on the store's own geometry: rays cast against one level's TIN surfaces (not
+//! the DEM), the ortho draped at their hits (baseline) and ideal projective texturing of the
+//! photos through the TIN (oracle). Against the DEM references they separate what the TIN's
+//! geometric error costs from what texturing and filtering cost.
 
 use glam::{DVec3, Vec3};
 use image::RgbImage;
 use rayon::prelude::*;
 
-use super::reference::ortho_colour;
+use super::reference::{PhotoMips, oracle_colour, ortho_colour};
 use crate::camera::CameraModel;
 use crate::colour::{linear_to_srgb, srgb_to_linear};
 use crate::error::{Error, Result};
 use crate::ortho::Ortho;
-use crate::photo::{BvhQuality, TriangleBvh};
-use crate::scene::SKY_COLOUR;
+use crate::photo::{BvhQuality, PhotoInput, TriangleBvh};
+use crate::scene::{DemHit, SKY_COLOUR};
 use crate::store::Store;
 
 /// The surface triangles of every cell of one level of a store, in a BVH (f32 frame centred
@@ -45,48 +46,88 @@ impl TinTracer {
         Ok(TinTracer { origin, bvh: TriangleBvh::build(&local, BvhQuality::Medium), tris })
     }
 
-    /// The nearest hit point (world) of the ray from `from` along unit `dir`.
-    pub fn nearest(&self, from: DVec3, dir: DVec3) -> Option<DVec3> {
-        let hit = self.bvh.nearest((from - self.origin).as_vec3(), dir.as_vec3(), 0.0, f32::INFINITY)?;
+    /// The nearest hit of the ray from `from` along unit `dir` within `t_max` metres.
+    pub fn nearest(&self, from: DVec3, dir: DVec3, t_max: f64) -> Option<DemHit> {
+        let hit = self.bvh.nearest((from - self.origin).as_vec3(), dir.as_vec3(), 0.0, t_max as f32)?;
         let t = self.tris.get(hit.triangle as usize)?;
         let b = hit.bary.map(|x| x as f64);
-        Some(t[0] * b[0] + t[1] * b[1] + t[2] * b[2])
+        let point = t[0] + (t[1] - t[0]) * b[1] + (t[2] - t[0]) * b[2];
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        let mut normal = n.try_normalize().unwrap_or(DVec3::Z);
+        if normal.z < 0.0 {
+            normal = -normal;
+        }
+        let slope_deg = normal.z.clamp(0.0, 1.0).acos().to_degrees();
+        Some(DemHit { t: hit.t as f64, point, normal, slope_deg })
+    }
+
+    /// Whether `point` is seen from `eye` (as [`crate::scene::DemTracer::sees`]).
+    pub fn sees(&self, eye: DVec3, point: DVec3, tolerance: f64) -> bool {
+        let d = point - eye;
+        let len = d.length();
+        if !(len > 0.0) || !len.is_finite() {
+            return false;
+        }
+        self.nearest(eye, d / len, len + tolerance).is_none_or(|h| h.t >= len - tolerance)
     }
 }
 
-/// The ortho draped on `tracer`'s TIN as seen by `camera`: `supersample` (1..=8) rays per
-/// pixel side averaged in linear light, like [`super::reference_images`]; misses are
+/// The two references on `tracer`'s TIN as seen by `camera`: the baseline (the ortho draped
+/// at the TIN hit points) and the oracle on the TIN (per ray, the photo with the finest
+/// footprint that sees the TIN point, filtered at its projection as [`super::oracle_colour`],
+/// else the ortho: the best
+/// projective texturing can do with this geometry). `supersample` (1..=8) rays per pixel
+/// side averaged in linear light, like [`super::reference_images`]; misses are
 /// [`SKY_COLOUR`].
-pub fn tin_baseline(tracer: &TinTracer, ortho: &Ortho, camera: &CameraModel, supersample: u32) -> Result<RgbImage> {
+pub fn tin_references(
+    tracer: &TinTracer,
+    ortho: &Ortho,
+    photos: &[PhotoInput],
+    camera: &CameraModel,
+    supersample: u32,
+) -> Result<(RgbImage, RgbImage)> {
     if !(1..=8).contains(&supersample) {
         return Err(Error::BadOption(format!("supersample must be in 1..=8, got {supersample}")));
     }
     let ss = supersample as usize;
     let (w, h) = (camera.width as usize, camera.height as usize);
     let sky = SKY_COLOUR.map(|c| c as f64 / 255.0);
-    let rows: Vec<Vec<u8>> = (0..h)
+    let mips: Vec<PhotoMips> = photos.iter().map(|p| PhotoMips::new(&p.image)).collect();
+    let pixel_angle = 1.0 / ((camera.fx * camera.fy).sqrt() * ss as f64);
+    let rows: Vec<(Vec<u8>, Vec<u8>)> = (0..h)
         .into_par_iter()
         .map(|row| {
-            let mut out = Vec::with_capacity(3 * w);
+            let (mut base, mut oracle) = (Vec::with_capacity(3 * w), Vec::with_capacity(3 * w));
             for col in 0..w {
-                let mut acc = [0.0f64; 3];
+                let mut acc = [[0.0f64; 3]; 2];
                 for sy in 0..ss {
                     for sx in 0..ss {
                         let u = col as f64 - 0.5 + (sx as f64 + 0.5) / ss as f64;
                         let v = row as f64 - 0.5 + (sy as f64 + 0.5) / ss as f64;
-                        let c = camera
-                            .pixel_ray(u, v)
-                            .and_then(|d| tracer.nearest(camera.position, d))
-                            .map_or(sky, |p| ortho_colour(ortho, p.x, p.y));
-                        for k in 0..3 {
-                            acc[k] += srgb_to_linear(c[k]);
+                        let c = match camera.pixel_ray(u, v).and_then(|d| tracer.nearest(camera.position, d, f64::INFINITY)) {
+                            None => [sky; 2],
+                            Some(hit) => {
+                                let b = ortho_colour(ortho, hit.point.x, hit.point.y);
+                                let cast = |from, dir, t_max| tracer.nearest(from, dir, t_max).map(|h| h.t);
+                                let o = oracle_colour(photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(b);
+                                [b, o]
+                            }
+                        };
+                        for (a, c) in acc.iter_mut().zip(c) {
+                            for k in 0..3 {
+                                a[k] += srgb_to_linear(c[k]);
+                            }
                         }
                     }
                 }
-                out.extend(acc.map(|a| (linear_to_srgb(a / (ss * ss) as f64) * 255.0).round().clamp(0.0, 255.0) as u8));
+                let q = |a: f64| (linear_to_srgb(a / (ss * ss) as f64) * 255.0).round().clamp(0.0, 255.0) as u8;
+                base.extend(acc[0].map(q));
+                oracle.extend(acc[1].map(q));
             }
-            out
+            (base, oracle)
         })
         .collect();
-    RgbImage::from_raw(camera.width, camera.height, rows.concat()).ok_or_else(|| Error::BadOption("baseline size mismatch".into()))
+    let (b, o): (Vec<Vec<u8>>, Vec<Vec<u8>>) = rows.into_iter().unzip();
+    let img = |v: Vec<Vec<u8>>| RgbImage::from_raw(camera.width, camera.height, v.concat()).ok_or_else(|| Error::BadOption("reference size mismatch".into()));
+    Ok((img(b)?, img(o)?))
 }

@@ -310,9 +310,14 @@ pub struct CellAccum {
     pub has_colour: Vec<bool>,
     /// The cell's context of the resolution rule.
     pub context: CellContext,
+    /// Per texel: the index of the photo with the largest selection weight there (the
+    /// `photo` given to [`CellAccum::merge`]; `u16::MAX` where no photo gave colour).
+    pub best_photo: Vec<u16>,
     /// γ of the selection weight `confidence · resolution^−γ`.
     sharpness: f32,
     sums: Vec<MergedSums>,
+    /// Per texel: the largest single-photo selection weight.
+    best_weight: Vec<f32>,
 }
 
 impl CellAccum {
@@ -326,13 +331,16 @@ impl CellAccum {
             confidence: vec![0.0; n],
             has_colour: vec![false; n],
             context,
+            best_photo: vec![u16::MAX; n],
             sharpness: params.sharpness_power as f32,
             sums: vec![MergedSums::default(); n],
+            best_weight: vec![0.0; n],
         }
     }
 
-    /// Adds one photo's deposits (same texture size); returns how many texels it gave colour.
-    pub fn merge(&mut self, p: &PhotoAccum) -> u64 {
+    /// Adds the deposits of photo number `photo` (same texture size); returns how many texels
+    /// it gave colour.
+    pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
         let mut written = 0;
         let n = self.confidence.len().min(p.sums.len());
         for t in 0..n {
@@ -358,6 +366,10 @@ impl CellAccum {
                         *s = MergedSums { weight: w, colour: c, resolution: res };
                     }
                 }
+            }
+            if self.best_photo[t] == u16::MAX || w > self.best_weight[t] {
+                self.best_photo[t] = photo;
+                self.best_weight[t] = w;
             }
             self.confidence[t] = self.confidence[t].max(conf);
             self.has_colour[t] = true;
@@ -550,7 +562,7 @@ mod tests {
         let ctx = CellContext::flat(1, 0.0, 1.0);
         for (mode, first_red) in [(BlendMode::Confidence, true), (BlendMode::Confidence, false), (BlendMode::Best, true), (BlendMode::Best, false)] {
             let mut acc = CellAccum::new(1, 1, mode, ctx.clone(), &params());
-            let written = if first_red { acc.merge(&a) + acc.merge(&b) } else { acc.merge(&b) + acc.merge(&a) };
+            let written = if first_red { acc.merge(&a, 0) + acc.merge(&b, 1) } else { acc.merge(&b, 1) + acc.merge(&a, 0) };
             assert_eq!(written, 2);
             let c = acc.colour_at(0).unwrap();
             assert!((acc.confidence[0] - 1.0).abs() < 1e-6);
@@ -560,6 +572,8 @@ mod tests {
                 BlendMode::Best => assert_eq!(c, [1.0, 0.0, 0.0]),
             }
             assert!(acc.resolution_at(0) < 0.0105, "{}", acc.resolution_at(0));
+            // the red photo (number 0) supplies the texel
+            assert_eq!(acc.best_photo[0], 0);
         }
         let empty = CellAccum::new(1, 1, BlendMode::Best, ctx, &params());
         assert!(empty.colour_at(0).is_none());

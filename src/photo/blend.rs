@@ -33,6 +33,9 @@ pub struct Blended {
     pub steep_texels: u64,
     /// Steep covered texels with `s > 0.5`.
     pub steep_photo_texels: u64,
+    /// Per photo (by the index given to [`CellAccum::merge`]): covered texels with `s > 0.5`
+    /// whose heaviest photo it is.
+    pub supplied: Vec<u64>,
 }
 
 /// `existing` magnified `scale` times (a power of two) by bilinear interpolation between
@@ -76,6 +79,7 @@ pub fn blend_cell(
     let ctx: &CellContext = &acc.context;
     let mut conf = GrayImage::new(w, h);
     let (mut photo_texels, mut steep_texels, mut steep_photo_texels) = (0, 0, 0);
+    let mut supplied: Vec<u64> = Vec::new();
     let n = (w as usize * h as usize).min(acc.confidence.len());
     for (t, (px, cv)) in texture.pixels_mut().zip(conf.pixels_mut()).enumerate() {
         let cov = covered.get(t).copied().unwrap_or(false);
@@ -102,9 +106,16 @@ pub fn blend_cell(
         if s > 0.5 && cov {
             photo_texels += 1;
             steep_photo_texels += st as u64;
+            let i = acc.best_photo[t] as usize;
+            if i < u16::MAX as usize {
+                if supplied.len() <= i {
+                    supplied.resize(i + 1, 0);
+                }
+                supplied[i] += 1;
+            }
         }
     }
-    Blended { texture, confidence: conf, photo_texels, steep_texels, steep_photo_texels }
+    Blended { texture, confidence: conf, photo_texels, steep_texels, steep_photo_texels, supplied }
 }
 
 #[cfg(test)]
@@ -140,7 +151,7 @@ mod tests {
         pa.add_samples(&footprints(n, true), &PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params, ColourSpace::Srgb));
         let ctx = CellContext::flat(n, 0.0, 0.04);
         let mut acc = CellAccum::new(n, 1, BlendMode::Confidence, ctx, &params);
-        acc.merge(&pa);
+        acc.merge(&pa, 0);
         let mut existing = RgbaImage::from_pixel(n, n, image::Rgba([10, 10, 10, 255]));
         // an unknown existing texel where the photo is coarse
         existing.put_pixel(30, 0, image::Rgba([0, 0, 0, 0]));
@@ -169,6 +180,7 @@ mod tests {
         let photo = s.iter().filter(|&&v| v > 127).count() as u64;
         assert_eq!(b.photo_texels, photo);
         assert_eq!(b.steep_photo_texels, s.iter().step_by(2).filter(|&&v| v > 127).count() as u64);
+        assert_eq!(b.supplied, vec![photo]);
     }
 
     #[test]
@@ -204,7 +216,7 @@ mod tests {
             let mut pa = PhotoAccum::with_scale(t, scale);
             pa.add_samples(&fps, &samples);
             let mut acc = CellAccum::new(t, scale, BlendMode::Confidence, ctx.clone(), &params);
-            acc.merge(&pa);
+            acc.merge(&pa, 0);
             let b = blend_cell(&existing, &acc, &params, ColourSpace::Linear, &[], &[]);
             assert_eq!(b.texture.dimensions(), (t, t));
             shares.push((scale, b.confidence.clone(), acc.confidence.clone()));

@@ -5,9 +5,11 @@
 //! Per cell, [`SizingBins`] divides the existing texture into 16 × 16 bins and keeps in each
 //! the side (in existing texels, `√area` of the footprint scaled to the full-resolution
 //! photo) of the finest photo pixel whose footprint centre falls there, over all photos. The
-//! cell wants the scale `2^m` (a power of two) that makes a texel no larger than 1.19× the
-//! median of those bin minima: `m = max(0, ⌈log2(1 / side) − 0.25⌉)`, capped so that the
-//! side stays within `max_texels`. [`choose_scales`] then fits the wanted scales of one level
+//! cell wants the scale `2^m` (a power of two) that makes a texel no larger than the median
+//! of those bin minima: `m = max(0, ⌈log2(k / side)⌉)` for `k` texels per pixel side
+//! (default 1), capped so that the side stays within `max_texels`. (Allowing texels up to
+//! 1.19× the pixel instead lost 5 % of the oracle's gain in one evaluation view and saved
+//! 8 % of the memory, docs/evaluation.md.) [`choose_scales`] then fits the wanted scales of one level
 //! into that level's byte budget by halving, one step at a time, the cell whose photo bins
 //! cover the smallest fraction of it (then the larger texture, then the lower index), so the
 //! memory goes where the photos cover most of the cell. Deterministic.
@@ -74,7 +76,7 @@ impl SizingBins {
         }
         let k = v.len() / 2;
         let (_, median, _) = v.select_nth_unstable_by(k, f32::total_cmp);
-        let want = (texels_per_pixel.max(1e-3) / median.max(1e-6) as f64).log2() - 0.25;
+        let want = (texels_per_pixel.max(1e-3) / median.max(1e-6) as f64).log2() - 1e-9;
         let m = want.ceil().clamp(0.0, 16.0) as u32;
         let mut scale = 1u32 << m;
         while scale > max_scale.max(1) {
@@ -139,7 +141,7 @@ mod tests {
             }
         }
         assert_eq!(b.covered(), 128);
-        // a tenth: 2^ceil(log2(10) - 0.25) = 16
+        // a tenth: 2^ceil(log2(10)) = 16
         assert_eq!(b.wanted_scale(64, 1.0), 16);
         assert_eq!(b.wanted_scale(4, 1.0), 4);
         for j in 0..64 {
@@ -149,12 +151,17 @@ mod tests {
         }
         // the median bin now holds a coarse pixel: no upsizing
         assert_eq!(b.wanted_scale(64, 1.0), 1);
-        // a pixel of 0.45 texel: scale 2 (texels 0.9 px), cast from a 4x smaller image
+        // a pixel of 0.6 texel: scale 2 (texels of 0.83 pixel),
+        // cast from a 4x smaller image
         let mut c = SizingBins::default();
-        c.add(&fp(10.0, 10.0, 1.8), 256, 0.25);
+        c.add(&fp(10.0, 10.0, 2.4), 256, 0.25);
         assert_eq!(c.wanted_scale(64, 1.0), 2);
         // two texels per pixel side: one doubling more
         assert_eq!(c.wanted_scale(64, 2.0), 4);
+        // a pixel of exactly half a texel: scale 2, not 4
+        let mut e = SizingBins::default();
+        e.add(&fp(10.0, 10.0, 0.5), 256, 1.0);
+        assert_eq!(e.wanted_scale(64, 1.0), 2);
         assert_eq!(SizingBins::default().wanted_scale(64, 1.0), 1);
         // footprints outside the texture are ignored
         let mut d = SizingBins::default();

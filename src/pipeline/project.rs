@@ -162,6 +162,9 @@ impl StageTimer {
 pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -> Result<ProjectReport> {
     opts.confidence.validate()?;
     opts.texture.validate()?;
+    if photos.len() >= u16::MAX as usize {
+        return Err(Error::BadOption(format!("at most {} photos per run, got {}", u16::MAX - 1, photos.len())));
+    }
     let mut timer = StageTimer::new();
     let mut store = Store::open(dir)?;
     for p in photos {
@@ -202,6 +205,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             name: p.name.clone(),
             image: crate::fsutil::relative_path(&p.image_path, dir),
             texels_written: 0,
+            texels_supplied: 0,
             pixels_hit: 0,
             rejected_silhouette: 0,
             reconstructed_footprints: 0,
@@ -273,9 +277,12 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             },
         );
         if let Some((l, result, secs)) = finished {
-            let (lr, recs) = result?;
+            let (lr, recs, supplied) = result?;
             for (ci, rec) in recs {
                 records[ci] = Some(rec);
+            }
+            for (r, n) in reports.iter_mut().zip(supplied) {
+                r.texels_supplied += n;
             }
             level_reports.push(lr);
             timer.note(&format!("level {l}: cells written (alongside the next level)"), secs);
@@ -473,11 +480,11 @@ impl LevelRun<'_> {
                 .enumerate()
                 .map(|(ci, (acc, pa))| match (acc.as_mut(), pa) {
                     (_, None) => Ok(0),
-                    (Some(acc), Some(pa)) => Ok(acc.merge(&pa)),
+                    (Some(acc), Some(pa)) => Ok(acc.merge(&pa, pi as u16)),
                     (None, Some(pa)) => {
                         let ctx = cell_context(self.store, &cells[ci])?;
                         let mut first = CellAccum::new(pa.texels, pa.scale, self.opts.blend, ctx, &self.opts.confidence);
-                        let n = first.merge(&pa);
+                        let n = first.merge(&pa, pi as u16);
                         *acc = Some(first);
                         Ok(n)
                     }
@@ -595,7 +602,7 @@ fn finish_level(
     sizing: &LevelSizing,
     opts: &ProjectOptions,
     writer: &BackgroundWriter,
-) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>)> {
+) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>, Vec<u64>)> {
     let cells = &store.manifest.cells;
     let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
     let results: Vec<Result<CellOutcome>> =
@@ -608,8 +615,15 @@ fn finish_level(
         ..PhotoLevelReport::default()
     };
     let mut records = Vec::new();
+    let mut supplied: Vec<u64> = Vec::new();
     for (&ci, r) in level_cells.iter().zip(results) {
         let o = r?;
+        if supplied.len() < o.supplied_base.len() {
+            supplied.resize(o.supplied_base.len(), 0);
+        }
+        for (s, n) in supplied.iter_mut().zip(&o.supplied_base) {
+            *s += n;
+        }
         lr.steep_texels += o.steep_texels;
         if let Some(rec) = o.record {
             lr.cells_with_photo += 1;
@@ -619,7 +633,7 @@ fn finish_level(
             records.push((ci, rec));
         }
     }
-    Ok((lr, records))
+    Ok((lr, records, supplied))
 }
 
 /// Most footprints (over all photos) kept from the leveling casts for the main loop
@@ -710,6 +724,9 @@ struct CellOutcome {
     steep_photo_base: u64,
     /// Covered texels with mostly photo colour, likewise.
     photo_base: u64,
+    /// Per photo, the covered texels it supplies (mostly photo colour, this photo the
+    /// heaviest), in texels of the active texture.
+    supplied_base: Vec<u64>,
 }
 
 /// Which texel centres of a `texels × texels` texture of cell `rec` (active layout) lie on a
@@ -747,7 +764,7 @@ fn finish_cell(
         let covered = covered_mask(store, rec, active_texels(rec))?;
         let steep_texels =
             covered.iter().zip(normals.pixels()).filter(|(c, n)| **c && (normal_cos_slope(n.0) as f32) < cos_steep).count() as u64;
-        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0 });
+        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0, supplied_base: Vec::new() });
     };
     let existing = store.read_active_texture(rec)?;
     let ctx = &acc.context;
@@ -762,7 +779,7 @@ fn finish_cell(
     let area = (acc.scale as u64).pow(2);
     let steep_texels = b.steep_texels / area;
     if b.confidence.pixels().all(|p| p.0[0] == 0) {
-        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0 });
+        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0, supplied_base: Vec::new() });
     }
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {
@@ -773,5 +790,11 @@ fn finish_cell(
         steep_texels: b.steep_texels,
         steep_photo_texels: b.steep_photo_texels,
     };
-    Ok(CellOutcome { record: Some(record), steep_texels, steep_photo_base: b.steep_photo_texels / area, photo_base: b.photo_texels / area })
+    Ok(CellOutcome {
+        record: Some(record),
+        steep_texels,
+        steep_photo_base: b.steep_photo_texels / area,
+        photo_base: b.photo_texels / area,
+        supplied_base: b.supplied.iter().map(|n| n / area).collect(),
+    })
 }

@@ -14,7 +14,8 @@ use crate::photo::{BvhQuality, TriangleBvh};
 pub struct DemHit {
     /// Distance along the (unit) ray from its origin, metres.
     pub t: f64,
-    /// The hit point, world metres (f64, barycentric on the triangle's f64 vertices).
+    /// The hit point, world metres (f64, barycentric on the triangle's f64 vertices, relative
+    /// to its first vertex).
     pub point: DVec3,
     /// Unit normal of the hit triangle, pointing up (z ≥ 0).
     pub normal: DVec3,
@@ -57,8 +58,10 @@ impl<'a> DemTracer<'a> {
         let o = (from - self.origin).as_vec3();
         let hit = self.bvh.nearest(o, dir.as_vec3(), 0.0, t_max as f32)?;
         let p = corners(self.dem.width, hit.triangle as usize).map(|(r, c)| world(self.dem, r, c));
+        // relative to a vertex: barycentrics times absolute (UTM-sized) coordinates would lose
+        // decimetres on the slivers of near-vertical walls
         let b = hit.bary.map(|x| x as f64);
-        let point = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
+        let point = p[0] + (p[1] - p[0]) * b[1] + (p[2] - p[0]) * b[2];
         let n = (p[1] - p[0]).cross(p[2] - p[0]);
         let len = n.length();
         let mut normal = if len > 0.0 { n / len } else { DVec3::Z };

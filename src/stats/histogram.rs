@@ -1,17 +1,12 @@
 //! The histogram of average texel stretch per cell (`rel_texel`), as a PNG.
 
 use std::path::Path;
-use std::sync::OnceLock;
 
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
 use crate::error::{Error, Result};
+use crate::font::register_font;
 use crate::stats::quantile_sorted;
-
-/// DejaVu Sans (Bitstream Vera licence, see assets/fonts/LICENSE-DejaVu.txt), embedded so
-/// that plots render the same everywhere.
-static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Number of regular bins of the rel_texel histogram.
 const BINS: usize = 40;
@@ -52,16 +47,6 @@ pub fn rel_texel_bins(rel_texels: &[f64], threshold: f64) -> RelTexelBins {
         }
     }
     RelTexelBins { lo, hi, counts, overflow }
-}
-
-fn register_font() -> std::result::Result<(), String> {
-    static REGISTERED: OnceLock<std::result::Result<(), String>> = OnceLock::new();
-    REGISTERED
-        .get_or_init(|| {
-            plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
-                .map_err(|_| "the embedded DejaVu Sans font is invalid".to_string())
-        })
-        .clone()
 }
 
 /// Plot size in pixels.

@@ -285,6 +285,10 @@ pub struct PhotoReport {
     pub image: String,
     /// Texels that received colour from this photo.
     pub texels_written: u64,
+    /// Covered texels (all levels, counted in texels of the cells' active textures) whose
+    /// colour now comes mainly from photos and from this photo more than from any other.
+    #[serde(default)]
+    pub texels_supplied: u64,
     /// Pixels whose centre ray hit the terrain.
     pub pixels_hit: u64,
     /// Pixels rejected because their footprint crossed a silhouette edge.
