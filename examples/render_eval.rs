@@ -9,7 +9,7 @@
 //!     [--cell-texels T] [--mixed-resolution] [--photo-width W] [--photo-supersample N]
 //!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
-//!     [--photo-texture-budget-mb MB] [--feather F] [--resolution-ramp LO,HI] [--best]
+//!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N]
 //! ```
 //! Writes OUT/store, OUT/photos, OUT/views/VIEW_{baseline,oracle,truth,ortho,reparam,photo}.png,
@@ -80,6 +80,9 @@ fn main() -> anyhow::Result<()> {
         }
         if let Some(m) = flag("--photo-texture-budget-mb") {
             popts.texture.budget_bytes = m.parse::<u64>()? << 20;
+        }
+        if let Some(m) = flag("--texels-per-delivered") {
+            popts.texture.texels_per_delivered = m.parse()?;
         }
         if let Some(m) = flag("--texels-per-pixel") {
             popts.texture.texels_per_pixel = m.parse()?;

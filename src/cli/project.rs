@@ -34,6 +34,11 @@ pub struct Args {
     /// Texels per photo pixel side the photo-driven sizes aim at (0.25..=4).
     #[arg(long, default_value_t = 1.0)]
     pub texels_per_pixel: f64,
+    /// Most texels an enlarged photo texture may hold per photo pixel its cell receives, e.g.
+    /// 4: cells the photos cover only in part get smaller textures (faster, less memory,
+    /// less detail; docs/projection.md "Texture sizes"). Default: no bound.
+    #[arg(long, default_value_t = f64::INFINITY)]
+    pub max_texels_per_photo_pixel: f64,
     /// Keep every photo texture at its active texture's size (no photo-driven sizes).
     #[arg(long)]
     pub fixed_photo_texels: bool,
@@ -75,6 +80,7 @@ pub fn options(a: &Args) -> ProjectOptions {
             max_texels: a.max_photo_texels,
             budget_bytes: a.photo_texture_budget,
             texels_per_pixel: a.texels_per_pixel,
+            texels_per_delivered: a.max_texels_per_photo_pixel,
         },
         quiet: a.quiet,
         ..ProjectOptions::default()

@@ -65,7 +65,7 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
         let m = &p["texture_memory"];
         let mib = |v: &serde_json::Value| v.as_f64().unwrap_or(0.0) / (1u64 << 20) as f64;
         println!(
-            "reparameterized {} cells: Rel_texel max {:.3} -> {:.3}, texel stretch max {:.2} -> {:.2}; texture memory ortho {:.1} MiB, reparam {:.1} MiB, mixed {:.1} MiB",
+            "reparameterized {} cells: Rel_texel max {:.3} -> {:.3}, texel stretch max {:.2} -> {:.2}; texture memory ortho {:.1} MiB, reparam {:.1} MiB, mixed {:.1} MiB, as stored with photo textures {:.1} MiB",
             p["cells_reparam"],
             f(&p["rel_texel_before"]["max"]),
             f(&p["rel_texel_after"]["max"]),
@@ -73,7 +73,8 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
             f(&p["texel_stretch_max_after"]),
             mib(&m["ortho_bytes"]),
             mib(&m["reparam_bytes"]),
-            mib(&m["mixed_bytes"])
+            mib(&m["mixed_bytes"]),
+            mib(&m["photo_bytes"])
         );
     }
     if let Some(photos) = s["photos"].as_array().filter(|p| !p.is_empty()) {

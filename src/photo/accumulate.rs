@@ -220,6 +220,19 @@ impl PhotoAccum {
     }
 }
 
+/// `x^−p` for `x > 0`; by multiplications when `p` is a small whole number (the default 4).
+#[inline]
+fn inverse_power(x: f32, p: f32) -> f32 {
+    if p == 4.0 {
+        let q = 1.0 / (x * x);
+        q * q
+    } else if p.fract() == 0.0 && (0.0..=16.0).contains(&p) {
+        (1.0 / x).powi(p as i32)
+    } else {
+        x.powf(-p)
+    }
+}
+
 /// View cosines below this count as this (a ray grazing the surface).
 const MIN_COS_VIEW: f32 = 1e-3;
 
@@ -284,18 +297,14 @@ impl CellContext {
     }
 }
 
-/// The merged sums of one texel over photos.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct MergedSums {
-    /// Σ selection weights (best mode: the best photo's).
-    weight: f32,
-    /// Σ weight · colour (best mode: the best photo's colour).
-    colour: [f32; 3],
-    /// Σ weight · resolution (best mode: the best photo's resolution).
-    resolution: f32,
-}
-
 /// All photos' contributions to one cell texture on one level.
+///
+/// Per texel it keeps one record of the same layout as a [`PhotoAccum`]'s ([`TexelSums`]),
+/// so that a cell's first photo hands over its memory ([`CellAccum::from_photo`]), with the
+/// fields standing for: `coverage` the highest single-photo coverage confidence; `weight`
+/// Σ selection weights (best mode: the best photo's); `colour` Σ weight · colour (best mode:
+/// the best photo's colour); `footprint` Σ weight · resolution (best mode: the best photo's
+/// resolution); `grazing` the largest single-photo selection weight.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellAccum {
     /// Blend mode.
@@ -304,10 +313,6 @@ pub struct CellAccum {
     pub texels: u32,
     /// Factor from the existing texture's texels to this texture's (a power of two).
     pub scale: u32,
-    /// Per texel: the highest single-photo coverage confidence, in [0, 1].
-    pub confidence: Vec<f32>,
-    /// Per texel: some photo gave it colour.
-    pub has_colour: Vec<bool>,
     /// The cell's context of the resolution rule.
     pub context: CellContext,
     /// Per texel: the index of the photo with the largest selection weight there (the
@@ -315,9 +320,7 @@ pub struct CellAccum {
     pub best_photo: Vec<u16>,
     /// γ of the selection weight `confidence · resolution^−γ`.
     sharpness: f32,
-    sums: Vec<MergedSums>,
-    /// Per texel: the largest single-photo selection weight.
-    best_weight: Vec<f32>,
+    merged: Vec<TexelSums>,
 }
 
 impl CellAccum {
@@ -328,61 +331,116 @@ impl CellAccum {
             mode,
             texels,
             scale: scale.max(1),
-            confidence: vec![0.0; n],
-            has_colour: vec![false; n],
             context,
             best_photo: vec![u16::MAX; n],
             sharpness: params.sharpness_power as f32,
-            sums: vec![MergedSums::default(); n],
-            best_weight: vec![0.0; n],
+            merged: vec![TexelSums::default(); n],
         }
+    }
+
+    /// The accumulator of one photo's deposits `p` (photo number `photo`), as
+    /// [`CellAccum::new`] followed by [`CellAccum::merge`] of `p` (bit for bit), using `p`'s
+    /// memory; also returns how many texels `p` gave colour.
+    pub fn from_photo(
+        p: PhotoAccum,
+        photo: u16,
+        mode: BlendMode,
+        context: CellContext,
+        params: &ConfidenceParams,
+    ) -> (CellAccum, u64) {
+        let (texels, scale) = (p.texels, p.scale.max(1));
+        let mut merged = p.sums;
+        let sharpness = params.sharpness_power as f32;
+        let mut best_photo = vec![u16::MAX; merged.len()];
+        let mut written = 0;
+        for (t, s) in merged.iter_mut().enumerate() {
+            match Self::photo_texel(s, &context, t, texels, scale, sharpness) {
+                Some((c, conf, res, w)) => {
+                    written += 1;
+                    best_photo[t] = photo;
+                    *s = match mode {
+                        BlendMode::Confidence => TexelSums { coverage: conf, weight: w, colour: c.map(|v| w * v), footprint: w * res, grazing: w },
+                        BlendMode::Best => TexelSums { coverage: conf, weight: w, colour: c, footprint: res, grazing: w },
+                    };
+                }
+                None => *s = TexelSums::default(),
+            }
+        }
+        (CellAccum { mode, texels, scale, context, best_photo, sharpness, merged }, written)
+    }
+
+    /// A photo's colour, coverage confidence, resolution and selection weight at texel `t`
+    /// from its sums `s` (`None` without colour).
+    #[inline]
+    fn photo_texel(s: &TexelSums, ctx: &CellContext, t: usize, texels: u32, scale: u32, sharpness: f32) -> Option<([f32; 3], f32, f32, f32)> {
+        if !(s.weight > 0.0) {
+            return None;
+        }
+        let c = s.colour.map(|v| (v / s.weight).clamp(0.0, 1.0));
+        let conf = (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0);
+        let b = ctx.base_index(t, texels, scale);
+        let res = ctx.photo_resolution(b, [s.footprint / s.weight, s.grazing / s.weight]).max(1e-6);
+        let w = conf * inverse_power(res, sharpness);
+        Some((c, conf, res, if w.is_finite() { w } else { 0.0 }))
     }
 
     /// Adds the deposits of photo number `photo` (same texture size); returns how many texels
     /// it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
         let mut written = 0;
-        let n = self.confidence.len().min(p.sums.len());
+        let n = self.merged.len().min(p.sums.len());
         for t in 0..n {
-            let Some(c) = p.colour_at(t) else { continue };
+            let Some((c, conf, res, w)) = Self::photo_texel(&p.sums[t], &self.context, t, self.texels, self.scale, self.sharpness)
+            else {
+                continue;
+            };
             written += 1;
-            let conf = p.confidence(t);
-            let b = self.context.base_index(t, self.texels, self.scale);
-            let res = self.context.photo_resolution(b, p.footprint_at(t)).max(1e-6);
-            let w = conf * res.powf(-self.sharpness);
-            let w = if w.is_finite() { w } else { 0.0 };
-            let s = &mut self.sums[t];
+            let first = self.best_photo[t] == u16::MAX;
+            let s = &mut self.merged[t];
             match self.mode {
                 BlendMode::Confidence => {
                     s.weight += w;
                     for k in 0..3 {
                         s.colour[k] += w * c[k];
                     }
-                    s.resolution += w * res;
+                    s.footprint += w * res;
                 }
                 BlendMode::Best => {
                     // the first photo with colour, then any strictly better one
-                    if !self.has_colour[t] || w > s.weight {
-                        *s = MergedSums { weight: w, colour: c, resolution: res };
+                    if first || w > s.weight {
+                        s.weight = w;
+                        s.colour = c;
+                        s.footprint = res;
                     }
                 }
             }
-            if self.best_photo[t] == u16::MAX || w > self.best_weight[t] {
+            if first || w > s.grazing {
                 self.best_photo[t] = photo;
-                self.best_weight[t] = w;
+                s.grazing = w;
             }
-            self.confidence[t] = self.confidence[t].max(conf);
-            self.has_colour[t] = true;
+            s.coverage = s.coverage.max(conf);
         }
         written
     }
 
+    /// Whether some photo gave texel `t` colour.
+    #[inline]
+    pub fn has_colour(&self, t: usize) -> bool {
+        self.best_photo.get(t).is_some_and(|&p| p != u16::MAX)
+    }
+
+    /// The highest single-photo coverage confidence at texel `t`, in [0, 1].
+    #[inline]
+    pub fn confidence(&self, t: usize) -> f32 {
+        self.merged.get(t).map_or(0.0, |s| s.coverage)
+    }
+
     /// The combined photo colour (working space 0..1) at texel `t`, if any photo gave it colour.
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
-        if !self.has_colour[t] {
+        if !self.has_colour(t) {
             return None;
         }
-        let s = &self.sums[t];
+        let s = &self.merged[t];
         Some(match self.mode {
             BlendMode::Confidence if s.weight > 0.0 => s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
             BlendMode::Confidence => [0.0; 3],
@@ -393,10 +451,10 @@ impl CellAccum {
     /// The combined photo resolution (metres) at texel `t` (the weighted mean of the photos',
     /// or the best photo's); infinite without usable colour.
     pub fn resolution_at(&self, t: usize) -> f32 {
-        let s = &self.sums[t];
+        let Some(s) = self.merged.get(t) else { return f32::INFINITY };
         match self.mode {
-            BlendMode::Confidence if s.weight > 0.0 => s.resolution / s.weight,
-            BlendMode::Best if self.has_colour[t] && s.weight > 0.0 => s.resolution,
+            BlendMode::Confidence if s.weight > 0.0 => s.footprint / s.weight,
+            BlendMode::Best if self.has_colour(t) && s.weight > 0.0 => s.footprint,
             _ => f32::INFINITY,
         }
     }
@@ -565,7 +623,7 @@ mod tests {
             let written = if first_red { acc.merge(&a, 0) + acc.merge(&b, 1) } else { acc.merge(&b, 1) + acc.merge(&a, 0) };
             assert_eq!(written, 2);
             let c = acc.colour_at(0).unwrap();
-            assert!((acc.confidence[0] - 1.0).abs() < 1e-6);
+            assert!((acc.confidence(0) - 1.0).abs() < 1e-6);
             match mode {
                 // weights 1 : 4^-4: red with 255/256 of the weight
                 BlendMode::Confidence => assert!((c[0] - 256.0 / 257.0).abs() < 1e-5 && c[2] < 0.004, "{c:?}"),
@@ -574,6 +632,14 @@ mod tests {
             assert!(acc.resolution_at(0) < 0.0105, "{}", acc.resolution_at(0));
             // the red photo (number 0) supplies the texel
             assert_eq!(acc.best_photo[0], 0);
+        }
+        // a cell's first photo handed over equals merging it into an empty accumulator
+        for mode in [BlendMode::Confidence, BlendMode::Best] {
+            let mut merged = CellAccum::new(1, 1, mode, ctx.clone(), &params());
+            let n = merged.merge(&a, 0) + merged.merge(&b, 1);
+            let (mut adopted, m) = CellAccum::from_photo(a.clone(), 0, mode, ctx.clone(), &params());
+            assert_eq!(n, m + adopted.merge(&b, 1));
+            assert_eq!(merged, adopted);
         }
         let empty = CellAccum::new(1, 1, BlendMode::Best, ctx, &params());
         assert!(empty.colour_at(0).is_none());

@@ -18,7 +18,9 @@ use image::{GrayImage, RgbaImage};
 
 use super::accumulate::{CellAccum, CellContext};
 use super::confidence::ConfidenceParams;
-use crate::colour::ColourSpace;
+use rayon::prelude::*;
+
+use crate::colour::{ColourSpace, decode_u8, encode_u8};
 
 /// A cell's photo-enhanced texture and its statistics.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,26 +41,45 @@ pub struct Blended {
 }
 
 /// `existing` magnified `scale` times (a power of two) by bilinear interpolation between
-/// texel centres (edges clamped), RGBA channels each; `scale` 1 returns a copy.
+/// texel centres (edges clamped), colour in linear light (as a GPU filters an sRGB texture),
+/// alpha as it is; `scale` 1 returns a copy.
 pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
     let (w, h) = existing.dimensions();
     if scale <= 1 || w == 0 || h == 0 {
         return existing.clone();
     }
     let s = scale as f64;
-    RgbaImage::from_fn(w * scale, h * scale, |x, y| {
-        let u = ((x as f64 + 0.5) / s - 0.5).clamp(0.0, (w - 1) as f64);
-        let v = ((y as f64 + 0.5) / s - 0.5).clamp(0.0, (h - 1) as f64);
-        let (x0, y0) = (u.floor() as u32, v.floor() as u32);
-        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-        let (fx, fy) = (u - x0 as f64, v - y0 as f64);
-        let (a, b, c, d) = (existing.get_pixel(x0, y0).0, existing.get_pixel(x1, y0).0, existing.get_pixel(x0, y1).0, existing.get_pixel(x1, y1).0);
-        image::Rgba(std::array::from_fn(|k| {
-            let top = a[k] as f64 * (1.0 - fx) + b[k] as f64 * fx;
-            let bottom = c[k] as f64 * (1.0 - fx) + d[k] as f64 * fx;
-            crate::fastmath::to_u8(top * (1.0 - fy) + bottom * fy)
-        }))
-    })
+    // per output column / row: the two source texels and the weight of the second
+    let taps = |n: u32| -> Vec<(usize, usize, f32)> {
+        (0..n * scale)
+            .map(|i| {
+                let u = ((i as f64 + 0.5) / s - 0.5).clamp(0.0, (n - 1) as f64);
+                let i0 = u.floor() as usize;
+                (i0, (i0 + 1).min(n as usize - 1), (u - i0 as f64) as f32)
+            })
+            .collect()
+    };
+    let (cols, rows) = (taps(w), taps(h));
+    let src = existing.as_raw();
+    let lin: Vec<f32> = src.iter().enumerate().map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) }).collect();
+    let ow = (w * scale) as usize;
+    let mut out = vec![0u8; ow * rows.len() * 4];
+    out.par_chunks_mut(ow * 4).zip(rows.par_iter()).for_each(|(row, &(y0, y1, fy))| {
+        let (r0, r1) = (&lin[y0 * w as usize * 4..][..w as usize * 4], &lin[y1 * w as usize * 4..][..w as usize * 4]);
+        for (px, &(x0, x1, fx)) in row.chunks_exact_mut(4).zip(&cols) {
+            let mut v = [0.0f32; 4];
+            for k in 0..4 {
+                let top = r0[4 * x0 + k] + (r0[4 * x1 + k] - r0[4 * x0 + k]) * fx;
+                let bottom = r1[4 * x0 + k] + (r1[4 * x1 + k] - r1[4 * x0 + k]) * fx;
+                v[k] = top + (bottom - top) * fy;
+            }
+            px[0] = encode_u8(v[0]);
+            px[1] = encode_u8(v[1]);
+            px[2] = encode_u8(v[2]);
+            px[3] = (v[3] + 0.5) as u8;
+        }
+    });
+    RgbaImage::from_raw(w * scale, h * scale, out).unwrap_or_else(|| existing.clone())
 }
 
 /// Blends `acc` into `existing` (the cell's existing texture, `acc.scale` times smaller than
@@ -80,7 +101,7 @@ pub fn blend_cell(
     let mut conf = GrayImage::new(w, h);
     let (mut photo_texels, mut steep_texels, mut steep_photo_texels) = (0, 0, 0);
     let mut supplied: Vec<u64> = Vec::new();
-    let n = (w as usize * h as usize).min(acc.confidence.len());
+    let n = (w as usize * h as usize).min(acc.best_photo.len());
     for (t, (px, cv)) in texture.pixels_mut().zip(conf.pixels_mut()).enumerate() {
         let cov = covered.get(t).copied().unwrap_or(false);
         let st = cov && steep.get(t).copied().unwrap_or(false);
@@ -91,7 +112,7 @@ pub fn blend_cell(
         let Some(p) = acc.colour_at(t) else { continue };
         let b = ctx.base_index(t, acc.texels, acc.scale);
         let ratio = ctx.existing_resolution(b) as f64 / acc.resolution_at(t) as f64;
-        let beta = params.photo_weight(acc.confidence[t] as f64, ratio);
+        let beta = params.photo_weight(acc.confidence(t) as f64, ratio);
         if !(beta > 0.0) {
             continue;
         }
@@ -219,7 +240,7 @@ mod tests {
             acc.merge(&pa, 0);
             let b = blend_cell(&existing, &acc, &params, ColourSpace::Linear, &[], &[]);
             assert_eq!(b.texture.dimensions(), (t, t));
-            shares.push((scale, b.confidence.clone(), acc.confidence.clone()));
+            shares.push((scale, b.confidence.clone(), (0..t * t).map(|i| acc.confidence(i as usize)).collect::<Vec<f32>>()));
         }
         // over the surface the photo covers fully at the existing size, the mean share of
         // the finer textures is no lower, and no texel's share falls by more than rounding
@@ -253,10 +274,12 @@ mod tests {
         assert_eq!(magnify(&img, 1), img);
         let m = magnify(&img, 2);
         assert_eq!(m.dimensions(), (8, 8));
-        // corners clamp to the corner texels; between centres it interpolates
+        // corners clamp to the corner texels; between centres it interpolates in linear light
         assert_eq!(m.get_pixel(0, 0).0, [0, 0, 7, 255]);
         assert_eq!(m.get_pixel(7, 7).0, [180, 180, 7, 255]);
-        assert_eq!(m.get_pixel(1, 0).0[0], 15);
-        assert_eq!(m.get_pixel(2, 0).0[0], 45);
+        let lin = |v: u8| decode_u8(v);
+        assert_eq!(m.get_pixel(1, 0).0[0], encode_u8(0.75 * lin(0) + 0.25 * lin(60)));
+        assert_eq!(m.get_pixel(2, 0).0[0], encode_u8(0.25 * lin(0) + 0.75 * lin(60)));
+        assert!(m.pixels().all(|p| p.0[2] == 7 && p.0[3] == 255));
     }
 }

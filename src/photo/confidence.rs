@@ -106,10 +106,13 @@ impl ConfidenceParams {
     /// smooth and non-decreasing in the ratio, 0 at or below `2^resolution_ramp[0]`, 1 at or
     /// above `2^resolution_ramp[1]`; 0 for NaN, 1 for an infinite ratio.
     pub fn resolution_weight(&self, ratio: f64) -> f64 {
-        if ratio.is_nan() || ratio <= 0.0 {
+        let [lo, hi] = self.resolution_ramp;
+        if ratio.is_nan() || ratio <= lo.exp2() {
             return 0.0;
         }
-        let [lo, hi] = self.resolution_ramp;
+        if ratio >= hi.exp2() {
+            return 1.0;
+        }
         smoothstep((ratio.log2() - lo) / (hi - lo))
     }
 

@@ -19,7 +19,6 @@
 use image::RgbaImage;
 
 use super::accumulate::{CellContext, PhotoAccum};
-use super::confidence::ConfidenceParams;
 
 /// A per-channel affine colour map on sRGB values in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,8 +49,11 @@ pub struct LevelingParams {
     pub max_samples: usize,
     /// Steepest surface slope of a sample, degrees from horizontal (default 30).
     pub max_slope_deg: f64,
-    /// Lowest photo texel confidence of a sample (default 0.5).
+    /// Lowest photo coverage confidence of a sample (default 0.5).
     pub min_confidence: f32,
+    /// Most oblique view of a sample, as `1 / cos_view` (default 2: within 60° of the
+    /// surface normal).
+    pub max_grazing: f32,
     /// Luminance range (0..1) both colours must lie in (default [0.04, 0.96]).
     pub luminance: [f32; 2],
     /// Below this standard deviation of a channel's photo values only an offset is fitted
@@ -68,6 +70,7 @@ impl Default for LevelingParams {
             max_samples: 200_000,
             max_slope_deg: 30.0,
             min_confidence: 0.5,
+            max_grazing: 2.0,
             luminance: [0.04, 0.96],
             min_spread: 0.02,
             gain_range: [0.25, 4.0],
@@ -99,20 +102,19 @@ pub fn normal_cos_slope(px: [u8; 3]) -> f64 {
 
 /// Appends the samples of one cell: photo deposits `acc` (untransformed sRGB colours, at
 /// the existing texture's size), the cell's existing texture and its [`CellContext`] (the
-/// slopes of its normal map). A texel qualifies where the existing colour is fully known,
-/// the surface is flat and the photo's coverage confidence reaches `min_confidence`, and
-/// the photo resolves the surface at least as finely as the existing texture does (its
-/// resolution weight `weights.resolution_weight` at least 1/2: grazing views of flat ground
-/// smear each pixel over metres). Colours are averaged over blocks of `k × k` texels whose
-/// texels all qualify, `k` the power of two that makes a block as large as the existing
-/// texture's ground sample distance, so that the photo is compared at the ortho's
-/// resolution and its finer detail does not bias the gain low. Both block means must be well
-/// lit. On a size mismatch nothing is added. Returns the number of samples added.
+/// slopes of its normal map). Colours are averaged over blocks of `k × k` texels, `k` the
+/// power of two that makes a block as large as the existing texture's ground sample
+/// distance, so that the photo is compared at the ortho's resolution and its finer detail
+/// does not bias the gain low. A block counts if all its texels qualify: the existing colour
+/// fully known, the surface flat, the photo's coverage confidence at least `min_confidence`,
+/// seen no more obliquely than `1 / cos_view = max_grazing`, its pixel footprint no larger
+/// than the block and the displacement the TIN's error causes along its rays
+/// (`ε · cos θ / cos_view`) within a block; and if both block means are well lit. On a
+/// size mismatch nothing is added. Returns the number of samples added.
 pub fn collect_pairs(
     acc: &PhotoAccum,
     existing: &RgbaImage,
     ctx: &CellContext,
-    weights: &ConfidenceParams,
     params: &LevelingParams,
     out: &mut ColourPairs,
 ) -> usize {
@@ -127,14 +129,19 @@ pub fn collect_pairs(
     while (k as f32) < ratio && k < 16 && 2 * k <= t {
         k *= 2;
     }
+    // a block's side on the ground, metres
+    let block = k as f32 * ctx.texel_ground;
     let qualifies = |i: usize| -> Option<([f32; 3], [f32; 3])> {
         let e = existing.as_raw().get(4 * i..4 * i + 4)?;
         if e[3] != 255 || acc.confidence(i) < params.min_confidence || ctx.cos_at(i) < cos_max {
             return None;
         }
         let p = acc.colour_at(i)?;
-        let r = ctx.existing_resolution(i) as f64 / ctx.photo_resolution(i, acc.footprint_at(i)) as f64;
-        if weights.resolution_weight(r) < 0.5 {
+        // seen within 60° of the normal, the pixel no larger than a block and the TIN's
+        // displacement of it within a block: photo and ortho block show the same ground
+        let [r, g] = acc.footprint_at(i);
+        let misplaced = ctx.max_error * ctx.cos_at(i) * g;
+        if !(g <= params.max_grazing && r <= block && misplaced <= block) {
             return None;
         }
         Some((p, [e[0], e[1], e[2]].map(|v| v as f32 / 255.0)))
@@ -310,30 +317,36 @@ mod tests {
     }
 
     #[test]
-    fn collects_only_flat_bright_confident_sharp_texels() {
+    fn collects_only_flat_bright_confident_well_placed_texels() {
         let mut acc = PhotoAccum::new(2);
         // texel 0: confident and sharp; texel 1: steep; texel 2: dark; texel 3: smeared (a
         // pixel of 5 m on ground the ortho resolves to 1 m)
         for (t, c, r) in [(0usize, 0.5f32, 0.1f32), (1, 0.5, 0.1), (2, 0.01, 0.1), (3, 0.5, 5.0)] {
-            acc.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3], footprint: r, grazing: 1.0 };
+            acc.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3], footprint: r, grazing: 1.2 };
         }
         let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
         let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.0, 1.0, 1.0], max_error: 0.0, existing_ground: 1.0, texel_ground: 1.0 };
-        let w = ConfidenceParams::default();
+        let lp = LevelingParams::default();
         let mut pairs = ColourPairs::default();
-        assert_eq!(collect_pairs(&acc, &existing, &ctx, &w, &LevelingParams::default(), &mut pairs), 1);
+        assert_eq!(collect_pairs(&acc, &existing, &ctx, &lp, &mut pairs), 1);
         assert_eq!(pairs.photo, vec![[0.5; 3]]);
-        assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &ctx, &w, &LevelingParams::default(), &mut pairs), 0);
+        assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &ctx, &lp, &mut pairs), 0);
+        // seen too obliquely, or displaced too far by the TIN's error: no sample
+        let mut oblique = acc.clone();
+        oblique.sums[0].grazing = 2.5;
+        assert_eq!(collect_pairs(&oblique, &existing, &ctx, &lp, &mut ColourPairs::default()), 0);
+        let rough = CellContext { max_error: 0.9, ..ctx.clone() };
+        assert_eq!(collect_pairs(&acc, &existing, &rough, &lp, &mut ColourPairs::default()), 0);
         // texels of half the ortho's spacing: 2 x 2 blocks, which texel 1 spoils here
         let half = CellContext { texel_ground: 0.5, ..ctx.clone() };
-        assert_eq!(collect_pairs(&acc, &existing, &half, &w, &LevelingParams::default(), &mut pairs), 0);
+        assert_eq!(collect_pairs(&acc, &existing, &half, &lp, &mut pairs), 0);
         let mut flat = acc.clone();
         for t in 0..4 {
-            flat.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [0.2 + 0.1 * t as f32; 3], footprint: 0.1, grazing: 1.0 };
+            flat.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [0.2 + 0.1 * t as f32; 3], footprint: 0.1, grazing: 1.2 };
         }
         let ok = CellContext { cos_slope: vec![1.0; 4], ..half };
         let mut pairs = ColourPairs::default();
-        assert_eq!(collect_pairs(&flat, &existing, &ok, &w, &LevelingParams::default(), &mut pairs), 1);
+        assert_eq!(collect_pairs(&flat, &existing, &ok, &lp, &mut pairs), 1);
         assert!((pairs.photo[0][0] - 0.35).abs() < 1e-6);
     }
 }

@@ -4,10 +4,16 @@
 //!
 //! Per cell, [`SizingBins`] divides the existing texture into 16 × 16 bins and keeps in each
 //! the side (in existing texels, `√area` of the footprint scaled to the full-resolution
-//! photo) of the finest photo pixel whose footprint centre falls there, over all photos. The
+//! photo) of the finest photo pixel whose footprint centre falls there, over all photos,
+//! among the pixels the blend would let dominate (photo resolution at least twice the
+//! existing texture's there), and counts all the pixels the cell receives. The
 //! cell wants the scale `2^m` (a power of two) that makes a texel no larger than the median
 //! of those bin minima: `m = max(0, ⌈log2(k / side)⌉)` for `k` texels per pixel side
-//! (default 1), capped so that the side stays within `max_texels`. (Allowing texels up to
+//! (default 1), capped so that the side stays within `max_texels` and the texture holds no
+//! more than `texels_per_delivered` texels per full-resolution photo pixel the cell receives
+//! (a speed and memory knob, unbounded by default: a cell the photos cover only in part
+//! otherwise gets a large texture that is mostly magnified ortho; Engabreen: 604 MB of photo
+//! textures for one 12-MP photo unbounded, 97 MB at 4 texels per pixel, docs/projection.md). (Allowing texels up to
 //! 1.19× the pixel instead lost 5 % of the oracle's gain in one evaluation view and saved
 //! 8 % of the memory, docs/evaluation.md.) [`choose_scales`] then fits the wanted scales of one level
 //! into that level's byte budget by halving, one step at a time, the cell whose photo bins
@@ -26,35 +32,45 @@ pub fn texture_bytes(texels: u32) -> u64 {
 }
 
 /// Per bin of a cell's existing texture, the side of the finest full-resolution photo pixel
-/// seen there (existing texels; infinite where no footprint fell).
+/// seen there (existing texels; infinite where no footprint fell), and how many
+/// full-resolution photo pixels the cell receives (all photos).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SizingBins {
     /// Row-major [`SIZING_BINS`]² minima.
     pub side: Vec<f32>,
+    /// Full-resolution photo pixels whose footprints fell on the texture (a footprint of an
+    /// image `1/side_scale` times smaller counts `1/side_scale²`).
+    pub pixels: f64,
 }
 
 impl Default for SizingBins {
     fn default() -> Self {
-        SizingBins { side: vec![f32::INFINITY; SIZING_BINS * SIZING_BINS] }
+        SizingBins { side: vec![f32::INFINITY; SIZING_BINS * SIZING_BINS], pixels: 0.0 }
     }
 }
 
 impl SizingBins {
     /// Adds a footprint (corners in texels of a `base_texels` existing texture) cast from a
     /// photo image `1 / side_scale` times smaller than the full-resolution one (its side is
-    /// multiplied by `side_scale` to give the full-resolution pixel's).
-    pub fn add(&mut self, fp: &PixelFootprint, base_texels: u32, side_scale: f32) {
+    /// multiplied by `side_scale` to give the full-resolution pixel's): it counts as
+    /// `1 / side_scale²` delivered pixels, and its side enters the bins if `sizes` (the
+    /// pixels the blend would give weight to).
+    pub fn add(&mut self, fp: &PixelFootprint, base_texels: u32, side_scale: f32, sizes: bool) {
         let area = footprint_area(&fp.corners);
         if !(area > 0.0) {
             return;
         }
-        let side = area.sqrt() as f32 * side_scale;
         let c = fp.corners.iter().fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
         let n = SIZING_BINS as f32 / base_texels.max(1) as f32;
         let (bx, by) = ((c[0] * n).floor(), (c[1] * n).floor());
         if !(bx >= 0.0 && by >= 0.0 && bx < SIZING_BINS as f32 && by < SIZING_BINS as f32) {
             return;
         }
+        self.pixels += 1.0 / (side_scale as f64 * side_scale as f64);
+        if !sizes {
+            return;
+        }
+        let side = area.sqrt() as f32 * side_scale;
         let b = &mut self.side[by as usize * SIZING_BINS + bx as usize];
         if side < *b {
             *b = side;
@@ -67,9 +83,10 @@ impl SizingBins {
     }
 
     /// The scale (a power of two, at least 1, at most `max_scale`) the bins want for
-    /// `texels_per_pixel` texels per photo pixel side (1 in the [module docs](self)); 1
-    /// without covered bins.
-    pub fn wanted_scale(&self, max_scale: u32, texels_per_pixel: f64) -> u32 {
+    /// `texels_per_pixel` texels per photo pixel side (1 in the [module docs](self)), and no
+    /// more than `texels_per_delivered` texels (at the existing texture's side `base_texels`
+    /// times the scale) per photo pixel the cell receives; 1 without covered bins.
+    pub fn wanted_scale(&self, max_scale: u32, texels_per_pixel: f64, base_texels: u32, texels_per_delivered: f64) -> u32 {
         let mut v: Vec<f32> = self.side.iter().copied().filter(|s| s.is_finite()).collect();
         if v.is_empty() {
             return 1;
@@ -79,7 +96,8 @@ impl SizingBins {
         let want = (texels_per_pixel.max(1e-3) / median.max(1e-6) as f64).log2() - 1e-9;
         let m = want.ceil().clamp(0.0, 16.0) as u32;
         let mut scale = 1u32 << m;
-        while scale > max_scale.max(1) {
+        let allowed = texels_per_delivered * self.pixels;
+        while scale > max_scale.max(1) || (scale > 1 && (base_texels as f64 * scale as f64).powi(2) > allowed) {
             scale /= 2;
         }
         scale
@@ -137,36 +155,50 @@ mod tests {
         let mut b = SizingBins::default();
         for j in 0..64 {
             for i in 0..32 {
-                b.add(&fp(i as f32 * 4.0, j as f32 * 4.0, 0.1), 256, 1.0);
+                b.add(&fp(i as f32 * 4.0, j as f32 * 4.0, 0.1), 256, 1.0, true);
             }
         }
         assert_eq!(b.covered(), 128);
         // a tenth: 2^ceil(log2(10)) = 16
-        assert_eq!(b.wanted_scale(64, 1.0), 16);
-        assert_eq!(b.wanted_scale(4, 1.0), 4);
+        assert_eq!(b.wanted_scale(64, 1.0, 256, f64::INFINITY), 16);
+        assert_eq!(b.wanted_scale(4, 1.0, 256, f64::INFINITY), 4);
         for j in 0..64 {
             for i in 32..64 {
-                b.add(&fp(i as f32 * 4.0, j as f32 * 4.0, 2.0), 256, 1.0);
+                b.add(&fp(i as f32 * 4.0, j as f32 * 4.0, 2.0), 256, 1.0, true);
             }
         }
         // the median bin now holds a coarse pixel: no upsizing
-        assert_eq!(b.wanted_scale(64, 1.0), 1);
+        assert_eq!(b.wanted_scale(64, 1.0, 256, f64::INFINITY), 1);
         // a pixel of 0.6 texel: scale 2 (texels of 0.83 pixel),
         // cast from a 4x smaller image
         let mut c = SizingBins::default();
-        c.add(&fp(10.0, 10.0, 2.4), 256, 0.25);
-        assert_eq!(c.wanted_scale(64, 1.0), 2);
+        c.add(&fp(10.0, 10.0, 2.4), 256, 0.25, true);
+        assert_eq!(c.wanted_scale(64, 1.0, 256, f64::INFINITY), 2);
         // two texels per pixel side: one doubling more
-        assert_eq!(c.wanted_scale(64, 2.0), 4);
+        assert_eq!(c.wanted_scale(64, 2.0, 256, f64::INFINITY), 4);
         // a pixel of exactly half a texel: scale 2, not 4
         let mut e = SizingBins::default();
-        e.add(&fp(10.0, 10.0, 0.5), 256, 1.0);
-        assert_eq!(e.wanted_scale(64, 1.0), 2);
-        assert_eq!(SizingBins::default().wanted_scale(64, 1.0), 1);
+        e.add(&fp(10.0, 10.0, 0.5), 256, 1.0, true);
+        assert_eq!(e.wanted_scale(64, 1.0, 256, f64::INFINITY), 2);
+        assert_eq!(SizingBins::default().wanted_scale(64, 1.0, 256, f64::INFINITY), 1);
+        // 2048 footprints of a tenth of a texel: at 4 texels per delivered pixel, at most
+        // 8192 texels, i.e. no enlargement of a 256-texel texture (65 536 texels)
+        let mut few = SizingBins::default();
+        for i in 0..2048 {
+            few.add(&fp((i % 64) as f32 * 4.0, (i / 64) as f32 * 4.0, 0.1), 256, 1.0, true);
+        }
+        assert_eq!(few.pixels, 2048.0);
+        assert_eq!(few.wanted_scale(64, 1.0, 256, f64::INFINITY), 16);
+        assert_eq!(few.wanted_scale(64, 1.0, 256, 4.0), 1);
+        assert_eq!(few.wanted_scale(64, 1.0, 32, 4.0), 2);
+        // footprints the blend would not use count as delivered pixels but do not size
+        let mut unused = SizingBins::default();
+        unused.add(&fp(10.0, 10.0, 0.1), 256, 1.0, false);
+        assert_eq!((unused.pixels, unused.covered()), (1.0, 0));
         // footprints outside the texture are ignored
         let mut d = SizingBins::default();
-        d.add(&fp(-5.0, 10.0, 0.1), 256, 1.0);
-        d.add(&fp(300.0, 10.0, 0.1), 256, 1.0);
+        d.add(&fp(-5.0, 10.0, 0.1), 256, 1.0, true);
+        d.add(&fp(300.0, 10.0, 0.1), 256, 1.0, true);
         assert_eq!(d.covered(), 0);
     }
 

@@ -97,11 +97,15 @@ pub struct PhotoTextureOptions {
     pub budget_bytes: u64,
     /// Texels per photo pixel side the sizing aims at, in [0.25, 4]. Default 1.
     pub texels_per_pixel: f64,
+    /// Most texels an enlarged texture holds per full-resolution photo pixel its cell
+    /// receives (> 0; a speed and memory knob: cells the photos cover only in part get
+    /// smaller textures). Default infinite (no bound: sizes follow the finest detail).
+    pub texels_per_delivered: f64,
 }
 
 impl Default for PhotoTextureOptions {
     fn default() -> Self {
-        PhotoTextureOptions { photo_driven: true, max_texels: 2048, budget_bytes: 1 << 30, texels_per_pixel: 1.0 }
+        PhotoTextureOptions { photo_driven: true, max_texels: 2048, budget_bytes: 1 << 30, texels_per_pixel: 1.0, texels_per_delivered: f64::INFINITY }
     }
 }
 
@@ -110,6 +114,9 @@ impl PhotoTextureOptions {
     pub fn validate(&self) -> Result<()> {
         if !(self.max_texels.is_power_of_two() && (64..=8192).contains(&self.max_texels)) {
             return Err(Error::BadOption(format!("--max-photo-texels must be a power of two in 64..=8192, got {}", self.max_texels)));
+        }
+        if !(self.texels_per_delivered > 0.0) {
+            return Err(Error::BadOption(format!("texels per delivered pixel must be positive, got {}", self.texels_per_delivered)));
         }
         if !(0.25..=4.0).contains(&self.texels_per_pixel) {
             return Err(Error::BadOption(format!("--texels-per-pixel must be in [0.25, 4], got {}", self.texels_per_pixel)));
@@ -436,7 +443,7 @@ impl LevelRun<'_> {
                 *first_scene = Some(scene);
             }
         }
-        let sizing = self.size_level(level, cached, &mut scenes)?;
+        let mut sizing = self.size_level(level, cached, &mut scenes)?;
         timer.lap(&format!("level {level}: texture sizes"));
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
@@ -477,14 +484,17 @@ impl LevelRun<'_> {
             let written: Vec<Result<u64>> = accs
                 .par_iter_mut()
                 .zip(pas.into_par_iter())
+                .zip(sizing.contexts.par_iter_mut())
                 .enumerate()
-                .map(|(ci, (acc, pa))| match (acc.as_mut(), pa) {
+                .map(|(ci, ((acc, pa), ctx))| match (acc.as_mut(), pa) {
                     (_, None) => Ok(0),
                     (Some(acc), Some(pa)) => Ok(acc.merge(&pa, pi as u16)),
                     (None, Some(pa)) => {
-                        let ctx = cell_context(self.store, &cells[ci])?;
-                        let mut first = CellAccum::new(pa.texels, pa.scale, self.opts.blend, ctx, &self.opts.confidence);
-                        let n = first.merge(&pa, pi as u16);
+                        let ctx = match ctx.take() {
+                            Some(c) => c,
+                            None => cell_context(self.store, &cells[ci])?,
+                        };
+                        let (first, n) = CellAccum::from_photo(pa, pi as u16, self.opts.blend, ctx, &self.opts.confidence);
                         *acc = Some(first);
                         Ok(n)
                     }
@@ -512,42 +522,66 @@ impl LevelRun<'_> {
     ) -> Result<LevelSizing> {
         let cells = &self.store.manifest.cells;
         let topt = &self.opts.texture;
-        let mut out = LevelSizing { scales: vec![1; cells.len()], ..LevelSizing::default() };
+        let mut out = LevelSizing { scales: vec![1; cells.len()], contexts: vec![None; cells.len()], ..LevelSizing::default() };
         if !topt.photo_driven {
             return Ok(out);
         }
         let step = self.finest - level;
-        let mut bins: Vec<Option<SizingBins>> = vec![None; cells.len()];
-        let mut add = |fs: &FootprintSet, side_scale: f32| {
-            for cf in &fs.cells {
-                let ci = cf.cell as usize;
-                if ci < cells.len() && cells[ci].level as usize == level {
-                    let base = active_texels(&cells[ci]);
-                    let b = bins[ci].get_or_insert_with(SizingBins::default);
-                    for fp in cf.iter() {
-                        b.add(fp, base, side_scale);
-                    }
+        // each photo's footprints for the sizing: cached from the leveling, or cast from the
+        // image two halvings coarser (side scale: coarse pixel side to this level's)
+        let mut sets: Vec<(std::borrow::Cow<FootprintSet>, f32, f64)> = Vec::new();
+        for (pi, pyr) in self.pyramids.iter().enumerate() {
+            let (_, cam) = pyr.level(step);
+            let focal = (cam.fx * cam.fy).sqrt();
+            if let Some((l, fs)) = &cached[pi] {
+                if *l == level {
+                    sets.push((std::borrow::Cow::Borrowed(fs), 1.0, focal));
+                    continue;
                 }
             }
-        };
-        for (pi, pyr) in self.pyramids.iter().enumerate() {
-            match &cached[pi] {
-                Some((l, fs)) if *l == level => add(fs, 1.0),
-                _ => {
-                    let (_, cam) = pyr.level(step);
-                    let scene = match scenes[pi].take() {
-                        Some(s) => s,
-                        None => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
-                    };
-                    let coarse = (step + SIZING_STEPS).min(pyr.steps());
-                    let (_, ccam) = pyr.level(coarse);
-                    let fs = photo_footprints_in(self.buffers, &scene, &ccam, &self.opts.footprint);
-                    add(&fs, 0.5f32.powi((coarse - step) as i32));
-                    self.buffers.recycle(fs);
-                    scenes[pi] = Some(scene);
+            let scene = match scenes[pi].take() {
+                Some(s) => s,
+                None => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
+            };
+            let coarse = (step + SIZING_STEPS).min(pyr.steps());
+            let (_, ccam) = pyr.level(coarse);
+            let fs = photo_footprints_in(self.buffers, &scene, &ccam, &self.opts.footprint);
+            sets.push((std::borrow::Cow::Owned(fs), 0.5f32.powi((coarse - step) as i32), focal));
+            scenes[pi] = Some(scene);
+        }
+        // the resolution rule's view of every cell the photos reach
+        let mut seen = vec![false; cells.len()];
+        for (fs, ..) in &sets {
+            for cf in &fs.cells {
+                if let Some(v) = seen.get_mut(cf.cell as usize) {
+                    *v = cells[cf.cell as usize].level as usize == level;
                 }
             }
         }
+        let contexts: Vec<Option<CellContext>> = (0..cells.len())
+            .into_par_iter()
+            .map(|ci| if seen[ci] { cell_context(self.store, &cells[ci]).map(Some) } else { Ok(None) })
+            .collect::<Result<_>>()?;
+        // every footprint counts as a delivered pixel; only those the blend lets dominate
+        // size the texture
+        let weights = &self.opts.confidence;
+        let mut bins: Vec<Option<SizingBins>> = vec![None; cells.len()];
+        for (fs, side_scale, focal) in &sets {
+            for cf in &fs.cells {
+                let ci = cf.cell as usize;
+                let Some(ctx) = contexts.get(ci).and_then(Option::as_ref) else { continue };
+                let b = bins[ci].get_or_insert_with(SizingBins::default);
+                for fp in cf.iter() {
+                    b.add(fp, ctx.base_texels, *side_scale, resolves_more(ctx, fp, *focal, weights));
+                }
+            }
+        }
+        for (fs, _, _) in sets {
+            if let std::borrow::Cow::Owned(fs) = fs {
+                self.buffers.recycle(fs);
+            }
+        }
+        out.contexts = contexts;
         let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
         let requests: Vec<SizeRequest> = level_cells
             .iter()
@@ -557,7 +591,7 @@ impl LevelRun<'_> {
                 match &bins[ci] {
                     Some(b) => SizeRequest {
                         base_texels: base,
-                        scale: b.wanted_scale(max_scale, topt.texels_per_pixel),
+                        scale: b.wanted_scale(max_scale, topt.texels_per_pixel, base, topt.texels_per_delivered),
                         covered: b.covered() as f64 / (SIZING_BINS * SIZING_BINS) as f64,
                     },
                     None => SizeRequest { base_texels: base, scale: 1, covered: 0.0 },
@@ -591,6 +625,25 @@ struct LevelSizing {
     upsized: u64,
     /// This level's share of the budget, bytes.
     budget_bytes: u64,
+    /// The cells' resolution contexts loaded for the sizing (indexed by manifest cell).
+    contexts: Vec<Option<CellContext>>,
+}
+
+/// Whether the photo pixel of footprint `fp` (cast for an image of focal length `focal`
+/// pixels) would get weight against cell `ctx`'s existing texture by the resolution rule
+/// (the texel under its centre; [`ConfidenceParams::resolution_weight`] at least 1/2: the
+/// photo dominates there).
+fn resolves_more(ctx: &CellContext, fp: &crate::photo::PixelFootprint, focal: f64, weights: &ConfidenceParams) -> bool {
+    let c = fp.corners.iter().fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
+    let n = ctx.base_texels as f32;
+    if !(c[0] >= 0.0 && c[1] >= 0.0 && c[0] < n && c[1] < n) {
+        return false;
+    }
+    let b = c[1] as usize * ctx.base_texels as usize + c[0] as usize;
+    let g = 1.0 / fp.cos_view.max(1e-3);
+    let r = fp.distance / focal as f32 * g;
+    let ratio = ctx.existing_resolution(b) as f64 / ctx.photo_resolution(b, [r, g]) as f64;
+    weights.resolution_weight(ratio) >= 0.5
 }
 
 /// Blends and writes the photo textures of every cell of `level` from its accumulators
@@ -671,7 +724,7 @@ fn estimate_leveling(
                 let ctx = cell_context(store, rec)?;
                 check_size(store, rec, existing.dimensions(), (ctx.base_texels, ctx.base_texels))?;
                 let mut pairs = ColourPairs::default();
-                collect_pairs(pa, &existing, &ctx, &opts.confidence, &opts.leveling, &mut pairs);
+                collect_pairs(pa, &existing, &ctx, &opts.leveling, &mut pairs);
                 Ok(pairs)
             })
             .collect();
@@ -682,6 +735,7 @@ fn estimate_leveling(
             all.existing.extend(p.existing);
         }
         let (t, n) = fit_colour_transform(&all, &opts.leveling);
+        tracing::debug!("project: leveling on level {level} (pyramid step {step}): {} samples, {n} used", all.photo.len());
         if n > 0 {
             return Ok((t, n, Some((level, fs))));
         }
@@ -769,12 +823,16 @@ fn finish_cell(
     let existing = store.read_active_texture(rec)?;
     let ctx = &acc.context;
     check_size(store, rec, existing.dimensions(), (ctx.base_texels, ctx.base_texels))?;
-    let covered = covered_mask(store, rec, acc.texels)?;
-    let steep: Vec<bool> = covered
-        .iter()
-        .enumerate()
-        .map(|(t, &c)| c && ctx.cos_at(ctx.base_index(t, acc.texels, acc.scale)) < cos_steep)
-        .collect();
+    // (the active texture's masks looked up for the photo texture's texels: these masks only
+    // feed the texel counts)
+    let base_covered = covered_mask(store, rec, ctx.base_texels)?;
+    let n = acc.texels as usize * acc.texels as usize;
+    let (mut covered, mut steep) = (vec![false; n], vec![false; n]);
+    for t in 0..n {
+        let b = ctx.base_index(t, acc.texels, acc.scale);
+        covered[t] = base_covered.get(b).copied().unwrap_or(false);
+        steep[t] = covered[t] && ctx.cos_at(b) < cos_steep;
+    }
     let b = blend_cell(&existing, acc, &opts.confidence, opts.colour_space, &covered, &steep);
     let area = (acc.scale as u64).pow(2);
     let steep_texels = b.steep_texels / area;

@@ -56,15 +56,33 @@ pub struct TextureMemory {
     pub reparam_bytes: u64,
     /// Stretched cells reparameterized at twice the side.
     pub mixed_bytes: u64,
+    /// As stored, with each cell's photo texture where it has one (the default render):
+    /// photo colour at its own size, normal map at the active size.
+    #[serde(default)]
+    pub photo_bytes: u64,
 }
 
 /// Texture memory per mode for a store's cells (independent of which mode was built).
 pub fn texture_memory(cells: &[CellRecord], cell_texels: u32) -> TextureMemory {
     let per = |t: u32| (t as u64 * t as u64 * 7 * 4).div_ceil(3); // (4 + 3) bytes, mips 4/3
+    let mips = |t: u32, bytes: u64| (t as u64 * t as u64 * bytes * 4).div_ceil(3);
     let base = per(cell_texels);
     let n = cells.len() as u64;
     let n_re = cells.iter().filter(|c| c.reparam.is_some()).count() as u64;
-    TextureMemory { ortho_bytes: n * base, reparam_bytes: n * base, mixed_bytes: (n - n_re) * base + n_re * per(2 * cell_texels) }
+    let photo_bytes = cells
+        .iter()
+        .map(|c| {
+            let active = crate::store::active_texels(c);
+            let colour = c.photo.as_ref().map_or(active, |p| p.texels);
+            mips(colour, 4) + mips(active, 3)
+        })
+        .sum();
+    TextureMemory {
+        ortho_bytes: n * base,
+        reparam_bytes: n * base,
+        mixed_bytes: (n - n_re) * base + n_re * per(2 * cell_texels),
+        photo_bytes,
+    }
 }
 
 /// Runs `reparam` on the store in `dir`: parameterizes every cell above the threshold,
