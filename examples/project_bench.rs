@@ -16,7 +16,11 @@
 //! ```sh
 //! cargo run --release --example project_bench -- [STORE_DIR] [RUNS] [ACCELS]
 //! ```
-//! `ACCELS` is a comma-separated list of `--ray-accel` values (default `grid,bvh:fast`).
+//! `ACCELS` is a comma-separated list of variants `ACCEL[+TEXTURES]`: a `--ray-accel` value,
+//! optionally with the photo texture sizes `fixed` (the cells' own sizes,
+//! `--fixed-photo-texels`) or `tpdN` (`--max-texels-per-photo-pixel N`); default
+//! `grid,bvh:fast` (photo-driven sizes, the defaults of `cliffmap project`). The table also
+//! gives the photo texture memory each variant wrote.
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;
@@ -25,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bench_util::{cpu_seconds, median, shared_data};
-use cliffmap::pipeline::{project_store, reparam_store, ProjectOptions, ReparamOptions};
+use cliffmap::pipeline::{project_store, reparam_store, PhotoTextureOptions, ProjectOptions, ReparamOptions};
 use cliffmap::photo::{read_photo_list, RayAccel};
 
 
@@ -54,11 +58,11 @@ fn main() -> anyhow::Result<()> {
     let tmp = tempfile::tempdir()?;
     let dir = args.get(1).map_or_else(|| tmp.path().join("store"), PathBuf::from);
     let runs: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(3).max(1);
-    let accels: Vec<RayAccel> = args
+    let variants: Vec<(String, RayAccel, PhotoTextureOptions)> = args
         .get(3)
         .map_or("grid,bvh:fast", String::as_str)
         .split(',')
-        .map(|m| RayAccel::parse(m).ok_or_else(|| anyhow::anyhow!("bad acceleration {m}")))
+        .map(parse_variant)
         .collect::<anyhow::Result<_>>()?;
     if !dir.join("manifest.json").is_file() {
         engabreen_store(&dir)?;
@@ -80,42 +84,73 @@ fn main() -> anyhow::Result<()> {
         rayon::current_num_threads()
     );
 
-    let mut wall = vec![Vec::new(); accels.len()];
-    let mut cpu = vec![Vec::new(); accels.len()];
-    let mut stages: Vec<Vec<Vec<(String, f64)>>> = vec![Vec::new(); accels.len()];
+    let n = variants.len();
+    let mut wall = vec![Vec::new(); n];
+    let mut cpu = vec![Vec::new(); n];
+    let mut bytes = vec![0u64; n];
+    let mut stages: Vec<Vec<Vec<(String, f64)>>> = vec![Vec::new(); n];
     for run in 0..runs {
-        for (k, accel) in accels.iter().enumerate() {
+        for (k, (_, accel, texture)) in variants.iter().enumerate() {
             let work = tmp.path().join(format!("run{run}-{k}"));
             copy_dir(&dir, &work)?;
-            let opts = ProjectOptions { ray: *accel, quiet: true, ..ProjectOptions::default() };
+            let opts = ProjectOptions { ray: *accel, texture: *texture, quiet: true, ..ProjectOptions::default() };
             let (c0, t0) = (cpu_seconds(), Instant::now());
             let report = project_store(&work, &photos, &opts)?;
             wall[k].push(t0.elapsed().as_secs_f64());
             cpu[k].push(cpu_seconds() - c0);
+            bytes[k] = report.settings.levels.iter().map(|l| l.photo_texture_bytes).sum();
             stages[k].push(report.stage_seconds);
         }
     }
     let base = median(wall[0].clone());
-    println!("| acceleration | wall s (median) | CPU s (median) | wall × first |");
-    println!("|---|---|---|---|");
-    for (k, accel) in accels.iter().enumerate() {
+    println!("| variant | wall s (median) | CPU s (median) | wall × first | photo textures MB |");
+    println!("|---|---|---|---|---|");
+    for (k, (name, ..)) in variants.iter().enumerate() {
         let m = median(wall[k].clone());
-        println!("| {} | {m:.2} | {:.2} | {:.2} |", accel.name(), median(cpu[k].clone()), m / base);
+        println!("| {name} | {m:.2} | {:.2} | {:.2} | {:.0} |", median(cpu[k].clone()), m / base, bytes[k] as f64 / 1e6);
     }
-    println!("\nStage wall seconds (medians):\n");
+    println!("\nStage wall seconds (medians; - where a variant has no such stage):\n");
     print!("| stage |");
-    for a in &accels {
-        print!(" {} |", a.name());
+    for (name, ..) in &variants {
+        print!(" {name} |");
     }
     println!();
-    println!("|---|{}", "---|".repeat(accels.len()));
-    for (i, (name, _)) in stages[0][0].iter().enumerate() {
+    println!("|---|{}", "---|".repeat(n));
+    let mut names: Vec<&String> = Vec::new();
+    for st in &stages {
+        for (name, _) in &st[0] {
+            if !names.contains(&name) {
+                names.push(name);
+            }
+        }
+    }
+    for name in names {
         print!("| {name} |");
         for st in &stages {
-            let v: Vec<f64> = st.iter().filter_map(|r| r.get(i).map(|x| x.1)).collect();
-            print!(" {:.3} |", median(v));
+            let v: Vec<f64> = st.iter().filter_map(|r| r.iter().find(|x| &x.0 == name).map(|x| x.1)).collect();
+            if v.is_empty() {
+                print!(" - |");
+            } else {
+                print!(" {:.3} |", median(v));
+            }
         }
         println!();
     }
     Ok(())
+}
+
+/// A variant `ACCEL[+fixed|+tpdN]` (see the module docs).
+fn parse_variant(v: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptions)> {
+    let (accel, texture) = v.split_once('+').map_or((v, None), |(a, t)| (a, Some(t)));
+    let accel = RayAccel::parse(accel).ok_or_else(|| anyhow::anyhow!("bad acceleration {accel}"))?;
+    let mut opts = PhotoTextureOptions::default();
+    match texture {
+        None => {}
+        Some("fixed") => opts.photo_driven = false,
+        Some(t) => {
+            let n: f64 = t.strip_prefix("tpd").and_then(|n| n.parse().ok()).ok_or_else(|| anyhow::anyhow!("bad texture variant {t}"))?;
+            opts.texels_per_delivered = n;
+        }
+    }
+    Ok((v.replace(':', " "), accel, opts))
 }

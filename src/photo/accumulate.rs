@@ -22,6 +22,7 @@ use super::confidence::{BorderFeather, ConfidenceParams};
 use super::level::ColourTransform;
 use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
 use super::PixelFootprint;
+pub use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::colour::ColourSpace;
 
 /// How several photos' colours combine in a texel.
@@ -44,21 +45,6 @@ impl BlendMode {
             BlendMode::Best => "best",
         }
     }
-}
-
-/// The sums of one texel (kept together: a deposit touches one record).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct TexelSums {
-    /// `A`: deposited footprint area (texels²).
-    pub coverage: f32,
-    /// `W`: feathered area.
-    pub weight: f32,
-    /// `C`: feathered area times colour (working space 0..1).
-    pub colour: [f32; 3],
-    /// `R`: feathered area times the surface footprint (metres).
-    pub footprint: f32,
-    /// `G`: feathered area over the view cosine.
-    pub grazing: f32,
 }
 
 /// A photo image prepared for splatting: its 8-bit values mapped by a colour transform and
@@ -105,8 +91,8 @@ pub struct PhotoAccum {
     /// Factor (a power of two, >= 1) from the footprints' texel units (the cell's active
     /// texture) to this texture's.
     pub scale: u32,
-    /// Per texel, row-major: the sums.
-    pub sums: Vec<TexelSums>,
+    /// Per texel, row-major: the sums (tiles allocated where footprints deposited).
+    pub sums: TexelTiles,
     /// Footprints deposited exactly / by the bilinear fallback / skipped.
     pub kinds: [u64; 3],
 }
@@ -121,8 +107,7 @@ impl PhotoAccum {
     /// texture `scale` times smaller (`scale` a power of two; corners are multiplied by it,
     /// exactly, and the size guard [`MAX_SPLAT_BBOX`] applies in the footprints' units).
     pub fn with_scale(texels: u32, scale: u32) -> PhotoAccum {
-        let n = texels as usize * texels as usize;
-        PhotoAccum { texels, scale: scale.max(1), sums: vec![TexelSums::default(); n], kinds: [0; 3] }
+        PhotoAccum { texels, scale: scale.max(1), sums: TexelTiles::new(texels), kinds: [0; 3] }
     }
 
     /// Deposits a footprint of colour `rgb` (working space 0..1) with border feather
@@ -136,7 +121,7 @@ impl PhotoAccum {
         let (qr, qg) = (q * footprint_m, q * grazing);
         let deposit = |i: usize, w: f64| {
             let w = w as f32;
-            let s = &mut sums[i];
+            let Some(s) = sums.get_mut(i) else { return };
             s.coverage += w;
             let wq = w * q;
             s.weight += wq;
@@ -199,7 +184,7 @@ impl PhotoAccum {
     /// The photo's coverage confidence at texel `t`: `W / max(1, A)`, in [0, 1].
     #[inline]
     pub fn confidence(&self, t: usize) -> f32 {
-        let s = &self.sums[t];
+        let s = self.sums.get(t);
         (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0)
     }
 
@@ -207,7 +192,7 @@ impl PhotoAccum {
     /// reached it.
     #[inline]
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
-        let s = &self.sums[t];
+        let s = self.sums.get(t);
         (s.weight > 0.0).then(|| s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)))
     }
 
@@ -215,7 +200,7 @@ impl PhotoAccum {
     /// texel `t` (NaN without deposits).
     #[inline]
     pub fn footprint_at(&self, t: usize) -> [f32; 2] {
-        let s = &self.sums[t];
+        let s = self.sums.get(t);
         [s.footprint / s.weight, s.grazing / s.weight]
     }
 }
@@ -315,12 +300,13 @@ pub struct CellAccum {
     pub scale: u32,
     /// The cell's context of the resolution rule.
     pub context: CellContext,
-    /// Per texel: the index of the photo with the largest selection weight there (the
-    /// `photo` given to [`CellAccum::merge`]; `u16::MAX` where no photo gave colour).
-    pub best_photo: Vec<u16>,
+    /// Per texel: 1 + the index of the photo with the largest selection weight there (the
+    /// `photo` given to [`CellAccum::merge`]; 0 where no photo gave colour). Read it with
+    /// [`CellAccum::best_photo`].
+    best: Vec<u16>,
     /// γ of the selection weight `confidence · resolution^−γ`.
     sharpness: f32,
-    merged: Vec<TexelSums>,
+    merged: TexelTiles,
 }
 
 impl CellAccum {
@@ -332,9 +318,9 @@ impl CellAccum {
             texels,
             scale: scale.max(1),
             context,
-            best_photo: vec![u16::MAX; n],
+            best: vec![0; n],
             sharpness: params.sharpness_power as f32,
-            merged: vec![TexelSums::default(); n],
+            merged: TexelTiles::new(texels),
         }
     }
 
@@ -351,13 +337,14 @@ impl CellAccum {
         let (texels, scale) = (p.texels, p.scale.max(1));
         let mut merged = p.sums;
         let sharpness = params.sharpness_power as f32;
-        let mut best_photo = vec![u16::MAX; merged.len()];
+        let mut best = vec![0u16; merged.len()];
+        let label = photo.saturating_add(1);
         let mut written = 0;
-        for (t, s) in merged.iter_mut().enumerate() {
+        merged.for_each_mut(|t, s| {
             match Self::photo_texel(s, &context, t, texels, scale, sharpness) {
                 Some((c, conf, res, w)) => {
                     written += 1;
-                    best_photo[t] = photo;
+                    best[t] = label;
                     *s = match mode {
                         BlendMode::Confidence => TexelSums { coverage: conf, weight: w, colour: c.map(|v| w * v), footprint: w * res, grazing: w },
                         BlendMode::Best => TexelSums { coverage: conf, weight: w, colour: c, footprint: res, grazing: w },
@@ -365,8 +352,8 @@ impl CellAccum {
                 }
                 None => *s = TexelSums::default(),
             }
-        }
-        (CellAccum { mode, texels, scale, context, best_photo, sharpness, merged }, written)
+        });
+        (CellAccum { mode, texels, scale, context, best, sharpness, merged }, written)
     }
 
     /// A photo's colour, coverage confidence, resolution and selection weight at texel `t`
@@ -388,16 +375,21 @@ impl CellAccum {
     /// it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
         let mut written = 0;
+        let label = photo.saturating_add(1);
         let n = self.merged.len().min(p.sums.len());
-        for t in 0..n {
-            let Some((c, conf, res, w)) = Self::photo_texel(&p.sums[t], &self.context, t, self.texels, self.scale, self.sharpness)
-            else {
-                continue;
+        let (ctx, texels, scale, sharpness, mode) = (&self.context, self.texels, self.scale, self.sharpness, self.mode);
+        let (merged, best) = (&mut self.merged, &mut self.best);
+        p.sums.for_each(|t, ps| {
+            if t >= n {
+                return;
+            }
+            let Some((c, conf, res, w)) = Self::photo_texel(ps, ctx, t, texels, scale, sharpness) else {
+                return;
             };
             written += 1;
-            let first = self.best_photo[t] == u16::MAX;
-            let s = &mut self.merged[t];
-            match self.mode {
+            let first = best[t] == 0;
+            let Some(s) = merged.get_mut(t) else { return };
+            match mode {
                 BlendMode::Confidence => {
                     s.weight += w;
                     for k in 0..3 {
@@ -415,24 +407,43 @@ impl CellAccum {
                 }
             }
             if first || w > s.grazing {
-                self.best_photo[t] = photo;
+                best[t] = label;
                 s.grazing = w;
             }
             s.coverage = s.coverage.max(conf);
-        }
+        });
         written
     }
 
     /// Whether some photo gave texel `t` colour.
     #[inline]
     pub fn has_colour(&self, t: usize) -> bool {
-        self.best_photo.get(t).is_some_and(|&p| p != u16::MAX)
+        self.best.get(t).is_some_and(|&p| p != 0)
+    }
+
+    /// The photo (the index given to [`CellAccum::merge`]) with the largest selection weight
+    /// at texel `t`, if some photo gave it colour.
+    #[inline]
+    pub fn best_photo(&self, t: usize) -> Option<u16> {
+        self.best.get(t).and_then(|&p| p.checked_sub(1))
+    }
+
+    /// Texels of the texture (`texels²`).
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.best.len()
+    }
+
+    /// Whether the texture has no texels.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.best.is_empty()
     }
 
     /// The highest single-photo coverage confidence at texel `t`, in [0, 1].
     #[inline]
     pub fn confidence(&self, t: usize) -> f32 {
-        self.merged.get(t).map_or(0.0, |s| s.coverage)
+        self.merged.get(t).coverage
     }
 
     /// The combined photo colour (working space 0..1) at texel `t`, if any photo gave it colour.
@@ -440,7 +451,7 @@ impl CellAccum {
         if !self.has_colour(t) {
             return None;
         }
-        let s = &self.merged[t];
+        let s = self.merged.get(t);
         Some(match self.mode {
             BlendMode::Confidence if s.weight > 0.0 => s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
             BlendMode::Confidence => [0.0; 3],
@@ -451,7 +462,7 @@ impl CellAccum {
     /// The combined photo resolution (metres) at texel `t` (the weighted mean of the photos',
     /// or the best photo's); infinite without usable colour.
     pub fn resolution_at(&self, t: usize) -> f32 {
-        let Some(s) = self.merged.get(t) else { return f32::INFINITY };
+        let s = self.merged.get(t);
         match self.mode {
             BlendMode::Confidence if s.weight > 0.0 => s.footprint / s.weight,
             BlendMode::Best if self.has_colour(t) && s.weight > 0.0 => s.footprint,
@@ -579,7 +590,9 @@ mod tests {
         let mut direct = PhotoAccum::new(16);
         direct.add_samples(&doubled, &s);
         assert_eq!(scaled.sums, direct.sums);
-        assert!(scaled.sums.iter().filter(|t| t.weight > 0.0).count() > 100);
+        let mut n = 0;
+        scaled.sums.for_each(|_, t| n += (t.weight > 0.0) as usize);
+        assert!(n > 100);
     }
 
     #[test]
@@ -595,7 +608,7 @@ mod tests {
         a.add_all(&fps, &img, [1000.0; 2], &ColourTransform::IDENTITY, &params());
         for t in 0..16 {
             assert!(a.confidence(t).is_finite());
-            let s = a.sums[t];
+            let s = *a.sums.get(t);
             assert!(s.colour.iter().chain([&s.weight, &s.coverage, &s.footprint, &s.grazing]).all(|v| v.is_finite()));
             if let Some(c) = a.colour_at(t) {
                 assert!(c.iter().all(|v| v.is_finite()));
@@ -631,7 +644,7 @@ mod tests {
             }
             assert!(acc.resolution_at(0) < 0.0105, "{}", acc.resolution_at(0));
             // the red photo (number 0) supplies the texel
-            assert_eq!(acc.best_photo[0], 0);
+            assert_eq!(acc.best_photo(0), Some(0));
         }
         // a cell's first photo handed over equals merging it into an empty accumulator
         for mode in [BlendMode::Confidence, BlendMode::Best] {

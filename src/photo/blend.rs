@@ -101,7 +101,7 @@ pub fn blend_cell(
     let mut conf = GrayImage::new(w, h);
     let (mut photo_texels, mut steep_texels, mut steep_photo_texels) = (0, 0, 0);
     let mut supplied: Vec<u64> = Vec::new();
-    let n = (w as usize * h as usize).min(acc.best_photo.len());
+    let n = (w as usize * h as usize).min(acc.len());
     for (t, (px, cv)) in texture.pixels_mut().zip(conf.pixels_mut()).enumerate() {
         let cov = covered.get(t).copied().unwrap_or(false);
         let st = cov && steep.get(t).copied().unwrap_or(false);
@@ -127,8 +127,7 @@ pub fn blend_cell(
         if s > 0.5 && cov {
             photo_texels += 1;
             steep_photo_texels += st as u64;
-            let i = acc.best_photo[t] as usize;
-            if i < u16::MAX as usize {
+            if let Some(i) = acc.best_photo(t).map(usize::from) {
                 if supplied.len() <= i {
                     supplied.resize(i + 1, 0);
                 }

@@ -322,7 +322,7 @@ mod tests {
         // texel 0: confident and sharp; texel 1: steep; texel 2: dark; texel 3: smeared (a
         // pixel of 5 m on ground the ortho resolves to 1 m)
         for (t, c, r) in [(0usize, 0.5f32, 0.1f32), (1, 0.5, 0.1), (2, 0.01, 0.1), (3, 0.5, 5.0)] {
-            acc.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3], footprint: r, grazing: 1.2 };
+            *acc.sums.get_mut(t).unwrap() = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3], footprint: r, grazing: 1.2 };
         }
         let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
         let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.0, 1.0, 1.0], max_error: 0.0, existing_ground: 1.0, texel_ground: 1.0 };
@@ -333,7 +333,7 @@ mod tests {
         assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &ctx, &lp, &mut pairs), 0);
         // seen too obliquely, or displaced too far by the TIN's error: no sample
         let mut oblique = acc.clone();
-        oblique.sums[0].grazing = 2.5;
+        oblique.sums.get_mut(0).unwrap().grazing = 2.5;
         assert_eq!(collect_pairs(&oblique, &existing, &ctx, &lp, &mut ColourPairs::default()), 0);
         let rough = CellContext { max_error: 0.9, ..ctx.clone() };
         assert_eq!(collect_pairs(&acc, &existing, &rough, &lp, &mut ColourPairs::default()), 0);
@@ -342,7 +342,7 @@ mod tests {
         assert_eq!(collect_pairs(&acc, &existing, &half, &lp, &mut pairs), 0);
         let mut flat = acc.clone();
         for t in 0..4 {
-            flat.sums[t] = TexelSums { coverage: 1.0, weight: 1.0, colour: [0.2 + 0.1 * t as f32; 3], footprint: 0.1, grazing: 1.2 };
+            *flat.sums.get_mut(t).unwrap() = TexelSums { coverage: 1.0, weight: 1.0, colour: [0.2 + 0.1 * t as f32; 3], footprint: 0.1, grazing: 1.2 };
         }
         let ok = CellContext { cos_slope: vec![1.0; 4], ..half };
         let mut pairs = ColourPairs::default();

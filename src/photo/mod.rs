@@ -43,6 +43,7 @@ mod scene;
 mod silhouette;
 mod sizing;
 mod splat;
+mod texel_tiles;
 mod triangle;
 mod viewgrid;
 

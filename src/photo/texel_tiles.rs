@@ -1,0 +1,194 @@
+//! A sparse square grid of per-texel sums ([`TexelSums`]) stored in 16 × 16 tiles that are
+//! allocated on the first write: a photo usually reaches a fraction of a cell's texture (a
+//! third of the texels of a 12-MP photo's finest cells on Engabreen), so the accumulators of
+//! large photo textures hold only the tiles some footprint touched.
+//!
+//! Texels are addressed by their row-major index `t = y · side + x`, as the splatter gives
+//! them. Tiles are appended in the order of their first write; two grids written in the same
+//! order compare equal (the accumulators write in footprint order, whatever the threads).
+
+/// The per-texel accumulator record (see [`super::accumulate`]); all zero is the empty texel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexelSums {
+    /// `A`: deposited footprint area (texels²).
+    pub coverage: f32,
+    /// `W`: feathered area.
+    pub weight: f32,
+    /// `C`: feathered area times colour (working space 0..1).
+    pub colour: [f32; 3],
+    /// `R`: feathered area times the surface footprint (metres).
+    pub footprint: f32,
+    /// `G`: feathered area over the view cosine.
+    pub grazing: f32,
+}
+
+/// Texels per tile side.
+pub const TILE: u32 = 16;
+const TILE_TEXELS: usize = (TILE * TILE) as usize;
+const NONE: u32 = u32::MAX;
+
+/// A `side × side` grid of [`TexelSums`], zero where never written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TexelTiles {
+    side: u32,
+    tiles_x: u32,
+    /// log2 of `side` when it is a power of two (index split by shifts).
+    shift: Option<u32>,
+    /// Per tile (row-major over tiles): its position in `data`, or `NONE`.
+    index: Vec<u32>,
+    /// The allocated tiles, `TILE²` records each, row-major within the tile.
+    data: Vec<TexelSums>,
+}
+
+const ZERO: TexelSums = TexelSums { coverage: 0.0, weight: 0.0, colour: [0.0; 3], footprint: 0.0, grazing: 0.0 };
+
+impl TexelTiles {
+    /// An empty grid of `side × side` texels.
+    pub fn new(side: u32) -> TexelTiles {
+        let tiles_x = side.div_ceil(TILE);
+        TexelTiles {
+            side,
+            tiles_x,
+            shift: side.is_power_of_two().then(|| side.trailing_zeros()),
+            index: vec![NONE; tiles_x as usize * tiles_x as usize],
+            data: Vec::new(),
+        }
+    }
+
+    /// Side of the grid in texels.
+    pub fn side(&self) -> u32 {
+        self.side
+    }
+
+    /// Texels of the grid (`side²`).
+    pub fn len(&self) -> usize {
+        self.side as usize * self.side as usize
+    }
+
+    /// Whether the grid has no texels.
+    pub fn is_empty(&self) -> bool {
+        self.side == 0
+    }
+
+    /// Texels held by allocated tiles (a multiple of `TILE²`).
+    pub fn allocated(&self) -> usize {
+        self.data.len()
+    }
+
+    /// The tile number and the position within the tile of texel `t` (`t < len()`).
+    #[inline]
+    fn locate(&self, t: usize) -> (usize, usize) {
+        let (x, y) = match self.shift {
+            Some(s) => (t & ((1usize << s) - 1), t >> s),
+            None => (t % self.side as usize, t / self.side as usize),
+        };
+        let tile = (y / TILE as usize) * self.tiles_x as usize + x / TILE as usize;
+        (tile, (y % TILE as usize) * TILE as usize + x % TILE as usize)
+    }
+
+    /// The sums of texel `t` (zero if never written or outside the grid).
+    #[inline]
+    pub fn get(&self, t: usize) -> &TexelSums {
+        if t >= self.len() {
+            return &ZERO;
+        }
+        let (tile, within) = self.locate(t);
+        match self.index[tile] {
+            NONE => &ZERO,
+            k => &self.data[k as usize * TILE_TEXELS + within],
+        }
+    }
+
+    /// The sums of texel `t` for writing, allocating its tile (zeroed) on first use; `None`
+    /// outside the grid.
+    #[inline]
+    pub fn get_mut(&mut self, t: usize) -> Option<&mut TexelSums> {
+        if t >= self.len() {
+            return None;
+        }
+        let (tile, within) = self.locate(t);
+        let k = match self.index[tile] {
+            NONE => {
+                let k = (self.data.len() / TILE_TEXELS) as u32;
+                self.data.resize(self.data.len() + TILE_TEXELS, ZERO);
+                self.index[tile] = k;
+                k
+            }
+            k => k,
+        };
+        Some(&mut self.data[k as usize * TILE_TEXELS + within])
+    }
+
+    /// Calls `f(t, sums)` for every texel of every allocated tile (texels outside the grid's
+    /// last partial tiles skipped), tiles in row-major tile order, texels row-major within
+    /// a tile.
+    pub fn for_each_mut(&mut self, mut f: impl FnMut(usize, &mut TexelSums)) {
+        let (side, tx) = (self.side as usize, self.tiles_x as usize);
+        for (tile, &k) in self.index.iter().enumerate() {
+            if k == NONE {
+                continue;
+            }
+            let (x0, y0) = ((tile % tx) * TILE as usize, (tile / tx) * TILE as usize);
+            let block = &mut self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
+            for (w, s) in block.iter_mut().enumerate() {
+                let (x, y) = (x0 + w % TILE as usize, y0 + w / TILE as usize);
+                if x < side && y < side {
+                    f(y * side + x, s);
+                }
+            }
+        }
+    }
+
+    /// [`TexelTiles::for_each_mut`] without writing.
+    pub fn for_each(&self, mut f: impl FnMut(usize, &TexelSums)) {
+        let (side, tx) = (self.side as usize, self.tiles_x as usize);
+        for (tile, &k) in self.index.iter().enumerate() {
+            if k == NONE {
+                continue;
+            }
+            let (x0, y0) = ((tile % tx) * TILE as usize, (tile / tx) * TILE as usize);
+            let block = &self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
+            for (w, s) in block.iter().enumerate() {
+                let (x, y) = (x0 + w % TILE as usize, y0 + w / TILE as usize);
+                if x < side && y < side {
+                    f(y * side + x, s);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_land_where_read_and_only_touched_tiles_exist() {
+        for side in [1u32, 15, 16, 37, 64] {
+            let mut g = TexelTiles::new(side);
+            let n = g.len();
+            let picks: Vec<usize> = (0..n).filter(|t| t % 7 == 3).collect();
+            for &t in &picks {
+                g.get_mut(t).unwrap().weight += t as f32;
+            }
+            assert!(g.get_mut(n).is_none());
+            for t in 0..n {
+                let want = if t % 7 == 3 { t as f32 } else { 0.0 };
+                assert_eq!(g.get(t).weight, want, "side {side} texel {t}");
+            }
+            assert_eq!(g.get(n + 5).weight, 0.0);
+            let mut seen = Vec::new();
+            g.for_each(|t, s| {
+                if s.weight > 0.0 || t % 7 == 3 {
+                    seen.push(t);
+                }
+            });
+            seen.sort_unstable();
+            assert_eq!(seen, picks, "side {side}");
+        }
+        // one corner write allocates one tile
+        let mut g = TexelTiles::new(1024);
+        g.get_mut(1024 * 1024 - 1).unwrap().coverage = 1.0;
+        assert_eq!(g.allocated(), (TILE * TILE) as usize);
+    }
+}
