@@ -10,8 +10,11 @@
 //!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
-//!     [--render-supersample N]
+//!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
 //! ```
+//! `--perturb-*` project the photos with every camera's yaw turned by DEG degrees or its
+//! position moved by (DX, DY, DZ) metres (docs/registration.md, "Sensitivity"); the oracle
+//! and the truth keep the exact cameras.
 //! Writes OUT/store, OUT/photos, OUT/views/VIEW_{baseline,oracle,truth,ortho,reparam,photo}.png,
 //! OUT/views/VIEW_classes.png (red steep, green flat, blue covered by a photo),
 //! OUT/views/VIEW_side_by_side.png (ortho | reparam | photo | truth) and OUT/eval.json, and
@@ -66,7 +69,9 @@ fn main() -> anyhow::Result<()> {
         let popts = DemoPhotoOptions { width: photo_width, height: photo_width / 4 * 3, supersample: photo_ss };
         scene.write_demo_photos(&dem, &photos_dir, &popts)?;
         eprintln!("store and photos: {:.1} s", t0.elapsed().as_secs_f64());
-        let photos = cliffmap::photo::read_photo_list(&list)?;
+        // projection with perturbed poses (the truth, the oracle and the scores keep the exact ones)
+        let project_list = perturbed_list(&list, flag("--perturb-yaw"), flag("--perturb-position"))?;
+        let photos = cliffmap::photo::read_photo_list(&project_list)?;
         let t = Instant::now();
         let mut popts = ProjectOptions { quiet: true, ..ProjectOptions::default() };
         if flag("--colour-space") == Some("srgb") {
@@ -126,4 +131,30 @@ fn main() -> anyhow::Result<()> {
     std::fs::write(out.join("eval.json"), serde_json::to_string_pretty(&reports)?)?;
     eprintln!("total {:.1} s", t0.elapsed().as_secs_f64());
     Ok(())
+}
+
+/// `list` itself, or a copy next to it whose cameras have their yaw turned by `yaw` degrees
+/// and their position moved by `position` ("DX,DY,DZ" metres).
+fn perturbed_list(list: &std::path::Path, yaw: Option<&str>, position: Option<&str>) -> anyhow::Result<PathBuf> {
+    if yaw.is_none() && position.is_none() {
+        return Ok(list.to_path_buf());
+    }
+    let dyaw: f64 = yaw.map(str::parse).transpose()?.unwrap_or(0.0);
+    let dpos: Vec<f64> = position.map_or(Ok(vec![0.0; 3]), |s| s.split(',').map(str::parse).collect())?;
+    anyhow::ensure!(dpos.len() == 3, "--perturb-position DX,DY,DZ");
+    let dir = list.parent().unwrap_or(std::path::Path::new("."));
+    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(list)?)?;
+    for entry in doc["photos"].as_array_mut().ok_or_else(|| anyhow::anyhow!("no photos"))? {
+        let name = entry["camera"].as_str().ok_or_else(|| anyhow::anyhow!("photo without camera"))?.to_string();
+        let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
+        let (y, p, r) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
+        cam.world_to_camera = cliffmap::camera::rotation_from_yaw_pitch_roll(y + dyaw.to_radians(), p, r);
+        cam.position += glam::DVec3::new(dpos[0], dpos[1], dpos[2]);
+        let out = format!("{}.perturbed.json", name.trim_end_matches(".json"));
+        std::fs::write(dir.join(&out), cliffmap::camera::camera_to_json(&cam).to_string())?;
+        entry["camera"] = serde_json::json!(out);
+    }
+    let out = dir.join("photos_perturbed.json");
+    std::fs::write(&out, doc.to_string())?;
+    Ok(out)
 }

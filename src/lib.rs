@@ -63,6 +63,7 @@ pub mod ortho;
 pub mod param;
 pub mod photo;
 pub mod pipeline;
+pub mod register;
 pub mod render;
 pub mod resample;
 pub mod scene;

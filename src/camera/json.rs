@@ -265,9 +265,52 @@ pub fn camera_to_json(cam: &CameraModel) -> Value {
     })
 }
 
+/// The ImGRAFT-style Camera JSON of `cam` (the keys of the Engabreen camera file):
+/// `image_size_wh`, `camera_xyz_m`, `viewdir_yaw_pitch_roll_rad` and `_deg`, `f_px`
+/// (`[fx, fy]`), `c_px_0based`, `c_px_1based`, `k1`, `k2`, `R_world_to_camera_rows` and a
+/// `model` note. Reading it back with [`camera_from_json_str`] gives the same camera up to
+/// rounding.
+pub fn camera_to_imgraft_json(cam: &CameraModel) -> Value {
+    let (yaw, pitch, roll) = super::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
+    let r = cam.world_to_camera;
+    serde_json::json!({
+        "image_size_wh": [cam.width, cam.height],
+        "camera_xyz_m": [cam.position.x, cam.position.y, cam.position.z],
+        "viewdir_yaw_pitch_roll_rad": [yaw, pitch, roll],
+        "viewdir_yaw_pitch_roll_deg": [yaw.to_degrees(), pitch.to_degrees(), roll.to_degrees()],
+        "f_px": [cam.fx, cam.fy],
+        "c_px_0based": [cam.cx, cam.cy],
+        "c_px_1based": [cam.cx + 1.0, cam.cy + 1.0],
+        "k1": cam.k1,
+        "k2": cam.k2,
+        "R_world_to_camera_rows": [r.row(0).to_array(), r.row(1).to_array(), r.row(2).to_array()],
+        "model": "ImGRAFT camera.m pinhole: x_c = R*(X - xyz); (x,y)=x_c[0:2]/x_c[2]; r2=min(x^2+y^2,4); (x,y)*=(1+k1*r2+k2*r2^2); u=fx*x+cx, v=fy*y+cy",
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn imgraft_writer_round_trips() {
+        let cam = CameraModel {
+            position: DVec3::new(446722.0, 7396671.0, 770.0),
+            world_to_camera: rotation_from_yaw_pitch_roll(3.83, 0.1, -0.013),
+            width: 4290,
+            height: 2856,
+            fx: 6014.4,
+            fy: 6021.5,
+            cx: 2144.5,
+            cy: 1427.0,
+            k1: -0.11,
+            k2: 0.01,
+        };
+        let back = parse(&camera_to_imgraft_json(&cam).to_string()).unwrap();
+        assert_eq!((back.width, back.height, back.fx, back.fy, back.cx, back.cy, back.k1, back.k2), (4290, 2856, 6014.4, 6021.5, 2144.5, 1427.0, -0.11, 0.01));
+        assert!(back.position == cam.position);
+        assert!((back.world_to_camera - cam.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-12));
+    }
 
     fn parse(s: &str) -> Result<CameraModel> {
         camera_from_json_str(s, Path::new("cam.json"), (640, 480))

@@ -4,6 +4,7 @@
 mod build;
 mod demo;
 mod export_obj;
+mod fit_camera;
 mod fly;
 mod project;
 mod render;
@@ -39,6 +40,8 @@ enum Command {
     Project(project::Args),
     /// Texel-stretch statistics of a store: summary, stats.json and a histogram PNG.
     Stats(stats::Args),
+    /// Fit a photo's camera to ground control points (robust Levenberg-Marquardt).
+    FitCamera(fit_camera::Args),
     /// Write one cell's TIN with texture coordinates as Wavefront OBJ.
     ExportObj(export_obj::Args),
     /// Render one frame of a store from a camera (headless GPU) to PNG.
@@ -72,6 +75,7 @@ pub fn run() -> ExitCode {
         Command::Project(a) => project::run(a),
         Command::Stats(a) => stats::run(a),
         Command::ExportObj(a) => export_obj::run(a),
+        Command::FitCamera(a) => fit_camera::run(a),
         Command::Render(a) => render::run(a),
         Command::Fly(a) => fly::run(a),
         Command::View(a) => view::run(a),

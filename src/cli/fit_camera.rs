@@ -1,0 +1,227 @@
+//! `cliffmap fit-camera`: a photo's camera from ground control points.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use cliffmap::camera::{CameraModel, camera_from_json_file, camera_to_imgraft_json, rotation_from_yaw_pitch_roll};
+use cliffmap::fsutil::write_atomic;
+use cliffmap::register::{CameraFit, FitOptions, PixelOrigin, fit_camera, parse_free, read_gcps, start_from_position};
+use glam::DVec3;
+use serde_json::json;
+
+/// Flags of `cliffmap fit-camera`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// GCP file: ImGRAFT text (`X Y Z U V`, 1-based pixels, `1951+9` sums) or CSV with a
+    /// header `x,y,z,u,v[,name][,weight]` (0-based pixels).
+    #[arg(long)]
+    gcps: PathBuf,
+    /// Start camera (Camera JSON, e.g. ImGRAFT-style): position, view direction, focal
+    /// length and image size. Without it, give --position and --size (or --image).
+    #[arg(long)]
+    camera: Option<PathBuf>,
+    /// Camera position "X,Y,Z" (world metres) for a start without --camera (or to replace
+    /// the start camera's).
+    #[arg(long, allow_hyphen_values = true)]
+    position: Option<String>,
+    /// Start yaw, degrees (azimuth of the optical axis counter-clockwise from east); with
+    /// --focal-px. Without it the orientation is solved from the GCPs' bearings.
+    #[arg(long, allow_hyphen_values = true)]
+    yaw: Option<f64>,
+    /// Start pitch, degrees (positive looking down; with --yaw, default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pitch: Option<f64>,
+    /// Start roll, degrees (with --yaw, default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    roll: Option<f64>,
+    /// Start focal length, pixels (without it and without --camera it is searched).
+    #[arg(long)]
+    focal_px: Option<f64>,
+    /// Image size "WxH" in pixels (without --camera).
+    #[arg(long)]
+    size: Option<String>,
+    /// The photo, to read its size (without --camera and --size).
+    #[arg(long)]
+    image: Option<PathBuf>,
+    /// Free parameters: yaw, pitch, roll (angles), x, y, z (position), f (fx and fy together),
+    /// fx, fy, cx, cy (c), k1, k2.
+    #[arg(long, default_value = "yaw,pitch,roll,f,k1")]
+    free: String,
+    /// Pixel convention of the GCP file: "format" (ImGRAFT text 1-based, CSV 0-based), 0 or 1.
+    #[arg(long, default_value = "format")]
+    pixel_origin: String,
+    /// Plain least squares instead of the Huber-weighted fit.
+    #[arg(long)]
+    no_robust: bool,
+    /// Fixed Huber threshold in pixels (default: 2.45 times the robust residual scale, at
+    /// least 0.5 px).
+    #[arg(long)]
+    huber_px: Option<f64>,
+    /// Output camera (ImGRAFT-style Camera JSON, read directly by `project`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print the fit as JSON on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `fit-camera`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let origin = match a.pixel_origin.as_str() {
+        "format" => PixelOrigin::Format,
+        "0" => PixelOrigin::Zero,
+        "1" => PixelOrigin::One,
+        o => anyhow::bail!("--pixel-origin must be format, 0 or 1, got {o}"),
+    };
+    let gcps = read_gcps(&a.gcps, origin)?;
+    let free = parse_free(&a.free)?;
+    let position = a.position.as_deref().map(parse_position).transpose()?;
+    let start = start_camera(&a, position, &gcps)?;
+    let opts = FitOptions { free, robust: !a.no_robust, huber_px: a.huber_px, ..FitOptions::default() };
+    let fit = fit_camera(&start, &gcps, &opts)?;
+    let mut doc = camera_to_imgraft_json(&fit.camera);
+    if let Some(obj) = doc.as_object_mut() {
+        obj.insert("fit".into(), fit_json(&fit, &a.gcps.display().to_string()));
+        obj.insert("rmse_px".into(), json!(fit.rmse_px));
+    }
+    let text = serde_json::to_string_pretty(&doc)?;
+    write_atomic(&a.out, text.as_bytes())?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&fit_json(&fit, &a.gcps.display().to_string()))?);
+    } else {
+        print_table(&fit);
+        println!("camera written to {}", a.out.display());
+    }
+    Ok(())
+}
+
+/// The start camera: --camera (position replaced by --position), else --yaw with
+/// --focal-px, else the orientation from the GCP bearings at --position.
+fn start_camera(a: &Args, position: Option<DVec3>, gcps: &[cliffmap::register::Gcp]) -> anyhow::Result<CameraModel> {
+    if let Some(path) = &a.camera {
+        let mut cam = camera_from_json_file(path, (0, 0))?;
+        if let Some(p) = position {
+            cam.position = p;
+        }
+        if let Some(f) = a.focal_px {
+            cam.fy *= f / cam.fx;
+            cam.fx = f;
+        }
+        return Ok(cam);
+    }
+    let position = position.context("give --camera START.json, or --position X,Y,Z with --size WxH or --image (an unknown position needs a start camera: no P3P/EPnP solver yet)")?;
+    let (w, h) = image_size(a)?;
+    match (a.yaw, a.focal_px) {
+        (Some(yaw), Some(f)) => {
+            let r = rotation_from_yaw_pitch_roll(yaw.to_radians(), a.pitch.unwrap_or(0.0).to_radians(), a.roll.unwrap_or(0.0).to_radians());
+            let mut cam = CameraModel::with_fov(position, r, w, h, 1.0);
+            cam.fx = f;
+            cam.fy = f;
+            Ok(cam)
+        }
+        (Some(_), None) => anyhow::bail!("--yaw needs --focal-px (or leave out --yaw to solve the orientation from the GCPs)"),
+        (None, f) => Ok(start_from_position(position, w, h, gcps, f)?),
+    }
+}
+
+fn parse_position(s: &str) -> anyhow::Result<DVec3> {
+    let v: Vec<f64> = s.split(',').map(|t| t.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("--position must be X,Y,Z metres, got {s}"))?;
+    anyhow::ensure!(v.len() == 3 && v.iter().all(|x| x.is_finite()), "--position must be X,Y,Z metres, got {s}");
+    Ok(DVec3::new(v[0], v[1], v[2]))
+}
+
+fn image_size(a: &Args) -> anyhow::Result<(u32, u32)> {
+    if let Some(s) = &a.size {
+        let (w, h) = s.split_once(['x', 'X']).with_context(|| format!("--size must be WxH, got {s}"))?;
+        let (w, h): (u32, u32) = (w.trim().parse().with_context(|| format!("--size {s}"))?, h.trim().parse().with_context(|| format!("--size {s}"))?);
+        anyhow::ensure!(w > 0 && h > 0, "--size must be positive, got {s}");
+        return Ok((w, h));
+    }
+    if let Some(p) = &a.image {
+        let (w, h) = image::image_dimensions(p).with_context(|| format!("{}: cannot read the image size", p.display()))?;
+        return Ok((w, h));
+    }
+    anyhow::bail!("without --camera, give the image size: --size WxH or --image PHOTO")
+}
+
+/// The fit as the JSON of `--json` (also stored under "fit" in the camera file).
+fn fit_json(fit: &CameraFit, gcp_file: &str) -> serde_json::Value {
+    let value = |p: cliffmap::register::Param, v: f64| match p {
+        cliffmap::register::Param::Yaw => v.to_degrees().rem_euclid(360.0),
+        _ if p.is_angle() => v.to_degrees(),
+        _ => v,
+    };
+    let spread = |p: cliffmap::register::Param, v: f64| if p.is_angle() { v.to_degrees() } else { v };
+    let params: serde_json::Map<String, serde_json::Value> =
+        fit.params.iter().map(|p| (p.param.name().to_string(), json!(value(p.param, p.value)))).collect();
+    let start: serde_json::Map<String, serde_json::Value> =
+        fit.params.iter().map(|p| (p.param.name().to_string(), json!(value(p.param, p.start)))).collect();
+    let sigma: serde_json::Map<String, serde_json::Value> = fit
+        .params
+        .iter()
+        .map(|p| (p.param.name().to_string(), if p.sigma.is_finite() { json!(spread(p.param, p.sigma)) } else { serde_json::Value::Null }))
+        .collect();
+    let residuals: Vec<serde_json::Value> = fit
+        .gcps
+        .iter()
+        .map(|g| {
+            json!({
+                "name": g.name,
+                "u": g.observed[0],
+                "v": g.observed[1],
+                "du": g.residual.map(|r| r[0]),
+                "dv": g.residual.map(|r| r[1]),
+                "px": g.residual.map(|r| r[0].hypot(r[1])),
+                "robust_weight": g.robust_weight,
+                "status": g.status.name(),
+            })
+        })
+        .collect();
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { serde_json::Value::Null };
+    json!({
+        "gcp_file": gcp_file,
+        "rmse_px": finite(fit.rmse_px),
+        "rmse_inliers_px": finite(fit.rmse_inliers_px),
+        "aic": finite(fit.aic),
+        "robust_scale_px": finite(fit.sigma_px),
+        "rounds": fit.rounds,
+        "units": "angles in degrees (yaw, pitch, roll: ImGRAFT convention), position in metres, focal length and principal point in pixels (0-based)",
+        "params": params,
+        "start": start,
+        "sigma": sigma,
+        "residuals": residuals,
+    })
+}
+
+fn print_table(fit: &CameraFit) {
+    println!("| GCP | u | v | du | dv | px | status |");
+    println!("|---|---|---|---|---|---|---|");
+    for g in &fit.gcps {
+        match g.residual {
+            Some(r) => println!(
+                "| {} | {:.1} | {:.1} | {:+.2} | {:+.2} | {:.2} | {} |",
+                g.name,
+                g.observed[0],
+                g.observed[1],
+                r[0],
+                r[1],
+                r[0].hypot(r[1]),
+                g.status.name()
+            ),
+            None => println!("| {} | {:.1} | {:.1} | | | | {} |", g.name, g.observed[0], g.observed[1], g.status.name()),
+        }
+    }
+    println!();
+    println!("| parameter | start | fitted | σ |");
+    println!("|---|---|---|---|");
+    for p in &fit.params {
+        let (k, unit) = if p.param.is_angle() { (180.0 / std::f64::consts::PI, "°") } else { (1.0, "") };
+        let shown = |v: f64| if p.param == cliffmap::register::Param::Yaw { (v * k).rem_euclid(360.0) } else { v * k };
+        println!("| {} | {:.6}{unit} | {:.6}{unit} | {:.2e}{unit} |", p.param.name(), shown(p.start), shown(p.value), p.sigma * k);
+    }
+    let outliers = fit.gcps.iter().filter(|g| g.status == cliffmap::register::GcpStatus::Outlier).count();
+    println!(
+        "\nRMSE {:.3} px over the fitted GCPs ({:.3} px over the inliers, {outliers} outliers), AIC {:.2}, robust scale {:.3} px, {} rounds",
+        fit.rmse_px, fit.rmse_inliers_px, fit.aic, fit.sigma_px, fit.rounds
+    );
+}

@@ -1,0 +1,220 @@
+//! Ground control point files: world points with the pixels where a photo shows them.
+//!
+//! Two formats, told apart by their first data line:
+//! - **ImGRAFT text** (as `gcp8902.txt` of the Engabreen demo): one GCP per line,
+//!   `X Y Z U V` separated by blanks or commas, `%` or `#` starts a comment, pixels
+//!   MATLAB 1-based (the centre of the top-left pixel is (1, 1)); a number may be written
+//!   as a sum or difference such as `1951+9` (ImGRAFT's files record offsets that way; the
+//!   value is the sum). Further columns are ignored.
+//! - **CSV with a header** naming the columns `x,y,z,u,v` and optionally `name` and
+//!   `weight` (any order, case-insensitive); pixels 0-based by default (cliffmap's
+//!   convention: the centre of the top-left pixel is (0, 0)).
+//!
+//! [`Gcp::pixel`] is always 0-based pixel-centre. Errors name the file and the line.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::error::{Error, Result};
+
+/// One ground control point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gcp {
+    /// Name (from the CSV's `name` column, else `"line N"`).
+    pub name: String,
+    /// World position, metres (the camera's frame: x east, y north, z up).
+    pub world: DVec3,
+    /// Observed pixel `[u, v]`, 0-based pixel-centre convention, u right, v down.
+    pub pixel: [f64; 2],
+    /// Relative weight of the point in the fit (> 0; default 1).
+    pub weight: f64,
+}
+
+/// The pixel convention of a GCP file's `u, v` columns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelOrigin {
+    /// The format's own convention (ImGRAFT text: 1-based, CSV: 0-based).
+    Format,
+    /// 0-based: the centre of the top-left pixel is (0, 0).
+    Zero,
+    /// 1-based (MATLAB): the centre of the top-left pixel is (1, 1).
+    One,
+}
+
+/// Reads a GCP file (either format, see the [module docs](self)).
+pub fn read_gcps(path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_gcps(&text, path, origin)
+}
+
+/// Parses the text of a GCP file; `path` only names it in errors.
+pub fn parse_gcps(text: &str, path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, strip_comment(l).trim()))
+        .filter(|(_, l)| !l.is_empty())
+        .collect();
+    let Some(&(_, first)) = lines.first() else {
+        return Err(Error::bad_input(path, "no ground control points in the file"));
+    };
+    let header = first.chars().any(|c| c.is_ascii_alphabetic()) && first.contains(',') && !looks_numeric(first);
+    let gcps = if header { parse_csv(&lines, path, origin)? } else { parse_imgraft(&lines, path, origin)? };
+    if gcps.is_empty() {
+        return Err(Error::bad_input(path, "no ground control points in the file"));
+    }
+    Ok(gcps)
+}
+
+fn strip_comment(line: &str) -> &str {
+    let cut = line.find(['%', '#']).unwrap_or(line.len());
+    &line[..cut]
+}
+
+/// Whether every field of a line parses as a number (a data line, not a header).
+fn looks_numeric(line: &str) -> bool {
+    line.split([',', ' ', '\t', ';']).filter(|t| !t.is_empty()).all(|t| number(t).is_some())
+}
+
+/// A number, or a sum / difference of numbers such as `1951+9` or `12.5-0.5` (signs of
+/// exponents stay with their number: `1e+3` is 1000).
+fn number(token: &str) -> Option<f64> {
+    let t = token.trim();
+    if t.is_empty() {
+        return None;
+    }
+    let b = t.as_bytes();
+    let mut total = 0.0;
+    let mut start = 0;
+    for i in 1..=b.len() {
+        let split = i == b.len() || ((b[i] == b'+' || b[i] == b'-') && !matches!(b[i - 1], b'e' | b'E' | b'+' | b'-'));
+        if split {
+            let part = &t[start..i];
+            let v: f64 = part.parse().ok()?;
+            if !v.is_finite() {
+                return None;
+            }
+            total += v;
+            start = i;
+        }
+    }
+    Some(total)
+}
+
+fn to_zero_based(p: [f64; 2], one_based: bool) -> [f64; 2] {
+    if one_based { [p[0] - 1.0, p[1] - 1.0] } else { p }
+}
+
+fn parse_imgraft(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
+    let one = origin != PixelOrigin::Zero;
+    let mut out = Vec::new();
+    for &(n, line) in lines {
+        let tokens: Vec<&str> = line.split([',', ' ', '\t', ';']).filter(|t| !t.is_empty()).collect();
+        if tokens.len() < 5 {
+            return Err(Error::bad_input(path, format!("line {n}: expected X Y Z U V, got {} fields", tokens.len())));
+        }
+        let mut v = [0.0; 5];
+        for (k, t) in tokens[..5].iter().enumerate() {
+            v[k] = number(t).ok_or_else(|| Error::bad_input(path, format!("line {n}: \"{t}\" is not a number")))?;
+        }
+        out.push(Gcp {
+            name: format!("line {n}"),
+            world: DVec3::new(v[0], v[1], v[2]),
+            pixel: to_zero_based([v[3], v[4]], one),
+            weight: 1.0,
+        });
+    }
+    Ok(out)
+}
+
+fn parse_csv(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
+    let one = origin == PixelOrigin::One;
+    let (hn, header) = lines[0];
+    let names: Vec<String> = header.split(',').map(|s| s.trim().to_ascii_lowercase()).collect();
+    let col = |want: &str| names.iter().position(|n| n == want);
+    let mut idx = [0usize; 5];
+    for (k, want) in ["x", "y", "z", "u", "v"].iter().enumerate() {
+        idx[k] = col(want).ok_or_else(|| {
+            Error::bad_input(path, format!("line {hn}: the CSV header needs columns x,y,z,u,v (got \"{header}\")"))
+        })?;
+    }
+    let (name_col, weight_col) = (col("name"), col("weight"));
+    let mut out = Vec::new();
+    for &(n, line) in &lines[1..] {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let field = |k: usize| fields.get(k).copied().unwrap_or("");
+        let mut v = [0.0; 5];
+        for (k, &c) in idx.iter().enumerate() {
+            let t = field(c);
+            v[k] = number(t).ok_or_else(|| Error::bad_input(path, format!("line {n}: column {} \"{t}\" is not a number", names[c])))?;
+        }
+        let weight = match weight_col {
+            Some(c) if !field(c).is_empty() => {
+                let w = number(field(c)).filter(|w| *w > 0.0);
+                w.ok_or_else(|| Error::bad_input(path, format!("line {n}: weight \"{}\" must be a positive number", field(c))))?
+            }
+            _ => 1.0,
+        };
+        let name = name_col.map(field).filter(|s| !s.is_empty()).map_or_else(|| format!("line {n}"), str::to_string);
+        out.push(Gcp { name, world: DVec3::new(v[0], v[1], v[2]), pixel: to_zero_based([v[3], v[4]], one), weight });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn imgraft_text_with_sums_and_comments() {
+        let text = "% Ground control points\n% X,Y,Z U,V\n  445562 7395662 596.4 1951+9 1490+4 \n445359.2, 7396092.5, 519.2, 3851, 1889 % note\n";
+        let g = parse_gcps(text, Path::new("g.txt"), PixelOrigin::Format).unwrap();
+        assert_eq!(g.len(), 2);
+        assert_eq!(g[0].world, DVec3::new(445562.0, 7395662.0, 596.4));
+        assert_eq!(g[0].pixel, [1959.0, 1493.0]); // 1960, 1494 in 1-based pixels
+        assert_eq!(g[1].pixel, [3850.0, 1888.0]);
+        assert_eq!(g[0].name, "line 3");
+        let zero = parse_gcps(text, Path::new("g.txt"), PixelOrigin::Zero).unwrap();
+        assert_eq!(zero[0].pixel, [1960.0, 1494.0]);
+    }
+
+    #[test]
+    fn csv_with_header_names_and_weights() {
+        let text = "name,x,y,z,u,v,weight\nrock,1,2,3,10.5,20,2\n,4,5,6,7,8,\n";
+        let g = parse_gcps(text, Path::new("g.csv"), PixelOrigin::Format).unwrap();
+        assert_eq!(g.len(), 2);
+        assert_eq!((g[0].name.as_str(), g[0].pixel, g[0].weight), ("rock", [10.5, 20.0], 2.0));
+        assert_eq!((g[1].name.as_str(), g[1].world, g[1].weight), ("line 3", DVec3::new(4.0, 5.0, 6.0), 1.0));
+        let one = parse_gcps(text, Path::new("g.csv"), PixelOrigin::One).unwrap();
+        assert_eq!(one[0].pixel, [9.5, 19.0]);
+    }
+
+    #[test]
+    fn numbers_sums_and_exponents() {
+        assert_eq!(number("1951+9"), Some(1960.0));
+        assert_eq!(number("-3.5"), Some(-3.5));
+        assert_eq!(number("12.5-0.5"), Some(12.0));
+        assert_eq!(number("1e+3"), Some(1000.0));
+        assert_eq!(number("2E-1+1"), Some(1.2));
+        assert_eq!(number("abc"), None);
+        assert_eq!(number("1+"), None);
+        assert_eq!(number("nan"), None);
+    }
+
+    #[test]
+    fn bad_files_name_the_line() {
+        for (text, want) in [
+            ("", "no ground control points"),
+            ("% only comments\n", "no ground control points"),
+            ("1 2 3 4\n", "line 1: expected X Y Z U V"),
+            ("1 2 3 4 x5\n", "line 1: \"x5\" is not a number"),
+            ("x,y,z,u\n1,2,3,4\n", "needs columns x,y,z,u,v"),
+            ("x,y,z,u,v\n1,2,3,4,oops\n", "line 2: column v"),
+            ("x,y,z,u,v,weight\n1,2,3,4,5,-1\n", "line 2: weight"),
+        ] {
+            let e = parse_gcps(text, Path::new("bad.txt"), PixelOrigin::Format).unwrap_err().to_string();
+            assert!(e.contains("bad.txt") && e.contains(want), "{text:?}: {e}");
+        }
+    }
+}

@@ -1,0 +1,42 @@
+//! Camera registration: fitting a photo's camera to ground control points
+//! (docs/registration.md).
+//!
+//! Data types: [`Gcp`] (a world point and the 0-based pixel where the photo shows it), read
+//! by [`read_gcps`] from ImGRAFT text or CSV; [`Param`] / [`CameraParams`] (the camera as
+//! yaw, pitch, roll, position, focal lengths, principal point, k1, k2) with the free set
+//! from [`parse_free`]; [`fit_camera`] takes a start [`CameraModel`](crate::camera::CameraModel),
+//! the GCPs and [`FitOptions`] and returns a [`CameraFit`] (the camera, per-GCP residuals and
+//! status, RMSE, AIC, parameter standard deviations). [`start_from_position`] gives a start
+//! without a view direction when the camera position is known.
+//!
+//! ```
+//! use cliffmap::camera::{CameraModel, rotation_from_yaw_pitch_roll};
+//! use cliffmap::register::{FitOptions, Gcp, fit_camera, parse_free};
+//! use glam::DVec3;
+//!
+//! let truth = CameraModel::with_fov(DVec3::new(0.0, 0.0, 10.0), rotation_from_yaw_pitch_roll(0.3, 0.05, 0.0), 800, 600, 0.9);
+//! let gcps: Vec<Gcp> = [(100.0, 20.0, 0.0), (120.0, 60.0, 15.0), (90.0, 50.0, 3.0), (150.0, 10.0, 30.0), (110.0, 40.0, -2.0)]
+//!     .iter()
+//!     .enumerate()
+//!     .map(|(i, &(x, y, z))| {
+//!         let world = DVec3::new(x, y, z);
+//!         Gcp { name: format!("g{i}"), world, pixel: truth.project(world).unwrap(), weight: 1.0 }
+//!     })
+//!     .collect();
+//! let mut start = truth;
+//! start.world_to_camera = rotation_from_yaw_pitch_roll(0.33, 0.04, 0.01);
+//! let opts = FitOptions { free: parse_free("yaw,pitch,roll")?, ..FitOptions::default() };
+//! let fit = fit_camera(&start, &gcps, &opts)?;
+//! assert!(fit.rmse_px < 1e-6);
+//! # Ok::<(), cliffmap::Error>(())
+//! ```
+
+mod fit;
+mod gcp;
+mod params;
+mod start;
+
+pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
+pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
+pub use params::{CameraParams, Param, parse_free};
+pub use start::{rotation_from_bearings, start_from_position};

@@ -1,0 +1,145 @@
+//! A start camera without a view direction: the camera position is known (GPS, a survey),
+//! the rotation follows in closed form from the GCPs' bearings, the focal length (if not
+//! given) by a search.
+//!
+//! For a focal length `f`, each GCP gives a unit bearing in the camera frame (its pixel
+//! through a distortion-free camera with the principal point at the image centre) and one
+//! in the world (from the position to the point); the rotation that maps the world bearings
+//! best onto the camera ones (Wahba's problem) is `U diag(1, 1, det(U Vᵀ)) Vᵀ` of the SVD of
+//! `Σ b_cam b_worldᵀ`. Without `f`, the horizontal field of view is searched over 3°–140°
+//! on a log grid of 96 steps, then by golden section around the best step, minimising the
+//! median reprojection error (robust to a minority of bad GCPs); the result starts
+//! [`super::fit_camera`].
+
+use glam::{DMat3, DVec3};
+use nalgebra::Matrix3;
+
+use super::gcp::Gcp;
+use crate::camera::CameraModel;
+use crate::error::{Error, Result};
+
+/// The world-to-camera rotation (rows right, down, forward) that best maps the world
+/// bearings `world[i]` onto the camera bearings `cam[i]` (unit vectors, weights `w[i]`);
+/// `None` for fewer than two non-parallel pairs.
+pub fn rotation_from_bearings(cam: &[DVec3], world: &[DVec3], w: &[f64]) -> Option<DMat3> {
+    let mut b = Matrix3::<f64>::zeros();
+    for ((c, v), &wi) in cam.iter().zip(world).zip(w) {
+        b += wi * Matrix3::new(c.x * v.x, c.x * v.y, c.x * v.z, c.y * v.x, c.y * v.y, c.y * v.z, c.z * v.x, c.z * v.y, c.z * v.z);
+    }
+    let svd = b.svd(true, true);
+    let (u, vt) = (svd.u?, svd.v_t?);
+    let s = svd.singular_values;
+    if !(s[1] > 1e-12 * s[0].max(1e-300)) {
+        return None;
+    }
+    let d = (u * vt).determinant().signum();
+    let r = u * Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, d)) * vt;
+    let m = DMat3::from_cols(
+        DVec3::new(r[(0, 0)], r[(1, 0)], r[(2, 0)]),
+        DVec3::new(r[(0, 1)], r[(1, 1)], r[(2, 1)]),
+        DVec3::new(r[(0, 2)], r[(1, 2)], r[(2, 2)]),
+    );
+    m.is_finite().then_some(m)
+}
+
+/// A start camera at `position` for a `width × height` photo from `gcps` (see the
+/// [module docs](self)); `focal_px` fixes the focal length. Errors with fewer than 2 GCPs
+/// inside the image (3 without a focal length) or when no rotation fits.
+pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp], focal_px: Option<f64>) -> Result<CameraModel> {
+    let (w, h) = (width as f64, height as f64);
+    let inside: Vec<&Gcp> = gcps
+        .iter()
+        .filter(|g| g.pixel[0] >= -0.5 && g.pixel[1] >= -0.5 && g.pixel[0] <= w - 0.5 && g.pixel[1] <= h - 0.5)
+        .filter(|g| (g.world - position).length() > 0.0)
+        .collect();
+    let need = if focal_px.is_some() { 2 } else { 3 };
+    if inside.len() < need {
+        return Err(Error::BadOption(format!(
+            "fit-camera: a start from the position needs at least {need} GCPs inside the image, got {}",
+            inside.len()
+        )));
+    }
+    let (cx, cy) = ((w - 1.0) / 2.0, (h - 1.0) / 2.0);
+    let world: Vec<DVec3> = inside.iter().map(|g| (g.world - position).normalize()).collect();
+    let weights: Vec<f64> = inside.iter().map(|g| g.weight).collect();
+    let camera_at = |f: f64| -> Option<(CameraModel, f64)> {
+        let cam: Vec<DVec3> = inside.iter().map(|g| DVec3::new((g.pixel[0] - cx) / f, (g.pixel[1] - cy) / f, 1.0).normalize()).collect();
+        let r = rotation_from_bearings(&cam, &world, &weights)?;
+        let model = CameraModel { position, world_to_camera: r, width, height, fx: f, fy: f, cx, cy, k1: 0.0, k2: 0.0 };
+        let mut e: Vec<f64> = inside
+            .iter()
+            .map(|g| model.project(g.world).map_or(f64::INFINITY, |p| (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1])))
+            .collect();
+        e.sort_by(f64::total_cmp);
+        Some((model, e[e.len() / 2]))
+    };
+    let best = match focal_px {
+        Some(f) if f.is_finite() && f > 0.0 => camera_at(f),
+        Some(f) => return Err(Error::BadOption(format!("fit-camera: focal length must be positive pixels, got {f}"))),
+        None => {
+            let f_of = |fov_deg: f64| w / 2.0 / (fov_deg.to_radians() / 2.0).tan();
+            let (lo, hi) = (3f64.ln(), 140f64.ln());
+            let steps = 96;
+            let fov = |k: f64| (lo + (hi - lo) * k / steps as f64).exp();
+            let cost = |k: f64| camera_at(f_of(fov(k))).map_or(f64::INFINITY, |c| c.1);
+            let mut k_best = 0usize;
+            let mut c_best = f64::INFINITY;
+            for k in 0..=steps {
+                let c = cost(k as f64);
+                if c < c_best {
+                    (k_best, c_best) = (k, c);
+                }
+            }
+            // golden section between the neighbouring steps
+            let (mut a, mut b) = ((k_best as f64 - 1.0).max(0.0), (k_best as f64 + 1.0).min(steps as f64));
+            let g = 0.5 * (5f64.sqrt() - 1.0);
+            for _ in 0..40 {
+                let (c, d) = (b - g * (b - a), a + g * (b - a));
+                if cost(c) < cost(d) {
+                    b = d;
+                } else {
+                    a = c;
+                }
+            }
+            camera_at(f_of(fov(0.5 * (a + b))))
+        }
+    };
+    best.map(|(m, _)| m).ok_or_else(|| Error::BadOption("fit-camera: the GCPs' bearings give no rotation (all on one line?)".into()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::rotation_from_yaw_pitch_roll;
+
+    #[test]
+    fn finds_rotation_and_focal_from_the_position() {
+        let truth = CameraModel {
+            position: DVec3::new(446722.0, 7396671.0, 770.0),
+            world_to_camera: rotation_from_yaw_pitch_roll(3.83, 0.1, -0.013),
+            width: 4290,
+            height: 2856,
+            fx: 6014.0,
+            fy: 6014.0,
+            cx: 2144.5,
+            cy: 1427.5,
+            k1: 0.0,
+            k2: 0.0,
+        };
+        let inv = truth.world_to_camera.transpose();
+        let gcps: Vec<Gcp> = (0..12)
+            .map(|i| {
+                let (x, y, d) = ((i % 4) as f64 * 0.1 - 0.15, (i / 4) as f64 * 0.1 - 0.1, 500.0 + 97.0 * i as f64);
+                let world = truth.position + inv * DVec3::new(x * d, y * d, d);
+                Gcp { name: format!("{i}"), world, pixel: truth.project(world).unwrap(), weight: 1.0 }
+            })
+            .collect();
+        let start = start_from_position(truth.position, 4290, 2856, &gcps, None).unwrap();
+        assert!((start.fx - 6014.0).abs() < 1.0, "{}", start.fx);
+        let dot = start.forward().dot(truth.forward());
+        assert!(dot > (1e-4f64).cos(), "{dot}");
+        let given = start_from_position(truth.position, 4290, 2856, &gcps, Some(6014.0)).unwrap();
+        assert!((given.world_to_camera - truth.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-9));
+        assert!(start_from_position(truth.position, 4290, 2856, &gcps[..2], None).is_err());
+    }
+}

@@ -1,0 +1,97 @@
+//! `cliffmap fit-camera` on Engabreen's 28 GCPs (ImGRAFT's fit: yaw, pitch, roll, fx, fy, k1
+//! with the position fixed, 3.04 px RMSE with the `+` tokens summed) and on bad input.
+
+mod common;
+
+use std::process::{Command, Output};
+
+use cliffmap::camera::camera_from_json_file;
+use cliffmap::register::{PixelOrigin, read_gcps};
+
+fn cliffmap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cliffmap")).args(args).output().expect("cannot start cliffmap")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let o = cliffmap(args);
+    assert!(
+        o.status.success(),
+        "cliffmap {args:?} failed:\nstdout: {}\nstderr: {}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn path(rel: &str) -> String {
+    common::real_data(rel).display().to_string()
+}
+
+/// GCP RMSE (px) of a camera file over the Engabreen GCPs.
+fn rmse_of(camera: &std::path::Path) -> f64 {
+    let cam = camera_from_json_file(camera, (0, 0)).unwrap();
+    let gcps = read_gcps(&common::real_data("engabreen/gcp8902.txt"), PixelOrigin::Format).unwrap();
+    let s: f64 = gcps
+        .iter()
+        .map(|g| {
+            let p = cam.project(g.world).unwrap();
+            (p[0] - g.pixel[0]).powi(2) + (p[1] - g.pixel[1]).powi(2)
+        })
+        .sum();
+    (s / gcps.len() as f64).sqrt()
+}
+
+#[test]
+fn engabreen_fit_matches_imgraft_from_its_camera_and_from_the_position_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcps = path("engabreen/gcp8902.txt");
+    let free = "yaw,pitch,roll,fx,fy,k1";
+    // from a start 2° / 1° / 3 % off ImGRAFT's camera
+    let start = dir.path().join("start.json");
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(common::real_data("engabreen/engabreen_camera_IMG_8902.json")).unwrap()).unwrap();
+    let ypr = doc["viewdir_yaw_pitch_roll_deg"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect::<Vec<_>>();
+    doc.as_object_mut().unwrap().remove("viewdir_yaw_pitch_roll_rad");
+    doc["viewdir_yaw_pitch_roll_deg"] = serde_json::json!([ypr[0] + 2.0, ypr[1] - 1.0, ypr[2] + 1.0]);
+    doc["f_px"] = serde_json::json!([5830.0, 5840.0]);
+    doc["k1"] = serde_json::json!(0.0);
+    std::fs::write(&start, doc.to_string()).unwrap();
+    let out = dir.path().join("fit.json");
+    let o = ok(&["fit-camera", "--gcps", &gcps, "--camera", start.to_str().unwrap(), "--free", free, "--out", out.to_str().unwrap(), "--json"]);
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rmse = report["rmse_px"].as_f64().unwrap();
+    assert!((rmse - 3.044).abs() < 0.01, "RMSE {rmse} px, ImGRAFT's fit 3.04 px");
+    assert!((rmse_of(&out) - rmse).abs() < 1e-6, "the written camera reproduces the fit");
+    assert!((report["params"]["yaw"].as_f64().unwrap() - 219.2258).abs() < 0.01, "{}", report["params"]);
+    assert!((report["params"]["k1"].as_f64().unwrap() + 0.1145).abs() < 0.002);
+    assert_eq!(report["residuals"].as_array().unwrap().len(), 28);
+    for k in ["yaw", "pitch", "roll", "fx", "fy", "k1"] {
+        let s = report["sigma"][k].as_f64().unwrap();
+        assert!(s > 0.0 && s.is_finite(), "sigma {k} = {s}");
+    }
+    assert!(report["aic"].as_f64().unwrap().is_finite());
+    // from the position alone (orientation from the GCP bearings, focal length searched)
+    let out2 = dir.path().join("fit2.json");
+    ok(&[
+        "fit-camera", "--gcps", &gcps, "--position", "446722,7396671,770", "--size", "4290x2856", "--free", free, "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert!((rmse_of(&out2) - 3.044).abs() < 0.01, "{}", rmse_of(&out2));
+}
+
+#[test]
+fn bad_gcp_input_fails_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.txt");
+    std::fs::write(&bad, "446238 7396055 586.4 816+9\n").unwrap();
+    let out = dir.path().join("cam.json");
+    let cam = path("engabreen/engabreen_camera_IMG_8902.json");
+    for (gcps, want) in [(bad.to_str().unwrap(), "bad.txt"), ("/nonexistent/g.txt", "/nonexistent/g.txt")] {
+        let o = cliffmap(&["fit-camera", "--gcps", gcps, "--camera", &cam, "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want), "{err}");
+    }
+    let o = cliffmap(&["fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--camera", &cam, "--free", "zoom", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("zoom"));
+    assert!(!out.exists(), "nothing written on failure");
+}
