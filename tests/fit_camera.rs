@@ -80,6 +80,25 @@ fn engabreen_fit_matches_imgraft_from_its_camera_and_from_the_position_alone() {
 }
 
 #[test]
+fn exif_focal_length_of_img_8902() {
+    // Canon EOS Rebel T3, FocalLength 30 mm, no focal-plane resolution in the file: the
+    // sensor width (22.0 mm) gives 5850 px, 2.7 % below the GCP fit's 6014 px
+    let img = common::real_data("engabreen/IMG_8902.jpg");
+    let f = cliffmap::register::exif_focal_px(&img, 4290, 2856, Some(22.0)).unwrap().unwrap();
+    assert!((f.focal_px - 5850.0).abs() < 0.5, "{f:?}");
+    assert_eq!(cliffmap::register::exif_focal_px(&img, 4290, 2856, None).unwrap(), None);
+    // the command starts from it
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cam.json");
+    let o = ok(&[
+        "fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--position", "446722,7396671,770", "--image",
+        img.to_str().unwrap(), "--sensor-width-mm", "22.0", "--free", "yaw,pitch,roll,fx,fy,k1", "--out", out.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("from EXIF"));
+    assert!((rmse_of(&out) - 3.044).abs() < 0.01);
+}
+
+#[test]
 fn bad_gcp_input_fails_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.txt");

@@ -40,9 +40,13 @@ pub struct Args {
     /// Image size "WxH" in pixels (without --camera).
     #[arg(long)]
     size: Option<String>,
-    /// The photo, to read its size (without --camera and --size).
+    /// The photo: its size (without --camera and --size) and, without --focal-px, its EXIF
+    /// focal length.
     #[arg(long)]
     image: Option<PathBuf>,
+    /// Sensor width in mm, for photos whose EXIF gives the focal length in mm alone.
+    #[arg(long)]
+    sensor_width_mm: Option<f64>,
     /// Free parameters: yaw, pitch, roll (angles), x, y, z (position), f (fx and fy together),
     /// fx, fy, cx, cy (c), k1, k2.
     #[arg(long, default_value = "yaw,pitch,roll,f,k1")]
@@ -111,7 +115,14 @@ fn start_camera(a: &Args, position: Option<DVec3>, gcps: &[cliffmap::register::G
     }
     let position = position.context("give --camera START.json, or --position X,Y,Z with --size WxH or --image (an unknown position needs a start camera: no P3P/EPnP solver yet)")?;
     let (w, h) = image_size(a)?;
-    match (a.yaw, a.focal_px) {
+    let mut focal = a.focal_px;
+    if let (None, Some(img)) = (focal, &a.image) {
+        if let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)? {
+            eprintln!("start focal length {:.1} px from EXIF ({})", e.focal_px, e.source);
+            focal = Some(e.focal_px);
+        }
+    }
+    match (a.yaw, focal) {
         (Some(yaw), Some(f)) => {
             let r = rotation_from_yaw_pitch_roll(yaw.to_radians(), a.pitch.unwrap_or(0.0).to_radians(), a.roll.unwrap_or(0.0).to_radians());
             let mut cam = CameraModel::with_fov(position, r, w, h, 1.0);

@@ -7,7 +7,8 @@
 //! from [`parse_free`]; [`fit_camera`] takes a start [`CameraModel`](crate::camera::CameraModel),
 //! the GCPs and [`FitOptions`] and returns a [`CameraFit`] (the camera, per-GCP residuals and
 //! status, RMSE, AIC, parameter standard deviations). [`start_from_position`] gives a start
-//! without a view direction when the camera position is known.
+//! without a view direction when the camera position is known; [`exif_focal_px`] reads a
+//! photo's focal length in pixels from its EXIF data.
 //!
 //! ```
 //! use cliffmap::camera::{CameraModel, rotation_from_yaw_pitch_roll};
@@ -31,11 +32,13 @@
 //! # Ok::<(), cliffmap::Error>(())
 //! ```
 
+mod exif;
 mod fit;
 mod gcp;
 mod params;
 mod start;
 
+pub use exif::{ExifFocal, exif_focal_px};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
 pub use params::{CameraParams, Param, parse_free};

@@ -1,0 +1,78 @@
+//! A photo's focal length in pixels from its EXIF data (`kamadak-exif`).
+//!
+//! In order of preference: `FocalLength` (mm) times `FocalPlaneXResolution` (pixels per
+//! `FocalPlaneResolutionUnit` on the sensor, scaled to the image's width when the EXIF
+//! dimensions differ); `FocalLengthIn35mmFilm` as `f35 · diagonal_px / 43.27` (the 35 mm
+//! equivalent is defined by the diagonal of a 36 × 24 mm frame); `FocalLength` with a
+//! sensor width the caller gives (`f · width_px / sensor_mm`). A photo without EXIF, or
+//! without these fields, gives `None`; malformed EXIF is an error naming the file.
+
+use std::path::Path;
+
+use exif::{In, Tag, Value};
+
+use crate::error::{Error, Result};
+
+/// A focal length read from EXIF, and how it was derived.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExifFocal {
+    /// Focal length in pixels of the image's width.
+    pub focal_px: f64,
+    /// Which fields gave it.
+    pub source: &'static str,
+}
+
+fn rational(f: &exif::Field) -> Option<f64> {
+    match &f.value {
+        Value::Rational(v) => v.first().filter(|r| r.denom != 0).map(|r| r.num as f64 / r.denom as f64),
+        _ => f.value.get_uint(0).map(f64::from),
+    }
+}
+
+/// The focal length in pixels of the `width × height` image at `path` (see the
+/// [module docs](self)); `sensor_width_mm` is used when EXIF gives the focal length alone.
+pub fn exif_focal_px(path: &Path, width: u32, height: u32, sensor_width_mm: Option<f64>) -> Result<Option<ExifFocal>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let data = match exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file)) {
+        Ok(d) => d,
+        Err(exif::Error::NotFound(_)) => return Ok(None),
+        Err(exif::Error::Io(e)) => return Err(Error::io(path, e)),
+        Err(e) => return Err(Error::bad_input(path, format!("malformed EXIF data: {e}"))),
+    };
+    let get = |t: Tag| data.get_field(t, In::PRIMARY).and_then(rational).filter(|v| v.is_finite() && *v > 0.0);
+    let focal_mm = get(Tag::FocalLength);
+    let (w, h) = (width as f64, height as f64);
+    if let (Some(f), Some(res)) = (focal_mm, get(Tag::FocalPlaneXResolution)) {
+        let unit_mm = match data.get_field(Tag::FocalPlaneResolutionUnit, In::PRIMARY).and_then(|u| u.value.get_uint(0)) {
+            Some(3) => 10.0,
+            Some(4) => 1.0,
+            Some(5) => 1e-3,
+            _ => 25.4, // 2 = inch, the default
+        };
+        let exif_w = data.get_field(Tag::PixelXDimension, In::PRIMARY).and_then(|v| v.value.get_uint(0)).map(f64::from);
+        let scale = exif_w.filter(|&ew| ew > 0.0).map_or(1.0, |ew| w / ew);
+        return Ok(Some(ExifFocal { focal_px: f * res / unit_mm * scale, source: "FocalLength x FocalPlaneXResolution" }));
+    }
+    if let Some(f35) = get(Tag::FocalLengthIn35mmFilm) {
+        return Ok(Some(ExifFocal { focal_px: f35 * w.hypot(h) / 36f64.hypot(24.0), source: "FocalLengthIn35mmFilm" }));
+    }
+    if let (Some(f), Some(s)) = (focal_mm, sensor_width_mm.filter(|s| s.is_finite() && *s > 0.0)) {
+        return Ok(Some(ExifFocal { focal_px: f * w / s, source: "FocalLength and the given sensor width" }));
+    }
+    Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn images_without_exif_give_none_and_missing_files_fail() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("plain.png");
+        image::RgbImage::new(4, 3).save(&p).unwrap();
+        assert_eq!(exif_focal_px(&p, 4, 3, Some(22.0)).unwrap(), None);
+        let e = exif_focal_px(&dir.path().join("missing.jpg"), 4, 3, None).unwrap_err().to_string();
+        assert!(e.contains("missing.jpg"), "{e}");
+    }
+}
