@@ -4,33 +4,10 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use cliffmap::store::Store;
-use common::real_data;
-
-fn cliffmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cliffmap")).args(args).output().expect("cannot start cliffmap")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let o = cliffmap(args);
-    assert!(
-        o.status.success(),
-        "cliffmap {args:?} failed:\nstdout: {}\nstderr: {}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
-
-fn fails_naming(args: &[&str], needle: &str) {
-    let o = cliffmap(args);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "cliffmap {args:?} should fail");
-    assert!(err.contains(needle), "error of {args:?} should name {needle:?}: {err}");
-    assert!(!err.contains("panicked"), "cliffmap {args:?} panicked: {err}");
-}
+use common::{fails_naming, ok, real_data};
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")

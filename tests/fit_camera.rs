@@ -3,25 +3,9 @@
 
 mod common;
 
-use std::process::{Command, Output};
-
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::register::{PixelOrigin, read_gcps};
-
-fn cliffmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cliffmap")).args(args).output().expect("cannot start cliffmap")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let o = cliffmap(args);
-    assert!(
-        o.status.success(),
-        "cliffmap {args:?} failed:\nstdout: {}\nstderr: {}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use common::{cliffmap, ok};
 
 fn path(rel: &str) -> String {
     common::real_data(rel).display().to_string()

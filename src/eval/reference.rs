@@ -243,33 +243,19 @@ pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersampl
             let mut out: Row =
                 (Vec::with_capacity(3 * w), Vec::with_capacity(3 * w), Vec::with_capacity(3 * w), vec![0; w], vec![u8::MAX; w]);
             for col in 0..w {
-                let mut acc = [[0.0f64; 3]; 3];
-                for sy in 0..ss {
-                    for sx in 0..ss {
-                        let u = col as f64 - 0.5 + (sx as f64 + 0.5) / ss as f64;
-                        let v = row as f64 - 0.5 + (sy as f64 + 0.5) / ss as f64;
-                        let c = match cast(u, v) {
-                            None => [sky; 3],
-                            Some(hit) => {
-                                let p = hit.point;
-                                let base = ortho_colour(src.ortho, p.x, p.y);
-                                let cast = |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t);
-                                let oracle =
-                                    oracle_colour(src.photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(base);
-                                [colour(p.x, p.y, p.z, hit.slope_deg), oracle, base]
-                            }
-                        };
-                        for (a, c) in acc.iter_mut().zip(c) {
-                            for k in 0..3 {
-                                a[k] += srgb_to_linear(c[k]);
-                            }
-                        }
+                let [t, o, b] = supersampled(col, row, ss, |u, v| match cast(u, v) {
+                    None => [sky; 3],
+                    Some(hit) => {
+                        let p = hit.point;
+                        let base = ortho_colour(src.ortho, p.x, p.y);
+                        let cast = |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t);
+                        let oracle = oracle_colour(src.photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(base);
+                        [colour(p.x, p.y, p.z, hit.slope_deg), oracle, base]
                     }
-                }
-                let q = |v: f64| (linear_to_srgb(v / (ss * ss) as f64) * 255.0).round().clamp(0.0, 255.0) as u8;
-                out.0.extend(acc[0].map(q));
-                out.1.extend(acc[1].map(q));
-                out.2.extend(acc[2].map(q));
+                });
+                out.0.extend(t);
+                out.1.extend(o);
+                out.2.extend(b);
                 if let Some(hit) = cast(col as f64, row as f64) {
                     let mut class = TERRAIN;
                     if hit.slope_deg > STEEP_DEG {
@@ -299,4 +285,28 @@ pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersampl
     let [truth, oracle, baseline, classes, oracle_photo] = planes;
     let img = |v: Vec<u8>| RgbImage::from_raw(camera.width, camera.height, v).ok_or_else(|| Error::BadOption("reference size mismatch".into()));
     Ok(Reference { truth: img(truth)?, oracle: img(oracle)?, baseline: img(baseline)?, classes, oracle_photo })
+}
+
+/// The mean in linear light of the `N` colours (sRGB, 0..1) `sample(u, v)` gives at the
+/// `ss × ss` subpixel centres of pixel `(col, row)` (pixel-centre convention), as sRGB bytes.
+pub(crate) fn supersampled<const N: usize>(
+    col: usize,
+    row: usize,
+    ss: usize,
+    mut sample: impl FnMut(f64, f64) -> [[f64; 3]; N],
+) -> [[u8; 3]; N] {
+    let mut acc = [[0.0f64; 3]; N];
+    for sy in 0..ss {
+        for sx in 0..ss {
+            let u = col as f64 - 0.5 + (sx as f64 + 0.5) / ss as f64;
+            let v = row as f64 - 0.5 + (sy as f64 + 0.5) / ss as f64;
+            for (a, c) in acc.iter_mut().zip(sample(u, v)) {
+                for k in 0..3 {
+                    a[k] += srgb_to_linear(c[k]);
+                }
+            }
+        }
+    }
+    let n = (ss * ss).max(1) as f64;
+    acc.map(|a| a.map(|v| (linear_to_srgb(v / n) * 255.0).round().clamp(0.0, 255.0) as u8))
 }

@@ -9,7 +9,6 @@ use rayon::prelude::*;
 
 use super::reference::{PhotoMips, oracle_colour, ortho_colour};
 use crate::camera::CameraModel;
-use crate::colour::{linear_to_srgb, srgb_to_linear};
 use crate::error::{Error, Result};
 use crate::ortho::Ortho;
 use crate::photo::{BvhQuality, PhotoInput, TriangleBvh};
@@ -50,25 +49,12 @@ impl TinTracer {
     pub fn nearest(&self, from: DVec3, dir: DVec3, t_max: f64) -> Option<DemHit> {
         let hit = self.bvh.nearest((from - self.origin).as_vec3(), dir.as_vec3(), 0.0, t_max as f32)?;
         let t = self.tris.get(hit.triangle as usize)?;
-        let b = hit.bary.map(|x| x as f64);
-        let point = t[0] + (t[1] - t[0]) * b[1] + (t[2] - t[0]) * b[2];
-        let n = (t[1] - t[0]).cross(t[2] - t[0]);
-        let mut normal = n.try_normalize().unwrap_or(DVec3::Z);
-        if normal.z < 0.0 {
-            normal = -normal;
-        }
-        let slope_deg = normal.z.clamp(0.0, 1.0).acos().to_degrees();
-        Some(DemHit { t: hit.t as f64, point, normal, slope_deg })
+        Some(DemHit::on_triangle(hit.t as f64, *t, hit.bary))
     }
 
     /// Whether `point` is seen from `eye` (as [`crate::scene::DemTracer::sees`]).
     pub fn sees(&self, eye: DVec3, point: DVec3, tolerance: f64) -> bool {
-        let d = point - eye;
-        let len = d.length();
-        if !(len > 0.0) || !len.is_finite() {
-            return false;
-        }
-        self.nearest(eye, d / len, len + tolerance).is_none_or(|h| h.t >= len - tolerance)
+        crate::scene::sees_with(eye, point, tolerance, |o, d, t| self.nearest(o, d, t))
     }
 }
 
@@ -99,30 +85,19 @@ pub fn tin_references(
         .map(|row| {
             let (mut base, mut oracle) = (Vec::with_capacity(3 * w), Vec::with_capacity(3 * w));
             for col in 0..w {
-                let mut acc = [[0.0f64; 3]; 2];
-                for sy in 0..ss {
-                    for sx in 0..ss {
-                        let u = col as f64 - 0.5 + (sx as f64 + 0.5) / ss as f64;
-                        let v = row as f64 - 0.5 + (sy as f64 + 0.5) / ss as f64;
-                        let c = match camera.pixel_ray(u, v).and_then(|d| tracer.nearest(camera.position, d, f64::INFINITY)) {
-                            None => [sky; 2],
-                            Some(hit) => {
-                                let b = ortho_colour(ortho, hit.point.x, hit.point.y);
-                                let cast = |from, dir, t_max| tracer.nearest(from, dir, t_max).map(|h| h.t);
-                                let o = oracle_colour(photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(b);
-                                [b, o]
-                            }
-                        };
-                        for (a, c) in acc.iter_mut().zip(c) {
-                            for k in 0..3 {
-                                a[k] += srgb_to_linear(c[k]);
-                            }
+                let [b, o] = super::reference::supersampled(col, row, ss, |u, v| {
+                    match camera.pixel_ray(u, v).and_then(|d| tracer.nearest(camera.position, d, f64::INFINITY)) {
+                        None => [sky; 2],
+                        Some(hit) => {
+                            let b = ortho_colour(ortho, hit.point.x, hit.point.y);
+                            let cast = |from, dir, t_max| tracer.nearest(from, dir, t_max).map(|h| h.t);
+                            let o = oracle_colour(photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(b);
+                            [b, o]
                         }
                     }
-                }
-                let q = |a: f64| (linear_to_srgb(a / (ss * ss) as f64) * 255.0).round().clamp(0.0, 255.0) as u8;
-                base.extend(acc[0].map(q));
-                oracle.extend(acc[1].map(q));
+                });
+                base.extend(b);
+                oracle.extend(o);
             }
             (base, oracle)
         })

@@ -22,6 +22,7 @@ mod truth;
 
 pub use photos::{DemoPhotoOptions, PhotoShot, SKY_COLOUR};
 pub use tracer::{DemHit, DemTracer};
+pub(crate) use tracer::sees_with;
 pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_covered, texel_truth_with};
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};

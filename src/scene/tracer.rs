@@ -58,33 +58,43 @@ impl<'a> DemTracer<'a> {
         let o = (from - self.origin).as_vec3();
         let hit = self.bvh.nearest(o, dir.as_vec3(), 0.0, t_max as f32)?;
         let p = corners(self.dem.width, hit.triangle as usize).map(|(r, c)| world(self.dem, r, c));
-        // relative to a vertex: barycentrics times absolute (UTM-sized) coordinates would lose
-        // decimetres on the slivers of near-vertical walls
-        let b = hit.bary.map(|x| x as f64);
-        let point = p[0] + (p[1] - p[0]) * b[1] + (p[2] - p[0]) * b[2];
-        let n = (p[1] - p[0]).cross(p[2] - p[0]);
-        let len = n.length();
-        let mut normal = if len > 0.0 { n / len } else { DVec3::Z };
-        if normal.z < 0.0 {
-            normal = -normal;
-        }
-        let slope_deg = normal.z.clamp(0.0, 1.0).acos().to_degrees();
-        Some(DemHit { t: hit.t as f64, point, normal, slope_deg })
+        Some(DemHit::on_triangle(hit.t as f64, p, hit.bary))
     }
 
     /// Whether the surface point `point` (world) is seen from `eye`: the nearest hit of the
     /// ray from `eye` towards it lies no more than `tolerance` metres before it.
     pub fn sees(&self, eye: DVec3, point: DVec3, tolerance: f64) -> bool {
-        let d = point - eye;
-        let len = d.length();
-        if !(len > 0.0) || !len.is_finite() {
-            return false;
-        }
-        match self.nearest(eye, d / len, len + tolerance) {
-            Some(h) => h.t >= len - tolerance,
-            None => true,
-        }
+        sees_with(eye, point, tolerance, |o, d, t| self.nearest(o, d, t))
     }
+}
+
+impl DemHit {
+    /// The hit at distance `t` on the triangle `p` (world, f64) with barycentric weights
+    /// `bary`: the point interpolated relative to the first vertex (barycentrics times
+    /// absolute, UTM-sized coordinates would lose decimetres on the slivers of near-vertical
+    /// walls), the upward unit normal and the slope.
+    pub fn on_triangle(t: f64, p: [DVec3; 3], bary: [f32; 3]) -> DemHit {
+        let b = bary.map(|x| x as f64);
+        let point = p[0] + (p[1] - p[0]) * b[1] + (p[2] - p[0]) * b[2];
+        let mut normal = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::Z);
+        if normal.z < 0.0 {
+            normal = -normal;
+        }
+        let slope_deg = normal.z.clamp(0.0, 1.0).acos().to_degrees();
+        DemHit { t, point, normal, slope_deg }
+    }
+}
+
+/// Whether `point` is seen from `eye` by a tracer's `nearest(origin, unit dir, t_max)`: the
+/// nearest hit towards it lies no more than `tolerance` metres before it (false for `eye`
+/// at the point or non-finite input).
+pub(crate) fn sees_with(eye: DVec3, point: DVec3, tolerance: f64, nearest: impl Fn(DVec3, DVec3, f64) -> Option<DemHit>) -> bool {
+    let d = point - eye;
+    let len = d.length();
+    if !(len > 0.0) || !len.is_finite() {
+        return false;
+    }
+    nearest(eye, d / len, len + tolerance).is_none_or(|h| h.t >= len - tolerance)
 }
 
 /// The three samples `(row, col)` of triangle `i` of a grid `w` samples wide.
