@@ -98,3 +98,27 @@ fn bad_gcp_input_fails_naming_the_file() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("zoom"));
     assert!(!out.exists(), "nothing written on failure");
 }
+
+#[test]
+fn img_8937_registers_to_img_8902_on_stable_ground() {
+    // ImGRAFT: viewdir change +0.12633°, +0.017584°, +0.015242° from rock features, 0.41 px
+    let a = image::open(common::real_data("engabreen/IMG_8902.jpg")).unwrap().to_rgb8();
+    let b = image::open(common::real_data("engabreen/IMG_8937.jpg")).unwrap().to_rgb8();
+    let cam = camera_from_json_file(&common::real_data("engabreen/engabreen_camera_IMG_8902.json"), (0, 0)).unwrap();
+    let matches = cliffmap::register::match_photos(&a, &b, &cliffmap::register::MatchOptions::default()).unwrap();
+    let dem = common::engabreen_dem();
+    let mask = image::open(common::real_data("engabreen/engabreen_glacier_mask_507x590.png")).unwrap().to_luma8();
+    let tracer = cliffmap::scene::DemTracer::new(&dem, cam.position).unwrap();
+    let rock = |p: glam::DVec3| {
+        let (r, c) = dem.georef.grid(p.x, p.y);
+        r >= -0.5 && c >= -0.5 && mask.get_pixel_checked(c.round() as u32, r.round() as u32).is_some_and(|m| m.0[0] < 128)
+    };
+    let stable = cliffmap::register::stable_matches(&cam, &matches, |o, d| tracer.nearest(o, d, f64::INFINITY).map(|h| h.point), rock);
+    assert!(stable.len() >= 200, "{} stable matches of {}", stable.len(), matches.len());
+    let fit = cliffmap::register::fit_rotation(&cam, &stable).unwrap();
+    assert!(fit.rmse_inliers_px < 0.5, "match residual {} px", fit.rmse_inliers_px);
+    let (ya, pa, _) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
+    let (yb, pb, _) = cliffmap::camera::yaw_pitch_roll_from_rotation(&fit.camera.world_to_camera);
+    let (dy, dp) = ((yb - ya).to_degrees(), (pb - pa).to_degrees());
+    assert!((dy - 0.12633).abs() < 0.005 && (dp - 0.017584).abs() < 0.005, "{dy} {dp}");
+}

@@ -8,7 +8,8 @@
 //! the GCPs and [`FitOptions`] and returns a [`CameraFit`] (the camera, per-GCP residuals and
 //! status, RMSE, AIC, parameter standard deviations). [`start_from_position`] gives a start
 //! without a view direction when the camera position is known; [`exif_focal_px`] reads a
-//! photo's focal length in pixels from its EXIF data.
+//! photo's focal length in pixels from its EXIF data; [`match_photos`] and
+//! [`fit_rotation`] register a photo to another taken from the same place.
 //!
 //! ```
 //! use cliffmap::camera::{CameraModel, rotation_from_yaw_pitch_roll};
@@ -35,11 +36,13 @@
 mod exif;
 mod fit;
 mod gcp;
+mod pair;
 mod params;
 mod start;
 
 pub use exif::{ExifFocal, exif_focal_px};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
+pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
 pub use start::{rotation_from_bearings, start_from_position};

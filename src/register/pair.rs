@@ -1,0 +1,316 @@
+//! Registering a photo to another taken from the same place (a fixed time-lapse camera that
+//! turned a little, ImGRAFT's "camera B = camera A rotated"): patch matches between the two
+//! images, then a rotation-only fit.
+//!
+//! Matching: on a regular grid over photo A (margin of a patch and the search radius),
+//! each patch of `2·half + 1` pixels square with enough texture (standard deviation ≥ 2
+//! grey levels) is searched in photo B by normalised cross-correlation (NCC), first on both
+//! images box-filtered 4× (radius `radius / 4 + 2`), then at full resolution within ±4
+//! pixels of that; the peak is refined to sub-pixel by a parabola through it and its
+//! neighbours in each axis. A match counts if its NCC is at least `min_ncc` and the peak is
+//! not at the edge of the search; the sub-pixel position then comes from a Lucas-Kanade
+//! refinement of the translation (Gauss-Newton on bilinear samples of B, both patches
+//! normalised to zero mean and unit norm; the parabola alone is biased towards whole
+//! pixels by up to 0.2 px). Deterministic (grid order, no randomness).
+//!
+//! Fit: each match becomes a ground control point for B: the world point 10 km along A's
+//! ray through the matched pixel (A's distortion removed), observed at B's pixel. With B's
+//! position fixed at A's, only B's angles are fitted ([`super::fit_camera`], robust): the
+//! points are effectively at infinity, so the fit is the rotation alone and its RMSE is the
+//! match residual in pixels.
+
+use glam::DVec3;
+use image::RgbImage;
+use rayon::prelude::*;
+
+use super::fit::{CameraFit, FitOptions, fit_camera};
+use super::gcp::Gcp;
+use super::params::Param;
+use crate::camera::CameraModel;
+use crate::error::{Error, Result};
+
+/// How [`match_photos`] matches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchOptions {
+    /// Patch half size, pixels (patch side `2·half + 1`). Default 15.
+    pub half: u32,
+    /// Largest shift searched, pixels. Default 64.
+    pub radius: u32,
+    /// Grid spacing of the patches in A, pixels. Default 96.
+    pub spacing: u32,
+    /// Lowest NCC of a match. Default 0.8.
+    pub min_ncc: f64,
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        MatchOptions { half: 15, radius: 64, spacing: 96, min_ncc: 0.8 }
+    }
+}
+
+/// A patch of A found in B.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchMatch {
+    /// Patch centre in A (0-based pixels).
+    pub a: [f64; 2],
+    /// Its position in B (sub-pixel).
+    pub b: [f64; 2],
+    /// NCC at the peak.
+    pub ncc: f64,
+}
+
+/// A grey image as f32 luminance (Rec. 709 weights of the sRGB values).
+struct Grey {
+    w: usize,
+    h: usize,
+    v: Vec<f32>,
+}
+
+impl Grey {
+    fn of(img: &RgbImage) -> Grey {
+        let v = img.pixels().map(|p| 0.2126 * p.0[0] as f32 + 0.7152 * p.0[1] as f32 + 0.0722 * p.0[2] as f32).collect();
+        Grey { w: img.width() as usize, h: img.height() as usize, v }
+    }
+
+    /// Box-filtered by `k` (the last partial blocks dropped).
+    fn reduced(&self, k: usize) -> Grey {
+        let (w, h) = (self.w / k, self.h / k);
+        let mut v = vec![0.0; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = 0.0;
+                for dy in 0..k {
+                    let row = &self.v[(y * k + dy) * self.w + x * k..][..k];
+                    s += row.iter().sum::<f32>();
+                }
+                v[y * w + x] = s / (k * k) as f32;
+            }
+        }
+        Grey { w, h, v }
+    }
+
+    /// The patch of half size `r` at integer centre `(cx, cy)` with its mean removed, and
+    /// its norm; `None` outside the image.
+    fn patch(&self, cx: i64, cy: i64, r: i64) -> Option<(Vec<f32>, f32)> {
+        if cx - r < 0 || cy - r < 0 || cx + r >= self.w as i64 || cy + r >= self.h as i64 {
+            return None;
+        }
+        let n = (2 * r + 1) as usize;
+        let mut p = Vec::with_capacity(n * n);
+        for y in cy - r..=cy + r {
+            let row = &self.v[y as usize * self.w + (cx - r) as usize..][..n];
+            p.extend_from_slice(row);
+        }
+        let mean = p.iter().sum::<f32>() / p.len() as f32;
+        p.iter_mut().for_each(|v| *v -= mean);
+        let norm = p.iter().map(|v| v * v).sum::<f32>().sqrt();
+        Some((p, norm))
+    }
+
+    /// NCC of the zero-mean template `t` (norm `tn`, half size `r`) at centre `(cx, cy)`.
+    fn ncc(&self, t: &[f32], tn: f32, cx: i64, cy: i64, r: i64) -> Option<f64> {
+        let (p, pn) = self.patch(cx, cy, r)?;
+        if !(pn > 0.0 && tn > 0.0) {
+            return None;
+        }
+        let dot: f32 = p.iter().zip(t).map(|(a, b)| a * b).sum();
+        Some((dot / (pn * tn)) as f64)
+    }
+
+    /// The best NCC of template `t` over centres within `rad` of `(cx, cy)`: (x, y, ncc),
+    /// and whether the best lies on the search border.
+    fn search(&self, t: &[f32], tn: f32, c: (i64, i64), rad: i64, r: i64) -> Option<(i64, i64, f64, bool)> {
+        let mut best: Option<(i64, i64, f64)> = None;
+        for y in c.1 - rad..=c.1 + rad {
+            for x in c.0 - rad..=c.0 + rad {
+                if let Some(s) = self.ncc(t, tn, x, y, r) {
+                    if best.is_none_or(|b| s > b.2) {
+                        best = Some((x, y, s));
+                    }
+                }
+            }
+        }
+        best.map(|(x, y, s)| (x, y, s, (x - c.0).abs() == rad || (y - c.1).abs() == rad))
+    }
+}
+
+impl Grey {
+    /// Bilinear sample at `(x, y)` (pixel centres at integers), `None` outside.
+    #[inline]
+    fn at(&self, x: f64, y: f64) -> Option<f32> {
+        let (x0, y0) = (x.floor(), y.floor());
+        if x0 < 0.0 || y0 < 0.0 || x0 + 1.0 >= self.w as f64 || y0 + 1.0 >= self.h as f64 {
+            return None;
+        }
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let i = y0 as usize * self.w + x0 as usize;
+        let (a, b, c, d) = (self.v[i], self.v[i + 1], self.v[i + self.w], self.v[i + self.w + 1]);
+        Some(a + (b - a) * fx + (c - a) * fy + (a - b - c + d) * fx * fy)
+    }
+
+    /// Lucas-Kanade refinement of the position `p` in this image of the zero-mean template
+    /// `t` (half size `r`): Gauss-Newton on the translation, both patches normalised to zero
+    /// mean and unit norm (so gain and offset do not matter); `None` if it leaves the image
+    /// or moves more than a pixel.
+    fn refine(&self, t: &[f32], tn: f32, p: [f64; 2], r: i64) -> Option<[f64; 2]> {
+        let n = (2 * r + 1) as usize;
+        let tt: Vec<f64> = t.iter().map(|&v| (v / tn) as f64).collect();
+        let mut q = p;
+        for _ in 0..8 {
+            let mut s = Vec::with_capacity(n * n);
+            let mut g = Vec::with_capacity(n * n);
+            for dy in -r..=r {
+                for dx in -r..=r {
+                    let (x, y) = (q[0] + dx as f64, q[1] + dy as f64);
+                    s.push(self.at(x, y)? as f64);
+                    g.push([
+                        0.5 * (self.at(x + 1.0, y)? - self.at(x - 1.0, y)?) as f64,
+                        0.5 * (self.at(x, y + 1.0)? - self.at(x, y - 1.0)?) as f64,
+                    ]);
+                }
+            }
+            let mean = s.iter().sum::<f64>() / s.len() as f64;
+            let norm = s.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>().sqrt();
+            if !(norm > 0.0) {
+                return None;
+            }
+            let (mut a, mut b) = ([0.0f64; 3], [0.0f64; 2]);
+            for ((sv, gv), tv) in s.iter().zip(&g).zip(&tt) {
+                let res = (sv - mean) / norm - tv;
+                let j = [gv[0] / norm, gv[1] / norm];
+                a[0] += j[0] * j[0];
+                a[1] += j[0] * j[1];
+                a[2] += j[1] * j[1];
+                b[0] += j[0] * res;
+                b[1] += j[1] * res;
+            }
+            let det = a[0] * a[2] - a[1] * a[1];
+            if !(det.abs() > 1e-12) {
+                return None;
+            }
+            let step = [-(a[2] * b[0] - a[1] * b[1]) / det, -(a[0] * b[1] - a[1] * b[0]) / det];
+            q = [q[0] + step[0], q[1] + step[1]];
+            if (q[0] - p[0]).abs() > 1.0 || (q[1] - p[1]).abs() > 1.0 {
+                return None;
+            }
+            if step[0].abs() < 1e-3 && step[1].abs() < 1e-3 {
+                break;
+            }
+        }
+        Some(q)
+    }
+}
+
+/// Sub-pixel offset of a parabola's vertex through `(−1, a)`, `(0, b)`, `(1, c)`, in [−0.5, 0.5].
+fn parabola(a: f64, b: f64, c: f64) -> f64 {
+    let d = a - 2.0 * b + c;
+    if d < 0.0 { (0.5 * (a - c) / d).clamp(-0.5, 0.5) } else { 0.0 }
+}
+
+/// Matches patches of photo `a` in photo `b` (same size; see the [module docs](self)), in
+/// grid order.
+pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<Vec<PatchMatch>> {
+    if a.dimensions() != b.dimensions() {
+        return Err(Error::BadOption(format!("photos of different sizes: {:?} and {:?}", a.dimensions(), b.dimensions())));
+    }
+    let (ga, gb) = (Grey::of(a), Grey::of(b));
+    let k = 4usize;
+    let (ca, cb) = (ga.reduced(k), gb.reduced(k));
+    let (half, radius) = (opts.half.max(2) as i64, opts.radius as i64);
+    let margin = half + radius + 8;
+    let spacing = opts.spacing.max(1) as i64;
+    let (w, h) = (ga.w as i64, ga.h as i64);
+    let mut centres = Vec::new();
+    let mut y = margin;
+    while y < h - margin {
+        let mut x = margin;
+        while x < w - margin {
+            centres.push((x, y));
+            x += spacing;
+        }
+        y += spacing;
+    }
+    let coarse_half = (half / k as i64).max(4);
+    let coarse_rad = radius / k as i64 + 2;
+    let found: Vec<Option<PatchMatch>> = centres
+        .par_iter()
+        .map(|&(x, y)| {
+            let (t, tn) = ga.patch(x, y, half)?;
+            if tn / ((2 * half + 1) as f32) < 2.0 {
+                return None; // std below 2 grey levels: no texture to match
+            }
+            let (ct, ctn) = ca.patch(x / k as i64, y / k as i64, coarse_half)?;
+            let (cx, cy, _, _) = cb.search(&ct, ctn, (x / k as i64, y / k as i64), coarse_rad, coarse_half)?;
+            let (fx, fy, s, edge) = gb.search(&t, tn, (cx * k as i64 + k as i64 / 2, cy * k as i64 + k as i64 / 2), 4 + k as i64, half)?;
+            if edge || s < opts.min_ncc {
+                return None;
+            }
+            let at = |dx: i64, dy: i64| gb.ncc(&t, tn, fx + dx, fy + dy, half);
+            let (l, r, u, d) = (at(-1, 0)?, at(1, 0)?, at(0, -1)?, at(0, 1)?);
+            let start = [fx as f64 + parabola(l, s, r), fy as f64 + parabola(u, s, d)];
+            let b = gb.refine(&t, tn, start, half)?;
+            Some(PatchMatch { a: [x as f64, y as f64], b, ncc: s })
+        })
+        .collect();
+    Ok(found.into_iter().flatten().collect())
+}
+
+/// The matches whose ray from camera `a` meets the surface (`surface(origin, unit dir)`
+/// gives the nearest hit point) at a point `stable` accepts: for matching stable ground only
+/// (ImGRAFT matches rock, not the moving glacier); matches whose ray meets no surface (sky,
+/// clouds) are left out too.
+pub fn stable_matches(
+    a: &CameraModel,
+    matches: &[PatchMatch],
+    surface: impl Fn(DVec3, DVec3) -> Option<DVec3>,
+    stable: impl Fn(DVec3) -> bool,
+) -> Vec<PatchMatch> {
+    matches
+        .iter()
+        .copied()
+        .filter(|m| a.pixel_ray(m.a[0], m.a[1]).and_then(|d| surface(a.position, d)).is_some_and(&stable))
+        .collect()
+}
+
+/// Fits photo B's rotation from `matches` with A's camera `a` (B at A's position, A's
+/// intrinsics; see the [module docs](self)). The result's RMSE is the match residual.
+pub fn fit_rotation(a: &CameraModel, matches: &[PatchMatch]) -> Result<CameraFit> {
+    let gcps: Vec<Gcp> = matches
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| {
+            let dir: DVec3 = a.pixel_ray(m.a[0], m.a[1])?;
+            Some(Gcp { name: format!("match {i}"), world: a.position + dir * 1e4, pixel: m.b, weight: 1.0 })
+        })
+        .collect();
+    fit_camera(a, &gcps, &FitOptions { free: vec![Param::Yaw, Param::Pitch, Param::Roll], ..FitOptions::default() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finds_a_known_subpixel_shift() {
+        // a smooth random texture, and the same shifted by (7.3, -2.6) px
+        let tex = |x: f64, y: f64| {
+            let v = (x * 0.21).sin() * (y * 0.17).cos() + (x * 0.05 + y * 0.11).sin() + ((x * 0.13 - y * 0.07).cos() * 0.5);
+            (128.0 + 50.0 * v).clamp(0.0, 255.0) as u8
+        };
+        let a = RgbImage::from_fn(400, 300, |x, y| {
+            let v = tex(x as f64, y as f64);
+            image::Rgb([v, v, v])
+        });
+        let b = RgbImage::from_fn(400, 300, |x, y| {
+            let v = tex(x as f64 - 7.3, y as f64 + 2.6);
+            image::Rgb([v, v, v])
+        });
+        let m = match_photos(&a, &b, &MatchOptions { radius: 16, spacing: 40, ..MatchOptions::default() }).unwrap();
+        assert!(m.len() >= 10, "{} matches", m.len());
+        for p in &m {
+            let (du, dv) = (p.b[0] - p.a[0], p.b[1] - p.a[1]);
+            assert!((du - 7.3).abs() < 0.03 && (dv + 2.6).abs() < 0.03, "{p:?}");
+        }
+        assert!(match_photos(&a, &RgbImage::new(10, 10), &MatchOptions::default()).is_err());
+    }
+}
