@@ -82,7 +82,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let position = a.position.as_deref().map(parse_position).transpose()?;
     let start = start_camera(&a, position, &gcps)?;
     let opts = FitOptions { free, robust: !a.no_robust, huber_px: a.huber_px, ..FitOptions::default() };
-    let fit = fit_camera(&start, &gcps, &opts)?;
+    let fit = fit_camera(&start, &gcps, &opts).with_context(|| format!("{}", a.gcps.display()))?;
     let mut doc = camera_to_imgraft_json(&fit.camera);
     if let Some(obj) = doc.as_object_mut() {
         obj.insert("fit".into(), fit_json(&fit, &a.gcps.display().to_string()));

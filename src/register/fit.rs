@@ -200,7 +200,9 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 /// Fits the free parameters of `start` to `gcps` (see the [module docs](self)).
 ///
 /// Errors (never panics): no free parameters, fewer usable GCP coordinates than free
-/// parameters, or a solver failure (non-finite residuals at the start).
+/// parameters, GCPs that do not determine the free parameters (the Jacobian with unit
+/// columns has a singular value below 1e-7 of its largest), or a solver failure
+/// (non-finite residuals at the start).
 pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<CameraFit> {
     if opts.free.is_empty() {
         return Err(Error::BadOption("fit-camera: no free parameters".into()));
@@ -275,7 +277,30 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
     let rss: f64 = e.iter().map(|v| v * v).sum();
     let wr = problem.residuals_at(&x);
     let s2 = if n > k { wr.norm_squared() / (n - k) as f64 } else { f64::NAN };
-    let cov = problem.jacobian().and_then(|j| (j.transpose() * &j).try_inverse());
+    let jac = problem.jacobian();
+    if let Some(j) = &jac {
+        // the free parameters must be determined: columns scaled to unit norm, the smallest
+        // singular value against the largest (repeated GCPs, points on one ray, or a free
+        // set the GCPs cannot tell apart leave it near 0)
+        let mut jn = j.clone();
+        for mut c in jn.column_iter_mut() {
+            let n = c.norm();
+            if n > 0.0 {
+                c /= n;
+            }
+        }
+        let sv = jn.singular_values();
+        let (lo, hi) = (sv.min(), sv.max());
+        if !(lo > 1e-7 * hi) {
+            let names: Vec<&str> = opts.free.iter().map(|p| p.name()).collect();
+            return Err(Error::BadOption(format!(
+                "fit-camera: the {} usable GCPs do not determine the free parameters {} (repeated points, points on one ray, or too many free parameters)",
+                used.len(),
+                names.join(",")
+            )));
+        }
+    }
+    let cov = jac.and_then(|j| (j.transpose() * &j).try_inverse());
     let params = opts
         .free
         .iter()
@@ -441,5 +466,9 @@ mod tests {
         // too few equations is an error, not a panic
         let e = fit_camera(&cam, &g[..3], &FitOptions::default()).unwrap_err().to_string();
         assert!(e.contains("usable GCPs"), "{e}");
+        // so are GCPs that do not determine the parameters (one point repeated)
+        let same = vec![g[5].clone(); 4];
+        let e = fit_camera(&cam, &same, &FitOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("do not determine"), "{e}");
     }
 }
