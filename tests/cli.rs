@@ -1,13 +1,15 @@
 //! End-to-end tests of the `cliffmap` binary: demo, build on real data, stats, export-obj,
 //! resume, determinism across thread counts, and bad input handling.
 
+mod cli_util;
 mod common;
 
 use std::path::Path;
 use std::process::Command;
 
 use cliffmap::store::Store;
-use common::{fails_naming, ok, real_data};
+use cli_util::{fails_naming, ok};
+use common::real_data;
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")

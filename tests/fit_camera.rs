@@ -1,11 +1,12 @@
 //! `cliffmap fit-camera` on Engabreen's 28 GCPs (ImGRAFT's fit: yaw, pitch, roll, fx, fy, k1
 //! with the position fixed, 3.04 px RMSE with the `+` tokens summed) and on bad input.
 
+mod cli_util;
 mod common;
 
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::register::{PixelOrigin, read_gcps};
-use common::{cliffmap, ok};
+use cli_util::{cliffmap, ok};
 
 fn path(rel: &str) -> String {
     common::real_data(rel).display().to_string()

@@ -446,6 +446,25 @@ impl CellAccum {
         self.merged.get(t).coverage
     }
 
+    /// Calls `f(t, colour, confidence, resolution, photo)` for every texel `t` some photo
+    /// gave colour (the values of [`CellAccum::colour_at`], [`CellAccum::confidence`],
+    /// [`CellAccum::resolution_at`] and [`CellAccum::best_photo`]), in tile order: only the
+    /// tiles footprints reached are visited.
+    pub fn for_each_coloured(&self, mut f: impl FnMut(usize, [f32; 3], f32, f32, Option<u16>)) {
+        self.merged.for_each(|t, s| {
+            let Some(&label) = self.best.get(t) else { return };
+            if label == 0 {
+                return;
+            }
+            let (colour, res) = match self.mode {
+                BlendMode::Confidence if s.weight > 0.0 => (s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)), s.footprint / s.weight),
+                BlendMode::Confidence => ([0.0; 3], f32::INFINITY),
+                BlendMode::Best => (s.colour, if s.weight > 0.0 { s.footprint } else { f32::INFINITY }),
+            };
+            f(t, colour, s.coverage, res, Some(label - 1));
+        });
+    }
+
     /// The combined photo colour (working space 0..1) at texel `t`, if any photo gave it colour.
     pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
         if !self.has_colour(t) {

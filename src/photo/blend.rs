@@ -99,42 +99,42 @@ pub fn blend_cell(
     let (w, h) = texture.dimensions();
     let ctx: &CellContext = &acc.context;
     let mut conf = GrayImage::new(w, h);
-    let (mut photo_texels, mut steep_texels, mut steep_photo_texels) = (0, 0, 0);
+    let (mut photo_texels, mut steep_photo_texels) = (0, 0);
     let mut supplied: Vec<u64> = Vec::new();
     let n = (w as usize * h as usize).min(acc.len());
-    for (t, (px, cv)) in texture.pixels_mut().zip(conf.pixels_mut()).enumerate() {
-        let cov = covered.get(t).copied().unwrap_or(false);
-        let st = cov && steep.get(t).copied().unwrap_or(false);
-        steep_texels += st as u64;
+    let steep_texels = covered.iter().zip(steep).take(w as usize * h as usize).filter(|(c, s)| **c && **s).count() as u64;
+    let (px, cv) = (texture.as_mut(), conf.as_mut());
+    acc.for_each_coloured(|t, p, confidence, resolution, best| {
         if t >= n {
-            continue;
+            return;
         }
-        let Some(p) = acc.colour_at(t) else { continue };
         let b = ctx.base_index(t, acc.texels, acc.scale);
-        let ratio = ctx.existing_resolution(b) as f64 / acc.resolution_at(t) as f64;
-        let beta = params.photo_weight(acc.confidence(t) as f64, ratio);
+        let ratio = ctx.existing_resolution(b) as f64 / resolution as f64;
+        let beta = params.photo_weight(confidence as f64, ratio);
         if !(beta > 0.0) {
-            continue;
+            return;
         }
-        let alpha = px.0[3] as f64 / 255.0;
+        let e = &mut px[4 * t..4 * t + 4];
+        let alpha = e[3] as f64 / 255.0;
         let s = beta / (beta + (1.0 - beta) * alpha);
         for k in 0..3 {
-            let e = space.decode_u8(px.0[k]) as f64;
-            px.0[k] = space.encode_u8((s * p[k] as f64 + (1.0 - s) * e) as f32);
+            let old = space.decode_u8(e[k]) as f64;
+            e[k] = space.encode_u8((s * p[k] as f64 + (1.0 - s) * old) as f32);
         }
-        px.0[3] = px.0[3].max(crate::fastmath::to_u8(beta * 255.0));
-        cv.0[0] = crate::fastmath::to_u8(s * 255.0);
+        e[3] = e[3].max(crate::fastmath::to_u8(beta * 255.0));
+        cv[t] = crate::fastmath::to_u8(s * 255.0);
+        let cov = covered.get(t).copied().unwrap_or(false);
         if s > 0.5 && cov {
             photo_texels += 1;
-            steep_photo_texels += st as u64;
-            if let Some(i) = acc.best_photo(t).map(usize::from) {
+            steep_photo_texels += steep.get(t).copied().unwrap_or(false) as u64;
+            if let Some(i) = best.map(usize::from) {
                 if supplied.len() <= i {
                     supplied.resize(i + 1, 0);
                 }
                 supplied[i] += 1;
             }
         }
-    }
+    });
     Blended { texture, confidence: conf, photo_texels, steep_texels, steep_photo_texels, supplied }
 }
 

@@ -4,33 +4,6 @@
 pub mod tiffgen;
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-/// Runs the `cliffmap` binary with `args`.
-pub fn cliffmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cliffmap")).args(args).output().expect("cannot start cliffmap")
-}
-
-/// Runs `cliffmap` and fails the test (printing its output) unless it succeeds.
-pub fn ok(args: &[&str]) -> Output {
-    let o = cliffmap(args);
-    assert!(
-        o.status.success(),
-        "cliffmap {args:?} failed:\nstdout: {}\nstderr: {}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
-
-/// Runs `cliffmap` and fails the test unless it fails, without a panic, naming `needle`.
-pub fn fails_naming(args: &[&str], needle: &str) {
-    let o = cliffmap(args);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "cliffmap {args:?} should fail");
-    assert!(err.contains(needle), "error of {args:?} should name {needle:?}: {err}");
-    assert!(!err.contains("panicked"), "cliffmap {args:?} panicked: {err}");
-}
 
 /// Path of a file in the shared real-data directory: `$CLIFFMAP_SHARED_DATA`, else
 /// `$CARGO_MANIFEST_DIR/../shared/data/real`, else `/work/shared/data/real`. Panics (so the
