@@ -62,6 +62,14 @@ fn engabreen_fit_matches_imgraft_from_its_camera_and_from_the_position_alone() {
         out2.to_str().unwrap(),
     ]);
     assert!((rmse_of(&out2) - 3.044).abs() < 0.01, "{}", rmse_of(&out2));
+    // from the GCPs alone (DLT + RANSAC start), the position free too
+    let out3 = dir.path().join("fit3.json");
+    let o = ok(&["fit-camera", "--gcps", &gcps, "--size", "4290x2856", "--free", "angles,position,f,k1", "--out", out3.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("DLT"));
+    let cam = camera_from_json_file(&out3, (0, 0)).unwrap();
+    let off = cam.position - glam::DVec3::new(446722.0, 7396671.0, 770.0);
+    assert!(off.length() < 5.0, "{off:?} from the surveyed position");
+    assert!(rmse_of(&out3) < 3.0, "{}", rmse_of(&out3));
 }
 
 #[test]

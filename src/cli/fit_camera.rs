@@ -17,7 +17,8 @@ pub struct Args {
     #[arg(long)]
     gcps: PathBuf,
     /// Start camera (Camera JSON, e.g. ImGRAFT-style): position, view direction, focal
-    /// length and image size. Without it, give --position and --size (or --image).
+    /// length and image size. Without it: --position and the size (--size or --image), or the
+    /// size alone (a start from the GCPs by DLT + RANSAC, at least 6 GCPs).
     #[arg(long)]
     camera: Option<PathBuf>,
     /// Camera position "X,Y,Z" (world metres) for a start without --camera (or to replace
@@ -100,7 +101,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 /// The start camera: --camera (position replaced by --position), else --yaw with
-/// --focal-px, else the orientation from the GCP bearings at --position.
+/// --focal-px, else the orientation from the GCP bearings at --position, else the DLT of
+/// the GCPs.
 fn start_camera(a: &Args, position: Option<DVec3>, gcps: &[cliffmap::register::Gcp]) -> anyhow::Result<CameraModel> {
     if let Some(path) = &a.camera {
         let mut cam = camera_from_json_file(path, (0, 0))?;
@@ -113,8 +115,15 @@ fn start_camera(a: &Args, position: Option<DVec3>, gcps: &[cliffmap::register::G
         }
         return Ok(cam);
     }
-    let position = position.context("give --camera START.json, or --position X,Y,Z with --size WxH or --image (an unknown position needs a start camera: no P3P/EPnP solver yet)")?;
     let (w, h) = image_size(a)?;
+    let Some(position) = position else {
+        let cam = cliffmap::register::start_from_gcps(w, h, gcps)?;
+        eprintln!(
+            "start from the GCPs alone (DLT + RANSAC): position {:.1}, {:.1}, {:.1}, focal {:.0} px",
+            cam.position.x, cam.position.y, cam.position.z, cam.fx
+        );
+        return Ok(cam);
+    };
     let mut focal = a.focal_px;
     if let (None, Some(img)) = (focal, &a.image) {
         if let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)? {

@@ -45,4 +45,4 @@ pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_ca
 pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
-pub use start::{rotation_from_bearings, start_from_position};
+pub use start::{rotation_from_bearings, start_from_gcps, start_from_position};

@@ -12,7 +12,7 @@
 //! [`super::fit_camera`].
 
 use glam::{DMat3, DVec3};
-use nalgebra::Matrix3;
+use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use super::gcp::Gcp;
 use crate::camera::CameraModel;
@@ -107,6 +107,130 @@ pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp
     best.map(|(m, _)| m).ok_or_else(|| Error::BadOption("fit-camera: the GCPs' bearings give no rotation (all on one line?)".into()))
 }
 
+/// A start camera for a `width × height` photo from GCPs alone (position unknown): the
+/// direct linear transform (DLT) of the 3 × 4 projection in normalised coordinates, inside
+/// RANSAC over 6-point samples (deterministic samples, 400 rounds, inliers within 2 % of the
+/// image diagonal), refitted on the inliers and decomposed (RQ) into focal lengths,
+/// principal point, rotation and position; distortion 0, skew dropped. Errors with fewer
+/// than 6 GCPs or when no sample gives a camera with the GCPs in front.
+pub fn start_from_gcps(width: u32, height: u32, gcps: &[Gcp]) -> Result<CameraModel> {
+    if gcps.len() < 6 {
+        return Err(Error::BadOption(format!("fit-camera: a start without a camera or position needs at least 6 GCPs, got {}", gcps.len())));
+    }
+    let tol = 0.02 * (width as f64).hypot(height as f64);
+    let errs = |cam: &CameraModel| -> Vec<f64> {
+        gcps.iter().map(|g| cam.project(g.world).map_or(f64::INFINITY, |p| (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1]))).collect()
+    };
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = |n: usize| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % n as u64) as usize
+    };
+    let mut best: Option<(usize, f64, CameraModel)> = None;
+    for _ in 0..400 {
+        let mut idx: Vec<usize> = Vec::with_capacity(6);
+        while idx.len() < 6 {
+            let k = next(gcps.len());
+            if !idx.contains(&k) {
+                idx.push(k);
+            }
+        }
+        let sample: Vec<&Gcp> = idx.iter().map(|&i| &gcps[i]).collect();
+        let Some(cam) = dlt_camera(&sample, width, height) else { continue };
+        let e = errs(&cam);
+        let n = e.iter().filter(|v| **v <= tol).count();
+        let score: f64 = e.iter().map(|v| v.min(tol)).sum();
+        if best.as_ref().is_none_or(|b| n > b.0 || (n == b.0 && score < b.1)) {
+            best = Some((n, score, cam));
+        }
+    }
+    let (_, _, cam) = best.ok_or_else(|| Error::BadOption("fit-camera: no GCP sample gives a camera (are the GCPs on one plane or line?)".into()))?;
+    let e = errs(&cam);
+    let inliers: Vec<&Gcp> = gcps.iter().zip(&e).filter(|(_, v)| **v <= tol).map(|(g, _)| g).collect();
+    Ok(if inliers.len() >= 6 { dlt_camera(&inliers, width, height).unwrap_or(cam) } else { cam })
+}
+
+/// The DLT camera of `gcps` (≥ 6, not coplanar), or `None`.
+fn dlt_camera(gcps: &[&Gcp], width: u32, height: u32) -> Option<CameraModel> {
+    let n = gcps.len() as f64;
+    // normalisation (Hartley): centroids at 0, mean distances √3 and √2
+    let cw = gcps.iter().fold(DVec3::ZERO, |s, g| s + g.world) / n;
+    let sw = 3f64.sqrt() / (gcps.iter().map(|g| (g.world - cw).length()).sum::<f64>() / n).max(1e-12);
+    let cp = gcps.iter().fold([0.0, 0.0], |s, g| [s[0] + g.pixel[0], s[1] + g.pixel[1]]).map(|v| v / n);
+    let sp = 2f64.sqrt() / (gcps.iter().map(|g| (g.pixel[0] - cp[0]).hypot(g.pixel[1] - cp[1])).sum::<f64>() / n).max(1e-12);
+    let mut a = DMatrix::<f64>::zeros(2 * gcps.len(), 12);
+    for (i, g) in gcps.iter().enumerate() {
+        let x = (g.world - cw) * sw;
+        let (u, v) = ((g.pixel[0] - cp[0]) * sp, (g.pixel[1] - cp[1]) * sp);
+        let xh = [x.x, x.y, x.z, 1.0];
+        for k in 0..4 {
+            a[(2 * i, k)] = xh[k];
+            a[(2 * i, 8 + k)] = -u * xh[k];
+            a[(2 * i + 1, 4 + k)] = xh[k];
+            a[(2 * i + 1, 8 + k)] = -v * xh[k];
+        }
+    }
+    let svd = (a.transpose() * &a).symmetric_eigen();
+    let (imin, _) = svd.eigenvalues.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
+    let pv = svd.eigenvectors.column(imin);
+    // P = T_p⁻¹ · P̂ · T_w
+    let ph = nalgebra::Matrix3x4::from_fn(|r, c| pv[4 * r + c]);
+    let tp_inv = Matrix3::new(1.0 / sp, 0.0, cp[0], 0.0, 1.0 / sp, cp[1], 0.0, 0.0, 1.0);
+    let tw = nalgebra::Matrix4::new(sw, 0.0, 0.0, -sw * cw.x, 0.0, sw, 0.0, -sw * cw.y, 0.0, 0.0, sw, -sw * cw.z, 0.0, 0.0, 0.0, 1.0);
+    let mut p = tp_inv * ph * tw;
+    let mut m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into();
+    if m.determinant() < 0.0 {
+        p = -p;
+        m = -m;
+    }
+    let centre = m.try_inverse()? * -Vector3::new(p[(0, 3)], p[(1, 3)], p[(2, 3)]);
+    // RQ of M by the QR of its row-reversed transpose
+    let flip = Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0);
+    let qr = (flip * m).transpose().qr();
+    let (q, r) = (qr.q(), qr.r());
+    let mut k = flip * r.transpose() * flip;
+    let mut rot = flip * q.transpose();
+    for i in 0..3 {
+        if k[(i, i)] < 0.0 {
+            for row in 0..3 {
+                k[(row, i)] = -k[(row, i)];
+            }
+            for col in 0..3 {
+                rot[(i, col)] = -rot[(i, col)];
+            }
+        }
+    }
+    if rot.determinant() < 0.0 {
+        return None;
+    }
+    let s = k[(2, 2)];
+    if !(s.abs() > 0.0) {
+        return None;
+    }
+    k /= s;
+    let r = DMat3::from_cols(
+        DVec3::new(rot[(0, 0)], rot[(1, 0)], rot[(2, 0)]),
+        DVec3::new(rot[(0, 1)], rot[(1, 1)], rot[(2, 1)]),
+        DVec3::new(rot[(0, 2)], rot[(1, 2)], rot[(2, 2)]),
+    );
+    let cam = CameraModel {
+        position: DVec3::new(centre[0], centre[1], centre[2]),
+        world_to_camera: r,
+        width,
+        height,
+        fx: k[(0, 0)],
+        fy: k[(1, 1)],
+        cx: k[(0, 2)],
+        cy: k[(1, 2)],
+        k1: 0.0,
+        k2: 0.0,
+    };
+    let in_front = gcps.iter().filter(|g| cam.to_camera(g.world).z > 0.0).count();
+    (cam.problem().is_none() && 2 * in_front > gcps.len()).then_some(cam)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -141,5 +265,10 @@ mod tests {
         let given = start_from_position(truth.position, 4290, 2856, &gcps, Some(6014.0)).unwrap();
         assert!((given.world_to_camera - truth.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-9));
         assert!(start_from_position(truth.position, 4290, 2856, &gcps[..2], None).is_err());
+        // from the GCPs alone (DLT): position within centimetres, focal within 0.1 %
+        let dlt = start_from_gcps(4290, 2856, &gcps).unwrap();
+        assert!((dlt.position - truth.position).length() < 0.05, "{:?}", dlt.position - truth.position);
+        assert!((dlt.fx / 6014.0 - 1.0).abs() < 1e-3 && dlt.forward().dot(truth.forward()) > (1e-4f64).cos(), "{dlt:?}");
+        assert!(start_from_gcps(4290, 2856, &gcps[..5]).is_err());
     }
 }
