@@ -105,6 +105,10 @@ fn bad_gcp_input_fails_naming_the_file() {
     }
     let o = cliffmap(&["fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--camera", &cam, "--free", "zoom", "--out", out.to_str().unwrap()]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("zoom"));
+    for bad in [["--focal-px", "0"], ["--huber-px", "0"]] {
+        let o = cliffmap(&["fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--camera", &cam, bad[0], bad[1], "--out", out.to_str().unwrap()]);
+        assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains(bad[0]), "{bad:?}");
+    }
     assert!(!out.exists(), "nothing written on failure");
 }
 

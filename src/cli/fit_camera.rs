@@ -81,7 +81,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let gcps = read_gcps(&a.gcps, origin)?;
     let free = parse_free(&a.free)?;
     let position = a.position.as_deref().map(parse_position).transpose()?;
+    if let Some(f) = a.focal_px {
+        anyhow::ensure!(f.is_finite() && f > 0.0, "--focal-px must be a positive number of pixels, got {f}");
+    }
+    if let Some(d) = a.huber_px {
+        anyhow::ensure!(d.is_finite() && d > 0.0, "--huber-px must be a positive number of pixels, got {d}");
+    }
+    if let Some(s) = a.sensor_width_mm {
+        anyhow::ensure!(s.is_finite() && s > 0.0, "--sensor-width-mm must be positive, got {s}");
+    }
     let start = start_camera(&a, position, &gcps)?;
+    if let Some(problem) = start.problem() {
+        anyhow::bail!("the start camera is unusable: {problem}");
+    }
     let opts = FitOptions { free, robust: !a.no_robust, huber_px: a.huber_px, ..FitOptions::default() };
     let fit = fit_camera(&start, &gcps, &opts).with_context(|| format!("{}", a.gcps.display()))?;
     let mut doc = camera_to_imgraft_json(&fit.camera);
