@@ -12,7 +12,11 @@
 //! (it stays in the fit with its Huber weight). Without robustness (`robust: false`) every
 //! `ρ_i = 1`: plain least squares, as ImGRAFT's fit.
 //!
-//! GCPs whose observed pixel lies outside the image, or that lie behind the start camera,
+//! The solver works on offsets from the start camera's values (its trust region scales with
+//! the parameters' norm, so absolute UTM coordinates would let a first step move the camera
+//! by kilometres). With the position free, the fit is also run from the GCPs' own pose
+//! (DLT + RANSAC, [`super::start_from_gcps`]) and the better result kept. GCPs whose
+//! observed pixel lies outside the image, or that lie behind the start camera,
 //! are left out and reported. Reported: per GCP the residual and its status; the RMSE of
 //! the fitted GCPs (unweighted, pixels) and of the inliers; `AIC = n ln(RSS / n) + 2k` (n =
 //! 2 × fitted GCPs, k = free parameters, RSS the unweighted sum of squared residuals); and
@@ -144,7 +148,7 @@ impl Problem<'_> {
     fn params_at(&self, x: &DVector<f64>) -> CameraParams {
         let mut p = self.base;
         for (k, &param) in self.free.iter().enumerate() {
-            p.set(param, x[k]);
+            p.set(param, self.base.get(param) + x[k]);
         }
         p
     }
@@ -204,6 +208,24 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 /// columns has a singular value below 1e-7 of its largest), or a solver failure
 /// (non-finite residuals at the start).
 pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<CameraFit> {
+    let fit = fit_from(start, gcps, opts)?;
+    // With the position free, a start metres off can end in a wrong minimum; the fit is
+    // repeated from the GCPs' own pose (DLT + RANSAC, with the start's intrinsics) and the
+    // better of the two kept: lower sum of squared residual norms capped at 3 × the smaller
+    // robust scale (at least 1 px).
+    let position_free = opts.free.iter().any(|p| matches!(p, Param::X | Param::Y | Param::Z));
+    if !position_free || gcps.len() < 6 {
+        return Ok(fit);
+    }
+    let Ok(dlt) = super::start::start_from_gcps(start.width, start.height, gcps) else { return Ok(fit) };
+    let other_start = CameraModel { position: dlt.position, world_to_camera: dlt.world_to_camera, ..*start };
+    let Ok(other) = fit_from(&other_start, gcps, opts) else { return Ok(fit) };
+    let cap = (3.0 * fit.sigma_px.min(other.sigma_px)).max(1.0);
+    let cost = |f: &CameraFit| -> f64 { f.gcps.iter().map(|g| g.residual.map_or(cap, |r| r[0].hypot(r[1]).min(cap)).powi(2)).sum() };
+    Ok(if cost(&other) < cost(&fit) { other } else { fit })
+}
+
+fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<CameraFit> {
     if opts.free.is_empty() {
         return Err(Error::BadOption("fit-camera: no free parameters".into()));
     }
@@ -233,9 +255,11 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
         )));
     }
     let base = CameraParams::from_camera(start);
+    // the solver works on offsets from the start (its trust region scales with the norm of
+    // the parameters: absolute UTM coordinates would allow steps of kilometres)
     let x0 = DVector::from_iterator(k, opts.free.iter().map(|&p| base.get(p)));
     let mut rho = vec![1.0f64; used.len()];
-    let mut x = x0.clone();
+    let mut x = DVector::zeros(k);
     let mut rounds = 0;
     let mut sigma_px;
     let solver = LevenbergMarquardt::new().with_patience(200);
@@ -308,7 +332,7 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
         .map(|(i, &param)| FittedParam {
             param,
             start: x0[i],
-            value: x[i],
+            value: x0[i] + x[i],
             sigma: cov.as_ref().map_or(f64::NAN, |c| (s2 * c[(i, i)]).max(0.0).sqrt()),
         })
         .collect();
@@ -433,6 +457,21 @@ mod tests {
             assert!((p.angles[k] - want).abs() < 5.0 * f.sigma, "{:?}: {} vs {}", f.param, p.angles[k], want);
         }
         assert!(fit.aic.is_finite());
+    }
+
+    #[test]
+    fn a_free_position_metres_off_converges() {
+        let cam = truth();
+        let g = gcps(&cam, 20, 0.3);
+        let free = crate::register::parse_free("angles,position,f").unwrap();
+        for (k, d) in [DVec3::new(5.0, -5.0, 3.0), DVec3::new(-5.0, 4.0, -3.0), DVec3::new(4.0, 5.0, 2.0)].into_iter().enumerate() {
+            let mut start = perturbed(&cam);
+            start.position += d;
+            start.k1 = cam.k1;
+            let fit = fit_camera(&start, &g, &FitOptions { free: free.clone(), ..FitOptions::default() }).unwrap();
+            let off = (fit.camera.position - cam.position).length();
+            assert!(off < 0.5 && fit.rmse_px < 0.6, "start {k}: {off} m, {} px", fit.rmse_px);
+        }
     }
 
     #[test]
