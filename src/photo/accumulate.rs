@@ -679,6 +679,37 @@ mod tests {
     }
 
     #[test]
+    fn coloured_texels_visit_what_the_accessors_give() {
+        // two photos over parts of a 40 x 40 texture (several tiles, some untouched)
+        let img = RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 30) as u8, (y * 30) as u8, 99]));
+        let photo = |x0: f32, y0: f32, dist: f32| {
+            let mut a = PhotoAccum::new(40);
+            let fps: Vec<PixelFootprint> = (0..8)
+                .flat_map(|r| (0..8).map(move |c| (c, r)))
+                .map(|(c, r)| PixelFootprint { distance: dist, ..fp([c, r], square(x0 + 1.7 * c as f32, y0 + 1.3 * r as f32, 1.6), 0.9) })
+                .collect();
+            a.add_samples(&fps, &srgb_samples(&img));
+            a
+        };
+        let ctx = CellContext::flat(40, 0.1, 1.0);
+        for mode in [BlendMode::Confidence, BlendMode::Best] {
+            let mut acc = CellAccum::new(40, 1, mode, ctx.clone(), &params());
+            acc.merge(&photo(0.5, 0.5, 10.0), 0);
+            acc.merge(&photo(6.2, 3.1, 14.0), 1);
+            let mut seen = vec![false; 1600];
+            acc.for_each_coloured(|t, c, conf, res, best| {
+                seen[t] = true;
+                assert_eq!(Some(c), acc.colour_at(t));
+                assert_eq!((conf, res, best), (acc.confidence(t), acc.resolution_at(t), acc.best_photo(t)));
+            });
+            for t in 0..1600 {
+                assert_eq!(seen[t], acc.has_colour(t), "texel {t}");
+            }
+            assert!(seen.iter().filter(|s| **s).count() > 100 && seen.iter().any(|s| !*s));
+        }
+    }
+
+    #[test]
     fn resolution_rule_terms() {
         // a 2 x 2 existing texture: flat, 60°, vertical and 87°; ortho of 1 m, TIN error 0.5 m
         let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.5, 0.0, 0.05], max_error: 0.5, existing_ground: 1.0, texel_ground: 0.25 };
