@@ -103,3 +103,38 @@ mod relative_tests {
         assert_eq!(relative_path(&store.join("missing.jpg"), &store), store.join("missing.jpg").display().to_string());
     }
 }
+
+/// Decodes the image file at `path` to RGB8 (sRGB). JPEG files are decoded in strict mode
+/// (`zune-jpeg`, the decoder the `image` crate uses, so valid files give the same pixels): a
+/// truncated or damaged file is an error, not an image whose missing part is filled in
+/// (the one strict-mode complaint let through is stray bytes between markers, which some
+/// cameras write; such a file is then decoded leniently). Other formats go through the
+/// `image` crate, whose PNG and TIFF decoders fail on truncated data. Errors name the file.
+pub fn decode_rgb8(path: &Path) -> Result<image::RgbImage> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let format = image::guess_format(&bytes).map_err(|e| Error::bad_input(path, format!("unknown image format: {e}")))?;
+    if format == image::ImageFormat::Jpeg {
+        let decode = |strict: bool| {
+            let opts = zune_core::options::DecoderOptions::default()
+                .set_strict_mode(strict)
+                .jpeg_set_out_colorspace(zune_core::colorspace::ColorSpace::RGB);
+            let mut dec = zune_jpeg::JpegDecoder::new_with_options(zune_core::bytestream::ZCursor::new(&bytes[..]), opts);
+            dec.decode().map(|p| (p, dec.info()))
+        };
+        let (pixels, info) = match decode(true) {
+            Ok(r) => r,
+            // stray bytes between markers, written by some cameras: decoded leniently
+            Err(e) if format!("{e:?}").contains("Extra bytes between headers") => {
+                decode(false).map_err(|e| Error::bad_input(path, format!("damaged or truncated JPEG: {e:?}")))?
+            }
+            Err(e) => return Err(Error::bad_input(path, format!("damaged or truncated JPEG: {e:?}"))),
+        };
+        let info = info.ok_or_else(|| Error::bad_input(path, "JPEG without a frame header"))?;
+        let (w, h) = (u32::from(info.width), u32::from(info.height));
+        return image::RgbImage::from_raw(w, h, pixels)
+            .ok_or_else(|| Error::bad_input(path, format!("JPEG decoded to the wrong number of bytes for {w} x {h}")));
+    }
+    image::load_from_memory_with_format(&bytes, format)
+        .map(|i| i.to_rgb8())
+        .map_err(|e| Error::bad_input(path, format!("cannot decode image: {e}")))
+}

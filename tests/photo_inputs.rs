@@ -83,7 +83,14 @@ fn bad_photo_lists_are_clear_errors() {
     write(&d.join("neg_f.json"), r#"{"position":[0,0,0],"yaw_deg":0,"pitch_deg":0,"fx":-10,"width":64,"height":48}"#);
     write(&d.join("nan.json"), r#"{"position":[0,NaN,0],"yaw_deg":0,"pitch_deg":0,"fov_y_deg":40}"#);
     write(&d.join("garbage.jpg"), "not a jpeg");
+    // a JPEG cut short (issue #20: its missing part used to be projected as grey)
+    let noise = image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([(x * 37 % 251) as u8, (y * 91 % 241) as u8, ((x * y) % 256) as u8]));
+    noise.save(d.join("full.jpg")).unwrap();
+    let bytes = std::fs::read(d.join("full.jpg")).unwrap();
+    std::fs::write(d.join("cut.jpg"), &bytes[..bytes.len() * 3 / 5]).unwrap();
+    assert_eq!(cliffmap::fsutil::decode_rgb8(&d.join("full.jpg")).unwrap(), image::open(d.join("full.jpg")).unwrap().to_rgb8());
     let cases: &[(&str, &str, &str)] = &[
+        (r#"{"photos": [{"image": "cut.jpg", "camera": "a.json"}]}"#, "cut.jpg", "truncated"),
         (r#"{"photos": [{"image": "missing.jpg", "camera": "a.json"}]}"#, "missing.jpg", "No such file"),
         (r#"{"photos": [{"image": "garbage.jpg", "camera": "a.json"}]}"#, "garbage.jpg", "cannot read image"),
         (r#"{"photos": [{"image": "a.png", "camera": "nope.json"}]}"#, "nope.json", "No such file"),

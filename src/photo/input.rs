@@ -26,15 +26,10 @@ pub struct PhotoSpec {
 }
 
 impl PhotoSpec {
-    /// Decodes the image (sRGB, converted to RGB8). Errors name the file.
+    /// Decodes the image (sRGB, converted to RGB8; JPEG strictly, so a truncated or damaged
+    /// photo is refused, [`crate::fsutil::decode_rgb8`]). Errors name the file.
     pub fn load(&self) -> Result<PhotoInput> {
-        let image = image::ImageReader::open(&self.image_path)
-            .map_err(|e| Error::io(&self.image_path, e))?
-            .with_guessed_format()
-            .map_err(|e| Error::io(&self.image_path, e))?
-            .decode()
-            .map_err(|e| Error::bad_input(&self.image_path, format!("cannot decode image: {e}")))?
-            .to_rgb8();
+        let image = crate::fsutil::decode_rgb8(&self.image_path)?;
         if image.dimensions() != (self.camera.width, self.camera.height) {
             return Err(Error::bad_input(
                 &self.image_path,
