@@ -25,7 +25,8 @@ pub(crate) fn check(path: &Path, width: u64, height: u64, bytes_per_sample: u64,
 /// Bytes per sample of the final [`Dem`](super::Dem): one f32 height plus one void flag.
 pub(crate) const DEM_BYTES_PER_SAMPLE: u64 = 5;
 
-/// Decodes a PNG or JPEG (format from content, else `fallback`) with the image crate.
+/// Decodes a PNG or JPEG (format from content, else `fallback`) with the image crate (JPEG
+/// strictly, [`crate::fsutil::decode_rgb8`]: truncated data is an error).
 /// The header is read first; `check_header(width, height, bytes_per_pixel_of_decoded)`
 /// runs before any pixel is decoded, and the decoder's own allocation limit is set to
 /// `max_memory`. Errors name the file.
@@ -43,10 +44,16 @@ pub(crate) fn decode_image(
     // Header first without an allocation cap (it allocates little), so our own check
     // reports an oversized image as `TooLarge`; then the decoder gets the cap.
     reader.no_limits();
+    let reader_format = reader.format();
     let mut decoder =
         reader.into_decoder().map_err(|e| Error::bad_input(path, format!("cannot read the image header: {e}")))?;
     let (w, h) = decoder.dimensions();
     check_header(w, h, decoder.color_type())?;
+    if reader_format == Some(ImageFormat::Jpeg) {
+        // strictly, so a truncated JPEG is refused rather than filled in (its size is
+        // checked above)
+        return crate::fsutil::decode_rgb8(path).map(DynamicImage::ImageRgb8);
+    }
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(max_memory);
     decoder.set_limits(limits).map_err(|e| Error::bad_input(path, format!("image exceeds the memory limit: {e}")))?;
@@ -57,6 +64,23 @@ pub(crate) fn decode_image(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn truncated_png_and_jpeg_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([(x * 37 % 251) as u8, (y * 91 % 241) as u8, ((x * y) % 256) as u8]));
+        for ext in ["png", "jpg"] {
+            let full = dir.path().join(format!("full.{ext}"));
+            img.save(&full).unwrap();
+            let bytes = std::fs::read(&full).unwrap();
+            let cut = dir.path().join(format!("cut.{ext}"));
+            std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
+            assert!(decode_image(&full, ImageFormat::Png, 1 << 30, |_, _, _| Ok(())).is_ok(), "{ext}");
+            let e = decode_image(&cut, ImageFormat::Png, 1 << 30, |_, _, _| Ok(())).unwrap_err().to_string();
+            assert!(e.contains("cut.") && (e.contains("truncated") || e.contains("corrupt")), "{ext}: {e}");
+            assert!(crate::fsutil::decode_rgb8(&cut).is_err(), "{ext}");
+        }
+    }
 
     #[test]
     fn refuses_before_overflow() {
