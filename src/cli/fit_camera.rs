@@ -96,15 +96,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let opts = FitOptions { free, robust: !a.no_robust, huber_px: a.huber_px, ..FitOptions::default() };
     let fit = fit_camera(&start, &gcps, &opts).with_context(|| format!("{}", a.gcps.display()))?;
+    let report = fit_json(&fit, &a.gcps.display().to_string());
     let mut doc = camera_to_imgraft_json(&fit.camera);
     if let Some(obj) = doc.as_object_mut() {
-        obj.insert("fit".into(), fit_json(&fit, &a.gcps.display().to_string()));
+        obj.insert("fit".into(), report.clone());
         obj.insert("rmse_px".into(), json!(fit.rmse_px));
     }
     let text = serde_json::to_string_pretty(&doc)?;
     write_atomic(&a.out, text.as_bytes())?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&fit_json(&fit, &a.gcps.display().to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_table(&fit);
         println!("camera written to {}", a.out.display());

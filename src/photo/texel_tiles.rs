@@ -123,36 +123,43 @@ impl TexelTiles {
     /// last partial tiles skipped), tiles in row-major tile order, texels row-major within
     /// a tile.
     pub fn for_each_mut(&mut self, mut f: impl FnMut(usize, &mut TexelSums)) {
-        let (side, tx) = (self.side as usize, self.tiles_x as usize);
+        let walk = TileWalk { side: self.side as usize, tiles_x: self.tiles_x as usize };
         for (tile, &k) in self.index.iter().enumerate() {
-            if k == NONE {
-                continue;
-            }
-            let (x0, y0) = ((tile % tx) * TILE as usize, (tile / tx) * TILE as usize);
-            let block = &mut self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
-            for (w, s) in block.iter_mut().enumerate() {
-                let (x, y) = (x0 + w % TILE as usize, y0 + w / TILE as usize);
-                if x < side && y < side {
-                    f(y * side + x, s);
-                }
+            if k != NONE {
+                let block = &mut self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
+                walk.texels(tile, |w, t| f(t, &mut block[w]));
             }
         }
     }
 
     /// [`TexelTiles::for_each_mut`] without writing.
     pub fn for_each(&self, mut f: impl FnMut(usize, &TexelSums)) {
-        let (side, tx) = (self.side as usize, self.tiles_x as usize);
+        let walk = TileWalk { side: self.side as usize, tiles_x: self.tiles_x as usize };
         for (tile, &k) in self.index.iter().enumerate() {
-            if k == NONE {
-                continue;
+            if k != NONE {
+                let block = &self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
+                walk.texels(tile, |w, t| f(t, &block[w]));
             }
-            let (x0, y0) = ((tile % tx) * TILE as usize, (tile / tx) * TILE as usize);
-            let block = &self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
-            for (w, s) in block.iter().enumerate() {
-                let (x, y) = (x0 + w % TILE as usize, y0 + w / TILE as usize);
-                if x < side && y < side {
-                    f(y * side + x, s);
-                }
+        }
+    }
+}
+
+/// The grid's texel indices of a tile's records.
+struct TileWalk {
+    side: usize,
+    tiles_x: usize,
+}
+
+impl TileWalk {
+    /// Calls `f(w, t)` for each record `w` of tile `tile` that lies in the grid, with its
+    /// row-major texel index `t`.
+    #[inline]
+    fn texels(&self, tile: usize, mut f: impl FnMut(usize, usize)) {
+        let (x0, y0) = ((tile % self.tiles_x) * TILE as usize, (tile / self.tiles_x) * TILE as usize);
+        for w in 0..TILE_TEXELS {
+            let (x, y) = (x0 + w % TILE as usize, y0 + w / TILE as usize);
+            if x < self.side && y < self.side {
+                f(w, y * self.side + x);
             }
         }
     }

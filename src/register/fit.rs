@@ -263,6 +263,10 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     let mut rounds = 0;
     let mut sigma_px;
     let solver = LevenbergMarquardt::new().with_patience(200);
+    // per fitted GCP: world point, observed pixel, √(w ρ)
+    let points_of = |rho: &[f64]| -> Vec<(glam::DVec3, [f64; 2], f64)> {
+        used.iter().zip(rho).map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt())).collect()
+    };
     let norms_at = |x: &DVector<f64>, pr: &Problem| -> Vec<f64> {
         let cam = pr.params_at(x).camera();
         used.iter()
@@ -271,8 +275,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     };
     loop {
         rounds += 1;
-        let points = used.iter().zip(&rho).map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt())).collect();
-        let problem = Problem { base, free: &opts.free, points, x: x.clone() };
+        let problem = Problem { base, free: &opts.free, points: points_of(&rho), x: x.clone() };
         let (solved, report) = solver.minimize(problem);
         if report.termination.was_usage_issue() || !solved.x.iter().all(|v| v.is_finite()) {
             return Err(Error::BadOption(format!("fit-camera: the solver failed ({:?})", report.termination)));
@@ -292,8 +295,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
         }
     }
     // final statistics at x
-    let points: Vec<_> = used.iter().zip(&rho).map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt())).collect();
-    let problem = Problem { base, free: &opts.free, points, x: x.clone() };
+    let problem = Problem { base, free: &opts.free, points: points_of(&rho), x: x.clone() };
     let fitted = problem.params_at(&x);
     let camera = fitted.camera();
     let e = norms_at(&x, &problem);

@@ -107,14 +107,27 @@ impl Grey {
         Some((p, norm))
     }
 
-    /// NCC of the zero-mean template `t` (norm `tn`, half size `r`) at centre `(cx, cy)`.
+    /// NCC of the zero-mean template `t` (norm `tn`, half size `r`) at centre `(cx, cy)`,
+    /// read straight from the image rows (no patch copy: this is the search's inner loop).
+    /// As `Σ t = 0`, `Σ t·(p − p̄) = Σ t·p` and `‖p − p̄‖² = Σ p² − (Σ p)² / n`.
     fn ncc(&self, t: &[f32], tn: f32, cx: i64, cy: i64, r: i64) -> Option<f64> {
-        let (p, pn) = self.patch(cx, cy, r)?;
-        if !(pn > 0.0 && tn > 0.0) {
+        if cx - r < 0 || cy - r < 0 || cx + r >= self.w as i64 || cy + r >= self.h as i64 || !(tn > 0.0) {
             return None;
         }
-        let dot: f32 = p.iter().zip(t).map(|(a, b)| a * b).sum();
-        Some((dot / (pn * tn)) as f64)
+        let n = (2 * r + 1) as usize;
+        let (mut dot, mut sum, mut sq) = (0.0f64, 0.0f64, 0.0f64);
+        for (row, tr) in (cy - r..=cy + r).zip(t.chunks_exact(n)) {
+            let pr = &self.v[row as usize * self.w + (cx - r) as usize..][..n];
+            let (mut d, mut s1, mut s2) = (0.0f32, 0.0f32, 0.0f32);
+            for (&a, &b) in pr.iter().zip(tr) {
+                d += a * b;
+                s1 += a;
+                s2 += a * a;
+            }
+            (dot, sum, sq) = (dot + d as f64, sum + s1 as f64, sq + s2 as f64);
+        }
+        let pn2 = sq - sum * sum / (n * n) as f64;
+        (pn2 > 0.0).then(|| dot / (pn2.sqrt() * tn as f64))
     }
 
     /// The best NCC of template `t` over centres within `rad` of `(cx, cy)`: (x, y, ncc),
