@@ -7,6 +7,7 @@ mod export_obj;
 mod fit_camera;
 mod fly;
 mod project;
+mod register;
 mod render;
 mod reparam;
 mod stats;
@@ -42,6 +43,8 @@ enum Command {
     Stats(stats::Args),
     /// Fit a photo's camera to ground control points (robust Levenberg-Marquardt).
     FitCamera(fit_camera::Args),
+    /// Refine rough photo cameras against the store's terrain (no GCPs needed).
+    Register(register::Args),
     /// Write one cell's TIN with texture coordinates as Wavefront OBJ.
     ExportObj(export_obj::Args),
     /// Render one frame of a store from a camera (headless GPU) to PNG.
@@ -76,6 +79,7 @@ pub fn run() -> ExitCode {
         Command::Stats(a) => stats::run(a),
         Command::ExportObj(a) => export_obj::run(a),
         Command::FitCamera(a) => fit_camera::run(a),
+        Command::Register(a) => register::run(a),
         Command::Render(a) => render::run(a),
         Command::Fly(a) => fly::run(a),
         Command::View(a) => view::run(a),

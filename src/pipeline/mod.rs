@@ -14,6 +14,7 @@ mod mesh;
 mod photo_stats;
 mod progress;
 mod project;
+mod register;
 mod reparam;
 
 pub use build::{BuildInputs, BuildOptions, build_store, write_stats};
@@ -21,6 +22,7 @@ pub use derived_ortho::derived_ortho;
 pub use mesh::{LocalMesh, local_mesh};
 pub use progress::progress_bar;
 pub use project::{PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store};
+pub use register::{PhotoRegistration, register_photos};
 pub use reparam::{ReparamOptions, TextureMemory, reparam_store, texture_memory};
 
 #[allow(unused_imports)]

@@ -39,6 +39,7 @@ mod gcp;
 mod pair;
 mod params;
 mod start;
+pub mod terrain;
 
 pub use exif::{ExifFocal, exif_focal_px};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
@@ -46,3 +47,4 @@ pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
 pub use start::{rotation_from_bearings, start_from_gcps, start_from_position};
+pub use terrain::{TerrainFit, TerrainOptions, TerrainScene, register_to_terrain};

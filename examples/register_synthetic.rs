@@ -1,0 +1,147 @@
+//! Success rate of `register` (terrain registration without GCPs) on a generated scene
+//! with exact cameras (docs/registration.md, "`cliffmap register`"): builds the scene's
+//! store, renders its ground photos with the exact cameras, perturbs each camera N times
+//! inside the issue's ranges (yaw ±3°, pitch and roll ±1.5°, focal ±3 %, position ±5 m
+//! horizontally and ±2 m vertically, kept at least 0.5 m above the ground), registers, and
+//! prints per start the remaining errors, and a table of success rates and times.
+//!
+//! ```text
+//! cargo run --release --example register_synthetic -- OUT [--scene demo|tall] [--starts N]
+//!     [--photo-width W] [--free LIST] [--reuse] [--position-error M] [--max-error M] [--finest F]
+//! ```
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use cliffmap::camera::CameraModel;
+use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
+use cliffmap::register::{CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain};
+use cliffmap::scene::{DemoPhotoOptions, DemoScene};
+use glam::DVec3;
+
+/// Deterministic uniform numbers in [-1, 1] (SplitMix64).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let out = PathBuf::from(args.first().ok_or_else(|| anyhow::anyhow!("usage: register_synthetic OUT [options]"))?);
+    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|s| s.as_str());
+    let has = |name: &str| args.iter().any(|a| a == name);
+    let scene = match flag("--scene").unwrap_or("demo") {
+        "demo" => DemoScene::default(),
+        "tall" => DemoScene::tall_walls(),
+        s => anyhow::bail!("unknown --scene {s}"),
+    };
+    let starts: usize = flag("--starts").unwrap_or("5").parse()?;
+    let width: u32 = flag("--photo-width").unwrap_or("1600").parse()?;
+    let pos_err: f64 = flag("--position-error").unwrap_or("5").parse()?;
+    let mut opts = TerrainOptions::default();
+    if let Some(f) = flag("--finest") {
+        opts.finest_factor = f.parse()?;
+    }
+    if let Some(f) = flag("--free") {
+        opts.free = parse_free(f)?;
+    }
+    let (dem, ortho) = scene.generate()?;
+    let store_dir = out.join("store");
+    let list = out.join("photos").join("photos.json");
+    if !(has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
+        let t = Instant::now();
+        let inputs = BuildInputs {
+            dem: &dem,
+            ortho: Some(&ortho),
+            dem_source: "register_synthetic".into(),
+            ortho_source: Some("register_synthetic".into()),
+            fingerprint: format!("register_synthetic:{scene:?}"),
+        };
+        let max_error: f64 = flag("--max-error").unwrap_or("0.5").parse()?;
+        build_store(&inputs, &BuildOptions { max_error, quiet: true, force: true, ..BuildOptions::default() }, &store_dir)?;
+        reparam_store(&store_dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() })?;
+        scene.write_demo_photos(&dem, &out.join("photos"), &DemoPhotoOptions { width, height: width / 4 * 3, supersample: 2 })?;
+        eprintln!("store and photos: {:.1} s", t.elapsed().as_secs_f64());
+    }
+    let store = cliffmap::store::Store::open(&store_dir)?;
+    let photos = cliffmap::photo::read_photo_list(&list)?;
+    let mut rng = Rng(0x5EED_2026);
+    println!("| photo | start | yaw/pitch/roll error start (°) | after (°) | position error start / after (m) | focal error start / after (%) | repeat (px) | verdict | s |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut rows: Vec<(String, bool, bool, f64)> = Vec::new(); // photo, converged, within goal, seconds
+    for p in &photos {
+        let truth = CameraParams::from_camera(&p.camera);
+        let terrain = TerrainScene::new(&store, p.camera.position)?;
+        for s in 0..starts {
+            let mut c = truth;
+            c.angles[0] += (3.0 * rng.next()).to_radians();
+            c.angles[1] += (1.5 * rng.next()).to_radians();
+            c.angles[2] += (1.5 * rng.next()).to_radians();
+            let df = 0.03 * rng.next();
+            c.focal = [c.focal[0] * (1.0 + df), c.focal[1] * (1.0 + df)];
+            let d = DVec3::new(pos_err * rng.next(), pos_err * rng.next(), 0.4 * pos_err * rng.next());
+            c.position += d;
+            let ground = terrain.hit(c.position + DVec3::Z * 1000.0, -DVec3::Z).map_or(c.position.z - 1.7, |g| g.z);
+            c.position.z = c.position.z.max(ground + 0.5);
+            let rough: CameraModel = c.camera();
+            let fit = register_to_terrain(&terrain, &p.image, &rough, &opts)?;
+            let got = CameraParams::from_camera(&fit.found);
+            let err = |q: &CameraParams| {
+                let a = [0, 1, 2].map(|k| angle_diff(q.angles[k], truth.angles[k]).to_degrees());
+                (a, (q.position - truth.position).length(), 100.0 * (q.focal[0] / truth.focal[0] - 1.0))
+            };
+            let (a0, p0, f0) = err(&c);
+            let (a1, p1, f1) = err(&got);
+            let goal = a1.iter().all(|&e| e <= 0.02) && p1 <= 0.3;
+            println!(
+                "| {} | {s} | {:.2} / {:.2} / {:.2} | {:.3} / {:.3} / {:.3} | {:.1} / {:.2} | {:+.1} / {:+.2} | {:.2} | {} | {:.1} |",
+                p.name,
+                a0[0],
+                a0[1],
+                a0[2],
+                a1[0],
+                a1[1],
+                a1[2],
+                p0,
+                p1,
+                f0,
+                f1,
+                fit.repeat_px,
+                if fit.converged { "converged" } else { "not converged" },
+                fit.seconds
+            );
+            rows.push((p.name.clone(), fit.converged, goal, fit.seconds));
+        }
+    }
+    println!();
+    println!("| photo | starts | converged | within 0.02° and 0.3 m | converged but outside the goal | median s |");
+    println!("|---|---|---|---|---|---|");
+    let mut names: Vec<String> = rows.iter().map(|r| r.0.clone()).collect();
+    names.dedup();
+    for n in names.iter().chain(std::iter::once(&"all".to_string())) {
+        let sel: Vec<&(String, bool, bool, f64)> = rows.iter().filter(|r| n == "all" || &r.0 == n).collect();
+        let mut t: Vec<f64> = sel.iter().map(|r| r.3).collect();
+        t.sort_by(f64::total_cmp);
+        println!(
+            "| {n} | {} | {} | {} | {} | {:.1} |",
+            sel.len(),
+            sel.iter().filter(|r| r.1).count(),
+            sel.iter().filter(|r| r.2).count(),
+            sel.iter().filter(|r| r.1 && !r.2).count(),
+            t[t.len() / 2]
+        );
+    }
+    Ok(())
+}

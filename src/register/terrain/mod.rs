@@ -1,0 +1,369 @@
+//! Registration of a photo against the terrain, without GCPs (docs/registration.md,
+//! "`cliffmap register`").
+//!
+//! Input: a [`TerrainScene`] (the store's finest level, ray-cast on the CPU with the cells'
+//! active textures), a decoded photo and its rough camera (world frame), and
+//! [`TerrainOptions`] (free parameters, search ranges). Output: a [`TerrainFit`] — the
+//! refined camera, the score before and after, a repeatability figure and a verdict.
+//!
+//! Method: the store seen from the current camera becomes samples (terrain points with a
+//! label from their texture grey, steepness and distance; sky directions), and the camera
+//! maximises the normalised mutual information between those labels and the photo's grey
+//! levels where the camera reprojects the samples (the image-to-geometry registration of
+//! Viola & Wells 1997 and Corsini et al. 2009). Mutual information asks only that the
+//! photo's greys be *predictable* from the labels, so the sky's edge, the foot of walls
+//! against nearer ground and the ortho's broad patterns all count, while the ortho's smear
+//! on walls (which defeats patch correlation) does no harm. Coarse to fine: a grid over
+//! yaw, pitch and roll on the photo reduced to about 100 pixels across (a power of two),
+//! Nelder-Mead over every free parameter on photos 2 and 4 times larger from the three best
+//! grid peaks, then from the best through each finer scale to the full photo (by default), the samples
+//! re-cast from the current camera between rounds (occlusions follow the pose). Only the
+//! samples within about 48 pixels (24 on the full photo) of a silhouette (the sky's edge, a jump in distance)
+//! take part: the broad inner parts of regions change nothing when the camera moves a little
+//! but dilute the score. Sample positions are jittered inside their grid cells so that
+//! whole-pixel shifts are not favoured (the grid effect of partial-volume interpolation). The verdict comes from a
+//! restart: Nelder-Mead from the result moved by a few pixels must come back to it.
+
+mod mi;
+mod simplex;
+mod view;
+
+use std::time::Instant;
+
+use glam::DVec3;
+use image::RgbImage;
+
+pub use mi::{GreyImage, nmi};
+pub use view::{LABELS, SKY, Sample, SampleAt, TerrainScene};
+
+use super::params::{CameraParams, Param};
+use crate::camera::CameraModel;
+use crate::error::{Error, Result};
+
+/// What [`register_to_terrain`] may change and how far.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainOptions {
+    /// Free parameters (yaw, pitch, roll, f or fx/fy; others, the position included, are
+    /// refused by [`TerrainOptions::validate`]).
+    pub free: Vec<Param>,
+    /// Half-widths of the coarse grid over yaw, pitch and roll, degrees.
+    pub search_deg: [f64; 3],
+    /// Largest change accepted: angles (degrees), focal length (fraction), position (metres).
+    pub bounds: [f64; 3],
+    /// Restart agreement (full-resolution pixels at the image's corners) below which the fit
+    /// is called converged.
+    pub repeat_px: f64,
+    /// Finest photo scale used (1 = full resolution, 2 = half, ...; a power of two).
+    pub finest_factor: u32,
+}
+
+impl Default for TerrainOptions {
+    /// Yaw, pitch, roll and focal length free; grid ±4° yaw, ±2.5° pitch and
+    /// ±2° roll; changes up to 8° / 8 % / 15 m; converged when restarts agree within 1 px;
+    /// the finest scale is the full photo.
+    fn default() -> Self {
+        TerrainOptions {
+            free: vec![Param::Yaw, Param::Pitch, Param::Roll, Param::F],
+            search_deg: [4.0, 2.5, 2.0],
+            bounds: [8.0, 0.08, 15.0],
+            repeat_px: 1.0,
+            finest_factor: 1,
+        }
+    }
+}
+
+impl TerrainOptions {
+    /// Errors for a free parameter that cannot be refined against the terrain (position,
+    /// k1, k2, cx, cy) or an empty free set.
+    pub fn validate(&self) -> Result<()> {
+        if self.free.is_empty() {
+            return Err(Error::BadOption("register: no free parameters".into()));
+        }
+        if let Some(p) = self.free.iter().find(|p| matches!(p, Param::X | Param::Y | Param::Z)) {
+            return Err(Error::BadOption(format!(
+                "register: the camera position ({}) cannot be refined against the terrain yet (measured: the score \
+                 drifts with it, docs/registration.md); fit it from GCPs with fit-camera, or keep it fixed",
+                p.name()
+            )));
+        }
+        if let Some(p) = self.free.iter().find(|p| !matches!(p, Param::Yaw | Param::Pitch | Param::Roll | Param::F | Param::Fx | Param::Fy)) {
+            return Err(Error::BadOption(format!(
+                "register: parameter {} cannot be refined against the terrain (free: yaw, pitch, roll, f, fx, fy)",
+                p.name()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The result of [`register_to_terrain`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TerrainFit {
+    /// The refined camera (the input camera when not converged).
+    pub camera: CameraModel,
+    /// The camera the search ended at, converged or not.
+    pub found: CameraModel,
+    /// Whether the fit is trusted (restarts agree, the score rose, no bound reached).
+    pub converged: bool,
+    /// Why not, when not converged.
+    pub reason: Option<String>,
+    /// Normalised mutual information at the input camera and at the result (same samples,
+    /// finest scale).
+    pub score_start: f64,
+    /// See `score_start`.
+    pub score_final: f64,
+    /// Largest distance (full-resolution pixels, over the image's corners and centre)
+    /// between the result and the restarts' results.
+    pub repeat_px: f64,
+    /// Score evaluations.
+    pub evaluations: usize,
+    /// Seconds spent.
+    pub seconds: f64,
+}
+
+/// Refines `rough` (the camera of `photo`, sized like it) against the terrain; see the
+/// module docs. Errors for parameters that cannot be registered this way or a camera not
+/// sized like the photo; a search that does not converge is a result with
+/// `converged: false`, not an error.
+pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &CameraModel, opts: &TerrainOptions) -> Result<TerrainFit> {
+    let t0 = Instant::now();
+    if (rough.width, rough.height) != photo.dimensions() {
+        return Err(Error::BadOption(format!(
+            "camera is for {} x {} pixels, the photo has {} x {}",
+            rough.width,
+            rough.height,
+            photo.width(),
+            photo.height()
+        )));
+    }
+    opts.validate()?;
+    let finest = opts.finest_factor.clamp(1, 16).next_power_of_two();
+    let mut evals = 0usize;
+    let start = CameraParams::from_camera(rough);
+    let depth = median_depth(terrain, rough);
+
+    // Coarse grid over the angles on the photo reduced to about 100 pixels across.
+    let q = (photo.width() / 100).max(1);
+    let coarse = (1u32 << (31 - q.leading_zeros())).max(finest);
+    let grey16 = GreyImage::from_photo(photo, coarse);
+    let cam16 = scaled(rough, &grey16);
+    let samples = terrain.sample(&cam16, 1.0, 0.08, Some(band_width(coarse)))?;
+    let f16 = cam16.fx;
+    let angle_free = [Param::Yaw, Param::Pitch, Param::Roll].map(|p| opts.free.contains(&p));
+    let step = 0.7 / f16; // radians: 0.7 px at this scale
+    let counts: [i64; 3] = [0, 1, 2].map(|k| if angle_free[k] { (opts.search_deg[k].to_radians() / step).ceil() as i64 } else { 0 });
+    let roll_step = 0.7 / (cam16.width as f64 / 2.0).max(1.0); // radians: 0.7 px at the side
+    let roll_n = if angle_free[2] { (opts.search_deg[2].to_radians() / roll_step).ceil() as i64 } else { 0 };
+    let mut grid: Vec<[f64; 3]> = Vec::new();
+    for r in -roll_n..=roll_n {
+        for p in -counts[1]..=counts[1] {
+            for y in -counts[0]..=counts[0] {
+                grid.push([y as f64 * step, p as f64 * step, r as f64 * roll_step]);
+            }
+        }
+    }
+    use rayon::prelude::*;
+    let scores: Vec<f64> = grid
+        .par_iter()
+        .map(|d| {
+            let mut c = start;
+            for k in 0..3 {
+                c.angles[k] += d[k];
+            }
+            nmi(&samples, &scaled(&c.camera(), &grey16), &grey16)
+        })
+        .collect();
+    evals += grid.len();
+    let mut order: Vec<usize> = (0..grid.len()).collect();
+    order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+    let mut peaks: Vec<[f64; 3]> = Vec::new();
+    for &i in &order {
+        let g = grid[i];
+        if peaks.iter().all(|p| (0..3).any(|k| (p[k] - g[k]).abs() > 4.0 * step)) {
+            peaks.push(g);
+        }
+        if peaks.len() == 3 {
+            break;
+        }
+    }
+
+    // Nelder-Mead from each peak on photos reduced 2 and 4 times less than the grid's; the
+    // best goes on through every finer scale.
+    let space = Space { base: start, free: opts.free.clone(), depth, bounds: opts.bounds };
+    let mut best: Option<(CameraParams, f64)> = None;
+    let levels: Vec<u32> = [coarse / 2, coarse / 4].into_iter().filter(|&f| f > finest).collect();
+    for peak in &peaks {
+        let mut c = start;
+        for k in 0..3 {
+            c.angles[k] += peak[k];
+        }
+        let mut score = f64::NEG_INFINITY;
+        for &f in &levels {
+            let grey = GreyImage::from_photo(photo, f);
+            let (c2, s2, e) = refine(terrain, &space, &c, &grey, 3.0)?;
+            evals += e;
+            (c, score) = (c2, s2);
+        }
+        if best.as_ref().is_none_or(|b| score > b.1) {
+            best = Some((c, score));
+        }
+    }
+    let (mut cam, _) = best.ok_or_else(|| Error::BadOption("register: empty search".into()))?;
+
+    let mut f = levels.last().copied().unwrap_or(coarse) / 2;
+    while f > finest {
+        let grey = GreyImage::from_photo(photo, f);
+        let (c2, _, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
+        evals += e;
+        cam = c2;
+        f /= 2;
+    }
+
+    // Finest scale: two rounds (samples re-cast in between), then restarts for the verdict.
+    let grey = GreyImage::from_photo(photo, finest);
+    let mut score = 0.0;
+    for _ in 0..2 {
+        let (c2, s2, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
+        evals += e;
+        (cam, score) = (c2, s2);
+    }
+    let samples = terrain.sample(&scaled(&cam.camera(), &grey), 1.0, 0.04, Some(band_width(finest)))?;
+    let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
+    let mut repeat: f64 = 0.0;
+    for kick in [[3.0, -3.0], [-3.0, 3.0]] {
+        let mut c = cam;
+        c.angles[0] += kick[0] / scaled(&cam.camera(), &grey).fx;
+        c.angles[1] += kick[1] / scaled(&cam.camera(), &grey).fx;
+        let (c2, _, e) = refine(terrain, &space, &c, &grey, 2.0)?;
+        evals += e;
+        repeat = repeat.max(pixel_distance(&cam.camera(), &c2.camera(), depth));
+    }
+    let found = cam.camera();
+    let at_bound = space.outside(&cam, 0.98);
+    let reason = if at_bound {
+        Some("the search reached the largest change allowed".to_string())
+    } else if repeat > opts.repeat_px {
+        Some(format!("restarts disagree by {repeat:.2} px (limit {:.2} px)", opts.repeat_px))
+    } else if score <= score_start {
+        Some(format!("the score did not rise ({score_start:.4} -> {score:.4})"))
+    } else {
+        None
+    };
+    Ok(TerrainFit {
+        camera: if reason.is_none() { found } else { *rough },
+        found,
+        converged: reason.is_none(),
+        reason,
+        score_start,
+        score_final: score,
+        repeat_px: repeat,
+        evaluations: evals,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The free parameters as a vector in pixel units at one scale: an angle step moves the
+/// image centre by a pixel (roll: the image's side), a focal step the image's side, a
+/// position step a point at the view's median depth.
+struct Space {
+    base: CameraParams,
+    free: Vec<Param>,
+    depth: f64,
+    bounds: [f64; 3],
+}
+
+impl Space {
+    fn unit(&self, p: Param, cam: &CameraModel) -> f64 {
+        let f = cam.fx;
+        let half = cam.width as f64 / 2.0;
+        match p {
+            Param::Yaw | Param::Pitch => 1.0 / f,
+            Param::Roll => 1.0 / half,
+            Param::F | Param::Fx | Param::Fy => self.base.focal[0] / half,
+            _ => self.depth / f,
+        }
+    }
+
+    fn apply(&self, from: &CameraParams, x: &[f64], cam: &CameraModel) -> CameraParams {
+        let mut c = *from;
+        for (p, v) in self.free.iter().zip(x) {
+            c.set(*p, from.get(*p) + v * self.unit(*p, cam));
+        }
+        c
+    }
+
+    /// Whether `c` is beyond `frac` of the bounds from the base camera.
+    fn outside(&self, c: &CameraParams, frac: f64) -> bool {
+        self.free.iter().any(|&p| {
+            let d = (c.get(p) - self.base.get(p)).abs();
+            match p {
+                Param::Yaw | Param::Pitch | Param::Roll => d.to_degrees() > frac * self.bounds[0],
+                Param::F | Param::Fx | Param::Fy => d / self.base.focal[0] > frac * self.bounds[1],
+                _ => d > frac * self.bounds[2],
+            }
+        })
+    }
+}
+
+/// Nelder-Mead at one scale from `from`, with samples cast from `from`: the best camera, its
+/// score and the evaluations spent.
+fn refine(terrain: &TerrainScene, space: &Space, from: &CameraParams, grey: &GreyImage, step_px: f64) -> Result<(CameraParams, f64, usize)> {
+    let cam = scaled(&from.camera(), grey);
+    let factor = (from.size.0 / grey.width.max(1)).max(1);
+    let samples = terrain.sample(&cam, 1.0, 0.06, Some(band_width(factor)))?;
+    let mut f = |x: &[f64]| {
+        let c = space.apply(from, x, &cam);
+        if space.outside(&c, 1.0) {
+            return 0.0;
+        }
+        nmi(&samples, &scaled(&c.camera(), grey), grey)
+    };
+    let x0 = vec![0.0; space.free.len()];
+    let (x, v, evals) = simplex::maximise(&mut f, &x0, step_px, 0.02, 1e-7, 150 * space.free.len());
+    Ok((space.apply(from, &x, &cam), v, evals))
+}
+
+/// Half-width (grid steps) of the band of samples kept around silhouettes on a photo
+/// reduced `factor` times: about 48 full-resolution pixels (24 on the full photo), at
+/// least 3 steps.
+fn band_width(factor: u32) -> usize {
+    (48 / factor.max(1) as usize).clamp(3, 24)
+}
+
+/// `cam` resized to the grey image's size.
+fn scaled(cam: &CameraModel, grey: &GreyImage) -> CameraModel {
+    cam.resized(grey.width, grey.height)
+}
+
+/// Median distance of the terrain seen by `cam` (a coarse grid of rays), 100 m if none.
+fn median_depth(terrain: &TerrainScene, cam: &CameraModel) -> f64 {
+    let mut d: Vec<f64> = Vec::new();
+    for j in 1..16 {
+        for i in 1..16 {
+            let (u, v) = (cam.width as f64 * i as f64 / 16.0, cam.height as f64 * j as f64 / 16.0);
+            if let Some(dir) = cam.pixel_ray(u, v) {
+                if let Some(p) = terrain.hit(cam.position, dir) {
+                    d.push((p - cam.position).length());
+                }
+            }
+        }
+    }
+    d.sort_unstable_by(f64::total_cmp);
+    d.get(d.len() / 2).copied().unwrap_or(100.0)
+}
+
+/// Largest image distance (pixels of `a`) between where `a` and `b` show the points at
+/// `depth` along `a`'s rays through the image's corners and centre.
+pub fn pixel_distance(a: &CameraModel, b: &CameraModel, depth: f64) -> f64 {
+    let (w, h) = (a.width as f64, a.height as f64);
+    let mut worst: f64 = 0.0;
+    for (u, v) in [(0.0, 0.0), (w - 1.0, 0.0), (0.0, h - 1.0), (w - 1.0, h - 1.0), (w / 2.0, h / 2.0)] {
+        let Some(dir) = a.pixel_ray(u, v) else { continue };
+        let p: DVec3 = a.position + dir * depth;
+        match b.project(p) {
+            Some(q) => worst = worst.max(((q[0] - u).powi(2) + (q[1] - v).powi(2)).sqrt()),
+            None => return f64::INFINITY,
+        }
+    }
+    worst
+}

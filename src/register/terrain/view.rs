@@ -1,0 +1,312 @@
+//! What the store shows from a camera, as samples to reproject: one ray per pixel of a
+//! (scaled) image grid cast against the store's terrain, each hit kept as its world point
+//! with a label (the colour of the cell's active texture, the surface's steepness and its
+//! distance class), each ray above the terrain's reach kept as a sky direction.
+
+use glam::{DVec3, Vec3};
+use image::RgbaImage;
+use rayon::prelude::*;
+
+use crate::camera::CameraModel;
+use crate::error::Result;
+use crate::photo::LevelScene;
+use crate::store::Store;
+
+/// Number of texture-grey classes of a terrain sample's label.
+pub const GREY_CLASSES: u8 = 10;
+/// Label of a sky sample (terrain labels are `1..LABELS`).
+pub const SKY: u8 = 0;
+/// Number of labels: sky, then grey × steep (2) × distance (2).
+pub const LABELS: usize = 1 + GREY_CLASSES as usize * 4;
+
+/// What one sample is: a terrain point (world metres) or a sky direction (unit, world).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampleAt {
+    /// A point of the terrain (reprojects with position and rotation).
+    Point(DVec3),
+    /// A direction to the sky (reprojects with the rotation only).
+    Sky(DVec3),
+}
+
+/// One sample of a view: where it is and its label (see [`LABELS`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Where the sample is.
+    pub at: SampleAt,
+    /// Its label: [`SKY`], or `1 + grey + GREY_CLASSES · (2 · far + steep)`.
+    pub label: u8,
+}
+
+/// The store's finest level as a ray-castable scene with the active textures the rays hit
+/// (loaded on demand) and the terrain's highest point.
+pub struct TerrainScene<'a> {
+    store: &'a Store,
+    scene: LevelScene,
+    textures: std::sync::Mutex<Vec<Option<std::sync::Arc<RgbaImage>>>>,
+    top_z: f64,
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+impl<'a> TerrainScene<'a> {
+    /// The finest level of `store`, in an f32 frame centred on `near` (a camera position).
+    pub fn new(store: &'a Store, near: DVec3) -> Result<TerrainScene<'a>> {
+        let level = store.manifest.quadtree.levels.saturating_sub(1);
+        let scene = LevelScene::from_store(store, level, near, crate::photo::RayAccel::Bvh(crate::photo::BvhQuality::default()))?;
+        let (mut lo, mut hi, mut top_z) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], f64::NEG_INFINITY);
+        for c in &scene.cells {
+            for p in &c.positions {
+                let w = c.origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                lo = [lo[0].min(w.x), lo[1].min(w.y)];
+                hi = [hi[0].max(w.x), hi[1].max(w.y)];
+                top_z = top_z.max(w.z);
+            }
+        }
+        let n = scene.cells.len();
+        Ok(TerrainScene { store, scene, textures: std::sync::Mutex::new(vec![None; n]), top_z, lo, hi })
+    }
+
+    /// Samples of the view of `cam` at the centres of a `step`-pixel grid inside the image
+    /// inset by `margin` (a fraction of each side): terrain hits labelled by their texture
+    /// grey (quantiles of the view's own greys), steepness (normal more than 45° from up)
+    /// and distance (beyond the view's median distance); misses whose ray rises above the
+    /// terrain's highest point before it leaves the terrain's extent as sky; other misses
+    /// (rays that leave the store's extent below its top, where the land goes on unseen)
+    /// are dropped. With `band = Some(w)` only the samples within `w` grid steps of a
+    /// layer boundary (sky against terrain, dropped against kept, or a distance jump of
+    /// more than 25 %: the silhouettes) are kept. Deterministic.
+    pub fn sample(&self, cam: &CameraModel, step: f64, margin: f64, band: Option<usize>) -> Result<Vec<Sample>> {
+        let (w, h) = (cam.width as f64, cam.height as f64);
+        let (u0, v0) = (margin * w, margin * h);
+        let (nu, nv) = (((w - 2.0 * u0) / step).floor() as usize, ((h - 2.0 * v0) / step).floor() as usize);
+        let caster = cam.ray_caster();
+        let origin = (cam.position - self.scene.frame_origin).as_vec3();
+        let Some(bvh) = self.scene.bvh() else { return Ok(Vec::new()) };
+        // (direction, hit: (triangle, t, bary))
+        let raw: Vec<Option<(DVec3, Option<crate::photo::TriHit>)>> = (0..nu * nv)
+            .into_par_iter()
+            .map(|i| {
+                // Jittered inside the grid cell (a fixed hash of the index): samples on the
+                // photo's pixel centres would make the score favour whole-pixel shifts.
+                let (ju, jv) = jitter(i as u64);
+                let u = u0 + ((i % nu) as f64 + 0.5 + ju) * step - 0.5;
+                let v = v0 + ((i / nu) as f64 + 0.5 + jv) * step - 0.5;
+                let dir = caster.ray(u, v)?;
+                Some((dir, bvh.nearest(origin, dir.as_vec3(), 0.05, f32::INFINITY)))
+            })
+            .collect();
+        // Textures of the cells hit.
+        let mut need: Vec<usize> = raw.iter().flatten().filter_map(|(_, h)| h.map(|h| self.scene.cell_of(h.triangle) as usize)).collect();
+        need.sort_unstable();
+        need.dedup();
+        self.load_textures(&need)?;
+        let textures = self.textures.lock().map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?.clone();
+        // Per terrain hit: grey, steep, distance.
+        struct Hit {
+            point: DVec3,
+            grey: f32,
+            steep: bool,
+            dist: f32,
+        }
+        let mut out_at: Vec<Option<Result<Hit, DVec3>>> = Vec::with_capacity(raw.len());
+        for r in &raw {
+            let Some((dir, hit)) = r else {
+                out_at.push(None);
+                continue;
+            };
+            match hit {
+                Some(hh) => {
+                    let point = cam.position + *dir * hh.t as f64;
+                    let plane = self.scene.plane(hh.triangle);
+                    let steep = plane[2].abs() < std::f32::consts::FRAC_1_SQRT_2;
+                    let tex = self.scene.tri_texcoords(hh.triangle);
+                    let p = [0, 1].map(|k| hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]);
+                    let grey = textures[self.scene.cell_of(hh.triangle) as usize].as_deref().map_or(0.5, |t| grey_at(t, p));
+                    out_at.push(Some(Ok(Hit { point, grey, steep, dist: hh.t })));
+                }
+                None if self.rises_above(cam.position, *dir) => out_at.push(Some(Err(*dir))),
+                None => out_at.push(None),
+            }
+        }
+        let mut greys: Vec<f32> = out_at.iter().flatten().filter_map(|a| a.as_ref().ok().map(|h| h.grey)).collect();
+        let mut dists: Vec<f32> = out_at.iter().flatten().filter_map(|a| a.as_ref().ok().map(|h| h.dist)).collect();
+        greys.sort_unstable_by(f32::total_cmp);
+        dists.sort_unstable_by(f32::total_cmp);
+        let cuts: Vec<f32> = (1..GREY_CLASSES as usize)
+            .map(|k| greys.get(k * greys.len() / GREY_CLASSES as usize).copied().unwrap_or(0.5))
+            .collect();
+        let median = dists.get(dists.len() / 2).copied().unwrap_or(0.0);
+        // Layers for the band: 0 dropped, 1 sky, else the hit's distance.
+        let keep: Vec<bool> = match band {
+            None => vec![true; out_at.len()],
+            Some(wb) => {
+                let layer = |i: usize| match &out_at[i] {
+                    None => -1.0f32,
+                    Some(Err(_)) => 0.0,
+                    Some(Ok(h)) => h.dist,
+                };
+                let differs = |a: f32, b: f32| {
+                    if a <= 0.0 || b <= 0.0 { a != b } else { a.max(b) > 1.25 * a.min(b) }
+                };
+                let mut edge = vec![false; out_at.len()];
+                for r in 0..nv {
+                    for c in 0..nu {
+                        let i = r * nu + c;
+                        if c + 1 < nu && differs(layer(i), layer(i + 1)) {
+                            edge[i] = true;
+                            edge[i + 1] = true;
+                        }
+                        if r + 1 < nv && differs(layer(i), layer(i + nu)) {
+                            edge[i] = true;
+                            edge[i + nu] = true;
+                        }
+                    }
+                }
+                dilate(&edge, nu, nv, wb)
+            }
+        };
+        Ok(out_at
+            .into_iter()
+            .zip(keep)
+            .filter_map(|(a, k)| if k { a } else { None })
+            .map(|a| match a {
+                Ok(hit) => {
+                    let g = cuts.iter().filter(|&&c| hit.grey > c).count() as u8;
+                    let class = 2 * u8::from(hit.dist > median) + u8::from(hit.steep);
+                    Sample { at: SampleAt::Point(hit.point), label: 1 + g + GREY_CLASSES * class }
+                }
+                Err(dir) => Sample { at: SampleAt::Sky(dir), label: SKY },
+            })
+            .collect())
+    }
+
+    /// Whether a ray from `from` along `dir` (no terrain hit) is sky: it climbs above the
+    /// terrain's top before leaving the terrain's x-y extent (else it may meet land beyond
+    /// the store).
+    fn rises_above(&self, from: DVec3, dir: DVec3) -> bool {
+        if dir.z <= 0.0 {
+            return false;
+        }
+        let t_top = ((self.top_z - from.z) / dir.z).max(0.0);
+        let mut t_exit = f64::INFINITY;
+        for k in 0..2 {
+            let (o, d) = (from[k], dir[k]);
+            if d > 1e-12 {
+                t_exit = t_exit.min((self.hi[k] - o) / d);
+            } else if d < -1e-12 {
+                t_exit = t_exit.min((self.lo[k] - o) / d);
+            }
+        }
+        t_top <= t_exit.max(0.0)
+    }
+
+    fn load_textures(&self, cells: &[usize]) -> Result<()> {
+        let missing: Vec<usize> = {
+            let t = self.textures.lock().map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
+            cells.iter().copied().filter(|&c| t[c].is_none()).collect()
+        };
+        let loaded: Vec<(usize, RgbaImage)> = missing
+            .par_iter()
+            .map(|&c| {
+                let rec = &self.store.manifest.cells[self.scene.cells[c].cell as usize];
+                self.store.read_active_texture(rec).map(|t| (c, t))
+            })
+            .collect::<Result<_>>()?;
+        let mut t = self.textures.lock().map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
+        for (c, img) in loaded {
+            t[c] = Some(std::sync::Arc::new(img));
+        }
+        Ok(())
+    }
+
+    /// The terrain's highest point (world metres).
+    pub fn top_z(&self) -> f64 {
+        self.top_z
+    }
+
+    /// The first terrain hit of the ray from `from` along the unit `dir` (world), if any.
+    pub fn hit(&self, from: DVec3, dir: DVec3) -> Option<DVec3> {
+        let origin: Vec3 = (from - self.scene.frame_origin).as_vec3();
+        let h = self.scene.bvh()?.nearest(origin, dir.as_vec3(), 0.05, f32::INFINITY)?;
+        Some(from + dir * h.t as f64)
+    }
+}
+
+/// Luma (Rec. 709 weights on the sRGB values, 0..1) of the texel containing position `p`
+/// (texel units, clamped to the texture).
+fn grey_at(t: &RgbaImage, p: [f32; 2]) -> f32 {
+    let x = (p[0].floor().max(0.0) as u32).min(t.width().saturating_sub(1));
+    let y = (p[1].floor().max(0.0) as u32).min(t.height().saturating_sub(1));
+    let c = t.get_pixel(x, y).0;
+    (0.2126 * c[0] as f32 + 0.7152 * c[1] as f32 + 0.0722 * c[2] as f32) / 255.0
+}
+
+/// `mask` (row-major `nu × nv`) dilated by a `w`-step square (rows, then columns).
+fn dilate(mask: &[bool], nu: usize, nv: usize, w: usize) -> Vec<bool> {
+    let mut rows = vec![false; mask.len()];
+    for r in 0..nv {
+        dilate_line(mask, &mut rows, r * nu, 1, nu, w);
+    }
+    let mut out = vec![false; mask.len()];
+    for c in 0..nu {
+        dilate_line(&rows, &mut out, c, nu, nv, w);
+    }
+    out
+}
+
+/// One line of `n` cells at `start + k·stride` of `src` dilated by `w` into `dst`.
+fn dilate_line(src: &[bool], dst: &mut [bool], start: usize, stride: usize, n: usize, w: usize) {
+    let mut last_set: Option<usize> = None;
+    let mut next_set = vec![usize::MAX; n];
+    let mut nx = usize::MAX;
+    for k in (0..n).rev() {
+        if src[start + k * stride] {
+            nx = k;
+        }
+        next_set[k] = nx;
+    }
+    for k in 0..n {
+        if src[start + k * stride] {
+            last_set = Some(k);
+        }
+        dst[start + k * stride] = last_set.is_some_and(|l| k - l <= w) || (next_set[k] != usize::MAX && next_set[k] - k <= w);
+    }
+}
+
+/// Two numbers in [-0.5, 0.5) from an index (SplitMix64), the same on every run.
+fn jitter(i: u64) -> (f64, f64) {
+    let mut z = i.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(0x2545_F491_4F6C_DD1D);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    ((z >> 40) as f64 / (1u64 << 24) as f64 - 0.5, (z & 0xFF_FFFF) as f64 / (1u64 << 24) as f64 - 0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dilation_marks_exactly_the_square_around_each_set_cell() {
+        let (nu, nv) = (9, 7);
+        let mut m = vec![false; nu * nv];
+        m[3 * nu + 4] = true;
+        m[0] = true;
+        let d = dilate(&m, nu, nv, 2);
+        for r in 0..nv {
+            for c in 0..nu {
+                let want = (r.abs_diff(3) <= 2 && c.abs_diff(4) <= 2) || (r <= 2 && c <= 2);
+                assert_eq!(d[r * nu + c], want, "({c}, {r})");
+            }
+        }
+    }
+
+    #[test]
+    fn jitter_stays_inside_the_cell_and_repeats() {
+        for i in 0..1000 {
+            let (a, b) = jitter(i);
+            assert!((-0.5..0.5).contains(&a) && (-0.5..0.5).contains(&b));
+            assert_eq!(jitter(i), (a, b));
+        }
+    }
+}
