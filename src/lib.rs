@@ -54,6 +54,7 @@ pub mod colour;
 pub mod dem;
 pub mod error;
 pub mod eval;
+pub mod export;
 mod font;
 mod fastmath;
 pub mod fsutil;

@@ -3,7 +3,9 @@
 
 mod build;
 mod demo;
+mod export_glb;
 mod export_obj;
+mod export_tiles;
 mod fit_camera;
 mod fly;
 mod project;
@@ -47,6 +49,10 @@ enum Command {
     Register(register::Args),
     /// Write one cell's TIN with texture coordinates as Wavefront OBJ.
     ExportObj(export_obj::Args),
+    /// Write chosen cells with their best textures as one GLB (Blender, glTF viewers).
+    ExportGlb(export_glb::Args),
+    /// Write the store as a 3D Tiles 1.1 tileset (CesiumJS), one GLB per cell.
+    ExportTiles(export_tiles::Args),
     /// Render one frame of a store from a camera (headless GPU) to PNG.
     Render(render::Args),
     /// Timed fly-through over a store (headless GPU); writes a JSON report.
@@ -78,6 +84,8 @@ pub fn run() -> ExitCode {
         Command::Project(a) => project::run(a),
         Command::Stats(a) => stats::run(a),
         Command::ExportObj(a) => export_obj::run(a),
+        Command::ExportGlb(a) => export_glb::run(a),
+        Command::ExportTiles(a) => export_tiles::run(a),
         Command::FitCamera(a) => fit_camera::run(a),
         Command::Register(a) => register::run(a),
         Command::Render(a) => render::run(a),

@@ -29,3 +29,16 @@ pub fn fails_naming(args: &[&str], needle: &str) {
     assert!(err.contains(needle), "error of {args:?} should name {needle:?}: {err}");
     assert!(!err.contains("panicked"), "cliffmap {args:?} panicked: {err}");
 }
+
+/// Runs the Khronos glTF validator (tools/js, installed by `.ci/run` with `npm ci --prefix
+/// tools/js`) on `files` and fails the test unless every file has 0 errors. Fails, saying
+/// how to install it, when the validator is missing.
+pub fn validate_gltf(files: &[&std::path::Path]) {
+    let tools = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/js");
+    assert!(
+        tools.join("node_modules/gltf-validator").exists(),
+        "the glTF validator is not installed: run `npm ci --prefix tools/js` (as .ci/run does)"
+    );
+    let o = Command::new("node").arg(tools.join("validate_gltf.mjs")).args(files).output().expect("cannot start node");
+    assert!(o.status.success(), "glTF validation failed:\n{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+}

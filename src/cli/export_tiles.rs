@@ -1,0 +1,48 @@
+//! `cliffmap export-tiles`: the store as a 3D Tiles 1.1 tileset (one GLB per cell).
+
+use std::path::PathBuf;
+
+use cliffmap::export::{TilesOptions, export_tiles};
+
+/// Flags of `cliffmap export-tiles`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The store directory.
+    store: PathBuf,
+    /// Output folder (tileset.json and tiles/).
+    #[arg(long)]
+    out: PathBuf,
+    /// The store's CRS, "EPSG:CODE" or a PROJ string, when its manifest records none.
+    #[arg(long)]
+    crs: Option<String>,
+    /// Geoid height in metres added to the store's heights (orthometric → ellipsoidal).
+    #[arg(long, allow_hyphen_values = true)]
+    geoid_offset: Option<f64>,
+    /// Only warnings and errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Runs `export-tiles`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    if let Some(m) = a.geoid_offset {
+        if !(m.is_finite() && m.abs() < 200.0) {
+            anyhow::bail!("--geoid-offset must be a height in metres within ±200, got {m}");
+        }
+    }
+    let r = export_tiles(&a.store, &a.out, &TilesOptions { crs: a.crs, geoid_offset: a.geoid_offset })?;
+    if !a.quiet {
+        println!(
+            "wrote {} ({} tiles, {} left out where children do not cover their parent; textures: {} photo, {} reparam, {} ortho; {:.1} MB)",
+            a.out.join("tileset.json").display(),
+            r.tiles,
+            r.pruned,
+            r.textures[0],
+            r.textures[1],
+            r.textures[2],
+            r.bytes as f64 / 1e6
+        );
+        println!("heights: {}", r.heights);
+    }
+    Ok(())
+}

@@ -1,0 +1,122 @@
+//! The cells to export and what each one carries: its surface and skirt in world
+//! coordinates (f64), texture coordinates, and its best texture's file bytes.
+
+use glam::DVec3;
+
+use crate::error::{Error, Result};
+use crate::store::{CellRecord, Store, texcoord};
+
+/// Which texture a cell exports: the best it has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureSource {
+    /// The photo-enhanced texture (`cliffmap project`).
+    Photo,
+    /// The reparameterized texture (`cliffmap reparam`).
+    Reparam,
+    /// The orthographic texture.
+    Ortho,
+}
+
+impl TextureSource {
+    /// Lower-case name (`photo`, `reparam`, `ortho`).
+    pub fn name(self) -> &'static str {
+        match self {
+            TextureSource::Photo => "photo",
+            TextureSource::Reparam => "reparam",
+            TextureSource::Ortho => "ortho",
+        }
+    }
+}
+
+/// One cell ready to be written: world positions (f64, the store's CRS), texture
+/// coordinates (u right, v down, [0, 1], glTF's convention), surface and skirt triangles
+/// (counter-clockwise seen from above / from outside), and the chosen texture's PNG bytes
+/// exactly as stored.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExportCell {
+    /// The cell's id (`LEVEL-X-Y`).
+    pub id: String,
+    /// Vertex positions, world metres.
+    pub positions: Vec<DVec3>,
+    /// Texture coordinates per vertex.
+    pub uvs: Vec<[f32; 2]>,
+    /// Surface triangles.
+    pub surface: Vec<[u32; 3]>,
+    /// Skirt triangles.
+    pub skirt: Vec<[u32; 3]>,
+    /// The texture file's bytes (PNG) and where they come from.
+    pub texture_png: Vec<u8>,
+    /// Which texture that is.
+    pub texture: TextureSource,
+    /// The cell's geometric error (metres).
+    pub max_error: f64,
+}
+
+/// Reads a cell for export: the mesh its best texture belongs to (the reparameterized one
+/// when the cell has it, else the orthographic one with texture coordinates from x, y), and
+/// that texture's bytes, verified against the manifest's checksum.
+pub fn read_export_cell(store: &Store, rec: &CellRecord) -> Result<ExportCell> {
+    let mesh = store.read_active_mesh(rec)?;
+    let (file, texture) = match (&rec.photo, &rec.reparam) {
+        (Some(p), _) => (&p.texture, TextureSource::Photo),
+        (None, Some(r)) => (&r.files.texture, TextureSource::Reparam),
+        (None, None) => (&rec.files.texture, TextureSource::Ortho),
+    };
+    let texture_png = store.read_file(file)?;
+    let origin = DVec3::from_array(rec.origin);
+    let positions: Vec<DVec3> =
+        mesh.positions.iter().map(|p| origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
+    let uvs: Vec<[f32; 2]> = (0..mesh.positions.len()).map(|i| texcoord(rec, &mesh, i)).collect();
+    let n = mesh.positions.len() as u32;
+    if let Some(t) = mesh.triangles.iter().find(|t| t.iter().any(|&i| i >= n)) {
+        return Err(Error::store(store.dir.join(&rec.files.mesh.path), format!("triangle {t:?} indexes past {n} vertices")));
+    }
+    let split = (mesh.surface_triangles as usize).min(mesh.triangles.len());
+    Ok(ExportCell {
+        id: rec.id.clone(),
+        positions,
+        uvs,
+        surface: mesh.triangles[..split].to_vec(),
+        skirt: mesh.triangles[split..].to_vec(),
+        texture_png,
+        texture,
+        max_error: rec.max_error,
+    })
+}
+
+/// Which cells to export.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CellSelection {
+    /// A quadtree level (0 = root); `None` with `max_error` `None`: the finest level.
+    pub level: Option<u8>,
+    /// The coarsest level whose every cell's error is at most this (metres).
+    pub max_error: Option<f64>,
+    /// Only cells whose extent meets this rectangle `[x0, y0, x1, y1]` (world metres).
+    pub region: Option<[f64; 4]>,
+}
+
+/// The manifest indices of the cells `sel` picks, in manifest order. Errors for a level the
+/// store does not have, an error no level reaches, or a region that meets no cell.
+pub fn select_cells(store: &Store, sel: &CellSelection) -> Result<Vec<usize>> {
+    let levels = store.manifest.quadtree.levels;
+    let level = match (sel.level, sel.max_error) {
+        (Some(l), _) if l >= levels => {
+            return Err(Error::BadOption(format!("level {l} is not in store {} (levels 0..{levels})", store.dir.display())));
+        }
+        (Some(l), _) => l,
+        (None, Some(m)) => (0..levels)
+            .find(|&l| store.manifest.cells.iter().filter(|c| c.level == l).all(|c| c.max_error <= m))
+            .ok_or_else(|| Error::BadOption(format!("no level of store {} has every cell's error within {m} m", store.dir.display())))?,
+        (None, None) => levels.saturating_sub(1),
+    };
+    let meets = |c: &CellRecord| match sel.region {
+        None => true,
+        Some([x0, y0, x1, y1]) => c.extent.min_x <= x1 && c.extent.max_x >= x0 && c.extent.min_y <= y1 && c.extent.max_y >= y0,
+    };
+    let picked: Vec<usize> =
+        store.manifest.cells.iter().enumerate().filter(|(_, c)| c.level == level && meets(c)).map(|(i, _)| i).collect();
+    if picked.is_empty() {
+        return Err(Error::BadOption(format!("no cell of level {level} meets the region {:?}", sel.region)));
+    }
+    Ok(picked)
+}

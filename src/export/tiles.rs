@@ -1,0 +1,202 @@
+//! A 3D Tiles 1.1 tileset of the store's quadtree: one GLB per cell, an explicit tree in
+//! `tileset.json`, `refine: REPLACE`, box bounding volumes in an east-north-up frame whose
+//! `transform` (on the root) places it in ECEF.
+
+use std::path::Path;
+
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use serde_json::{Value, json};
+
+use super::ecef::{ToEcef, ecef_to_enu};
+use super::{ExportCell, TextureSource, read_export_cell, write_glb};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::store::Store;
+
+/// Options of [`export_tiles`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TilesOptions {
+    /// The store's CRS (`EPSG:CODE` or a PROJ string) when its manifest has none, or to
+    /// override it.
+    pub crs: Option<String>,
+    /// Geoid height (metres) added to the store's (orthometric) heights to make them
+    /// ellipsoidal; `None`: the heights are written as they are.
+    pub geoid_offset: Option<f64>,
+}
+
+/// What [`export_tiles`] wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TilesReport {
+    /// Tiles with content (one per cell).
+    pub tiles: usize,
+    /// Cells left out of the tree because their parent's children do not cover it (the
+    /// parent is drawn instead, so no hole appears).
+    pub pruned: usize,
+    /// Cells per texture source: photo, reparam, ortho.
+    pub textures: [usize; 3],
+    /// Bytes of GLB written.
+    pub bytes: u64,
+    /// How heights were made ellipsoidal.
+    pub heights: String,
+}
+
+/// Writes `out/tileset.json` and `out/tiles/LEVEL/X-Y.glb` for every cell of the store in
+/// `dir` (module docs). Positions are transformed vertex by vertex in f64 to ECEF and then
+/// to the root's east-north-up frame (at the centre of the store, f32 in the GLBs, glTF
+/// y-up: x east, y up, z south). A tile's `geometricError` is its cell's error (metres); a
+/// cell's children are listed only when together they cover its whole footprint (the x-y
+/// bounds of its mesh), so REPLACE refinement leaves no hole. Every file is written atomically, `tileset.json` last.
+pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<TilesReport> {
+    let store = Store::open(dir)?;
+    let crs = opts.crs.clone().or_else(|| store.manifest.crs.clone()).ok_or_else(|| {
+        Error::BadOption(format!("store {} records no CRS: give it with --crs EPSG:CODE", dir.display()))
+    })?;
+    let offset = opts.geoid_offset.unwrap_or(0.0);
+    let to_ecef = ToEcef::new(&crs, offset)?;
+    let cells = &store.manifest.cells;
+    if cells.is_empty() {
+        return Err(Error::store(dir.join("manifest.json"), "the store has no cells"));
+    }
+    // Frame: ENU at the centre of the store's bounding box.
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for c in cells {
+        lo = lo.min(DVec3::from_array(c.bbox_min));
+        hi = hi.max(DVec3::from_array(c.bbox_max));
+    }
+    let centre = to_ecef.to_ecef((lo + hi) * 0.5)?;
+    let rot = ecef_to_enu(centre);
+    let to_enu = |p: DVec3| -> Result<DVec3> { Ok(rot * (to_ecef.to_ecef(p)? - centre)) };
+
+    // GLBs in parallel (one cell at a time in memory per thread), bounding boxes back.
+    let results: Vec<(usize, [DVec3; 2], TextureSource, u64)> = (0..cells.len())
+        .into_par_iter()
+        .map(|i| {
+            let rec = &cells[i];
+            let cell: ExportCell = read_export_cell(&store, rec)?;
+            let enu: Vec<DVec3> = cell.positions.iter().map(|&p| to_enu(p)).collect::<Result<_>>()?;
+            let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for p in &enu {
+                a = a.min(*p);
+                b = b.max(*p);
+            }
+            let extras = json!({"cliffmap": {"cell": rec.id, "texture": cell.texture.name(), "max_error_m": rec.max_error}});
+            let bytes = write_glb(
+                std::slice::from_ref(&cell),
+                &|_, v| [enu[v].x, enu[v].z, -enu[v].y],
+                &extras,
+            )?;
+            write_atomic(&out.join(tile_path(rec.level, rec.x, rec.y)), &bytes)?;
+            Ok((i, [a, b], cell.texture, bytes.len() as u64))
+        })
+        .collect::<Result<_>>()?;
+    let mut boxes = vec![[DVec3::ZERO; 2]; cells.len()];
+    let mut textures = [0usize; 3];
+    let mut bytes = 0;
+    for (i, bx, t, n) in results {
+        boxes[i] = bx;
+        textures[match t {
+            TextureSource::Photo => 0,
+            TextureSource::Reparam => 1,
+            TextureSource::Ortho => 2,
+        }] += 1;
+        bytes += n;
+    }
+
+    // The explicit tree.
+    let index: std::collections::HashMap<(u8, u32, u32), usize> = cells.iter().enumerate().map(|(i, c)| ((c.level, c.x, c.y), i)).collect();
+    let mut pruned = 0usize;
+    let mut listed = 0usize;
+    let top: Vec<usize> = cells.iter().enumerate().filter(|(_, c)| c.level == 0).map(|(i, _)| i).collect();
+    let mut children = Vec::new();
+    for &i in &top {
+        children.push(tile_json(i, &store, &index, &boxes, &mut pruned, &mut listed));
+    }
+    let top_error = top.iter().map(|&i| cells[i].max_error).fold(0.0, f64::max);
+    let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for bx in &boxes {
+        a = a.min(bx[0]);
+        b = b.max(bx[1]);
+    }
+    let root_error = (2.0 * top_error).max(1.0);
+    let heights = match opts.geoid_offset {
+        Some(m) => format!("store heights + constant geoid offset {m} m (ellipsoidal, WGS 84)"),
+        None => "store heights written as they are (taken as ellipsoidal; give --geoid-offset for orthometric heights)".to_string(),
+    };
+    let tileset = json!({
+        "asset": {"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION")),
+                  "extras": {"cliffmap": {"crs": crs, "heights": heights, "frame": "east-north-up at the root transform's origin"}}},
+        "geometricError": root_error,
+        "root": {
+            "transform": enu_to_ecef_matrix(rot, centre),
+            "boundingVolume": {"box": box_json([a, b])},
+            "geometricError": root_error,
+            "refine": "REPLACE",
+            "children": children,
+        }
+    });
+    let text = serde_json::to_string(&tileset).map_err(|e| Error::BadOption(format!("tileset.json: {e}")))?;
+    write_atomic(&out.join("tileset.json"), text.as_bytes())?;
+    Ok(TilesReport { tiles: listed, pruned, textures, bytes, heights })
+}
+
+/// The GLB of cell (level, x, y), relative to the tileset's folder.
+pub fn tile_path(level: u8, x: u32, y: u32) -> String {
+    format!("tiles/{level}/{x}-{y}.glb")
+}
+
+fn tile_json(
+    i: usize,
+    store: &Store,
+    index: &std::collections::HashMap<(u8, u32, u32), usize>,
+    boxes: &[[DVec3; 2]],
+    pruned: &mut usize,
+    listed: &mut usize,
+) -> Value {
+    let c = &store.manifest.cells[i];
+    *listed += 1;
+    let kids: Vec<usize> =
+        [(0, 0), (1, 0), (0, 1), (1, 1)].iter().filter_map(|&(dx, dy)| index.get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy)).copied()).collect();
+    // Footprints are the meshes' x-y bounds (a cell's nominal square may reach past the DEM,
+    // where no child exists).
+    let area = |k: usize| {
+        let r = &store.manifest.cells[k];
+        (r.bbox_max[0] - r.bbox_min[0]).max(0.0) * (r.bbox_max[1] - r.bbox_min[1]).max(0.0)
+    };
+    let covered = !kids.is_empty() && kids.iter().map(|&k| area(k)).sum::<f64>() >= area(i) * (1.0 - 1e-6);
+    let mut t = json!({
+        "boundingVolume": {"box": box_json(boxes[i])},
+        "geometricError": c.max_error,
+        "content": {"uri": tile_path(c.level, c.x, c.y)},
+    });
+    if covered {
+        let children: Vec<Value> = kids.iter().map(|&k| tile_json(k, store, index, boxes, pruned, listed)).collect();
+        t["children"] = Value::Array(children);
+    } else if !kids.is_empty() {
+        *pruned += count_subtree(c.level, c.x, c.y, index) - 1;
+    }
+    t
+}
+
+/// Cells in the subtree of (level, x, y), itself included.
+fn count_subtree(level: u8, x: u32, y: u32, index: &std::collections::HashMap<(u8, u32, u32), usize>) -> usize {
+    if !index.contains_key(&(level, x, y)) {
+        return 0;
+    }
+    1 + [(0, 0), (1, 0), (0, 1), (1, 1)].iter().map(|&(dx, dy)| count_subtree(level + 1, 2 * x + dx, 2 * y + dy, index)).sum::<usize>()
+}
+
+/// 3D Tiles `box`: centre, then the three half-axes (axis-aligned in the tile frame).
+fn box_json(b: [DVec3; 2]) -> Value {
+    let c = (b[0] + b[1]) * 0.5;
+    let h = ((b[1] - b[0]) * 0.5).max(DVec3::splat(0.01));
+    json!([c.x, c.y, c.z, h.x, 0.0, 0.0, 0.0, h.y, 0.0, 0.0, 0.0, h.z])
+}
+
+/// The column-major 4×4 matrix from the ENU frame (rotation `rot` ECEF → ENU, origin
+/// `centre`) to ECEF.
+fn enu_to_ecef_matrix(rot: DMat3, centre: DVec3) -> Value {
+    let m = rot.transpose(); // columns: east, north, up in ECEF
+    let c = m.to_cols_array();
+    json!([c[0], c[1], c[2], 0.0, c[3], c[4], c[5], 0.0, c[6], c[7], c[8], 0.0, centre.x, centre.y, centre.z, 1.0])
+}
