@@ -2,21 +2,15 @@
 //! triangle counts, texture coordinates and texture bytes; bad selections fail cleanly.
 
 mod cli_util;
+mod common;
 
 use std::path::Path;
 
-use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
 use cliffmap::store::{Store, texcoord};
 use cli_util::{fails_naming, ok};
 
 fn small_store(dir: &Path) {
-    let scene = cliffmap::scene::DemoScene { samples: 129, spacing: 4.0, ..cliffmap::scene::DemoScene::default() };
-    let (dem, ortho) = scene.generate().unwrap();
-    let inputs =
-        BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "t".into(), ortho_source: Some("t".into()), fingerprint: "export-glb".into() };
-    let opts = BuildOptions { max_error: 0.5, cell_intervals: 32, cell_texels: 64, quiet: true, force: true, ..BuildOptions::default() };
-    build_store(&inputs, &opts, dir).unwrap();
-    reparam_store(dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() }).unwrap();
+    common::small_demo_store(dir, true);
 }
 
 #[test]

@@ -3,22 +3,17 @@
 //! within a millimetre), content GLBs re-read; bad input refused.
 
 mod cli_util;
+mod common;
 
 use std::path::Path;
 
 use cliffmap::export::{ToEcef, ecef_to_enu};
-use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::store::Store;
 use cli_util::{fails_naming, ok};
 use glam::{DMat3, DVec3};
 
 fn small_store(dir: &Path) {
-    let scene = cliffmap::scene::DemoScene { samples: 129, spacing: 4.0, ..cliffmap::scene::DemoScene::default() };
-    let (dem, ortho) = scene.generate().unwrap();
-    let inputs =
-        BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "t".into(), ortho_source: Some("t".into()), fingerprint: "export-tiles".into() };
-    let opts = BuildOptions { max_error: 0.5, cell_intervals: 32, cell_texels: 64, quiet: true, force: true, ..BuildOptions::default() };
-    build_store(&inputs, &opts, dir).unwrap();
+    common::small_demo_store(dir, false);
 }
 
 fn walk<'a>(t: &'a serde_json::Value, depth: usize, out: &mut Vec<(&'a serde_json::Value, usize)>) {
