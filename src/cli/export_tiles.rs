@@ -18,6 +18,10 @@ pub struct Args {
     /// Geoid height in metres added to the store's heights (orthometric → ellipsoidal).
     #[arg(long, allow_hyphen_values = true)]
     geoid_offset: Option<f64>,
+    /// Camera JSON(s) to write as views for the page (`index.html?camera=views/NAME.json`,
+    /// NAME the file's stem); repeatable.
+    #[arg(long)]
+    view: Vec<PathBuf>,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
@@ -30,7 +34,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             anyhow::bail!("--geoid-offset must be a height in metres within ±200, got {m}");
         }
     }
-    let r = export_tiles(&a.store, &a.out, &TilesOptions { crs: a.crs, geoid_offset: a.geoid_offset })?;
+    let mut views = Vec::new();
+    for v in &a.view {
+        let cam = cliffmap::camera::camera_from_json_file(v, (0, 0))?;
+        cliffmap::photo::validate_camera(&cam, v)?;
+        let name = v.file_stem().map_or_else(|| "view".to_string(), |s| s.to_string_lossy().into_owned());
+        views.push((name, cam));
+    }
+    let r = export_tiles(&a.store, &a.out, &TilesOptions { crs: a.crs, geoid_offset: a.geoid_offset, views })?;
     if !a.quiet {
         println!(
             "wrote {} ({} tiles, {} left out where children do not cover their parent; textures: {} photo, {} reparam, {} ortho; {:.1} MB)",

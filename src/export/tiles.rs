@@ -23,6 +23,9 @@ pub struct TilesOptions {
     /// Geoid height (metres) added to the store's (orthometric) heights to make them
     /// ellipsoidal; `None`: the heights are written as they are.
     pub geoid_offset: Option<f64>,
+    /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
+    /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
+    pub views: Vec<(String, crate::camera::CameraModel)>,
 }
 
 /// What [`export_tiles`] wrote.
@@ -135,9 +138,31 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
             "children": children,
         }
     });
+    for (name, cam) in &opts.views {
+        let v = view_json(&to_ecef, cam)?;
+        write_atomic(&out.join("views").join(format!("{name}.json")), v.to_string().as_bytes())?;
+    }
+    write_atomic(&out.join("index.html"), include_str!("index.html").as_bytes())?;
     let text = serde_json::to_string(&tileset).map_err(|e| Error::BadOption(format!("tileset.json: {e}")))?;
     write_atomic(&out.join("tileset.json"), text.as_bytes())?;
     Ok(TilesReport { tiles: listed, pruned, textures, bytes, heights })
+}
+
+/// A camera for the page: ECEF position, forward and up directions (through ECEF by
+/// differences of points a metre apart, so grid convergence is included), and the field of
+/// view of the image's larger side (Cesium's `fov`). The principal point is taken as centred.
+fn view_json(to_ecef: &ToEcef, cam: &crate::camera::CameraModel) -> Result<Value> {
+    let p = to_ecef.to_ecef(cam.position)?;
+    let dir = |d: DVec3| -> Result<DVec3> { Ok((to_ecef.to_ecef(cam.position + d)? - p).normalize()) };
+    let forward = dir(cam.world_to_camera.row(2))?;
+    let up = dir(-cam.world_to_camera.row(1))?;
+    let fov = if cam.width >= cam.height {
+        2.0 * (cam.width as f64 / (2.0 * cam.fx)).atan()
+    } else {
+        2.0 * (cam.height as f64 / (2.0 * cam.fy)).atan()
+    };
+    Ok(json!({"position_ecef": p.to_array(), "direction_ecef": forward.to_array(), "up_ecef": up.to_array(),
+              "fov_larger_rad": fov, "width": cam.width, "height": cam.height}))
 }
 
 /// The GLB of cell (level, x, y), relative to the tileset's folder.
