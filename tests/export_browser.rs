@@ -1,12 +1,14 @@
-//! `cliffmap export-tiles` opened in a real browser: the generated CesiumJS page in headless
+//! `cliffmap export-tiles` opened in a real browser: the demo store with its ground photos
+//! projected (so the walls carry photo textures), the generated CesiumJS page in headless
 //! Chromium (SwiftShader WebGL, `tools/js/screenshot_tiles.mjs`) from a demo photo's camera,
-//! compared with `cliffmap render --unlit` of the same camera on terrain pixels. Chromium,
+//! compared with `cliffmap render --unlit` (best texture) of the same camera on terrain
+//! pixels. Chromium,
 //! CesiumJS and puppeteer-core are installed by `.ci/run`.
 
 mod cli_util;
 
 use cliffmap::camera::camera_to_json;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, build_store, project_store};
 use cliffmap::scene::DemoScene;
 use cli_util::ok;
 
@@ -23,6 +25,11 @@ fn cesium_page_shows_what_cliffmap_renders() {
     let inputs = BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "t".into(), ortho_source: Some("t".into()), fingerprint: "browser".into() };
     let store = tmp.path().join("store");
     build_store(&inputs, &BuildOptions { quiet: true, force: true, ..BuildOptions::default() }, &store).unwrap();
+    let list = scene
+        .write_demo_photos(&dem, &tmp.path().join("photos"), &cliffmap::scene::DemoPhotoOptions { width: 800, height: 600, supersample: 1 })
+        .unwrap();
+    let photos = cliffmap::photo::read_photo_list(&list).unwrap();
+    project_store(&store, &photos, &ProjectOptions { quiet: true, ..ProjectOptions::default() }).unwrap();
     let (w, h) = (640u32, 480u32);
     let cam = scene.photo_shots()[0].camera.resized(w, h);
     let cam_file = tmp.path().join("view.json");
@@ -31,6 +38,14 @@ fn cesium_page_shows_what_cliffmap_renders() {
     let (s, o, c) = (store.to_str().unwrap(), out.to_str().unwrap(), cam_file.to_str().unwrap());
     ok(&["export-tiles", s, "--out", o, "--crs", "EPSG:32633", "--view", c, "--quiet"]);
     assert!(out.join("index.html").exists() && out.join("views/view.json").exists());
+    // The tiles carry the photo textures where the store has them.
+    let m = cliffmap::store::Store::open(&store).unwrap();
+    let with_photo: Vec<_> = m.manifest.cells.iter().filter(|c| c.photo.is_some()).collect();
+    assert!(!with_photo.is_empty());
+    for c in &with_photo {
+        let g = gltf::Gltf::from_slice(&std::fs::read(out.join(cliffmap::export::tile_path(c.level, c.x, c.y))).unwrap()).unwrap();
+        assert!(g.document.images().next().unwrap().name().unwrap().ends_with("photo"), "{}", c.id);
+    }
     let shot = tmp.path().join("cesium.png");
     let status = std::process::Command::new("node")
         .arg(tools.join("screenshot_tiles.mjs"))
