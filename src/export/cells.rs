@@ -18,6 +18,15 @@ pub enum TextureSource {
 }
 
 impl TextureSource {
+    /// Position in per-source counts `[photo, reparam, ortho]`.
+    pub fn index(self) -> usize {
+        match self {
+            TextureSource::Photo => 0,
+            TextureSource::Reparam => 1,
+            TextureSource::Ortho => 2,
+        }
+    }
+
     /// Lower-case name (`photo`, `reparam`, `ortho`).
     pub fn name(self) -> &'static str {
         match self {

@@ -77,11 +77,7 @@ pub fn export_glb(dir: &Path, sel: &CellSelection, out: &Path) -> Result<GlbRepo
     crate::fsutil::write_atomic(out, &bytes)?;
     let mut textures = [0usize; 3];
     for c in &cells {
-        textures[match c.texture {
-            TextureSource::Photo => 0,
-            TextureSource::Reparam => 1,
-            TextureSource::Ortho => 2,
-        }] += 1;
+        textures[c.texture.index()] += 1;
     }
     Ok(GlbReport {
         cells: cells.len(),

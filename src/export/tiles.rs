@@ -98,11 +98,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
     let mut bytes = 0;
     for (i, bx, t, n) in results {
         boxes[i] = bx;
-        textures[match t {
-            TextureSource::Photo => 0,
-            TextureSource::Reparam => 1,
-            TextureSource::Ortho => 2,
-        }] += 1;
+        textures[t.index()] += 1;
         bytes += n;
     }
 

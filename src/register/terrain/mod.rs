@@ -232,8 +232,9 @@ pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &Cam
     let mut repeat: f64 = 0.0;
     for kick in [[3.0, -3.0], [-3.0, 3.0]] {
         let mut c = cam;
-        c.angles[0] += kick[0] / scaled(&cam.camera(), &grey).fx;
-        c.angles[1] += kick[1] / scaled(&cam.camera(), &grey).fx;
+        let f = scaled(&cam.camera(), &grey).fx;
+        c.angles[0] += kick[0] / f;
+        c.angles[1] += kick[1] / f;
         let (c2, _, e) = refine(terrain, &space, &c, &grey, 2.0)?;
         evals += e;
         repeat = repeat.max(pixel_distance(&cam.camera(), &c2.camera(), depth));
