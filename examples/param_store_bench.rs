@@ -18,6 +18,7 @@
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
 use cliffmap::store::Store;
+use cliffmap::param::Objective;
 use cliffmap::{Dem, DemLoadOptions, ParamMesh, ParamOptions, chart_metrics, load_dem, parameterize};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -91,9 +92,19 @@ fn main() -> anyhow::Result<()> {
         .unwrap_or_else(|| std::env::temp_dir().join("cliffmap_param_store_bench"));
     std::fs::create_dir_all(out.join("cells"))?;
     let def = ParamOptions::default();
+    // The default, the hierarchy alone (no global finish) and the finish's knobs.
+    let configs: Vec<(String, ParamOptions)> = vec![
+        ("default".into(), def),
+        ("relax-1e-2/4-alone".into(), ParamOptions { newton_iterations: 0, ..def }),
+        ("objective=packed-stretch".into(), ParamOptions { objective: Objective::PackedStretch, ..def }),
+        ("newton-tol=1e-2".into(), ParamOptions { newton_tolerance: 1e-2, ..def }),
+        ("newton-tol=1e-4".into(), ParamOptions { newton_tolerance: 1e-4, newton_iterations: 50, ..def }),
+        ("relax-1e-4/32+newton".into(), ParamOptions { relax_tolerance: 1e-4, max_sweeps: 32, ..def }),
+        ("relax-1e-4/32-alone".into(), ParamOptions { relax_tolerance: 1e-4, max_sweeps: 32, newton_iterations: 0, ..def }),
+    ];
     println!(
-        "{:<34} {:>6} {:>6} {:>7} {:>7} {:>9} {:>5} {:>8} {:>8} {:>8} {:>7} {:>7}",
-        "cell", "verts", "tris", "slope", "maxslp", "ms(med)", "flip", "|logA|", "s1/s2", "symD", "ortho", "reltex"
+        "{:<34} {:<18} {:>6} {:>6} {:>7} {:>7} {:>9} {:>5} {:>8} {:>8} {:>9} {:>7} {:>7} {:>7}",
+        "cell", "config", "verts", "tris", "slope", "maxslp", "ms(med)", "flip", "|logA|", "s1/s2", "symD-4", "newton", "ortho-4", "packL2"
     );
     let mut json = Vec::new();
     for spec in specs()? {
@@ -143,38 +154,49 @@ fn main() -> anyhow::Result<()> {
                 .map(|p| [(p[0] - ext[0]) / (ext[1] - ext[0]), (p[1] - ext[0]) / (ext[1] - ext[0])])
                 .collect();
             let om = chart_metrics(&m.positions, &m.triangles, &ortho, None)?;
-            let mut times = Vec::new();
-            let mut chart = None;
-            for _ in 0..5 {
-                let t = Instant::now();
-                let ch = parameterize(&m, &def)?;
-                times.push(t.elapsed().as_secs_f64() * 1e3);
-                chart = Some(ch);
-            }
-            let ch = chart.ok_or_else(|| anyhow::anyhow!("no run"))?;
-            let ms = median(times);
-            let mm = ch.metrics;
-            println!(
-                "{:<34} {:>6} {:>6} {:>7.1} {:>7.1} {:>9.2} {:>5} {:>8.4} {:>8.4} {:>8.3} {:>7.3} {:>7.2}",
-                name,
-                nv,
-                mm.triangles,
-                rec.stats.mean_slope_deg,
-                rec.stats.max_slope_deg,
-                ms,
-                mm.flipped,
-                mm.area_distortion_mean,
-                mm.angle_distortion_mean,
-                mm.symmetric_dirichlet_mean,
-                om.symmetric_dirichlet_mean,
-                rec.stats.rel_texel
-            );
             json.push(serde_json::json!({"cell": name, "config": "orthographic", "triangles": om.triangles, "metrics": om}));
-            json.push(serde_json::json!({"cell": name, "config": "default", "store": spec.name, "id": rec.id,
-                "vertices": nv, "triangles": mm.triangles, "mean_slope_deg": rec.stats.mean_slope_deg,
-                "max_slope_deg": rec.stats.max_slope_deg, "store_rel_texel": rec.stats.rel_texel,
-                "theta": def.theta, "relax_tolerance": def.relax_tolerance, "max_sweeps": def.max_sweeps,
-                "ms_median": ms, "metrics": mm, "rounds": ch.rounds, "tutte_base": ch.tutte_base}));
+            let mut default_chart = None;
+            for (cname, o) in &configs {
+                let mut times = Vec::new();
+                let mut chart = None;
+                for _ in 0..5 {
+                    let t = Instant::now();
+                    let ch = parameterize(&m, o)?;
+                    times.push(t.elapsed().as_secs_f64() * 1e3);
+                    chart = Some(ch);
+                }
+                let ch = chart.ok_or_else(|| anyhow::anyhow!("no run"))?;
+                let ms = median(times);
+                let mm = ch.metrics;
+                println!(
+                    "{:<34} {:<18} {:>6} {:>6} {:>7.1} {:>7.1} {:>9.2} {:>5} {:>8.4} {:>8.4} {:>9.4} {:>7} {:>7.3} {:>7.2}",
+                    name,
+                    cname,
+                    nv,
+                    mm.triangles,
+                    rec.stats.mean_slope_deg,
+                    rec.stats.max_slope_deg,
+                    ms,
+                    mm.flipped,
+                    mm.area_distortion_mean,
+                    mm.angle_distortion_mean,
+                    mm.symmetric_dirichlet_excess(),
+                    ch.newton_iterations,
+                    om.symmetric_dirichlet_excess(),
+                    mm.packed_stretch_l2()
+                );
+                json.push(serde_json::json!({"cell": name, "config": cname, "store": spec.name, "id": rec.id,
+                    "vertices": nv, "triangles": mm.triangles, "mean_slope_deg": rec.stats.mean_slope_deg,
+                    "max_slope_deg": rec.stats.max_slope_deg, "store_rel_texel": rec.stats.rel_texel,
+                    "theta": o.theta, "relax_tolerance": o.relax_tolerance, "max_sweeps": o.max_sweeps,
+                    "newton_iterations": o.newton_iterations, "newton_tolerance": o.newton_tolerance,
+                    "ms_median": ms, "metrics": mm, "rounds": ch.rounds, "tutte_base": ch.tutte_base,
+                    "newton_iterations_used": ch.newton_iterations, "overlap_repaired": ch.overlap_repaired}));
+                if cname == "default" {
+                    default_chart = Some(ch);
+                }
+            }
+            let ch = default_chart.ok_or_else(|| anyhow::anyhow!("no default run"))?;
             write_obj(&out.join("cells").join(format!("{name}.obj")), &m, &ch.uvs)?;
         }
     }

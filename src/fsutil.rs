@@ -14,6 +14,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = temp_path(path);
     let result = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
+        test_disk_budget(bytes.len())?;
         f.write_all(bytes)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)
@@ -22,6 +23,25 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         let _ = std::fs::remove_file(&tmp);
         Error::io(path, e)
     })
+}
+
+/// Fault injection for the full-disk tests where no small file system can be mounted:
+/// with `CLIFFMAP_TEST_DISK_BYTES=N` in the environment, writes fail with ENOSPC ("No
+/// space left on device") once this process has written more than N bytes through
+/// [`write_atomic`]. Unset (always, outside tests), it does nothing.
+fn test_disk_budget(len: usize) -> std::io::Result<()> {
+    use std::sync::OnceLock;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
+    static USED: AtomicU64 = AtomicU64::new(0);
+    let limit = LIMIT.get_or_init(|| std::env::var("CLIFFMAP_TEST_DISK_BYTES").ok().and_then(|v| v.parse().ok()));
+    if let Some(limit) = *limit {
+        let used = USED.fetch_add(len as u64, Ordering::SeqCst) + len as u64;
+        if used > limit {
+            return Err(std::io::Error::from_raw_os_error(28));
+        }
+    }
+    Ok(())
 }
 
 /// Encodes an image as PNG in memory; `path` names the destination in errors.

@@ -23,6 +23,7 @@
 //! - [`scene`]: the embedded procedural demo scene (ground truth, exact ray casting).
 //! - [`eval`]: render-space evaluation against the scene's truth, an oracle and a baseline.
 //! - [`camera`]: pinhole cameras and Camera JSON; [`render`]: the wgpu quadtree renderer.
+//! - [`verify`]: integrity checks of a store and the plan of a repair.
 //!
 //! Guarantees: georeferenced coordinates are f64 (cell meshes are f32 relative to an f64
 //! cell origin, so UTM-sized coordinates keep millimetre precision); every TIN is within its
@@ -70,6 +71,7 @@ pub mod resample;
 pub mod scene;
 pub mod stats;
 pub mod store;
+pub mod verify;
 
 /// Test-only TIFF writers shared with the integration tests.
 #[cfg(test)]

@@ -30,21 +30,19 @@ fn near_vertical_walls_unfold() {
         let m = wall(17, deg);
         let ch = check_valid(&m, &format!("wall {deg}"));
         let ortho = chart_metrics(&m.positions, &m.triangles, &ortho_uvs(&m), None).unwrap();
-        // A straight wall is developable: the chart should be nearly isometric, while the
-        // orthographic map squeezes the wall by cos(deg).
-        // At 89.9° the wall triangles are 1 x 573 m and the local relaxation converges
-        // slowly (see docs/parameterization.md); the ortho map's mean angle distortion
-        // there is ~290.
-        let (max_angle, max_area) = if deg < 89.5 { (1.1, 0.05) } else { (3.0, 0.15) };
-        assert!(ch.metrics.angle_distortion_mean < max_angle, "wall {deg}: {:?}", ch.metrics);
-        assert!(ch.metrics.area_distortion_mean < max_area, "wall {deg}: {:?}", ch.metrics);
+        // A straight wall is developable: the chart should be an isometry (the global
+        // finish converges to it even at 89.9°, triangles 1 x 573 m), while the
+        // orthographic map squeezes the wall by cos(deg) (mean angle distortion ~290 at 89.9°).
+        assert!(ch.metrics.angle_distortion_mean < 1.001, "wall {deg}: {:?}", ch.metrics);
+        assert!(ch.metrics.area_distortion_mean < 1e-3, "wall {deg}: {:?}", ch.metrics);
+        assert!(ch.metrics.symmetric_dirichlet_excess() < 1e-3, "wall {deg}: {:?}", ch.metrics);
         assert!(ortho.angle_distortion_mean > 2.5 * ch.metrics.angle_distortion_mean, "wall {deg}: ortho {:?}", ortho);
-        // A looser relaxation budget (the pre-1e-4 default) is much worse at 89.9°.
+        // The hierarchy's local relaxation alone converges slowly under such anisotropy.
         if deg > 89.5 {
-            let loose = ParamOptions { relax_tolerance: 1e-3, max_sweeps: 8, ..ParamOptions::default() };
-            let ch2 = parameterize(&m, &loose).unwrap();
+            let local = ParamOptions { newton_iterations: 0, relax_tolerance: 1e-4, max_sweeps: 32, ..ParamOptions::default() };
+            let ch2 = parameterize(&m, &local).unwrap();
             assert_eq!(ch2.metrics.flipped, 0);
-            assert!(ch2.metrics.angle_distortion_mean > ch.metrics.angle_distortion_mean, "{:?}", ch2.metrics);
+            assert!(ch2.metrics.angle_distortion_mean > 1.2, "{:?}", ch2.metrics);
         }
         assert!(ch.metrics.rel_texel.is_finite() && ch.metrics.rel_texel > 1.0);
     }

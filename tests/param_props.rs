@@ -37,6 +37,7 @@ proptest! {
         let opts = ParamOptions { theta, ..ParamOptions::default() };
         let ch = parameterize(&m, &opts).unwrap();
         prop_assert_eq!(ch.metrics.flipped, 0);
+        prop_assert_eq!(ch.metrics.boundary_crossings, 0);
         for uv in &ch.uvs {
             prop_assert!(uv[0].is_finite() && uv[1].is_finite());
             prop_assert!((0.0..=1.0).contains(&uv[0]) && (0.0..=1.0).contains(&uv[1]), "uv {:?}", uv);

@@ -310,6 +310,7 @@ fn default_flight_visits_the_steepest_cells_at_low_altitude() {
         photos: None,
         build_key: "0".into(),
         cells,
+        content_crc32: None,
     };
     let path = FlightPath::default_for(&m).unwrap();
     let first = path.keys[0].position;

@@ -93,6 +93,13 @@ def metrics(V, F, UV):
         }
 
 
+def ratios(m, ref):
+    """Excess symmetric Dirichlet, area distortion and angle excess (s1/s2 - 1), each
+    divided by the reference's."""
+    q = lambda a, b: a / b if b > 0 else float("inf") if a > 0 else 1.0
+    return (q(m["symd"] - 4.0, ref["symd"] - 4.0), q(m["area"], ref["area"]), q(m["angle"] - 1.0, ref["angle"] - 1.0))
+
+
 def tutte(V, F):
     bnd = igl.boundary_loop(F).astype(np.int32)
     bnd_uv = igl.map_vertices_to_circle(V, bnd)
@@ -155,7 +162,9 @@ def main():
     ours = json.load(open(os.path.join(out, "ours.json")))
     by = {(r["cell"], r["config"]): r for r in ours}
     rows = []
-    hdr = f"{'cell':<32} {'tris':>6} {'method':<22} {'ms':>8} {'flip':>5} {'|logA|':>8} {'s1/s2':>8} {'symD':>8} {'symD/SLIM':>9}"
+    hdr = (f"{'cell':<32} {'tris':>6} {'method':<22} {'ms':>8} {'÷SLIM50':>6} {'flip':>5} {'|logA|':>8} {'s1/s2':>8} "
+           f"{'symD-4':>9} {'ex÷ref':>7} {'A÷ref':>7} {'ang÷ref':>7}")
+    print("ref = SLIM 200 it (converged); ex = symD - 4; A = mean |ln A|; ang = mean s1/s2 - 1; ms ÷ SLIM 50 it")
     print(hdr)
     for path in sorted(glob.glob(os.path.join(out, "cells", "*.obj"))):
         cell = os.path.basename(path)[:-4]
@@ -179,37 +188,43 @@ def main():
         for it in (5, 20, 50):
             ms, uv = timed(lambda: run_slim(V, F, it))
             res.append((f"SLIM {it} it", ms, metrics(V, F, uv)))
+        # The converged reference: SLIM with 200 iterations (timed once).
+        ms, uv = timed(lambda: run_slim(V, F, 200), reps=1)
+        res.append(("SLIM 200 it", ms, metrics(V, F, uv)))
         ms, uv = timed(lambda: run_arap(V, F))
         res.append(("ARAP 100 it", ms, metrics(V, F, uv)))
         ms, uv = timed(lambda: run_lscm(V, F))
         res.append(("LSCM", ms, metrics(V, F, uv)))
-        ref = [r for r in res if r[0] == "SLIM 50 it"][0][2]["symd"]
+        ref = [r for r in res if r[0] == "SLIM 200 it"][0][2]
+        ref_ms = [r for r in res if r[0] == "SLIM 50 it"][0][1]
         for name, ms, m in res:
-            print(f"{cell:<32} {len(F):>6} {name:<22} {ms:>8.1f} {m['flipped']:>5} {m['area']:>8.4f} {m['angle']:>8.4f} {m['symd']:>8.3f} {m['symd'] / ref:>9.3f}")
+            r_ex, r_area, r_ang = ratios(m, ref)
+            print(f"{cell:<32} {len(F):>6} {name:<22} {ms:>8.1f} {ms / ref_ms:>6.2f} {m['flipped']:>5} {m['area']:>8.4f} "
+                  f"{m['angle']:>8.4f} {m['symd'] - 4.0:>9.4f} {r_ex:>7.3f} {r_area:>7.3f} {r_ang:>7.3f}")
             rows.append({"cell": cell, "triangles": int(len(F)), "method": name, "ms": ms, **m})
         print()
     json.dump(rows, open(os.path.join(out, "peers.json"), "w"), indent=1)
-    # Summary: per method and size, median time and median symD ratio to SLIM 50 it.
-    print("summary (median over cells): method, size, ms, symD/SLIM50, max flips")
+    # Summary: per method and group, median time and median / worst ratios to converged SLIM.
+    print("summary (median over cells): method, group, ms, ms/SLIM50, excess/area/angle-excess ÷ SLIM 200 it (median, worst), max flips")
     sizes = sorted({group_of(r["cell"]) for r in rows}, key=group_key)
-    size_of = group_of
-    ref = {r["cell"]: r["symd"] for r in rows if r["method"] == "SLIM 50 it"}
+    ref = {r["cell"]: r for r in rows if r["method"] == "SLIM 200 it"}
+    ref_ms = {r["cell"]: r["ms"] for r in rows if r["method"] == "SLIM 50 it"}
     methods = []
     for r in rows:
         if r["method"] not in methods:
             methods.append(r["method"])
-    summ = []
-    for s in sizes:
+    for s in sizes + ["all"]:
         for meth in methods:
-            sel = [r for r in rows if r["method"] == meth and size_of(r["cell"]) == s]
+            sel = [r for r in rows if r["method"] == meth and (s == "all" or group_of(r["cell"]) == s)]
             if not sel:
                 continue
             ms = float(np.median([r["ms"] for r in sel]))
-            ratio = float(np.median([r["symd"] / ref[r["cell"]] for r in sel]))
-            worst = float(np.max([r["symd"] / ref[r["cell"]] for r in sel]))
+            tr = float(np.median([r["ms"] / ref_ms[r["cell"]] for r in sel]))
+            rs = np.array([ratios(r, ref[r["cell"]]) for r in sel])
+            med, worst = np.median(rs, axis=0), np.max(rs, axis=0)
             fl = int(max(r["flipped"] for r in sel))
-            summ.append((s, meth, ms, ratio, worst, fl))
-            print(f"  {s:>3} {meth:<22} {ms:>8.1f} ms  symD/SLIM50 median {ratio:.3f} worst {worst:.3f}  max flips {fl}")
+            print(f"  {s:>11} {meth:<22} {ms:>8.1f} ms {tr:>5.2f}x  excess {med[0]:.3f}/{worst[0]:.3f}  "
+                  f"area {med[1]:.3f}/{worst[1]:.3f}  angle {med[2]:.3f}/{worst[2]:.3f}  flips {fl}")
     if plot:
         make_plot(rows, plot)
 

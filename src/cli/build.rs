@@ -13,7 +13,7 @@ use super::stats::print_summary;
 pub struct Args {
     /// The DEM file (GeoTIFF, 16-bit PNG, Terrain-RGB PNG or raw little-endian f32).
     #[arg(long)]
-    dem: PathBuf,
+    pub(super) dem: PathBuf,
     /// DEM format; inferred from the extension (and PNG colour type) when omitted.
     #[arg(long, value_enum)]
     dem_format: Option<DemFormat>,
@@ -49,7 +49,7 @@ pub struct Args {
     cell_intervals: u32,
     /// Ortho image (PNG, JPEG or GeoTIFF); without it textures are derived from the DEM.
     #[arg(long)]
-    ortho: Option<PathBuf>,
+    pub(super) ortho: Option<PathBuf>,
     /// The ortho's pixel (r, c) lies on DEM sample (r, c).
     #[arg(long, conflicts_with = "ortho_extent")]
     ortho_same_grid: bool,
@@ -64,13 +64,13 @@ pub struct Args {
     max_memory: u64,
     /// Output store directory.
     #[arg(long)]
-    out: PathBuf,
+    pub(super) out: PathBuf,
     /// Rebuild over an existing store made from other inputs or options.
     #[arg(long)]
-    force: bool,
+    pub(super) force: bool,
     /// No progress bars or summary.
     #[arg(long)]
-    quiet: bool,
+    pub(super) quiet: bool,
 }
 
 fn parse_colour(s: &str) -> Result<[u8; 3], String> {
@@ -90,8 +90,14 @@ fn parse_extent(s: &str) -> Result<WorldRect, String> {
     Ok(r)
 }
 
-/// Runs `build`: loads and checks every input before creating the store directory.
+/// Runs `build`: loads and checks every input before creating the store directory, and
+/// records the command line as the store's recipe (for `cliffmap verify --repair`).
 pub fn run(a: Args) -> anyhow::Result<()> {
+    execute(a, true)
+}
+
+/// `build` itself; `record_recipe` false when the repair re-runs a recorded build.
+pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
     let opts = BuildOptions {
         max_error: a.max_error,
         cell_intervals: a.cell_intervals,
@@ -148,6 +154,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         fingerprint,
     };
     let manifest = build_store(&inputs, &opts, &a.out)?;
+    if record_recipe {
+        super::verify::write_recipe(&a.out)?;
+    }
     if !a.quiet {
         println!(
             "built {} cells in {} levels into {}",

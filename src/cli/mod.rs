@@ -13,6 +13,7 @@ mod register;
 mod render;
 mod reparam;
 mod stats;
+mod verify;
 mod view;
 mod view_window;
 
@@ -43,6 +44,8 @@ enum Command {
     Project(project::Args),
     /// Texel-stretch statistics of a store: summary, stats.json and a histogram PNG.
     Stats(stats::Args),
+    /// Check every file, mesh and texture of a store; --repair rebuilds damaged cells.
+    Verify(verify::Args),
     /// Fit a photo's camera to ground control points (robust Levenberg-Marquardt).
     FitCamera(fit_camera::Args),
     /// Refine rough photo cameras against the store's terrain (no GCPs needed).
@@ -83,6 +86,7 @@ pub fn run() -> ExitCode {
         Command::Reparam(a) => reparam::run(a),
         Command::Project(a) => project::run(a),
         Command::Stats(a) => stats::run(a),
+        Command::Verify(a) => verify::run(a),
         Command::ExportObj(a) => export_obj::run(a),
         Command::ExportGlb(a) => export_glb::run(a),
         Command::ExportTiles(a) => export_tiles::run(a),

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use cliffmap::param::ParamOptions;
+use cliffmap::param::{Objective, ParamOptions};
 use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::resample::{Fill, Mode, ResampleOptions};
 
@@ -25,6 +25,17 @@ pub struct Args {
     /// Relaxation sweeps per refinement round at most.
     #[arg(long, default_value_t = ParamOptions::default().max_sweeps)]
     pub max_sweeps: u32,
+    /// Global projected-Newton finish (θ = 1): at most this many iterations; 0 disables it.
+    #[arg(long, default_value_t = ParamOptions::default().newton_iterations)]
+    pub newton_iterations: u32,
+    /// The global finish stops when an iteration lowers the excess energy (E − 4) by less than this fraction.
+    #[arg(long, default_value_t = ParamOptions::default().newton_tolerance)]
+    pub newton_tol: f64,
+    /// What the global finish returns: "distortion" (the converged symmetric Dirichlet
+    /// minimum, SLIM's objective) or "packed-stretch" (the iterate that resolves the surface
+    /// most finely in the square texture).
+    #[arg(long, default_value = "distortion", value_parser = ["distortion", "packed-stretch"])]
+    pub objective: String,
     /// Gutter around the chart in texels.
     #[arg(long, default_value_t = ParamOptions::default().gutter_texels)]
     pub gutter: f64,
@@ -64,6 +75,9 @@ pub fn options(a: &Args) -> ReparamOptions {
             relax_tolerance: a.relax_tol,
             max_sweeps: a.max_sweeps,
             gutter_texels: a.gutter,
+            newton_iterations: a.newton_iterations,
+            newton_tolerance: a.newton_tol,
+            objective: if a.objective == "distortion" { Objective::Distortion } else { Objective::PackedStretch },
             ..ParamOptions::default()
         },
         mixed_resolution: a.mixed_resolution,

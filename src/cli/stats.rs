@@ -76,6 +76,18 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
             mib(&m["mixed_bytes"]),
             mib(&m["photo_bytes"])
         );
+        let d = &p["distortion"];
+        println!(
+            "chart distortion (excess over an isometry, median / max over cells): symmetric Dirichlet - 4 {:.4} / {:.4}, mean |ln(s1 s2)| {:.4} / {:.4}, mean s1/s2 - 1 {:.4} / {:.4}; flipped triangles max {}, boundary crossings max {}",
+            f(&d["symmetric_dirichlet_excess"]["p50"]),
+            f(&d["symmetric_dirichlet_excess"]["max"]),
+            f(&d["area_distortion"]["p50"]),
+            f(&d["area_distortion"]["max"]),
+            f(&d["angle_distortion_excess"]["p50"]),
+            f(&d["angle_distortion_excess"]["max"]),
+            d["flipped_max"],
+            d["boundary_crossings_max"]
+        );
     }
     if let Some(photos) = s["photos"].as_array().filter(|p| !p.is_empty()) {
         println!(

@@ -41,6 +41,26 @@ pub struct ChartMetrics {
     /// orthographic texture of the base area, for the same mean texel density on the
     /// surface as the ortho texture has on flat ground.
     pub rel_texel: f64,
+    /// Pairs of non-adjacent boundary segments of the chart that cross or touch (0 = the
+    /// chart is globally injective, given no flips). Only [`crate::param::parameterize`]
+    /// fills it; [`chart_metrics`] leaves 0.
+    #[serde(default)]
+    pub boundary_crossings: usize,
+}
+
+impl ChartMetrics {
+    /// Excess of the mean symmetric Dirichlet energy over an isometry's 4 (0 = isometric):
+    /// the distortion to compare between methods.
+    pub fn symmetric_dirichlet_excess(&self) -> f64 {
+        self.symmetric_dirichlet_mean - 4.0
+    }
+
+    /// Sander's L² stretch of the chart as packed: `stretch_l2 · sqrt(rel_texel)`, the RMS
+    /// surface length per texel relative to an ortho texel on flat ground (1), for a
+    /// texture of the same size. What a fixed texture budget resolves: lower is finer.
+    pub fn packed_stretch_l2(&self) -> f64 {
+        self.stretch_l2 * self.rel_texel.sqrt()
+    }
 }
 
 /// Measures the chart `uvs` of the mesh (`positions`, `triangles`). `base_area` is the

@@ -3,8 +3,8 @@
 //! Data types:
 //! - [`ParamMesh`]: one cell's triangulated surface in a cell-local f64 frame (metres),
 //!   a consistently oriented manifold disc, triangles counter-clockwise seen from +z.
-//! - [`ParamOptions`]: the energy's area/angle balance θ, the relaxation budget and the
-//!   texture size/gutter used for packing.
+//! - [`ParamOptions`]: the energy's area/angle balance θ, the relaxation budget, the
+//!   global finish's budget and the texture size/gutter used for packing.
 //! - [`Chart`]: one UV per input vertex, inside [0,1]², plus the similarity that placed
 //!   the chart in the square and its [`ChartMetrics`].
 //!
@@ -14,8 +14,11 @@
 //! round the vertices are relaxed one at a time against the energy
 //! E = (s1/s2 + s2/s1)·(s1·s2 + 1/(s1·s2))^θ (area-weighted, +∞ for flipped
 //! triangles), so no step can create a flip. The UV area is kept equal to the 3D area
-//! after every round. Finally the chart is rotated to its minimum-area bounding rectangle
-//! and scaled uniformly into the texture square. See docs/parameterization.md.
+//! after every round. With θ = 1 (the symmetric Dirichlet energy) a global projected-Newton
+//! finish then converges all UVs at once (`newton.rs`). If the chart's boundary crosses
+//! itself it is rebuilt from a Tutte layout with crossing-free steps (`overlap.rs`).
+//! Finally the chart is rotated to its minimum-area bounding rectangle and scaled uniformly
+//! into the texture square. See docs/parameterization.md.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN. Small fixed-size
 // matrix loops read better with indices.
@@ -26,9 +29,12 @@ mod collapse;
 mod energy;
 mod mesh;
 mod metrics;
+mod newton;
+mod overlap;
 mod pack;
 mod relax;
 mod split;
+mod sym_dirichlet;
 
 pub use metrics::{ChartMetrics, chart_metrics, degener_energy};
 
@@ -48,7 +54,7 @@ pub struct ParamMesh {
 }
 
 /// Parameters of [`parameterize`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ParamOptions {
     /// Area/angle balance θ >= 0 of the energy: 0 is purely conformal, larger values
     /// penalise area distortion more. Default 1, where the energy equals the symmetric
@@ -57,20 +63,60 @@ pub struct ParamOptions {
     /// VCGLib's default 3 trades more angle distortion for less area distortion.
     pub theta: f64,
     /// Relaxation after each refinement round stops when one sweep lowers the total
-    /// energy by less than this fraction (>= 0). Default 1e-4.
+    /// energy by less than this fraction (>= 0). Default 1e-2: the global finish does
+    /// the rest; with θ ≠ 1 (no global finish) 1e-4 with 32 sweeps is the measured
+    /// quality setting (docs/parameterization.md).
     pub relax_tolerance: f64,
-    /// At most this many relaxation sweeps per refinement round. Default 32.
+    /// At most this many relaxation sweeps per refinement round. Default 4.
     pub max_sweeps: u32,
     /// Empty border, in texels of `texture_size`, kept on every side of the chart
     /// (>= 0, less than half the texture). Default 2.
     pub gutter_texels: f64,
     /// Texture edge length in texels the chart is packed for (>= 1). Default 256.
     pub texture_size: u32,
+    /// Global finish (θ = 1 only, where the energy is the symmetric Dirichlet energy):
+    /// at most this many projected-Newton iterations over all UVs after the hierarchy.
+    /// 0 disables it. Default 20.
+    pub newton_iterations: u32,
+    /// The global finish stops when an iteration lowers the excess energy (E − 4) by less
+    /// than this fraction, or the Newton decrement falls below it (relative to E − 4).
+    /// Default 1e-3.
+    pub newton_tolerance: f64,
+    /// What the global finish returns (see [`Objective`]). Default
+    /// [`Objective::Distortion`].
+    #[serde(default)]
+    pub objective: Objective,
+}
+
+/// What the global finish optimises for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// The converged minimum of the symmetric Dirichlet energy (SLIM's objective): the
+    /// least distortion, whatever the chart's outline. The default.
+    #[default]
+    Distortion,
+    /// Of the hierarchy's layout and every Newton iterate, the one with the lowest packed
+    /// L² stretch: Sander's L² stretch of the texture→surface map at the scale the chart
+    /// gets in the square texture (its minimum-area rectangle's longer side fills it), i.e.
+    /// the finest mean texel spacing on the surface for a given texture size. A converged
+    /// low-distortion chart can fill less of the square (measured: ≤ 7 % finer texel
+    /// spacing than `Distortion` on the store cells, at up to 4× its excess distortion).
+    PackedStretch,
 }
 
 impl Default for ParamOptions {
     fn default() -> Self {
-        ParamOptions { theta: 1.0, relax_tolerance: 1e-4, max_sweeps: 32, gutter_texels: 2.0, texture_size: 256 }
+        ParamOptions {
+            theta: 1.0,
+            relax_tolerance: 1e-2,
+            max_sweeps: 4,
+            gutter_texels: 2.0,
+            texture_size: 256,
+            newton_iterations: 20,
+            newton_tolerance: 1e-3,
+            objective: Objective::Distortion,
+        }
     }
 }
 
@@ -82,6 +128,9 @@ impl ParamOptions {
         }
         if !(self.relax_tolerance.is_finite() && self.relax_tolerance >= 0.0) {
             return Err(Error::BadOption(format!("relax tolerance must be finite and >= 0, got {}", self.relax_tolerance)));
+        }
+        if !(self.newton_tolerance.is_finite() && self.newton_tolerance >= 0.0) {
+            return Err(Error::BadOption(format!("newton tolerance must be finite and >= 0, got {}", self.newton_tolerance)));
         }
         if self.texture_size == 0 {
             return Err(Error::BadOption("texture size must be at least 1 texel".into()));
@@ -117,6 +166,12 @@ pub struct Chart {
     /// True if simplification stopped above one triangle and the base mesh was laid out
     /// by a Tutte embedding instead (see docs/parameterization.md).
     pub tutte_base: bool,
+    /// Projected-Newton iterations of the global finish (0 if it did not run).
+    pub newton_iterations: u32,
+    /// True if the hierarchy's layout had a self-crossing boundary and was replaced by the
+    /// global symmetric Dirichlet minimiser from a Tutte start, with every step kept free
+    /// of boundary crossings (see docs/parameterization.md).
+    pub overlap_repaired: bool,
 }
 
 /// Computes a flip-free, area/angle-balanced chart of `mesh` packed into the unit square.
@@ -144,7 +199,7 @@ fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart
     let mut topo = Topo::new(mesh);
     let mut hier = collapse::simplify_capped(&mut topo, &pos, max_rounds);
     let mut uvs = vec![[0.0f64; 2]; n];
-    let mut rx = Relaxer { geom: Vec::new(), theta: opts.theta };
+    let mut rx = Relaxer { geom: Vec::new(), theta: opts.theta, guard: None };
     let tutte_base = topo.alive_faces > 1;
     if tutte_base {
         base::tutte(&topo, &pos, &mut uvs);
@@ -177,10 +232,89 @@ fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart
     }
     rx.refresh(&topo, &pos);
     normalize_area(&topo, &rx, &mut uvs);
+    let boundary = overlap::BoundaryLoop::new(n, &mesh.triangles);
+    let mut newton_iterations = 0;
+    let overlap_repaired = boundary.overlaps(&uvs);
+    if overlap_repaired {
+        // The hierarchy's layout folds over itself: restart from a layout whose boundary is
+        // a circle and let the global solve keep it simple.
+        // For θ = 1 the global solve does it; otherwise the local relaxation with moves
+        // of boundary vertices that would cross the boundary rejected.
+        base::tutte(&topo, &pos, &mut uvs);
+        normalize_area(&topo, &rx, &mut uvs);
+        if opts.theta == 1.0 {
+            let iters = opts.newton_iterations.max(REPAIR_ITERATIONS);
+            newton_iterations = finish(&pos, &mesh.triangles, &mut uvs, iters, opts, &boundary);
+        } else {
+            rx.guard = Some((boundary.clone(), boundary.index_of(n)));
+            let all: Vec<VertId> = (0..n as u32).map(VertId).collect();
+            rx.relax(&topo, &mut uvs, all, opts.relax_tolerance, REPAIR_SWEEPS);
+        }
+    } else if opts.theta == 1.0 && opts.newton_iterations > 0 {
+        newton_iterations = finish(&pos, &mesh.triangles, &mut uvs, opts.newton_iterations, opts, &boundary);
+    }
     let fit = pack::fit(&mut uvs, opts.gutter_texels / opts.texture_size as f64);
-    let metrics = chart_metrics(&mesh.positions, &mesh.triangles, &uvs, None)?;
-    Ok(Chart { uvs, metrics, rotation: fit.rotation, scale: fit.scale, offset: fit.offset, rounds, tutte_base })
+    let mut metrics = chart_metrics(&mesh.positions, &mesh.triangles, &uvs, None)?;
+    metrics.boundary_crossings = boundary.crossings(&uvs);
+    Ok(Chart {
+        uvs,
+        metrics,
+        rotation: fit.rotation,
+        scale: fit.scale,
+        offset: fit.offset,
+        rounds,
+        tutte_base,
+        newton_iterations,
+        overlap_repaired,
+    })
 }
+
+/// The global finish: Newton iterations from `uvs`; with [`Objective::PackedStretch`] the
+/// iterate (or start) with the lowest packed L² stretch is kept. Returns the iterations run.
+fn finish(pos: &[[f64; 3]], tris: &[[u32; 3]], uvs: &mut [[f64; 2]], iters: u32, opts: &ParamOptions, boundary: &overlap::BoundaryLoop) -> u32 {
+    let geom: Vec<energy::FaceGeom> =
+        tris.iter().map(|t| energy::FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize])).collect();
+    let mut best: Option<(f64, Vec<[f64; 2]>)> = None;
+    let mut observe = |x: &[[f64; 2]]| {
+        if opts.objective == Objective::PackedStretch {
+            let q = packed_stretch(&geom, tris, x);
+            if best.as_ref().is_none_or(|b| q < b.0) {
+                best = Some((q, x.to_vec()));
+            }
+        }
+    };
+    let it = newton::minimize(pos, tris, uvs, iters, opts.newton_tolerance, Some(boundary), &mut observe).iterations;
+    if let Some((_, b)) = best {
+        uvs.copy_from_slice(&b);
+    }
+    it
+}
+
+/// Packed L² stretch of a layout, up to a constant factor: (longer side of the minimum-area
+/// rectangle) × sqrt(area-weighted mean of (1/s1² + 1/s2²)/2), which is invariant to the
+/// layout's scale and proportional to Sander's L² stretch once packed into the square.
+fn packed_stretch(geom: &[energy::FaceGeom], tris: &[[u32; 3]], uvs: &[[f64; 2]]) -> f64 {
+    let (mut s, mut a) = (0.0, 0.0);
+    for (g, t) in geom.iter().zip(tris) {
+        let j = g.jacobian([uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]]);
+        let d = energy::det2(&j);
+        if !(d > 0.0) {
+            return f64::INFINITY;
+        }
+        let fro = j[0][0] * j[0][0] + j[0][1] * j[0][1] + j[1][0] * j[1][0] + j[1][1] * j[1][1];
+        s += g.area * 0.5 * fro / (d * d);
+        a += g.area;
+    }
+    pack::packed_side(uvs) * (s / a).sqrt()
+}
+
+/// Iteration budget of the global solve when it repairs an overlapping chart from a Tutte
+/// start (far from the optimum, so more than the finishing default).
+const REPAIR_ITERATIONS: u32 = 100;
+
+/// Sweep budget of the guarded local relaxation when it repairs an overlapping chart
+/// (θ ≠ 1) from a Tutte start.
+const REPAIR_SWEEPS: u32 = 200;
 
 /// Last resort when the 1-ring kernel is numerically empty: a point just off `v` towards
 /// the centroid of the ring (the relaxation cannot repair flips, so this is reported by

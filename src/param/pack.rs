@@ -89,6 +89,12 @@ pub(crate) fn min_area_rect(h: &[[f64; 2]]) -> (f64, f64) {
     (dirs[best.1][1].atan2(dirs[best.1][0]), best.0)
 }
 
+/// The side of the smallest square (over rotations) holding `uvs`: what [`fit`] scales to
+/// the texture's side.
+pub(crate) fn packed_side(uvs: &[[f64; 2]]) -> f64 {
+    min_square_rotation(&convex_hull(uvs)).1
+}
+
 /// The similarity applied by [`fit`]: uv' = offset + scale · R(rotation) · uv.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Fit {
@@ -97,12 +103,67 @@ pub(crate) struct Fit {
     pub offset: [f64; 2],
 }
 
-/// Rotates `uvs` so the minimum-area bounding rectangle is axis-aligned, scales them
-/// uniformly into [g, 1-g]² (g = gutter fraction, < 0.5) and centres them there.
+/// The rotation (radians) that minimises the longer side of the axis-aligned bounding box
+/// of the convex hull `h`, i.e. that lets the chart fill most of a square texture, and that
+/// side. The side is a piecewise-smooth function of the angle with period 90°: sampled every
+/// 0.5° (and at the minimum-area rectangle's angle, a good candidate for elongated charts),
+/// then refined by golden-section search around the best sample. Deterministic.
+pub(crate) fn min_square_rotation(h: &[[f64; 2]]) -> (f64, f64) {
+    let side = |rot: f64| {
+        let (c, s) = (rot.cos(), rot.sin());
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in h {
+            let q = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
+            for k in 0..2 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        (hi[0] - lo[0]).max(hi[1] - lo[1])
+    };
+    if h.len() < 2 {
+        return (0.0, 0.0);
+    }
+    let step = 0.5f64.to_radians();
+    let mut best = (-min_area_rect(h).0, f64::INFINITY);
+    best.1 = side(best.0);
+    for i in 0..180 {
+        let r = i as f64 * step;
+        let v = side(r);
+        if v < best.1 {
+            best = (r, v);
+        }
+    }
+    // Golden-section refinement on [best - step, best + step].
+    let (mut a, mut b) = (best.0 - step, best.0 + step);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut x1, mut x2) = (b - g * (b - a), a + g * (b - a));
+    let (mut f1, mut f2) = (side(x1), side(x2));
+    for _ in 0..40 {
+        if f1 < f2 {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - g * (b - a);
+            f1 = side(x1);
+        } else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + g * (b - a);
+            f2 = side(x2);
+        }
+    }
+    let (r, v) = if f1 < f2 { (x1, f1) } else { (x2, f2) };
+    if v < best.1 { (r, v) } else { best }
+}
+
+/// Rotates `uvs` so that their bounding box has the shortest possible longer side
+/// ([`min_square_rotation`]), scales them uniformly into [g, 1-g]² (g = gutter fraction,
+/// < 0.5) and centres them there.
 pub(crate) fn fit(uvs: &mut [[f64; 2]], gutter: f64) -> Fit {
     let hull = convex_hull(uvs);
-    let (ang, _) = min_area_rect(&hull);
-    let rot = -ang;
+    let (rot, _) = min_square_rotation(&hull);
     let (c, s) = (rot.cos(), rot.sin());
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in uvs.iter_mut() {
@@ -159,7 +220,38 @@ mod tests {
         }
         let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]);
         assert!((ext - 0.98).abs() < 1e-9, "{lo:?} {hi:?}");
-        assert!((f.scale - 0.98 / 4.0).abs() < 1e-9);
+        // A 4 x 1.5 rectangle fills a square best turned by 45°: its box is then
+        // (4 + 1.5)/√2 = 3.89 on both sides, less than its length 4.
+        let side = 5.5 / 2f64.sqrt();
+        assert!((f.scale - 0.98 / side).abs() < 1e-9, "scale {} rotation {}", f.scale, f.rotation);
+    }
+
+    #[test]
+    fn min_square_matches_a_fine_brute_force_search() {
+        let mut seed = 777u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..20 {
+            // random skewed point clouds (parallelogram-like, as converged charts are)
+            let (k, a) = (rnd() * 2.0 - 1.0, rnd() * 3.0);
+            let pts: Vec<[f64; 2]> = (0..40).map(|_| { let (x, y) = (rnd() * 3.0, rnd()); [x + k * y * 3.0, y + a * 0.2 * x] }).collect();
+            let h = convex_hull(&pts);
+            let (rot, side) = min_square_rotation(&h);
+            let side_at = |r: f64| {
+                let (c, s) = (r.cos(), r.sin());
+                let xs: Vec<f64> = h.iter().map(|p| c * p[0] - s * p[1]).collect();
+                let ys: Vec<f64> = h.iter().map(|p| s * p[0] + c * p[1]).collect();
+                let ext = |v: &[f64]| v.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - v.iter().cloned().fold(f64::INFINITY, f64::min);
+                ext(&xs).max(ext(&ys))
+            };
+            assert!((side_at(rot) - side).abs() < 1e-12);
+            let brute = (0..90_000).map(|i| side_at((i as f64 * 0.001).to_radians())).fold(f64::INFINITY, f64::min);
+            assert!(side <= brute * (1.0 + 1e-6), "{side} vs brute {brute}");
+            // never worse than the minimum-area rectangle's orientation
+            assert!(side <= side_at(-min_area_rect(&h).0) + 1e-12);
+        }
     }
 
     #[test]

@@ -8,6 +8,7 @@
 
 use super::energy::{FaceGeom, det2, det_slope, energy, vertex_grad_hess};
 use super::mesh::{Topo, VertId};
+use super::overlap::BoundaryLoop;
 
 /// Relaxation state: per-face 3D geometry (valid for alive faces) and the weight θ.
 pub(crate) struct Relaxer {
@@ -15,6 +16,9 @@ pub(crate) struct Relaxer {
     pub geom: Vec<FaceGeom>,
     /// Area/angle balance θ.
     pub theta: f64,
+    /// If set, moves of boundary vertices that would make the (full mesh's) boundary
+    /// cross itself are rejected: the loop and each vertex's position in it.
+    pub guard: Option<(BoundaryLoop, Vec<usize>)>,
 }
 
 /// What one relaxation call did.
@@ -152,7 +156,11 @@ impl Relaxer {
         for _ in 0..30 {
             let x = [x0[0] + t * dir[0], x0[1] + t * dir[1]];
             let e = self.local_energy(topo, uvs, v, x);
-            if e.is_finite() && e <= e0 + 1e-4 * t * slope {
+            let crosses = || match &self.guard {
+                Some((bl, ix)) if ix[v.ix()] != usize::MAX => bl.move_crosses(uvs, ix[v.ix()], x),
+                _ => false,
+            };
+            if e.is_finite() && e <= e0 + 1e-4 * t * slope && !crosses() {
                 uvs[v.ix()] = x;
                 return e0 - e;
             }

@@ -97,6 +97,13 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
         inp.ortho_source
     );
     let build_key = store::crc32_hex(key_src.as_bytes());
+    // Lock the directory before touching it, unless it is something else (prepare_dir
+    // then refuses it without leaving a lock file in it).
+    if !out.exists() {
+        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    }
+    let ours = out.is_dir() && (is_empty_dir(out)? || out.join("manifest.json").exists() || out.join("build.json").exists());
+    let _lock = if ours { Some(store::StoreLock::acquire(out, "cliffmap build")?) } else { None };
     prepare_dir(out, &build_key, opts.force)?;
     write_atomic(&out.join("build.json"), &serde_json::to_vec(&BuildMarker { build_key: build_key.clone() }).unwrap_or_default())?;
 
@@ -133,7 +140,7 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
     pb.finish_and_clear();
 
     let (lo, hi) = dem.height_range();
-    let manifest = Manifest {
+    let mut manifest = Manifest {
         format: STORE_FORMAT.into(),
         version: STORE_VERSION,
         generator: format!("cliffmap {}", env!("CARGO_PKG_VERSION")),
@@ -156,13 +163,10 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
         cells: records,
         reparam: None,
         photos: None,
+        content_crc32: None,
     };
     write_stats(out, &manifest, 1.1)?;
-    write_atomic(
-        &out.join("manifest.json"),
-        &serde_json::to_vec_pretty(&manifest).map_err(|e| Error::store(out, e.to_string()))?,
-    )?;
-    let _ = std::fs::remove_file(out.join("build.json"));
+    manifest.write(out)?;
     Ok(manifest)
 }
 
@@ -233,7 +237,38 @@ fn add_parameterization(json: &mut serde_json::Value, manifest: &Manifest) {
         "texel_stretch_max_before": worst(&|c| c.stats.texel_stretch.max),
         "texel_stretch_max_after": worst(&|c| c.reparam.as_ref().map_or(c.stats.texel_stretch.max, |r| r.texel_stretch.max)),
         "texture_memory": super::texture_memory(&manifest.cells, manifest.cell_texels),
+        "distortion": chart_distortion(manifest),
     });
+}
+
+/// Distortion of the reparameterized charts, as excess over an isometry: percentiles over
+/// the cells of symD − 4, mean |ln(s1 s2)| and mean s1/s2 − 1, and the worst flips and
+/// boundary crossings.
+fn chart_distortion(manifest: &crate::store::Manifest) -> serde_json::Value {
+    let metrics: Vec<&crate::param::ChartMetrics> = manifest.cells.iter().filter_map(|c| c.reparam.as_ref().map(|r| &r.metrics)).collect();
+    let pct = |f: &dyn Fn(&crate::param::ChartMetrics) -> f64| {
+        let mut v: Vec<f64> = metrics.iter().map(|m| f(m)).collect();
+        serde_json::to_value(stats::Percentiles::of(&mut v)).unwrap_or_default()
+    };
+    serde_json::json!({
+        "symmetric_dirichlet_excess": pct(&|m| m.symmetric_dirichlet_excess()),
+        "area_distortion": pct(&|m| m.area_distortion_mean),
+        "angle_distortion_excess": pct(&|m| m.angle_distortion_mean - 1.0),
+        "packed_stretch_l2": pct(&|m| m.packed_stretch_l2()),
+        "flipped_max": metrics.iter().map(|m| m.flipped).max().unwrap_or(0),
+        "boundary_crossings_max": metrics.iter().map(|m| m.boundary_crossings).max().unwrap_or(0),
+    })
+}
+
+/// True if `dir` holds nothing but (possibly) the store's lock file.
+fn is_empty_dir(dir: &Path) -> Result<bool> {
+    for e in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let e = e.map_err(|e| Error::io(dir, e))?;
+        if e.file_name() != ".lock" {
+            return Ok(false);
+        }
+    }
+    Ok(true)
 }
 
 /// Makes sure `out` can hold this build: absent or empty, or a cliffmap store of the same
@@ -245,8 +280,7 @@ fn prepare_dir(out: &Path, build_key: &str, force: bool) -> Result<()> {
     if !out.is_dir() {
         return Err(Error::BadOption(format!("output {} exists and is not a directory", out.display())));
     }
-    let empty = std::fs::read_dir(out).map_err(|e| Error::io(out, e))?.next().is_none();
-    if empty {
+    if is_empty_dir(out)? {
         return Ok(());
     }
     let previous_key = std::fs::read(out.join("build.json"))

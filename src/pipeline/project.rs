@@ -24,7 +24,7 @@ use rayon::prelude::*;
 
 use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
-use crate::fsutil::{encode_png, write_atomic};
+use crate::fsutil::encode_png;
 use crate::colour::ColourSpace;
 use crate::photo::{
     SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes,
@@ -173,6 +173,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         return Err(Error::BadOption(format!("at most {} photos per run, got {}", u16::MAX - 1, photos.len())));
     }
     let mut timer = StageTimer::new();
+    let _lock = crate::store::StoreLock::acquire(dir, "cliffmap project")?;
     let mut store = Store::open(dir)?;
     for p in photos {
         if p.image.dimensions() != (p.camera.width, p.camera.height) {
@@ -329,10 +330,7 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     store.manifest.photos = Some(settings.clone());
     let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);
     write_stats(dir, &store.manifest, threshold)?;
-    write_atomic(
-        &dir.join("manifest.json"),
-        &serde_json::to_vec_pretty(&store.manifest).map_err(|e| Error::store(dir, e.to_string()))?,
-    )?;
+    store.manifest.write(dir)?;
     remove_stale_photo_files(dir, &store.manifest.cells);
     timer.lap("manifest and stats");
     Ok(ProjectReport { settings, cells_written, stage_seconds: timer.laps })

@@ -10,7 +10,6 @@ use rayon::prelude::*;
 use super::build::write_png;
 use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
 use crate::georef::GridGeoref;
 use crate::param::{ParamMesh, ParamOptions, chart_metrics, parameterize};
 use crate::resample::{ChartMesh, Mode, PixelMap, ResampleOptions, Source, resample};
@@ -97,6 +96,7 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
         return Err(Error::BadOption(format!("--threshold must be a positive number, got {}", opts.threshold)));
     }
     opts.param.validate()?;
+    let _lock = crate::store::StoreLock::acquire(dir, "cliffmap reparam")?;
     let mut store = Store::open(dir)?;
     let t = store.manifest.cell_texels;
     let texels = if opts.mixed_resolution { 2 * t } else { t };
@@ -136,6 +136,7 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     store.manifest.reparam = Some(ReparamSettings {
         threshold: opts.threshold,
         theta: opts.param.theta,
+        newton_iterations: if opts.param.theta == 1.0 { opts.param.newton_iterations } else { 0 },
         mixed_resolution: opts.mixed_resolution,
         resample: match opts.resample.mode {
             Mode::Subtexel(n) => format!("subtexel:{n}"),
@@ -143,12 +144,14 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
             Mode::Exact => "exact".into(),
         },
         failed_cells: failed,
+        param: Some(opts.param),
+        fill: Some(match opts.resample.fill {
+            crate::resample::Fill::PullPush => "pull-push".into(),
+            _ => "average-border".into(),
+        }),
     });
     write_stats(dir, &store.manifest, opts.threshold)?;
-    write_atomic(
-        &dir.join("manifest.json"),
-        &serde_json::to_vec_pretty(&store.manifest).map_err(|e| Error::store(dir, e.to_string()))?,
-    )?;
+    store.manifest.write(dir)?;
     // Reparameterized files of cells that no longer use them are stale: remove them.
     for c in store.manifest.cells.iter().filter(|c| c.reparam.is_none()) {
         for ext in ["reparam.mesh", "reparam.png", "reparam.normal.png"] {
@@ -157,6 +160,47 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     }
     super::project::remove_stale_photo_files(dir, &store.manifest.cells);
     Ok(store)
+}
+
+/// The options of the store's last `reparam` run, from its recorded settings; `None` if the
+/// store has none or was reparameterized before every option was recorded.
+pub fn recorded_reparam_options(settings: &ReparamSettings) -> Option<ReparamOptions> {
+    let mode = match settings.resample.as_str() {
+        "bilinear" => Mode::Bilinear,
+        "exact" => Mode::Exact,
+        s => Mode::Subtexel(s.strip_prefix("subtexel:")?.parse().ok()?),
+    };
+    let fill = match settings.fill.as_deref()? {
+        "pull-push" => crate::resample::Fill::PullPush,
+        _ => crate::resample::Fill::AverageBorder,
+    };
+    Some(ReparamOptions {
+        threshold: settings.threshold,
+        param: settings.param?,
+        mixed_resolution: settings.mixed_resolution,
+        resample: ResampleOptions { mode, fill, ..ResampleOptions::default() },
+        quiet: true,
+    })
+}
+
+/// Redoes the reparameterized variant of the cells `ids` (which must have one) with the
+/// store's recorded options, rewriting their files and records in `store.manifest` (the
+/// caller writes the manifest). Deterministic: the same inputs give the same files.
+pub fn redo_reparam_cells(store: &mut Store, ids: &[String], opts: &ReparamOptions) -> Result<()> {
+    for id in ids {
+        let i = store
+            .manifest
+            .cells
+            .iter()
+            .position(|c| &c.id == id)
+            .ok_or_else(|| Error::BadOption(format!("cell {id} is not in the store")))?;
+        let texels = store.manifest.cells[i].reparam.as_ref().map(|r| r.texels).ok_or_else(|| {
+            Error::BadOption(format!("cell {id} has no reparameterized variant to redo"))
+        })?;
+        let rec = reparam_cell(store, &store.manifest.cells[i], texels, opts)?;
+        store.manifest.cells[i].reparam = Some(rec);
+    }
+    Ok(())
 }
 
 fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOptions) -> Result<ReparamRecord> {

@@ -139,12 +139,23 @@ pub struct ReparamSettings {
     pub threshold: f64,
     /// Energy exponent theta.
     pub theta: f64,
+    /// Iteration budget of the global projected-Newton finish (0 = none; absent in stores
+    /// made before it existed).
+    #[serde(default)]
+    pub newton_iterations: u32,
     /// Reparameterized cells got textures of twice the side.
     pub mixed_resolution: bool,
     /// Resampling filter, e.g. "subtexel:4".
     pub resample: String,
     /// Cells whose parameterization failed and that kept the ortho map.
     pub failed_cells: Vec<String>,
+    /// Every parameterization option used (absent in stores written before 2026-12-04;
+    /// `cliffmap verify --repair` needs it to redo a damaged reparameterized cell).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub param: Option<crate::param::ParamOptions>,
+    /// Fill of texels outside the chart ("average-border" or "pull-push"; absent in older stores).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill: Option<String>,
 }
 
 impl CellRecord {
@@ -208,6 +219,11 @@ pub struct Manifest {
     /// Settings and per-photo results of the last `cliffmap project` run, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub photos: Option<PhotoSettings>,
+    /// CRC-32 of this manifest's pretty JSON serialization with this field absent, set by
+    /// [`Manifest::write`] and checked by [`Manifest::read`] (absent in stores written
+    /// before 2026-12-04, which are read unchecked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub content_crc32: Option<String>,
 }
 
 /// Settings of the last `cliffmap project` run and what each photo contributed.
@@ -321,7 +337,31 @@ impl Manifest {
                 format!("store version {} is not supported (this cliffmap reads version {STORE_VERSION})", m.version),
             ));
         }
+        if let Some(want) = &m.content_crc32 {
+            let got = m.content_checksum()?;
+            if &got != want {
+                return Err(Error::store(
+                    &path,
+                    format!("checksum mismatch (recorded {want}, content {got}): the manifest is damaged; `cliffmap verify --repair` rebuilds it from the recorded inputs"),
+                ));
+            }
+        }
         Ok(m)
+    }
+
+    /// CRC-32 of the pretty JSON serialization without `content_crc32`.
+    fn content_checksum(&self) -> Result<String> {
+        let mut m = self.clone();
+        m.content_crc32 = None;
+        let bytes = serde_json::to_vec_pretty(&m).map_err(|e| Error::BadOption(format!("cannot serialize manifest: {e}")))?;
+        Ok(super::crc32_hex(&bytes))
+    }
+
+    /// Writes `dir/manifest.json` atomically with its content checksum.
+    pub fn write(&mut self, dir: &Path) -> Result<()> {
+        self.content_crc32 = Some(self.content_checksum()?);
+        let bytes = serde_json::to_vec_pretty(self).map_err(|e| Error::store(dir, e.to_string()))?;
+        crate::fsutil::write_atomic(&dir.join("manifest.json"), &bytes)
     }
 
     /// The record of cell `id`, if present.

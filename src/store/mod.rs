@@ -3,7 +3,9 @@
 //! Layout of a store directory (see docs/formats.md):
 //! ```text
 //! STORE/manifest.json            Manifest: georeference, quadtree, every CellRecord (written last)
-//! STORE/build.json               build key of the build in progress (for resuming)
+//! STORE/build.json               build key of the last or current build (for resuming and repair)
+//! STORE/.lock                   writer lock (pid and command of the writer; see `StoreLock`)
+//! STORE/recipe.json              the `cliffmap build` command line that made the store (for repair)
 //! STORE/stats.json               texel-stretch statistics ({"summary", "cells"})
 //! STORE/stats_histogram.png      histogram of average texel stretch per cell
 //! STORE/cells/{level}/{x}-{y}.mesh        CellMesh (binary, cell-local f32)
@@ -17,6 +19,7 @@
 //! verified on read.
 
 mod files;
+mod lock;
 mod manifest;
 mod mesh;
 mod obj;
@@ -25,6 +28,7 @@ mod writer;
 use std::path::{Path, PathBuf};
 
 pub use files::{crc32_hex, is_intact, read_verified, write_file};
+pub use lock::StoreLock;
 pub use manifest::{
     CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
     STORE_VERSION,

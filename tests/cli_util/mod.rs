@@ -42,3 +42,47 @@ pub fn validate_gltf(files: &[&std::path::Path]) {
     let o = Command::new("node").arg(tools.join("validate_gltf.mjs")).args(files).output().expect("cannot start node");
     assert!(o.status.success(), "glTF validation failed:\n{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
 }
+
+/// A path as `&str` for argument lists.
+pub fn s(p: &std::path::Path) -> &str {
+    p.to_str().expect("test paths are UTF-8")
+}
+
+/// Every file under `dir` (recursively), sorted.
+pub fn files_under(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("readable test directory") {
+            let p = e.expect("readable entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The small cliff DEM of the store tests: 129 x 129 raw f32 at 2 m with a 60 m cliff and
+/// some relief (its store is ≈ 0.95 MB, 1.6 MB after `reparam`).
+pub fn write_cliff_dem(path: &std::path::Path) {
+    let n = 129;
+    let mut bytes = Vec::with_capacity(n * n * 4);
+    for r in 0..n {
+        for c in 0..n {
+            let (x, y) = (c as f32, r as f32);
+            let cliff = if x + 0.3 * y > 70.0 { 60.0 } else { 0.0 };
+            let z = 100.0 + cliff + 3.0 * (0.11 * x).sin() * (0.07 * y).cos() + 0.05 * y;
+            bytes.extend_from_slice(&z.to_le_bytes());
+        }
+    }
+    std::fs::write(path, bytes).expect("writable temp dir");
+}
+
+/// `cliffmap build` arguments for [`write_cliff_dem`]'s DEM into `out`.
+pub fn cliff_build_args<'a>(dem: &'a std::path::Path, out: &'a std::path::Path) -> Vec<&'a str> {
+    vec!["build", "--dem", s(dem), "--width", "129", "--height", "129", "--spacing", "2", "--cell-intervals", "32", "--quiet", "--out", s(out)]
+}

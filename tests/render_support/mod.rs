@@ -231,6 +231,7 @@ pub fn write_store_textured(
         photos: None,
         build_key: "00000000".into(),
         cells,
+        content_crc32: None,
     };
     let text = serde_json::to_string_pretty(&m).unwrap();
     cliffmap::fsutil::write_atomic(&dir.join("manifest.json"), text.as_bytes()).unwrap();
