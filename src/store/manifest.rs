@@ -338,34 +338,94 @@ impl Manifest {
             ));
         }
         if let Some(want) = &m.content_crc32 {
-            let got = m.content_checksum()?;
-            if &got != want {
+            let got = raw_checksum(text.as_bytes());
+            if got.as_deref() != Some(want.as_str()) {
                 return Err(Error::store(
                     &path,
-                    format!("checksum mismatch (recorded {want}, content {got}): the manifest is damaged; `cliffmap verify --repair` rebuilds it from the recorded inputs"),
+                    format!(
+                        "checksum mismatch (recorded {want}, content {}): the manifest is damaged; `cliffmap verify --repair` rebuilds it from the recorded inputs",
+                        got.unwrap_or_else(|| "unreadable".into())
+                    ),
                 ));
             }
         }
         Ok(m)
     }
 
-    /// CRC-32 of the pretty JSON serialization without `content_crc32`.
-    fn content_checksum(&self) -> Result<String> {
-        let mut m = self.clone();
-        m.content_crc32 = None;
-        let bytes = serde_json::to_vec_pretty(&m).map_err(|e| Error::BadOption(format!("cannot serialize manifest: {e}")))?;
-        Ok(super::crc32_hex(&bytes))
-    }
-
-    /// Writes `dir/manifest.json` atomically with its content checksum.
+    /// Writes `dir/manifest.json` atomically with its content checksum: the CRC-32 of the
+    /// file's bytes with the checksum's own 8 digits written as `00000000`.
     pub fn write(&mut self, dir: &Path) -> Result<()> {
-        self.content_crc32 = Some(self.content_checksum()?);
-        let bytes = serde_json::to_vec_pretty(self).map_err(|e| Error::store(dir, e.to_string()))?;
+        self.content_crc32 = Some(CRC_PLACEHOLDER.into());
+        let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| Error::store(dir, e.to_string()))?;
+        let at = checksum_digits(&bytes).ok_or_else(|| Error::store(dir, "manifest checksum field not found"))?;
+        let crc = super::crc32_hex(&bytes);
+        bytes[at..at + 8].copy_from_slice(crc.as_bytes());
+        self.content_crc32 = Some(crc);
         crate::fsutil::write_atomic(&dir.join("manifest.json"), &bytes)
     }
 
     /// The record of cell `id`, if present.
     pub fn cell(&self, id: &str) -> Option<&CellRecord> {
         self.cells.iter().find(|c| c.id == id)
+    }
+}
+
+/// What [`Manifest::write`] hashes in place of the checksum's digits.
+const CRC_PLACEHOLDER: &str = "00000000";
+const CRC_KEY: &[u8] = b"\"content_crc32\": \"";
+
+/// Byte offset of the 8 checksum digits in a manifest file (the last `content_crc32` key).
+fn checksum_digits(bytes: &[u8]) -> Option<usize> {
+    let at = bytes.windows(CRC_KEY.len()).rposition(|w| w == CRC_KEY)? + CRC_KEY.len();
+    (bytes.len() >= at + 9 && bytes[at + 8] == b'"').then_some(at)
+}
+
+/// The CRC-32 of a manifest file's bytes with its checksum digits replaced by the
+/// placeholder (independent of the fields this version knows), or `None` without a checksum.
+fn raw_checksum(bytes: &[u8]) -> Option<String> {
+    let at = checksum_digits(bytes)?;
+    let mut b = bytes.to_vec();
+    b[at..at + 8].copy_from_slice(CRC_PLACEHOLDER.as_bytes());
+    Some(super::crc32_hex(&b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny() -> Manifest {
+        let text = r#"{"format": "cliffmap-store", "version": 1, "generator": "t", "crs": null,
+            "georef": {"origin_x": 0.0, "origin_y": 0.0, "spacing_x": 1.0, "spacing_y": 1.0},
+            "dem": {"source": "t", "width": 2, "height": 2, "height_min": 0.0, "height_max": 0.0, "void_fraction": 0.0},
+            "ortho": null, "quadtree": {"dem_width": 2, "dem_height": 2, "finest_intervals": 2, "levels": 1},
+            "max_error": 0.5, "cell_texels": 8, "build_key": "0", "cells": []}"#;
+        serde_json::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn the_checksum_covers_the_bytes_and_survives_fields_this_version_does_not_know() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = tiny();
+        m.write(dir.path()).unwrap();
+        let back = Manifest::read(dir.path()).unwrap();
+        assert_eq!(back.max_error, 0.5);
+        let path = dir.path().join("manifest.json");
+        let text = std::fs::read_to_string(&path).unwrap();
+        // One changed digit of a value: detected.
+        std::fs::write(&path, text.replacen("0.5", "0.6", 1)).unwrap();
+        assert!(Manifest::read(dir.path()).unwrap_err().to_string().contains("checksum mismatch"));
+        // A field written by a later version (unknown here) with a correct checksum: accepted.
+        let mut future = text.replacen('{', "{\n  \"future_field\": [1, 2],", 1).into_bytes();
+        let at = checksum_digits(&future).unwrap();
+        future[at..at + 8].copy_from_slice(CRC_PLACEHOLDER.as_bytes());
+        let crc = crate::store::crc32_hex(&future);
+        future[at..at + 8].copy_from_slice(crc.as_bytes());
+        std::fs::write(&path, &future).unwrap();
+        assert_eq!(Manifest::read(dir.path()).unwrap().max_error, 0.5);
+        // A manifest without a checksum (older stores) is read unchecked.
+        let mut old = tiny();
+        old.content_crc32 = None;
+        std::fs::write(&path, serde_json::to_vec_pretty(&old).unwrap()).unwrap();
+        assert!(Manifest::read(dir.path()).is_ok());
     }
 }
