@@ -101,11 +101,8 @@ pub(crate) fn minimize(
                     if ra < rb {
                         continue; // lower triangle only
                     }
+                    // (ra == rb only for a == b: a triangle's corners are distinct)
                     let hab: f64 = (0..4).map(|j| dh[a][j] * d[b][j]).sum();
-                    if ra == rb && a != b {
-                        // two local dofs of the same global dof (cannot happen: distinct corners)
-                        continue;
-                    }
                     vals[pattern.slot(t, a, b)] += w * hab;
                     if ra == rb {
                         trace += w * hab;

@@ -103,6 +103,20 @@ pub(crate) struct Fit {
     pub offset: [f64; 2],
 }
 
+/// Bounding box (min, max corners) of `points` rotated by `rot` radians about the origin.
+fn rotated_bounds(points: &[[f64; 2]], rot: f64) -> ([f64; 2], [f64; 2]) {
+    let (c, s) = (rot.cos(), rot.sin());
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        let q = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
+        for k in 0..2 {
+            lo[k] = lo[k].min(q[k]);
+            hi[k] = hi[k].max(q[k]);
+        }
+    }
+    (lo, hi)
+}
+
 /// The rotation (radians) that minimises the longer side of the axis-aligned bounding box
 /// of the convex hull `h`, i.e. that lets the chart fill most of a square texture, and that
 /// side. The side is a piecewise-smooth function of the angle with period 90°: sampled every
@@ -110,15 +124,7 @@ pub(crate) struct Fit {
 /// then refined by golden-section search around the best sample. Deterministic.
 pub(crate) fn min_square_rotation(h: &[[f64; 2]]) -> (f64, f64) {
     let side = |rot: f64| {
-        let (c, s) = (rot.cos(), rot.sin());
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in h {
-            let q = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
-            for k in 0..2 {
-                lo[k] = lo[k].min(q[k]);
-                hi[k] = hi[k].max(q[k]);
-            }
-        }
+        let (lo, hi) = rotated_bounds(h, rot);
         (hi[0] - lo[0]).max(hi[1] - lo[1])
     };
     if h.len() < 2 {
@@ -164,14 +170,10 @@ pub(crate) fn min_square_rotation(h: &[[f64; 2]]) -> (f64, f64) {
 pub(crate) fn fit(uvs: &mut [[f64; 2]], gutter: f64) -> Fit {
     let hull = convex_hull(uvs);
     let (rot, _) = min_square_rotation(&hull);
+    let (lo, hi) = rotated_bounds(uvs, rot);
     let (c, s) = (rot.cos(), rot.sin());
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in uvs.iter_mut() {
         *p = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
     }
     let avail = 1.0 - 2.0 * gutter;
     let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]);

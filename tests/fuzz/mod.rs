@@ -291,8 +291,8 @@ pub fn fuzz(target: &Target, extra: &[Vec<u8>], seed: u64, iterations: u64, dead
         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| (target.run)(input, &dir)));
         rep.slowest_s = rep.slowest_s.max(t.elapsed().as_secs_f64());
         rep.runs += 1;
-        rep.accepted += u64::from(matches!(r, Ok(true)));
         let ok = matches!(r, Ok(true));
+        rep.accepted += u64::from(ok);
         if let Err(e) = r {
             let msg = e.downcast_ref::<String>().cloned().or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
             rep.panics.push((input.to_vec(), msg));
