@@ -19,19 +19,45 @@ fn bench(c: &mut Criterion) {
     let tree = Quadtree::new(507, 590, 64);
     let mut g = c.benchmark_group("cell_images");
     g.sample_size(20).measurement_time(Duration::from_secs(4));
-    for (name, key) in
-        [("level2_256", CellKey { level: 2, x: 0, y: 0 }), ("root_1024", CellKey { level: 0, x: 0, y: 0 })]
-    {
+    for (name, key) in [
+        (
+            "level2_256",
+            CellKey {
+                level: 2,
+                x: 0,
+                y: 0,
+            },
+        ),
+        (
+            "root_1024",
+            CellKey {
+                level: 0,
+                x: 0,
+                y: 0,
+            },
+        ),
+    ] {
         let ext = nominal_extent(&tree, &dem.georef, key);
         g.bench_function(format!("ortho_texture_256/{name}"), |b| {
             b.iter(|| ortho_texture(&ortho, &dem, ext, 256))
         });
-        g.bench_function(format!("normal_map_256/{name}"), |b| b.iter(|| normal_map(&dem, ext, 256)));
+        g.bench_function(format!("normal_map_256/{name}"), |b| {
+            b.iter(|| normal_map(&dem, ext, 256))
+        });
         g.bench_function(format!("texture_plus_normals_256/{name}"), |b| {
-            b.iter(|| (ortho_texture(&ortho, &dem, ext, 256), normal_map(&dem, ext, 256)))
+            b.iter(|| {
+                (
+                    ortho_texture(&ortho, &dem, ext, 256),
+                    normal_map(&dem, ext, 256),
+                )
+            })
         });
     }
-    let key = CellKey { level: 2, x: 0, y: 0 };
+    let key = CellKey {
+        level: 2,
+        x: 0,
+        y: 0,
+    };
     let tin = common::grid_tin(tree.clipped(key).unwrap(), tree.stride(key.level));
     g.bench_function("cell_stats_256/level2_full_grid_tin", |b| {
         b.iter(|| cell_stats(&dem, &tree, key, &tin, 256))

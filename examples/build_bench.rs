@@ -15,22 +15,39 @@ fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse::<f64>().ok()))
+            s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .and_then(|v| v.parse::<f64>().ok())
+            })
         })
         .map_or(f64::NAN, |kib| kib / 1024.0)
 }
 
 fn main() -> anyhow::Result<()> {
-    let samples: usize = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(1025);
-    let texels: u32 = std::env::args().nth(2).map(|s| s.parse()).transpose()?.unwrap_or(256);
-    let scene = DemoScene { samples, ..DemoScene::default() };
+    let samples: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(1025);
+    let texels: u32 = std::env::args()
+        .nth(2)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(256);
+    let scene = DemoScene {
+        samples,
+        ..DemoScene::default()
+    };
     let t0 = Instant::now();
     let (dem, ortho) = scene.generate()?;
     let gen_s = t0.elapsed().as_secs_f64();
     let dir = tempfile::tempdir()?;
-    let opts = BuildOptions { quiet: true, cell_texels: texels, ..BuildOptions::default() };
+    let opts = BuildOptions {
+        quiet: true,
+        cell_texels: texels,
+        ..BuildOptions::default()
+    };
     let inputs = BuildInputs {
         dem: &dem,
         ortho: Some(&ortho),

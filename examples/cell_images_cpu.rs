@@ -13,13 +13,26 @@ use cliffmap::{CellKey, Quadtree};
 /// User + system CPU seconds of this process (10 ms resolution).
 fn cpu_seconds() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").expect("/proc/self/stat (Linux only)");
-    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-    let tick = |k: usize| fields.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    let fields: Vec<&str> = stat
+        .rsplit(')')
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect();
+    let tick = |k: usize| {
+        fields
+            .get(k)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
     (tick(11) + tick(12)) / 100.0
 }
 
 fn main() {
-    rayon::ThreadPoolBuilder::new().num_threads(1).build_global().expect("rayon pool");
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .expect("rayon pool");
     let dem = common::engabreen_dem();
     let ortho = common::engabreen_ortho(&dem);
     let tree = Quadtree::new(507, 590, 64);
@@ -27,8 +40,22 @@ fn main() {
     println!("| cell | ortho_texture ms CPU | normal_map ms CPU | both |");
     println!("|---|---|---|---|");
     for (name, key) in [
-        ("2-0-0 (256 intervals)", CellKey { level: 2, x: 0, y: 0 }),
-        ("0-0-0 root (1024)", CellKey { level: 0, x: 0, y: 0 }),
+        (
+            "2-0-0 (256 intervals)",
+            CellKey {
+                level: 2,
+                x: 0,
+                y: 0,
+            },
+        ),
+        (
+            "0-0-0 root (1024)",
+            CellKey {
+                level: 0,
+                x: 0,
+                y: 0,
+            },
+        ),
     ] {
         let ext = nominal_extent(&tree, &dem.georef, key);
         let t0 = cpu_seconds();

@@ -15,13 +15,20 @@
 use std::time::Instant;
 
 use cliffmap::camera::camera_from_json_file;
-use cliffmap::register::{CameraParams, FitOptions, PixelOrigin, fit_camera, parse_free, read_gcps};
+use cliffmap::register::{
+    CameraParams, FitOptions, PixelOrigin, fit_camera, parse_free, read_gcps,
+};
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
 fn main() -> anyhow::Result<()> {
-    let runs: usize = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(50).max(1);
+    let runs: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(50)
+        .max(1);
     let data = bench_util::shared_data("engabreen");
     let imgraft = camera_from_json_file(&data.join("engabreen_camera_IMG_8902.json"), (0, 0))?;
     let gcps = read_gcps(&data.join("gcp8902.txt"), PixelOrigin::Format)?;
@@ -35,9 +42,16 @@ fn main() -> anyhow::Result<()> {
     a_start.k = [0.0, 0.0];
     let mut b_start = p;
     b_start.position += glam::DVec3::new(5.0, -5.0, 3.0);
-    for (config, free, perturbed) in [("A", "yaw,pitch,roll,fx,fy,k1", a_start.camera()), ("B", "yaw,pitch,roll,x,y,z", b_start.camera())] {
+    for (config, free, perturbed) in [
+        ("A", "yaw,pitch,roll,fx,fy,k1", a_start.camera()),
+        ("B", "yaw,pitch,roll,x,y,z", b_start.camera()),
+    ] {
         for robust in [false, true] {
-            let opts = FitOptions { free: parse_free(free)?, robust, ..FitOptions::default() };
+            let opts = FitOptions {
+                free: parse_free(free)?,
+                robust,
+                ..FitOptions::default()
+            };
             for (start_name, start) in [("imgraft", imgraft), ("perturbed", perturbed)] {
                 let mut times = Vec::new();
                 let mut fit = None;

@@ -32,13 +32,19 @@ impl Rng {
         2.0 * self.uniform() - 1.0
     }
     fn gauss(&mut self) -> f64 {
-        (-2.0 * self.uniform().max(1e-300).ln()).sqrt() * (std::f64::consts::TAU * self.uniform()).cos()
+        (-2.0 * self.uniform().max(1e-300).ln()).sqrt()
+            * (std::f64::consts::TAU * self.uniform()).cos()
     }
 }
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|s| s.as_str());
+    let flag = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .map(|s| s.as_str())
+    };
     let scene = match flag("--scene").unwrap_or("demo") {
         "demo" => DemoScene::default(),
         "tall" => DemoScene::tall_walls(),
@@ -50,26 +56,55 @@ fn main() -> anyhow::Result<()> {
     let starts: usize = flag("--starts").unwrap_or("20").parse()?;
     let (dem, _) = scene.generate()?;
     let mut rng = Rng(0x1234_5678_9ABC_DEF1);
-    println!("{n_gcps} GCPs per photo, noise {sigma} px per axis, {:.0} % outliers (30–80 px), {starts} starts per photo\n", 100.0 * outliers);
-    println!("| photo (distance to the GCPs) | configuration | starts converged | minimum's angle error ° | minimum's position error m | RMSE of the inliers px | worst start's angle error ° |");
+    println!(
+        "{n_gcps} GCPs per photo, noise {sigma} px per axis, {:.0} % outliers (30–80 px), {starts} starts per photo\n",
+        100.0 * outliers
+    );
+    println!(
+        "| photo (distance to the GCPs) | configuration | starts converged | minimum's angle error ° | minimum's position error m | RMSE of the inliers px | worst start's angle error ° |"
+    );
     println!("|---|---|---|---|---|---|---|");
     for truth in scene.photo_cameras() {
         let tracer = DemTracer::new(&dem, truth.position)?;
         let mut gcps = Vec::new();
         while gcps.len() < n_gcps {
-            let (u, v) = (rng.uniform() * (truth.width as f64 - 1.0), rng.uniform() * (truth.height as f64 - 1.0));
-            let Some(dir) = truth.pixel_ray(u, v) else { continue };
-            let Some(hit) = tracer.nearest(truth.position, dir, f64::INFINITY) else { continue };
-            let Some(p) = truth.project(hit.point) else { continue };
+            let (u, v) = (
+                rng.uniform() * (truth.width as f64 - 1.0),
+                rng.uniform() * (truth.height as f64 - 1.0),
+            );
+            let Some(dir) = truth.pixel_ray(u, v) else {
+                continue;
+            };
+            let Some(hit) = tracer.nearest(truth.position, dir, f64::INFINITY) else {
+                continue;
+            };
+            let Some(p) = truth.project(hit.point) else {
+                continue;
+            };
             let mut pixel = [p[0] + sigma * rng.gauss(), p[1] + sigma * rng.gauss()];
             if rng.uniform() < outliers {
-                let (r, a) = (30.0 + 50.0 * rng.uniform(), std::f64::consts::TAU * rng.uniform());
+                let (r, a) = (
+                    30.0 + 50.0 * rng.uniform(),
+                    std::f64::consts::TAU * rng.uniform(),
+                );
                 pixel = [pixel[0] + r * a.cos(), pixel[1] + r * a.sin()];
             }
-            gcps.push(Gcp { name: format!("g{}", gcps.len()), world: hit.point, pixel, weight: 1.0 });
+            gcps.push(Gcp {
+                name: format!("g{}", gcps.len()),
+                world: hit.point,
+                pixel,
+                weight: 1.0,
+            });
         }
-        for (config, free, move_position) in [("position known", "angles,f,k1", false), ("position free", "angles,position,f,k1", true)] {
-            let opts = FitOptions { free: parse_free(free)?, robust: !args.iter().any(|a| a == "--no-robust"), ..FitOptions::default() };
+        for (config, free, move_position) in [
+            ("position known", "angles,f,k1", false),
+            ("position free", "angles,position,f,k1", true),
+        ] {
+            let opts = FitOptions {
+                free: parse_free(free)?,
+                robust: !args.iter().any(|a| a == "--no-robust"),
+                ..FitOptions::default()
+            };
             let best = fit_camera(&truth, &gcps, &opts)?;
             let mut converged = 0;
             let mut worst = 0.0f64;
@@ -82,15 +117,23 @@ fn main() -> anyhow::Result<()> {
                 q.focal = [q.focal[0] * f, q.focal[1] * f];
                 q.k = [0.0, 0.0];
                 if move_position {
-                    q.position += DVec3::new(5.0 * rng.symmetric(), 5.0 * rng.symmetric(), 3.0 * rng.symmetric());
+                    q.position += DVec3::new(
+                        5.0 * rng.symmetric(),
+                        5.0 * rng.symmetric(),
+                        3.0 * rng.symmetric(),
+                    );
                 }
-                let Ok(fit) = fit_camera(&q.camera(), &gcps, &opts) else { continue };
+                let Ok(fit) = fit_camera(&q.camera(), &gcps, &opts) else {
+                    continue;
+                };
                 converged += (angle_error(&fit.camera, &best.camera) <= 0.001) as usize;
                 worst = worst.max(angle_error(&fit.camera, &truth));
             }
             println!(
                 "| {:.0} m | {config} | {converged} / {starts} | {:.4} | {:.3} | {:.2} | {worst:.4} |",
-                truth.position.distance(gcps.iter().fold(DVec3::ZERO, |s, g| s + g.world) / gcps.len() as f64),
+                truth.position.distance(
+                    gcps.iter().fold(DVec3::ZERO, |s, g| s + g.world) / gcps.len() as f64
+                ),
                 angle_error(&best.camera, &truth),
                 (best.camera.position - truth.position).length(),
                 best.rmse_inliers_px

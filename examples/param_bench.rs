@@ -26,7 +26,9 @@ fn grid(n: usize, spacing: f64, z: impl Fn(usize, usize) -> f64) -> ParamMesh {
 
 /// Deterministic value noise (hash of lattice points), for the fractal hills.
 fn hash(ix: i64, iy: i64, oct: u32) -> f64 {
-    let mut h = (ix as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (iy as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F) ^ (oct as u64) << 7;
+    let mut h = (ix as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (iy as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+        ^ (oct as u64) << 7;
     h ^= h >> 33;
     h = h.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
     h ^= h >> 33;
@@ -57,7 +59,13 @@ fn synthetic(n: usize) -> Vec<(String, ParamMesh)> {
         t80 * sp * (c.saturating_sub(c0).min(wall_w)) as f64
     });
     let (lo, hi) = (n / 3, n - 1 - n / 3);
-    let plateau = grid(n, sp, move |r, c| if (lo..=hi).contains(&r) && (lo..=hi).contains(&c) { t89 * sp } else { 0.0 });
+    let plateau = grid(n, sp, move |r, c| {
+        if (lo..=hi).contains(&r) && (lo..=hi).contains(&c) {
+            t89 * sp
+        } else {
+            0.0
+        }
+    });
     let canyon = grid(n, sp, move |r, c| {
         // A meandering canyon, 75-85° walls, 0.4 of the cell deep.
         let x = c as f64 * sp;
@@ -89,14 +97,21 @@ fn synthetic(n: usize) -> Vec<(String, ParamMesh)> {
     ]
 }
 
-
 /// The `count` steepest non-overlapping n x n patches of the Engabreen DEM (by mean slope).
 fn engabreen(n: usize, count: usize) -> anyhow::Result<Vec<(String, ParamMesh)>> {
     let path = shared_data("engabreen/engabreen_dem_3m_507x590.f32");
     let bytes = std::fs::read(&path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let (cols, rows) = (507usize, 590usize);
-    anyhow::ensure!(bytes.len() == cols * rows * 4, "{}: expected {} bytes", path.display(), cols * rows * 4);
-    let z: Vec<f64> = bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64).collect();
+    anyhow::ensure!(
+        bytes.len() == cols * rows * 4,
+        "{}: expected {} bytes",
+        path.display(),
+        cols * rows * 4
+    );
+    let z: Vec<f64> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64)
+        .collect();
     let sp = 3.0;
     // Slope magnitude per sample (central differences).
     let mut slope = vec![0.0; cols * rows];
@@ -123,7 +138,10 @@ fn engabreen(n: usize, count: usize) -> anyhow::Result<Vec<(String, ParamMesh)>>
     cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
     let mut chosen: Vec<(f64, usize, usize)> = Vec::new();
     for c in cands {
-        if chosen.iter().all(|o| o.1.abs_diff(c.1) >= n || o.2.abs_diff(c.2) >= n) {
+        if chosen
+            .iter()
+            .all(|o| o.1.abs_diff(c.1) >= n || o.2.abs_diff(c.2) >= n)
+        {
             chosen.push(c);
         }
         if chosen.len() == count {
@@ -140,23 +158,33 @@ fn engabreen(n: usize, count: usize) -> anyhow::Result<Vec<(String, ParamMesh)>>
         .collect())
 }
 
-
-
 /// Reads an OBJ's `v` and `f` lines (1-based, `i/j` accepted) into a mesh.
 fn read_obj(path: &Path) -> anyhow::Result<ParamMesh> {
-    let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let mut m = ParamMesh::default();
     for (ln, line) in text.lines().enumerate() {
         let mut it = line.split_whitespace();
         match it.next() {
             Some("v") => {
-                let v: Vec<f64> = it.take(3).map(|x| x.parse::<f64>()).collect::<Result<_, _>>()?;
+                let v: Vec<f64> = it
+                    .take(3)
+                    .map(|x| x.parse::<f64>())
+                    .collect::<Result<_, _>>()?;
                 anyhow::ensure!(v.len() == 3, "{}:{}: bad vertex", path.display(), ln + 1);
                 m.positions.push([v[0], v[1], v[2]]);
             }
             Some("f") => {
-                let f: Vec<u32> = it.take(3).map(|x| x.split('/').next().unwrap_or("").parse::<u32>()).collect::<Result<_, _>>()?;
-                anyhow::ensure!(f.len() == 3 && f.iter().all(|&i| i >= 1), "{}:{}: bad face", path.display(), ln + 1);
+                let f: Vec<u32> = it
+                    .take(3)
+                    .map(|x| x.split('/').next().unwrap_or("").parse::<u32>())
+                    .collect::<Result<_, _>>()?;
+                anyhow::ensure!(
+                    f.len() == 3 && f.iter().all(|&i| i >= 1),
+                    "{}:{}: bad face",
+                    path.display(),
+                    ln + 1
+                );
                 m.triangles.push([f[0] - 1, f[1] - 1, f[2] - 1]);
             }
             _ => {}
@@ -170,8 +198,16 @@ fn main() -> anyhow::Result<()> {
     // `--time-obj FILE REPS`: time the default options on one OBJ and print JSON (used by
     // the peer script so that ours and the peers are timed in the same run, same load).
     if let Some(i) = args.iter().position(|a| a == "--time-obj") {
-        let path = PathBuf::from(args.get(i + 1).ok_or_else(|| anyhow::anyhow!("--time-obj needs a file"))?);
-        let reps: usize = args.get(i + 2).map(|s| s.parse()).transpose()?.unwrap_or(3).max(1);
+        let path = PathBuf::from(
+            args.get(i + 1)
+                .ok_or_else(|| anyhow::anyhow!("--time-obj needs a file"))?,
+        );
+        let reps: usize = args
+            .get(i + 2)
+            .map(|s| s.parse())
+            .transpose()?
+            .unwrap_or(3)
+            .max(1);
         let m = read_obj(&path)?;
         let mut times = Vec::new();
         let mut chart = None;
@@ -181,11 +217,18 @@ fn main() -> anyhow::Result<()> {
             times.push(t.elapsed().as_secs_f64() * 1e3);
         }
         let ch = chart.ok_or_else(|| anyhow::anyhow!("no run"))?;
-        println!("{}", serde_json::json!({"ms_median": median(times), "metrics": ch.metrics}));
+        println!(
+            "{}",
+            serde_json::json!({"ms_median": median(times), "metrics": ch.metrics})
+        );
         return Ok(());
     }
     let quick = args.iter().any(|a| a == "--quick");
-    let out = args.iter().find(|a| !a.starts_with("--")).map(PathBuf::from).unwrap_or_else(|| std::env::temp_dir().join("cliffmap_param_bench"));
+    let out = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map(PathBuf::from)
+        .unwrap_or_else(|| std::env::temp_dir().join("cliffmap_param_bench"));
     std::fs::create_dir_all(out.join("cells"))?;
 
     let mut cells = Vec::new();
@@ -198,40 +241,119 @@ fn main() -> anyhow::Result<()> {
     if !quick {
         // θ ≠ 1 has no global finish: the local relaxation's quality budget 1e-4/32.
         for theta in [0.0, 0.5, 2.0, 3.0] {
-            configs.push((format!("theta={theta}"), ParamOptions { theta, relax_tolerance: 1e-4, max_sweeps: 32, ..def }));
+            configs.push((
+                format!("theta={theta}"),
+                ParamOptions {
+                    theta,
+                    relax_tolerance: 1e-4,
+                    max_sweeps: 32,
+                    ..def
+                },
+            ));
         }
         // The hierarchy alone (no global finish) at several relaxation budgets; the
         // 1e-4/32 row is the default before the global finish existed.
         for (tol, sweeps) in [(1e-2, 4), (1e-3, 8), (1e-4, 32), (1e-5, 64)] {
             configs.push((
                 format!("local-only tol={tol:e},sweeps={sweeps}"),
-                ParamOptions { relax_tolerance: tol, max_sweeps: sweeps, newton_iterations: 0, ..def },
+                ParamOptions {
+                    relax_tolerance: tol,
+                    max_sweeps: sweeps,
+                    newton_iterations: 0,
+                    ..def
+                },
             ));
         }
         // The global finish's knobs.
-        configs.push(("newton tol=1e-2".into(), ParamOptions { newton_tolerance: 1e-2, ..def }));
-        configs.push(("newton tol=1e-5".into(), ParamOptions { newton_tolerance: 1e-5, newton_iterations: 50, ..def }));
-        configs.push(("relax 1e-4/32 + newton".into(), ParamOptions { relax_tolerance: 1e-4, max_sweeps: 32, ..def }));
-        configs.push(("objective=packed-stretch".into(), ParamOptions { objective: cliffmap::param::Objective::PackedStretch, ..def }));
+        configs.push((
+            "newton tol=1e-2".into(),
+            ParamOptions {
+                newton_tolerance: 1e-2,
+                ..def
+            },
+        ));
+        configs.push((
+            "newton tol=1e-5".into(),
+            ParamOptions {
+                newton_tolerance: 1e-5,
+                newton_iterations: 50,
+                ..def
+            },
+        ));
+        configs.push((
+            "relax 1e-4/32 + newton".into(),
+            ParamOptions {
+                relax_tolerance: 1e-4,
+                max_sweeps: 32,
+                ..def
+            },
+        ));
+        configs.push((
+            "objective=packed-stretch".into(),
+            ParamOptions {
+                objective: cliffmap::param::Objective::PackedStretch,
+                ..def
+            },
+        ));
     }
     println!(
         "{:<34} {:<34} {:>6} {:>9} {:>5} {:>8} {:>8} {:>9} {:>6} {:>8} {:>7}",
-        "cell", "config", "tris", "ms(med)", "flip", "|logA|", "s1/s2", "symD-4", "newton", "L2str", "reltex"
+        "cell",
+        "config",
+        "tris",
+        "ms(med)",
+        "flip",
+        "|logA|",
+        "s1/s2",
+        "symD-4",
+        "newton",
+        "L2str",
+        "reltex"
     );
     let mut json = Vec::new();
     for (name, m) in &cells {
         // The orthographic chart of the cell, scaled into the unit square.
-        let ext = m.positions.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |a, p| [a[0].min(p[0].min(p[1])), a[1].max(p[0].max(p[1]))]);
-        let ortho: Vec<[f64; 2]> = m.positions.iter().map(|p| [(p[0] - ext[0]) / (ext[1] - ext[0]), (p[1] - ext[0]) / (ext[1] - ext[0])]).collect();
+        let ext = m
+            .positions
+            .iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |a, p| {
+                [a[0].min(p[0].min(p[1])), a[1].max(p[0].max(p[1]))]
+            });
+        let ortho: Vec<[f64; 2]> = m
+            .positions
+            .iter()
+            .map(|p| {
+                [
+                    (p[0] - ext[0]) / (ext[1] - ext[0]),
+                    (p[1] - ext[0]) / (ext[1] - ext[0]),
+                ]
+            })
+            .collect();
         let om = chart_metrics(&m.positions, &m.triangles, &ortho, None)?;
         let oe = degener_energy(&m.positions, &m.triangles, &ortho, 1.0)?;
         println!(
             "{:<34} {:<34} {:>6} {:>9} {:>5} {:>8.4} {:>8.4} {:>9.4} {:>6} {:>8.4} {:>7.2}",
-            name, "orthographic", om.triangles, "-", om.flipped, om.area_distortion_mean, om.angle_distortion_mean, om.symmetric_dirichlet_excess(), "-", om.stretch_l2, om.rel_texel
+            name,
+            "orthographic",
+            om.triangles,
+            "-",
+            om.flipped,
+            om.area_distortion_mean,
+            om.angle_distortion_mean,
+            om.symmetric_dirichlet_excess(),
+            "-",
+            om.stretch_l2,
+            om.rel_texel
         );
         json.push(serde_json::json!({"cell": name, "config": "orthographic", "triangles": om.triangles, "metrics": om, "energy_theta1": oe}));
         for (cname, o) in &configs {
-            let reps = if quick { 1 } else if m.triangles.len() > 4000 { 3 } else { 5 };
+            let reps = if quick {
+                1
+            } else if m.triangles.len() > 4000 {
+                3
+            } else {
+                5
+            };
             let mut times = Vec::new();
             let mut chart = None;
             for _ in 0..reps {
@@ -246,11 +368,21 @@ fn main() -> anyhow::Result<()> {
             let mm = ch.metrics;
             println!(
                 "{:<34} {:<34} {:>6} {:>9.2} {:>5} {:>8.4} {:>8.4} {:>9.4} {:>6} {:>8.4} {:>7.2}",
-                name, cname, mm.triangles, ms, mm.flipped, mm.area_distortion_mean, mm.angle_distortion_mean, mm.symmetric_dirichlet_excess(), ch.newton_iterations, mm.stretch_l2, mm.rel_texel
+                name,
+                cname,
+                mm.triangles,
+                ms,
+                mm.flipped,
+                mm.area_distortion_mean,
+                mm.angle_distortion_mean,
+                mm.symmetric_dirichlet_excess(),
+                ch.newton_iterations,
+                mm.stretch_l2,
+                mm.rel_texel
             );
             json.push(serde_json::json!({"cell": name, "config": cname, "theta": o.theta, "relax_tolerance": o.relax_tolerance,
                 "max_sweeps": o.max_sweeps, "newton_iterations": o.newton_iterations, "newton_tolerance": o.newton_tolerance,
-                "newton_iterations_used": ch.newton_iterations, "overlap_repaired": ch.overlap_repaired, "triangles": mm.triangles, "ms_median": ms, "metrics": mm, "energy_theta1": e1, "rounds": ch.rounds, "tutte_base": ch.tutte_base}));
+                "newton_iterations_used": ch.newton_iterations, "overlap_repaired": ch.overlap_repaired, "projection_start": ch.projection_start, "triangles": mm.triangles, "ms_median": ms, "metrics": mm, "energy_theta1": e1, "rounds": ch.rounds, "tutte_base": ch.tutte_base}));
             if cname == "default" {
                 write_obj(&out.join("cells").join(format!("{name}.obj")), m, &ch.uvs)?;
             }
@@ -258,10 +390,20 @@ fn main() -> anyhow::Result<()> {
     }
     // Growth of the time with the triangle count (fractal hills, default options).
     println!("\nscaling (hills, default options)");
-    println!("{:>6} {:>8} {:>10} {:>14}", "n", "tris", "ms(med)", "us/(T log2 T)");
-    let sizes: &[usize] = if quick { &[17, 33, 65] } else { &[17, 33, 65, 129, 257] };
+    println!(
+        "{:>6} {:>8} {:>10} {:>14}",
+        "n", "tris", "ms(med)", "us/(T log2 T)"
+    );
+    let sizes: &[usize] = if quick {
+        &[17, 33, 65]
+    } else {
+        &[17, 33, 65, 129, 257]
+    };
     for &n in sizes {
-        let (_, m) = synthetic(n).into_iter().nth(3).ok_or_else(|| anyhow::anyhow!("no hills cell"))?;
+        let (_, m) = synthetic(n)
+            .into_iter()
+            .nth(3)
+            .ok_or_else(|| anyhow::anyhow!("no hills cell"))?;
         let reps = if n >= 257 { 1 } else { 3 };
         let mut times = Vec::new();
         let mut flips = 0;
@@ -273,10 +415,21 @@ fn main() -> anyhow::Result<()> {
         }
         let ms = median(times);
         let t = m.triangles.len() as f64;
-        println!("{:>6} {:>8} {:>10.2} {:>14.4}   flips {}", n, m.triangles.len(), ms, ms * 1e3 / (t * t.log2()), flips);
+        println!(
+            "{:>6} {:>8} {:>10.2} {:>14.4}   flips {}",
+            n,
+            m.triangles.len(),
+            ms,
+            ms * 1e3 / (t * t.log2()),
+            flips
+        );
         json.push(serde_json::json!({"cell": format!("scaling_hills_{n}"), "config": "default", "triangles": m.triangles.len(), "ms_median": ms}));
     }
     std::fs::write(out.join("ours.json"), serde_json::to_string_pretty(&json)?)?;
-    println!("\nwrote {} and {}", out.join("cells").display(), out.join("ours.json").display());
+    println!(
+        "\nwrote {} and {}",
+        out.join("cells").display(),
+        out.join("ours.json").display()
+    );
     Ok(())
 }

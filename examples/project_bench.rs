@@ -29,13 +29,20 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bench_util::{cpu_seconds, median, shared_data};
-use cliffmap::pipeline::{project_store, reparam_store, PhotoTextureOptions, ProjectOptions, ReparamOptions};
-use cliffmap::photo::{read_photo_list, RayAccel};
-
+use cliffmap::photo::{RayAccel, read_photo_list};
+use cliffmap::pipeline::{
+    PhotoTextureOptions, ProjectOptions, ReparamOptions, project_store, reparam_store,
+};
 
 fn engabreen_store(dir: &Path) -> anyhow::Result<()> {
     bench_util::build_engabreen_store(dir, "project-bench")?;
-    reparam_store(dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() })?;
+    reparam_store(
+        dir,
+        &ReparamOptions {
+            quiet: true,
+            ..ReparamOptions::default()
+        },
+    )?;
     Ok(())
 }
 
@@ -56,8 +63,15 @@ fn copy_dir(from: &Path, to: &Path) -> std::io::Result<()> {
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let tmp = tempfile::tempdir()?;
-    let dir = args.get(1).map_or_else(|| tmp.path().join("store"), PathBuf::from);
-    let runs: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(3).max(1);
+    let dir = args
+        .get(1)
+        .map_or_else(|| tmp.path().join("store"), PathBuf::from);
+    let runs: usize = args
+        .get(2)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(3)
+        .max(1);
     let variants: Vec<(String, RayAccel, PhotoTextureOptions)> = args
         .get(3)
         .map_or("grid,bvh:fast", String::as_str)
@@ -93,12 +107,22 @@ fn main() -> anyhow::Result<()> {
         for (k, (_, accel, texture)) in variants.iter().enumerate() {
             let work = tmp.path().join(format!("run{run}-{k}"));
             copy_dir(&dir, &work)?;
-            let opts = ProjectOptions { ray: *accel, texture: *texture, quiet: true, ..ProjectOptions::default() };
+            let opts = ProjectOptions {
+                ray: *accel,
+                texture: *texture,
+                quiet: true,
+                ..ProjectOptions::default()
+            };
             let (c0, t0) = (cpu_seconds(), Instant::now());
             let report = project_store(&work, &photos, &opts)?;
             wall[k].push(t0.elapsed().as_secs_f64());
             cpu[k].push(cpu_seconds() - c0);
-            bytes[k] = report.settings.levels.iter().map(|l| l.photo_texture_bytes).sum();
+            bytes[k] = report
+                .settings
+                .levels
+                .iter()
+                .map(|l| l.photo_texture_bytes)
+                .sum();
             stages[k].push(report.stage_seconds);
         }
     }
@@ -107,7 +131,12 @@ fn main() -> anyhow::Result<()> {
     println!("|---|---|---|---|---|");
     for (k, (name, ..)) in variants.iter().enumerate() {
         let m = median(wall[k].clone());
-        println!("| {name} | {m:.2} | {:.2} | {:.2} | {:.0} |", median(cpu[k].clone()), m / base, bytes[k] as f64 / 1e6);
+        println!(
+            "| {name} | {m:.2} | {:.2} | {:.2} | {:.0} |",
+            median(cpu[k].clone()),
+            m / base,
+            bytes[k] as f64 / 1e6
+        );
     }
     println!("\nStage wall seconds (medians; - where a variant has no such stage):\n");
     print!("| stage |");
@@ -127,7 +156,10 @@ fn main() -> anyhow::Result<()> {
     for name in names {
         print!("| {name} |");
         for st in &stages {
-            let v: Vec<f64> = st.iter().filter_map(|r| r.iter().find(|x| &x.0 == name).map(|x| x.1)).collect();
+            let v: Vec<f64> = st
+                .iter()
+                .filter_map(|r| r.iter().find(|x| &x.0 == name).map(|x| x.1))
+                .collect();
             if v.is_empty() {
                 print!(" - |");
             } else {
@@ -142,13 +174,17 @@ fn main() -> anyhow::Result<()> {
 /// A variant `ACCEL[+fixed|+tpdN]` (see the module docs).
 fn parse_variant(v: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptions)> {
     let (accel, texture) = v.split_once('+').map_or((v, None), |(a, t)| (a, Some(t)));
-    let accel = RayAccel::parse(accel).ok_or_else(|| anyhow::anyhow!("bad acceleration {accel}"))?;
+    let accel =
+        RayAccel::parse(accel).ok_or_else(|| anyhow::anyhow!("bad acceleration {accel}"))?;
     let mut opts = PhotoTextureOptions::default();
     match texture {
         None => {}
         Some("fixed") => opts.photo_driven = false,
         Some(t) => {
-            let n: f64 = t.strip_prefix("tpd").and_then(|n| n.parse().ok()).ok_or_else(|| anyhow::anyhow!("bad texture variant {t}"))?;
+            let n: f64 = t
+                .strip_prefix("tpd")
+                .and_then(|n| n.parse().ok())
+                .ok_or_else(|| anyhow::anyhow!("bad texture variant {t}"))?;
             opts.texels_per_delivered = n;
         }
     }

@@ -21,7 +21,11 @@ fn copy_dir(src: &Path, dst: &Path) -> std::io::Result<()> {
     for e in std::fs::read_dir(src)? {
         let e = e?;
         let to = dst.join(e.file_name());
-        if e.file_type()?.is_dir() { copy_dir(&e.path(), &to)? } else { std::fs::copy(e.path(), &to).map(|_| ())? }
+        if e.file_type()?.is_dir() {
+            copy_dir(&e.path(), &to)?
+        } else {
+            std::fs::copy(e.path(), &to).map(|_| ())?
+        }
     }
     Ok(())
 }
@@ -31,34 +35,64 @@ fn main() -> anyhow::Result<()> {
     if args.len() < 4 {
         anyhow::bail!("usage: projection_figures STORE PHOTOS.json OUT_DIR [N]");
     }
-    let (store, list, out) = (PathBuf::from(&args[1]), PathBuf::from(&args[2]), PathBuf::from(&args[3]));
+    let (store, list, out) = (
+        PathBuf::from(&args[1]),
+        PathBuf::from(&args[2]),
+        PathBuf::from(&args[3]),
+    );
     let n: usize = args.get(4).map_or(Ok(3), |s| s.parse())?;
-    let name = store.file_name().and_then(|s| s.to_str()).unwrap_or("store").to_string();
+    let name = store
+        .file_name()
+        .and_then(|s| s.to_str())
+        .unwrap_or("store")
+        .to_string();
     let tmp = tempfile::tempdir()?;
     let (with, without) = (tmp.path().join("with"), tmp.path().join("without"));
     copy_dir(&store, &with)?;
     copy_dir(&store, &without)?;
     let photos = read_photo_list(&list)?;
-    let opts = ProjectOptions { quiet: true, ..ProjectOptions::default() };
+    let opts = ProjectOptions {
+        quiet: true,
+        ..ProjectOptions::default()
+    };
     let t0 = std::time::Instant::now();
     let a = project_store(&with, &photos, &opts)?;
     let wall = t0.elapsed();
-    let no_rec = ProjectOptions { footprint: FootprintOptions { reconstruct: false, ..FootprintOptions::default() }, ..opts };
+    let no_rec = ProjectOptions {
+        footprint: FootprintOptions {
+            reconstruct: false,
+            ..FootprintOptions::default()
+        },
+        ..opts
+    };
     let b = project_store(&without, &photos, &no_rec)?;
-    println!("projection of {} photos: {:.1} s wall (2 cores, shared)", photos.len(), wall.as_secs_f64());
+    println!(
+        "projection of {} photos: {:.1} s wall (2 cores, shared)",
+        photos.len(),
+        wall.as_secs_f64()
+    );
     println!("| photo | run | pixels hit | texels written | silhouette rejected | reconstructed |");
     println!("|---|---|---|---|---|---|");
     for (run, r) in [("reconstruct", &a), ("no reconstruct", &b)] {
         for p in &r.settings.photos {
             println!(
                 "| {} | {run} | {} | {} | {} | {} |",
-                p.name, p.pixels_hit, p.texels_written, p.rejected_silhouette, p.reconstructed_footprints
+                p.name,
+                p.pixels_hit,
+                p.texels_written,
+                p.rejected_silhouette,
+                p.reconstructed_footprints
             );
         }
     }
     let (sa, sb) = (Store::open(&with)?, Store::open(&without)?);
     let finest = sa.manifest.quadtree.levels - 1;
-    let mut cells: Vec<_> = sa.manifest.cells.iter().filter(|c| c.level == finest && c.photo.is_some()).collect();
+    let mut cells: Vec<_> = sa
+        .manifest
+        .cells
+        .iter()
+        .filter(|c| c.level == finest && c.photo.is_some())
+        .collect();
     cells.sort_by_key(|c| std::cmp::Reverse(c.photo.as_ref().map_or(0, |p| p.steep_photo_texels)));
     std::fs::create_dir_all(&out)?;
     for rec in cells.into_iter().take(n) {
@@ -74,10 +108,15 @@ fn main() -> anyhow::Result<()> {
         let t = before.width();
         let gap = 4;
         let mut strip = RgbaImage::from_pixel(4 * t + 3 * gap, t, Rgba([255, 255, 255, 255]));
-        for (k, img) in [before, after, RgbaImage::from_fn(t, t, |x, y| {
-            let v = conf.get_pixel(x, y)[0];
-            Rgba([v, v, v, 255])
-        }), after_b]
+        for (k, img) in [
+            before,
+            after,
+            RgbaImage::from_fn(t, t, |x, y| {
+                let v = conf.get_pixel(x, y)[0];
+                Rgba([v, v, v, 255])
+            }),
+            after_b,
+        ]
         .iter()
         .enumerate()
         {
@@ -87,7 +126,12 @@ fn main() -> anyhow::Result<()> {
         }
         let path = out.join(format!("{name}_cell_{}.png", rec.id));
         write_png_atomic(&path, &strip)?;
-        println!("wrote {} ({} steep photo texels of {})", path.display(), photo.steep_photo_texels, photo.steep_texels);
+        println!(
+            "wrote {} ({} steep photo texels of {})",
+            path.display(),
+            photo.steep_photo_texels,
+            photo.steep_texels
+        );
     }
     Ok(())
 }

@@ -15,7 +15,10 @@ use std::path::PathBuf;
 
 use cliffmap::camera::{CameraModel, camera_from_json_file};
 use cliffmap::pipeline::{ReparamOptions, reparam_store};
-use cliffmap::register::{CameraParams, Gcp, PixelOrigin, TerrainOptions, TerrainScene, parse_free, read_gcps, register_to_terrain};
+use cliffmap::register::{
+    CameraParams, Gcp, PixelOrigin, TerrainOptions, TerrainScene, parse_free, read_gcps,
+    register_to_terrain,
+};
 use glam::DVec3;
 
 fn gcp_rmse(cam: &CameraModel, gcps: &[Gcp]) -> f64 {
@@ -32,12 +35,26 @@ fn gcp_rmse(cam: &CameraModel, gcps: &[Gcp]) -> f64 {
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|s| s.as_str());
+    let flag = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .map(|s| s.as_str())
+    };
     let tmp = tempfile::tempdir()?;
-    let dir = args.first().filter(|a| !a.starts_with("--")).map_or_else(|| tmp.path().join("store"), PathBuf::from);
+    let dir = args
+        .first()
+        .filter(|a| !a.starts_with("--"))
+        .map_or_else(|| tmp.path().join("store"), PathBuf::from);
     if !dir.join("manifest.json").exists() {
         bench_util::build_engabreen_store(&dir, "register-engabreen")?;
-        reparam_store(&dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() })?;
+        reparam_store(
+            &dir,
+            &ReparamOptions {
+                quiet: true,
+                ..ReparamOptions::default()
+            },
+        )?;
     }
     let starts: usize = flag("--starts").unwrap_or("6").parse()?;
     let mut opts = TerrainOptions::default();
@@ -46,12 +63,20 @@ fn main() -> anyhow::Result<()> {
     }
     let data = bench_util::shared_data("engabreen");
     let photo = cliffmap::fsutil::decode_rgb8(&data.join("IMG_8902.jpg"))?;
-    let fitted = camera_from_json_file(&data.join("engabreen_camera_IMG_8902.json"), photo.dimensions())?;
+    let fitted = camera_from_json_file(
+        &data.join("engabreen_camera_IMG_8902.json"),
+        photo.dimensions(),
+    )?;
     let gcps = read_gcps(&data.join("gcp8902.txt"), PixelOrigin::Format)?;
     let store = cliffmap::store::Store::open(&dir)?;
     let terrain = TerrainScene::new(&store, fitted.position)?;
-    println!("fitted camera (ImGRAFT, from the GCPs): GCP RMSE {:.2} px\n", gcp_rmse(&fitted, &gcps));
-    println!("| start | yaw/pitch/roll change (°) | position change (m) | GCP RMSE start (px) | after (px) | repeat (px) | verdict | s |");
+    println!(
+        "fitted camera (ImGRAFT, from the GCPs): GCP RMSE {:.2} px\n",
+        gcp_rmse(&fitted, &gcps)
+    );
+    println!(
+        "| start | yaw/pitch/roll change (°) | position change (m) | GCP RMSE start (px) | after (px) | repeat (px) | verdict | s |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
     let base = CameraParams::from_camera(&fitted);
     let mut finals = Vec::new();
@@ -80,12 +105,19 @@ fn main() -> anyhow::Result<()> {
             gcp_rmse(&rough, &gcps),
             after,
             fit.repeat_px,
-            if fit.converged { "converged" } else { fit.reason.as_deref().unwrap_or("not converged") },
+            if fit.converged {
+                "converged"
+            } else {
+                fit.reason.as_deref().unwrap_or("not converged")
+            },
             fit.seconds
         );
         finals.push(after);
     }
     finals.sort_by(f64::total_cmp);
-    println!("\nmedian GCP RMSE after register: {:.2} px", finals[finals.len() / 2]);
+    println!(
+        "\nmedian GCP RMSE after register: {:.2} px",
+        finals[finals.len() / 2]
+    );
     Ok(())
 }

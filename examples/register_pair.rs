@@ -43,9 +43,18 @@ fn main() -> anyhow::Result<()> {
     let off_glacier = |p: glam::DVec3| {
         let (r, c) = dem.georef.grid(p.x, p.y);
         let (r, c) = (r.round(), c.round());
-        r >= 0.0 && c >= 0.0 && (r as u32) < mask.height() && (c as u32) < mask.width() && mask.get_pixel(c as u32, r as u32).0[0] < 128
+        r >= 0.0
+            && c >= 0.0
+            && (r as u32) < mask.height()
+            && (c as u32) < mask.width()
+            && mask.get_pixel(c as u32, r as u32).0[0] < 128
     };
-    let stable = stable_matches(&cam, &matches, |o, d| tracer.nearest(o, d, f64::INFINITY).map(|h| h.point), off_glacier);
+    let stable = stable_matches(
+        &cam,
+        &matches,
+        |o, d| tracer.nearest(o, d, f64::INFINITY).map(|h| h.point),
+        off_glacier,
+    );
     let all = fit_rotation(&cam, &matches)?;
     let t = Instant::now();
     let fit = fit_rotation(&cam, &stable)?;
@@ -53,18 +62,41 @@ fn main() -> anyhow::Result<()> {
     let (ya, pa, ra) = yaw_pitch_roll_from_rotation(&cam.world_to_camera);
     let (yb, pb, rb) = yaw_pitch_roll_from_rotation(&fit.camera.world_to_camera);
     let d = [yb - ya, pb - pa, rb - ra].map(|v| v.to_degrees());
-    let outliers = fit.gcps.iter().filter(|g| g.status == GcpStatus::Outlier).count();
-    let mean_shift = stable.iter().fold([0.0, 0.0], |s, m| [s[0] + m.b[0] - m.a[0], s[1] + m.b[1] - m.a[1]]);
+    let outliers = fit
+        .gcps
+        .iter()
+        .filter(|g| g.status == GcpStatus::Outlier)
+        .count();
+    let mean_shift = stable.iter().fold([0.0, 0.0], |s, m| {
+        [s[0] + m.b[0] - m.a[0], s[1] + m.b[1] - m.a[1]]
+    });
     let n = stable.len().max(1) as f64;
     let (yc, pc, rc) = yaw_pitch_roll_from_rotation(&all.camera.world_to_camera);
     let dall = [yc - ya, pc - pa, rc - ra].map(|v| v.to_degrees());
-    println!("IMG_8937 against IMG_8902 (decoded in {decode:.2} s, not counted), {} threads\n", rayon::current_num_threads());
+    println!(
+        "IMG_8937 against IMG_8902 (decoded in {decode:.2} s, not counted), {} threads\n",
+        rayon::current_num_threads()
+    );
     println!("| quantity | cliffmap | ImGRAFT |");
     println!("|---|---|---|");
-    println!("| matches (NCC ≥ 0.8) | {} on stable ground of {} ({outliers} flagged outliers) | rock features |", stable.len(), matches.len());
-    println!("| mean shift du, dv (px) | {:+.2}, {:+.2} | ≈ +13.7, −1.2 |", mean_shift[0] / n, mean_shift[1] / n);
-    println!("| viewdir change yaw, pitch, roll (°) | {:+.5}, {:+.6}, {:+.6} | +0.12633, +0.017584, +0.015242 |", d[0], d[1], d[2]);
-    println!("| match residual RMSE, all / inliers (px) | {:.3} / {:.3} | 0.41 |", fit.rmse_px, fit.rmse_inliers_px);
+    println!(
+        "| matches (NCC ≥ 0.8) | {} on stable ground of {} ({outliers} flagged outliers) | rock features |",
+        stable.len(),
+        matches.len()
+    );
+    println!(
+        "| mean shift du, dv (px) | {:+.2}, {:+.2} | ≈ +13.7, −1.2 |",
+        mean_shift[0] / n,
+        mean_shift[1] / n
+    );
+    println!(
+        "| viewdir change yaw, pitch, roll (°) | {:+.5}, {:+.6}, {:+.6} | +0.12633, +0.017584, +0.015242 |",
+        d[0], d[1], d[2]
+    );
+    println!(
+        "| match residual RMSE, all / inliers (px) | {:.3} / {:.3} | 0.41 |",
+        fit.rmse_px, fit.rmse_inliers_px
+    );
     // ImGRAFT's camera B on the same inlier matches
     let mut imgraft_b = cam;
     imgraft_b.world_to_camera = cliffmap::camera::rotation_from_yaw_pitch_roll(

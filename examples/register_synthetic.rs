@@ -15,7 +15,9 @@ use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
-use cliffmap::register::{CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain};
+use cliffmap::register::{
+    CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
+};
 use cliffmap::scene::{DemoPhotoOptions, DemoScene};
 use glam::DVec3;
 
@@ -39,8 +41,16 @@ fn angle_diff(a: f64, b: f64) -> f64 {
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let out = PathBuf::from(args.first().ok_or_else(|| anyhow::anyhow!("usage: register_synthetic OUT [options]"))?);
-    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|s| s.as_str());
+    let out = PathBuf::from(
+        args.first()
+            .ok_or_else(|| anyhow::anyhow!("usage: register_synthetic OUT [options]"))?,
+    );
+    let flag = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .map(|s| s.as_str())
+    };
     let has = |name: &str| args.iter().any(|a| a == name);
     let scene = match flag("--scene").unwrap_or("demo") {
         "demo" => DemoScene::default(),
@@ -70,15 +80,40 @@ fn main() -> anyhow::Result<()> {
             fingerprint: format!("register_synthetic:{scene:?}"),
         };
         let max_error: f64 = flag("--max-error").unwrap_or("0.5").parse()?;
-        build_store(&inputs, &BuildOptions { max_error, quiet: true, force: true, ..BuildOptions::default() }, &store_dir)?;
-        reparam_store(&store_dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() })?;
-        scene.write_demo_photos(&dem, &out.join("photos"), &DemoPhotoOptions { width, height: width / 4 * 3, supersample: 2 })?;
+        build_store(
+            &inputs,
+            &BuildOptions {
+                max_error,
+                quiet: true,
+                force: true,
+                ..BuildOptions::default()
+            },
+            &store_dir,
+        )?;
+        reparam_store(
+            &store_dir,
+            &ReparamOptions {
+                quiet: true,
+                ..ReparamOptions::default()
+            },
+        )?;
+        scene.write_demo_photos(
+            &dem,
+            &out.join("photos"),
+            &DemoPhotoOptions {
+                width,
+                height: width / 4 * 3,
+                supersample: 2,
+            },
+        )?;
         eprintln!("store and photos: {:.1} s", t.elapsed().as_secs_f64());
     }
     let store = cliffmap::store::Store::open(&store_dir)?;
     let photos = cliffmap::photo::read_photo_list(&list)?;
     let mut rng = Rng(0x5EED_2026);
-    println!("| photo | start | yaw/pitch/roll error start (°) | after (°) | position error start / after (m) | focal error start / after (%) | repeat (px) | verdict | s |");
+    println!(
+        "| photo | start | yaw/pitch/roll error start (°) | after (°) | position error start / after (m) | focal error start / after (%) | repeat (px) | verdict | s |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|");
     let mut rows: Vec<(String, bool, bool, f64)> = Vec::new(); // photo, converged, within goal, seconds
     for p in &photos {
@@ -91,16 +126,26 @@ fn main() -> anyhow::Result<()> {
             c.angles[2] += (1.5 * rng.next()).to_radians();
             let df = 0.03 * rng.next();
             c.focal = [c.focal[0] * (1.0 + df), c.focal[1] * (1.0 + df)];
-            let d = DVec3::new(pos_err * rng.next(), pos_err * rng.next(), 0.4 * pos_err * rng.next());
+            let d = DVec3::new(
+                pos_err * rng.next(),
+                pos_err * rng.next(),
+                0.4 * pos_err * rng.next(),
+            );
             c.position += d;
-            let ground = terrain.hit(c.position + DVec3::Z * 1000.0, -DVec3::Z).map_or(c.position.z - 1.7, |g| g.z);
+            let ground = terrain
+                .hit(c.position + DVec3::Z * 1000.0, -DVec3::Z)
+                .map_or(c.position.z - 1.7, |g| g.z);
             c.position.z = c.position.z.max(ground + 0.5);
             let rough: CameraModel = c.camera();
             let fit = register_to_terrain(&terrain, &p.image, &rough, &opts)?;
             let got = CameraParams::from_camera(&fit.found);
             let err = |q: &CameraParams| {
                 let a = [0, 1, 2].map(|k| angle_diff(q.angles[k], truth.angles[k]).to_degrees());
-                (a, (q.position - truth.position).length(), 100.0 * (q.focal[0] / truth.focal[0] - 1.0))
+                (
+                    a,
+                    (q.position - truth.position).length(),
+                    100.0 * (q.focal[0] / truth.focal[0] - 1.0),
+                )
             };
             let (a0, p0, f0) = err(&c);
             let (a1, p1, f1) = err(&got);
@@ -119,19 +164,26 @@ fn main() -> anyhow::Result<()> {
                 f0,
                 f1,
                 fit.repeat_px,
-                if fit.converged { "converged" } else { "not converged" },
+                if fit.converged {
+                    "converged"
+                } else {
+                    "not converged"
+                },
                 fit.seconds
             );
             rows.push((p.name.clone(), fit.converged, goal, fit.seconds));
         }
     }
     println!();
-    println!("| photo | starts | converged | within 0.02° and 0.3 m | converged but outside the goal | median s |");
+    println!(
+        "| photo | starts | converged | within 0.02° and 0.3 m | converged but outside the goal | median s |"
+    );
     println!("|---|---|---|---|---|---|");
     let mut names: Vec<String> = rows.iter().map(|r| r.0.clone()).collect();
     names.dedup();
     for n in names.iter().chain(std::iter::once(&"all".to_string())) {
-        let sel: Vec<&(String, bool, bool, f64)> = rows.iter().filter(|r| n == "all" || &r.0 == n).collect();
+        let sel: Vec<&(String, bool, bool, f64)> =
+            rows.iter().filter(|r| n == "all" || &r.0 == n).collect();
         let mut t: Vec<f64> = sel.iter().map(|r| r.3).collect();
         t.sort_by(f64::total_cmp);
         println!(

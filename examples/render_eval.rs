@@ -23,14 +23,27 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cliffmap::eval::{EvalOptions, ReferenceSources, evaluate_views, gains_table, write_view_images};
-use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store};
+use cliffmap::eval::{
+    EvalOptions, ReferenceSources, evaluate_views, gains_table, write_view_images,
+};
+use cliffmap::pipeline::{
+    BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store,
+    reparam_store,
+};
 use cliffmap::scene::{DemTracer, DemoPhotoOptions, DemoScene};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let out = PathBuf::from(args.first().ok_or_else(|| anyhow::anyhow!("usage: render_eval OUT [options]"))?);
-    let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|s| s.as_str());
+    let out = PathBuf::from(
+        args.first()
+            .ok_or_else(|| anyhow::anyhow!("usage: render_eval OUT [options]"))?,
+    );
+    let flag = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .map(|s| s.as_str())
+    };
     let has = |name: &str| args.iter().any(|a| a == name);
     let scene = match flag("--scene").unwrap_or("demo") {
         "demo" => DemoScene::default(),
@@ -45,7 +58,9 @@ fn main() -> anyhow::Result<()> {
     let sigma: f64 = flag("--sigma").unwrap_or("2").parse()?;
     let (vw, vh) = match flag("--view-size") {
         Some(s) => {
-            let (a, b) = s.split_once('x').ok_or_else(|| anyhow::anyhow!("--view-size WxH"))?;
+            let (a, b) = s
+                .split_once('x')
+                .ok_or_else(|| anyhow::anyhow!("--view-size WxH"))?;
             (a.parse()?, b.parse()?)
         }
         None => (1280u32, 720u32),
@@ -63,17 +78,38 @@ fn main() -> anyhow::Result<()> {
             ortho_source: Some("eval".into()),
             fingerprint: format!("render_eval:{scene:?}"),
         };
-        let opts = BuildOptions { max_error, cell_texels, quiet: true, force: true, ..BuildOptions::default() };
+        let opts = BuildOptions {
+            max_error,
+            cell_texels,
+            quiet: true,
+            force: true,
+            ..BuildOptions::default()
+        };
         build_store(&inputs, &opts, &store)?;
-        reparam_store(&store, &ReparamOptions { quiet: true, mixed_resolution: has("--mixed-resolution"), ..ReparamOptions::default() })?;
-        let popts = DemoPhotoOptions { width: photo_width, height: photo_width / 4 * 3, supersample: photo_ss };
+        reparam_store(
+            &store,
+            &ReparamOptions {
+                quiet: true,
+                mixed_resolution: has("--mixed-resolution"),
+                ..ReparamOptions::default()
+            },
+        )?;
+        let popts = DemoPhotoOptions {
+            width: photo_width,
+            height: photo_width / 4 * 3,
+            supersample: photo_ss,
+        };
         scene.write_demo_photos(&dem, &photos_dir, &popts)?;
         eprintln!("store and photos: {:.1} s", t0.elapsed().as_secs_f64());
         // projection with perturbed poses (the truth, the oracle and the scores keep the exact ones)
-        let project_list = perturbed_list(&list, flag("--perturb-yaw"), flag("--perturb-position"))?;
+        let project_list =
+            perturbed_list(&list, flag("--perturb-yaw"), flag("--perturb-position"))?;
         let photos = cliffmap::photo::read_photo_list(&project_list)?;
         let t = Instant::now();
-        let mut popts = ProjectOptions { quiet: true, ..ProjectOptions::default() };
+        let mut popts = ProjectOptions {
+            quiet: true,
+            ..ProjectOptions::default()
+        };
         if flag("--colour-space") == Some("srgb") {
             popts.colour_space = cliffmap::colour::ColourSpace::Srgb;
         }
@@ -96,23 +132,44 @@ fn main() -> anyhow::Result<()> {
             popts.confidence.feather = m.parse()?;
         }
         if let Some(m) = flag("--resolution-ramp") {
-            let (a, b) = m.split_once(',').ok_or_else(|| anyhow::anyhow!("--resolution-ramp LO,HI"))?;
+            let (a, b) = m
+                .split_once(',')
+                .ok_or_else(|| anyhow::anyhow!("--resolution-ramp LO,HI"))?;
             popts.confidence.resolution_ramp = [a.parse()?, b.parse()?];
         }
         if has("--best") {
             popts.blend = cliffmap::photo::BlendMode::Best;
         }
         let r = project_store(&store, &photos, &popts)?;
-        let bytes: u64 = r.settings.levels.iter().map(|l| l.photo_texture_bytes).sum();
-        eprintln!("photo textures: {:.1} MB (GPU, with mips)", bytes as f64 / 1e6);
-        eprintln!("project: {} cells in {:.1} s", r.cells_written, t.elapsed().as_secs_f64());
+        let bytes: u64 = r
+            .settings
+            .levels
+            .iter()
+            .map(|l| l.photo_texture_bytes)
+            .sum();
+        eprintln!(
+            "photo textures: {:.1} MB (GPU, with mips)",
+            bytes as f64 / 1e6
+        );
+        eprintln!(
+            "project: {} cells in {:.1} s",
+            r.cells_written,
+            t.elapsed().as_secs_f64()
+        );
     }
     let photos = cliffmap::photo::read_photo_list(&list)?;
     let views = scene.novel_views(vw, vh);
-    let centre = dem.georef.world(dem.height as f64 / 2.0, dem.width as f64 / 2.0);
+    let centre = dem
+        .georef
+        .world(dem.height as f64 / 2.0, dem.width as f64 / 2.0);
     let mid = 0.5 * (dem.height_range().0 + dem.height_range().1) as f64;
     let tracer = DemTracer::new(&dem, glam::DVec3::new(centre.0, centre.1, mid))?;
-    let src = ReferenceSources { scene: &scene, tracer: &tracer, ortho: &ortho, photos: &photos };
+    let src = ReferenceSources {
+        scene: &scene,
+        tracer: &tracer,
+        ortho: &ortho,
+        photos: &photos,
+    };
     let eopts = EvalOptions {
         supersample: ss,
         render_supersample: flag("--render-supersample").unwrap_or("2").parse()?,
@@ -121,37 +178,59 @@ fn main() -> anyhow::Result<()> {
     };
     let t = Instant::now();
     let (reports, images) = evaluate_views(&store, &src, &views, &eopts)?;
-    eprintln!("evaluation of {} views: {:.1} s", views.len(), t.elapsed().as_secs_f64());
+    eprintln!(
+        "evaluation of {} views: {:.1} s",
+        views.len(),
+        t.elapsed().as_secs_f64()
+    );
     let vdir = out.join("views");
     std::fs::create_dir_all(&vdir)?;
     for v in &images {
         write_view_images(&vdir, v)?;
     }
     println!("{}", gains_table(&reports));
-    std::fs::write(out.join("eval.json"), serde_json::to_string_pretty(&reports)?)?;
+    std::fs::write(
+        out.join("eval.json"),
+        serde_json::to_string_pretty(&reports)?,
+    )?;
     eprintln!("total {:.1} s", t0.elapsed().as_secs_f64());
     Ok(())
 }
 
 /// `list` itself, or a copy next to it whose cameras have their yaw turned by `yaw` degrees
 /// and their position moved by `position` ("DX,DY,DZ" metres).
-fn perturbed_list(list: &std::path::Path, yaw: Option<&str>, position: Option<&str>) -> anyhow::Result<PathBuf> {
+fn perturbed_list(
+    list: &std::path::Path,
+    yaw: Option<&str>,
+    position: Option<&str>,
+) -> anyhow::Result<PathBuf> {
     if yaw.is_none() && position.is_none() {
         return Ok(list.to_path_buf());
     }
     let dyaw: f64 = yaw.map(str::parse).transpose()?.unwrap_or(0.0);
-    let dpos: Vec<f64> = position.map_or(Ok(vec![0.0; 3]), |s| s.split(',').map(str::parse).collect())?;
+    let dpos: Vec<f64> =
+        position.map_or(Ok(vec![0.0; 3]), |s| s.split(',').map(str::parse).collect())?;
     anyhow::ensure!(dpos.len() == 3, "--perturb-position DX,DY,DZ");
     let dir = list.parent().unwrap_or(std::path::Path::new("."));
     let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(list)?)?;
-    for entry in doc["photos"].as_array_mut().ok_or_else(|| anyhow::anyhow!("no photos"))? {
-        let name = entry["camera"].as_str().ok_or_else(|| anyhow::anyhow!("photo without camera"))?.to_string();
+    for entry in doc["photos"]
+        .as_array_mut()
+        .ok_or_else(|| anyhow::anyhow!("no photos"))?
+    {
+        let name = entry["camera"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("photo without camera"))?
+            .to_string();
         let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
         let (y, p, r) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
-        cam.world_to_camera = cliffmap::camera::rotation_from_yaw_pitch_roll(y + dyaw.to_radians(), p, r);
+        cam.world_to_camera =
+            cliffmap::camera::rotation_from_yaw_pitch_roll(y + dyaw.to_radians(), p, r);
         cam.position += glam::DVec3::new(dpos[0], dpos[1], dpos[2]);
         let out = format!("{}.perturbed.json", name.trim_end_matches(".json"));
-        std::fs::write(dir.join(&out), cliffmap::camera::camera_to_json(&cam).to_string())?;
+        std::fs::write(
+            dir.join(&out),
+            cliffmap::camera::camera_to_json(&cam).to_string(),
+        )?;
         entry["camera"] = serde_json::json!(out);
     }
     let out = dir.join("photos_perturbed.json");

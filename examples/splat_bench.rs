@@ -21,20 +21,43 @@ fn footprints(n: u32, s: f32, collapse: bool) -> Vec<PixelFootprint> {
     (0..n)
         .flat_map(|r| (0..n).map(move |c| (c, r)))
         .map(|(c, r)| {
-            let o = [1.0 + (c as f32 * a[0] + r as f32 * b[0]).rem_euclid(span), 1.0 + (c as f32 * a[1] + r as f32 * b[1]).rem_euclid(span)];
+            let o = [
+                1.0 + (c as f32 * a[0] + r as f32 * b[0]).rem_euclid(span),
+                1.0 + (c as f32 * a[1] + r as f32 * b[1]).rem_euclid(span),
+            ];
             // shrunk below `MIN_SPLAT_AREA` (even the 4-texel ones: 1.6e-7 texel²)
-            let (a, b) = if collapse { (a.map(|v| v * 1e-4), b.map(|v| v * 1e-4)) } else { (a, b) };
-            let corners = [o, [o[0] + a[0], o[1] + a[1]], [o[0] + a[0] + b[0], o[1] + a[1] + b[1]], [o[0] + b[0], o[1] + b[1]]];
-            PixelFootprint { cell: 0, pixel: [c, r], corners, cos_view: 0.9, distance: 100.0, reconstructed: 0 }
+            let (a, b) = if collapse {
+                (a.map(|v| v * 1e-4), b.map(|v| v * 1e-4))
+            } else {
+                (a, b)
+            };
+            let corners = [
+                o,
+                [o[0] + a[0], o[1] + a[1]],
+                [o[0] + a[0] + b[0], o[1] + a[1] + b[1]],
+                [o[0] + b[0], o[1] + b[1]],
+            ];
+            PixelFootprint {
+                cell: 0,
+                pixel: [c, r],
+                corners,
+                cos_view: 0.9,
+                distance: 100.0,
+                reconstructed: 0,
+            }
         })
         .collect()
 }
 
 fn main() {
     let n = 1000u32; // 1 Mpixel per run
-    let img = RgbImage::from_fn(n, n, |x, y| image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x ^ y) % 256) as u8]));
+    let img = RgbImage::from_fn(n, n, |x, y| {
+        image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x ^ y) % 256) as u8])
+    });
     let params = ConfidenceParams::default();
-    println!("| footprint side (texels) | exact splat, Mfootprints/s | bilinear peer, Mfootprints/s | ratio |");
+    println!(
+        "| footprint side (texels) | exact splat, Mfootprints/s | bilinear peer, Mfootprints/s | ratio |"
+    );
     println!("|---|---|---|---|");
     for s in [0.1f32, 0.35, 0.7, 1.5, 4.0] {
         let time = |collapse: bool| {

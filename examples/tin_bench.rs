@@ -20,10 +20,16 @@ use cliffmap::{Dem, GridGeoref, Quadtree};
 fn data_dir() -> PathBuf {
     let c = [
         std::env::var_os("CLIFFMAP_SHARED_DATA").map(PathBuf::from),
-        Some(PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"))),
+        Some(PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../shared/data/real"
+        ))),
         Some(PathBuf::from("/work/shared/data/real")),
     ];
-    c.into_iter().flatten().find(|p| p.exists()).unwrap_or_else(|| PathBuf::from("/work/shared/data/real"))
+    c.into_iter()
+        .flatten()
+        .find(|p| p.exists())
+        .unwrap_or_else(|| PathBuf::from("/work/shared/data/real"))
 }
 
 /// On-CPU nanoseconds of the calling thread (Linux; 0 elsewhere).
@@ -37,28 +43,53 @@ fn thread_cpu_ns() -> u64 {
 /// On-CPU nanoseconds of the whole process, exited threads included (Linux
 /// /proc/self/stat utime + stime, 10 ms resolution; 0 elsewhere).
 fn process_cpu_ns() -> u64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else { return 0 };
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0;
+    };
     // fields after the ")" that closes the command name: state is field 3, utime 14, stime 15
-    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else { return 0 };
-    let f: Vec<u64> = rest.split_whitespace().skip(11).take(2).filter_map(|v| v.parse().ok()).collect();
+    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+        return 0;
+    };
+    let f: Vec<u64> = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|v| v.parse().ok())
+        .collect();
     f.iter().sum::<u64>() * 10_000_000
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 fn load_png16(path: &PathBuf, spacing: f64) -> anyhow::Result<Dem> {
     let img = image::open(path)?.into_luma16();
     let (w, h) = img.dimensions();
-    let hs = img.as_raw().iter().map(|&v| (v as f64 * 0.1) as f32).collect();
-    Ok(Dem::from_heights(w as usize, h as usize, hs, GridGeoref::new(0.0, 0.0, spacing))?)
+    let hs = img
+        .as_raw()
+        .iter()
+        .map(|&v| (v as f64 * 0.1) as f32)
+        .collect();
+    Ok(Dem::from_heights(
+        w as usize,
+        h as usize,
+        hs,
+        GridGeoref::new(0.0, 0.0, spacing),
+    )?)
 }
 
 fn load_terrain_rgb_mosaic(paths: &[PathBuf], spacing: f64) -> anyhow::Result<Dem> {
-    let tiles: Vec<_> = paths.iter().map(|p| image::open(p).map(|i| i.to_rgba8())).collect::<Result<_, _>>()?;
+    let tiles: Vec<_> = paths
+        .iter()
+        .map(|p| image::open(p).map(|i| i.to_rgba8()))
+        .collect::<Result<_, _>>()?;
     let (tw, th) = tiles[0].dimensions();
     let (w, h) = (tw * 2, th * 2);
     let mut hs = vec![0f32; (w * h) as usize];
@@ -69,7 +100,12 @@ fn load_terrain_rgb_mosaic(paths: &[PathBuf], spacing: f64) -> anyhow::Result<De
             hs[((oy + y) * w + ox + x) as usize] = v as f32;
         }
     }
-    Ok(Dem::from_heights(w as usize, h as usize, hs, GridGeoref::new(0.0, 0.0, spacing))?)
+    Ok(Dem::from_heights(
+        w as usize,
+        h as usize,
+        hs,
+        GridGeoref::new(0.0, 0.0, spacing),
+    )?)
 }
 
 struct Peer {
@@ -81,8 +117,15 @@ struct Peer {
 }
 
 fn pydelatin(kind: &str, paths: &[PathBuf], runs: usize, err: f64) -> Option<Peer> {
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/peers/tin_pydelatin.py");
-    let joined = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(",");
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/benches/peers/tin_pydelatin.py"
+    );
+    let joined = paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(",");
     let out = Command::new("python3")
         .args([script, kind, &joined, &runs.to_string(), &err.to_string()])
         .output()
@@ -91,7 +134,10 @@ fn pydelatin(kind: &str, paths: &[PathBuf], runs: usize, err: f64) -> Option<Pee
         eprintln!("pydelatin failed: {}", String::from_utf8_lossy(&out.stderr));
         return None;
     }
-    let line = String::from_utf8_lossy(&out.stdout).lines().next()?.to_string();
+    let line = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .next()?
+        .to_string();
     let v: serde_json::Value = serde_json::from_str(&line).ok()?;
     Some(Peer {
         version: v["version"].as_str().unwrap_or("?").to_string(),
@@ -102,12 +148,26 @@ fn pydelatin(kind: &str, paths: &[PathBuf], runs: usize, err: f64) -> Option<Pee
     })
 }
 
-fn bench_real(name: &str, dem: &Dem, kind: &str, paths: &[PathBuf], errors: &[f64], runs: usize, peer: bool) {
+fn bench_real(
+    name: &str,
+    dem: &Dem,
+    kind: &str,
+    paths: &[PathBuf],
+    errors: &[f64],
+    runs: usize,
+    peer: bool,
+) {
     println!("\n### {name} ({}x{})\n", dem.width, dem.height);
-    println!("| max error (m) | build | median wall (ms) | median CPU (ms) | triangles | measured max error (m) | wall speed vs pydelatin (>1 = faster) | CPU speed vs pydelatin (>1 = faster) |");
+    println!(
+        "| max error (m) | build | median wall (ms) | median CPU (ms) | triangles | measured max error (m) | wall speed vs pydelatin (>1 = faster) | CPU speed vs pydelatin (>1 = faster) |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
     for &err in errors {
-        let p = if peer { pydelatin(kind, paths, runs, err) } else { None };
+        let p = if peer {
+            pydelatin(kind, paths, runs, err)
+        } else {
+            None
+        };
         let (mut wall, mut cpu) = (Vec::new(), Vec::new());
         let mut tin = None;
         for _ in 0..runs {
@@ -119,7 +179,9 @@ fn bench_real(name: &str, dem: &Dem, kind: &str, paths: &[PathBuf], errors: &[f6
         }
         let tin = tin.expect("runs >= 1");
         let (wm, cm) = (median(wall), median(cpu));
-        let ratio = |ours: f64, theirs: Option<f64>| theirs.map_or("n/a".to_string(), |t| format!("{:.2}x", t / ours));
+        let ratio = |ours: f64, theirs: Option<f64>| {
+            theirs.map_or("n/a".to_string(), |t| format!("{:.2}x", t / ours))
+        };
         println!(
             "| {err} | cliffmap whole-DEM TIN (1 thread) | {wm:.0} | {cm:.0} | {} | {:.3} | {} | {} |",
             tin.triangles.len(),
@@ -136,13 +198,18 @@ fn bench_real(name: &str, dem: &Dem, kind: &str, paths: &[PathBuf], errors: &[f6
         for s in [64u32, 128] {
             let tree = Quadtree::new(dem.width as u32, dem.height as u32, s);
             let level = tree.finest_level();
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("thread pool");
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .expect("thread pool");
             let (mut wall, mut cpu) = (Vec::new(), Vec::new());
             let mut tris = 0;
             let mut worst = 0.0f64;
             for _ in 0..runs {
                 let (t0, c0) = (Instant::now(), process_cpu_ns());
-                let cells = pool.install(|| build_level(dem, &tree, level, err)).expect("level");
+                let cells = pool
+                    .install(|| build_level(dem, &tree, level, err))
+                    .expect("level");
                 cpu.push((process_cpu_ns().saturating_sub(c0)) as f64 / 1e6);
                 wall.push(t0.elapsed().as_secs_f64() * 1e3);
                 tris = cells.iter().map(|(_, t)| t.triangles.len()).sum::<usize>();
@@ -176,7 +243,11 @@ fn fractal(n: usize, seed: u64) -> Dem {
         let a = amp(step);
         for y in (half..n).step_by(step) {
             for x in (half..n).step_by(step) {
-                let m = (h[(y - half) * n + x - half] + h[(y - half) * n + x + half] + h[(y + half) * n + x - half] + h[(y + half) * n + x + half]) / 4.0;
+                let m = (h[(y - half) * n + x - half]
+                    + h[(y - half) * n + x + half]
+                    + h[(y + half) * n + x - half]
+                    + h[(y + half) * n + x + half])
+                    / 4.0;
                 h[y * n + x] = m + a * rnd();
             }
         }
@@ -185,10 +256,22 @@ fn fractal(n: usize, seed: u64) -> Dem {
             for x in (x0..n).step_by(step) {
                 let mut sum = 0.0;
                 let mut cnt = 0.0;
-                if y >= half { sum += h[(y - half) * n + x]; cnt += 1.0; }
-                if y + half < n { sum += h[(y + half) * n + x]; cnt += 1.0; }
-                if x >= half { sum += h[y * n + x - half]; cnt += 1.0; }
-                if x + half < n { sum += h[y * n + x + half]; cnt += 1.0; }
+                if y >= half {
+                    sum += h[(y - half) * n + x];
+                    cnt += 1.0;
+                }
+                if y + half < n {
+                    sum += h[(y + half) * n + x];
+                    cnt += 1.0;
+                }
+                if x >= half {
+                    sum += h[y * n + x - half];
+                    cnt += 1.0;
+                }
+                if x + half < n {
+                    sum += h[y * n + x + half];
+                    cnt += 1.0;
+                }
                 h[y * n + x] = sum / cnt + a * rnd();
             }
         }
@@ -199,10 +282,17 @@ fn fractal(n: usize, seed: u64) -> Dem {
 }
 
 fn growth(runs: usize) {
-    println!("\n### Growth with DEM size (diamond-square fractal, displacement 0.4 m * step^0.9, 10 m spacing, S = 64, max error 1 m at the finest level, 2 threads)\n");
-    println!("| DEM | samples | levels | wall, all levels (ms) | ns per sample per level | triangles, finest level | per level wall (ms), root first |");
+    println!(
+        "\n### Growth with DEM size (diamond-square fractal, displacement 0.4 m * step^0.9, 10 m spacing, S = 64, max error 1 m at the finest level, 2 threads)\n"
+    );
+    println!(
+        "| DEM | samples | levels | wall, all levels (ms) | ns per sample per level | triangles, finest level | per level wall (ms), root first |"
+    );
     println!("|---|---|---|---|---|---|---|");
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("thread pool");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("thread pool");
     for k in [10, 11, 12] {
         let n = (1usize << k) + 1;
         let dem = fractal(n, 42);
@@ -212,7 +302,9 @@ fn growth(runs: usize) {
         for _ in 0..runs {
             for level in 0..tree.levels {
                 let t0 = Instant::now();
-                let cells = pool.install(|| build_level(&dem, &tree, level, 1.0)).expect("level");
+                let cells = pool
+                    .install(|| build_level(&dem, &tree, level, 1.0))
+                    .expect("level");
                 per_level[level as usize].push(t0.elapsed().as_secs_f64() * 1e3);
                 if level == tree.finest_level() {
                     finest_tris = cells.iter().map(|(_, t)| t.triangles.len()).sum::<usize>();
@@ -229,7 +321,10 @@ fn growth(runs: usize) {
             samples / 1e6,
             tree.levels,
             total * 1e6 / (samples * tree.levels as f64),
-            meds.iter().map(|m| format!("{m:.0}")).collect::<Vec<_>>().join(" / ")
+            meds.iter()
+                .map(|m| format!("{m:.0}"))
+                .collect::<Vec<_>>()
+                .join(" / ")
         );
     }
 }
@@ -253,7 +348,10 @@ fn main() -> anyhow::Result<()> {
             .map(|t| dir.join(format!("grand_canyon_tiles/{t}.terrain.png")))
             .collect();
         let dems = [
-            ("St Helens", load_png16(&dir.join("argudo_glaciers/sthelens_10m.png"), 10.0)?),
+            (
+                "St Helens",
+                load_png16(&dir.join("argudo_glaciers/sthelens_10m.png"), 10.0)?,
+            ),
             ("Grand Canyon", load_terrain_rgb_mosaic(&gc, 30.9)?),
         ];
         for (name, dem) in &dems {
@@ -272,13 +370,29 @@ fn main() -> anyhow::Result<()> {
         let dir = data_dir();
         let sth = vec![dir.join("argudo_glaciers/sthelens_10m.png")];
         let dem = load_png16(&sth[0], 10.0)?;
-        bench_real("St Helens 10 m", &dem, "png16", &sth, &[2.0, 5.0], runs, peer);
+        bench_real(
+            "St Helens 10 m",
+            &dem,
+            "png16",
+            &sth,
+            &[2.0, 5.0],
+            runs,
+            peer,
+        );
         let gc: Vec<PathBuf> = ["12-758-1608", "12-759-1608", "12-758-1609", "12-759-1609"]
             .iter()
             .map(|t| dir.join(format!("grand_canyon_tiles/{t}.terrain.png")))
             .collect();
         let dem = load_terrain_rgb_mosaic(&gc, 30.9)?;
-        bench_real("Grand Canyon Terrain-RGB 2x2 mosaic, ~30.9 m", &dem, "terrain-rgb", &gc, &[2.0, 5.0], runs, peer);
+        bench_real(
+            "Grand Canyon Terrain-RGB 2x2 mosaic, ~30.9 m",
+            &dem,
+            "terrain-rgb",
+            &gc,
+            &[2.0, 5.0],
+            runs,
+            peer,
+        );
     }
     if args.iter().any(|a| a == "--growth") {
         growth(runs);

@@ -71,21 +71,31 @@ impl ColourSpace {
 /// Linear intensity in [0, 1] of the sRGB value `c` in [0, 1].
 #[inline]
 pub fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// sRGB value in [0, 1] of the linear intensity `l` in [0, 1].
 #[inline]
 pub fn linear_to_srgb(l: f64) -> f64 {
-    if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 }
+    if l <= 0.003_130_8 {
+        12.92 * l
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// Linear intensity of each 8-bit sRGB value.
-static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> = LazyLock::new(|| std::array::from_fn(|v| srgb_to_linear(v as f64 / 255.0) as f32));
+static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|v| srgb_to_linear(v as f64 / 255.0) as f32));
 
 /// `THRESHOLDS[k]`: the linear intensity of the sRGB value `(k + 0.5) / 255`, the boundary
 /// between 8-bit values `k` and `k + 1`.
-static THRESHOLDS: LazyLock<[f32; 255]> = LazyLock::new(|| std::array::from_fn(|k| srgb_to_linear((k as f64 + 0.5) / 255.0) as f32));
+static THRESHOLDS: LazyLock<[f32; 255]> =
+    LazyLock::new(|| std::array::from_fn(|k| srgb_to_linear((k as f64 + 0.5) / 255.0) as f32));
 
 /// Entries of [`ENCODE_START`]: the linear range [0, 1] in equal bins.
 const ENCODE_BINS: usize = 4096;
@@ -132,7 +142,10 @@ mod tests {
     fn round_trips_and_rounds_like_the_encoding() {
         for v in 0..=255u8 {
             assert_eq!(encode_u8(decode_u8(v)), v, "{v}");
-            assert_eq!(ColourSpace::Srgb.encode_u8(ColourSpace::Srgb.decode_u8(v)), v);
+            assert_eq!(
+                ColourSpace::Srgb.encode_u8(ColourSpace::Srgb.decode_u8(v)),
+                v
+            );
             let s = linear_to_srgb(srgb_to_linear(v as f64 / 255.0));
             assert!((s * 255.0 - v as f64).abs() < 1e-9);
         }
@@ -141,12 +154,20 @@ mod tests {
             let l = i as f32 / 20_000.0;
             let want = (linear_to_srgb(l as f64) * 255.0).round() as i32;
             let got = encode_u8(l) as i32;
-            assert!((got - want).abs() <= 1 && (got == want || (linear_to_srgb(l as f64) * 255.0).fract().abs() > 0.499), "{l}");
+            assert!(
+                (got - want).abs() <= 1
+                    && (got == want || (linear_to_srgb(l as f64) * 255.0).fract().abs() > 0.499),
+                "{l}"
+            );
         }
         // the table walk agrees with a full count of the boundaries below the value
         for i in 0..=100_000 {
             let l = i as f32 / 100_000.0;
-            assert_eq!(encode_u8(l) as usize, THRESHOLDS.iter().filter(|&&t| t <= l).count(), "{l}");
+            assert_eq!(
+                encode_u8(l) as usize,
+                THRESHOLDS.iter().filter(|&&t| t <= l).count(),
+                "{l}"
+            );
         }
         assert_eq!(encode_u8(f32::NAN), 0);
         assert_eq!(encode_u8(-1.0), 0);

@@ -29,7 +29,9 @@ pub enum Error {
     #[error("invalid option: {0}")]
     BadOption(String),
     /// The input would need more memory than the configured limit.
-    #[error("{path}: would need {needed} bytes, over the memory limit of {limit} bytes (raise --max-memory if this is intended)")]
+    #[error(
+        "{path}: would need {needed} bytes, over the memory limit of {limit} bytes (raise --max-memory if this is intended)"
+    )]
     TooLarge {
         /// The file involved.
         path: PathBuf,
@@ -54,14 +56,23 @@ pub enum Error {
 impl Error {
     /// Wraps an I/O error with the path it concerns.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
-        Error::Io { path: path.as_ref().to_path_buf(), error: source }
+        Error::Io {
+            path: path.as_ref().to_path_buf(),
+            error: source,
+        }
     }
     /// A content problem in `path`.
     pub fn bad_input(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
-        Error::BadInput { path: path.as_ref().to_path_buf(), msg: msg.into() }
+        Error::BadInput {
+            path: path.as_ref().to_path_buf(),
+            msg: msg.into(),
+        }
     }
     /// A problem in the store file `path`.
     pub fn store(path: impl AsRef<Path>, msg: impl Into<String>) -> Self {
-        Error::Store { path: path.as_ref().to_path_buf(), msg: msg.into() }
+        Error::Store {
+            path: path.as_ref().to_path_buf(),
+            msg: msg.into(),
+        }
     }
 }

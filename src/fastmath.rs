@@ -71,18 +71,36 @@ mod tests {
     #[test]
     fn round_matches_libm() {
         let near_half = 0.5f64.next_down();
-        let mut xs = vec![0.0, -0.0, 0.5, -0.5, 1.5, 2.5, -2.5, near_half, -near_half, 254.5, 255.49999999999997, 1e15 + 0.5];
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            2.5,
+            -2.5,
+            near_half,
+            -near_half,
+            254.5,
+            255.49999999999997,
+            1e15 + 0.5,
+        ];
         xs.extend([f64::NAN, f64::INFINITY, f64::NEG_INFINITY]);
         let mut seed = 5u64;
         for _ in 0..100_000 {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let v = (seed >> 11) as f64 / (1u64 << 53) as f64;
             xs.push((v - 0.3) * 400.0);
             xs.push((v * 512.0).floor() * 0.5); // exact halves
         }
         for x in xs {
             let (a, b) = (round_f(x), x.round());
-            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{x}: {a} vs {b}");
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "{x}: {a} vs {b}"
+            );
             assert_eq!(to_u8(x), x.round().clamp(0.0, 255.0) as u8, "{x}");
         }
     }

@@ -9,7 +9,10 @@ use crate::error::{Error, Result};
 /// flushed to disk and renamed over `path`. Parent directories are created. On error the
 /// temporary file is removed and `path` is left as it was.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let tmp = temp_path(path);
     let result = (|| -> std::io::Result<()> {
@@ -34,7 +37,11 @@ fn test_disk_budget(len: usize) -> std::io::Result<()> {
     use std::sync::atomic::{AtomicU64, Ordering};
     static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
     static USED: AtomicU64 = AtomicU64::new(0);
-    let limit = LIMIT.get_or_init(|| std::env::var("CLIFFMAP_TEST_DISK_BYTES").ok().and_then(|v| v.parse().ok()));
+    let limit = LIMIT.get_or_init(|| {
+        std::env::var("CLIFFMAP_TEST_DISK_BYTES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+    });
     if let Some(limit) = *limit {
         let used = USED.fetch_add(len as u64, Ordering::SeqCst) + len as u64;
         if used > limit {
@@ -69,8 +76,12 @@ where
 
 /// The temporary sibling used while writing `path` (unique per process and thread).
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tid = format!("{:?}", std::thread::current().id()).replace(|c: char| !c.is_ascii_alphanumeric(), "");
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tid = format!("{:?}", std::thread::current().id())
+        .replace(|c: char| !c.is_ascii_alphanumeric(), "");
     path.with_file_name(format!(".{name}.{}.{tid}.tmp", std::process::id()))
 }
 
@@ -103,7 +114,11 @@ pub fn relative_path(path: &Path, base: &Path) -> String {
         return path.display().to_string();
     }
     let mut parts: Vec<String> = vec!["..".to_string(); bc.len() - common];
-    parts.extend(pc[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    parts.extend(
+        pc[common..]
+            .iter()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned()),
+    );
     parts.join("/")
 }
 
@@ -120,7 +135,10 @@ mod relative_tests {
         let img = photos.join("a.jpg");
         std::fs::write(&img, b"x").unwrap();
         assert_eq!(relative_path(&img, &store), "../photos/a.jpg");
-        assert_eq!(relative_path(&store.join("missing.jpg"), &store), store.join("missing.jpg").display().to_string());
+        assert_eq!(
+            relative_path(&store.join("missing.jpg"), &store),
+            store.join("missing.jpg").display().to_string()
+        );
     }
 }
 
@@ -132,27 +150,39 @@ mod relative_tests {
 /// `image` crate, whose PNG and TIFF decoders fail on truncated data. Errors name the file.
 pub fn decode_rgb8(path: &Path) -> Result<image::RgbImage> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let format = image::guess_format(&bytes).map_err(|e| Error::bad_input(path, format!("unknown image format: {e}")))?;
+    let format = image::guess_format(&bytes)
+        .map_err(|e| Error::bad_input(path, format!("unknown image format: {e}")))?;
     if format == image::ImageFormat::Jpeg {
         let decode = |strict: bool| {
             let opts = zune_core::options::DecoderOptions::default()
                 .set_strict_mode(strict)
                 .jpeg_set_out_colorspace(zune_core::colorspace::ColorSpace::RGB);
-            let mut dec = zune_jpeg::JpegDecoder::new_with_options(zune_core::bytestream::ZCursor::new(&bytes[..]), opts);
+            let mut dec = zune_jpeg::JpegDecoder::new_with_options(
+                zune_core::bytestream::ZCursor::new(&bytes[..]),
+                opts,
+            );
             dec.decode().map(|p| (p, dec.info()))
         };
         let (pixels, info) = match decode(true) {
             Ok(r) => r,
             // stray bytes between markers, written by some cameras: decoded leniently
-            Err(e) if format!("{e:?}").contains("Extra bytes between headers") => {
-                decode(false).map_err(|e| Error::bad_input(path, format!("damaged or truncated JPEG: {e:?}")))?
+            Err(e) if format!("{e:?}").contains("Extra bytes between headers") => decode(false)
+                .map_err(|e| Error::bad_input(path, format!("damaged or truncated JPEG: {e:?}")))?,
+            Err(e) => {
+                return Err(Error::bad_input(
+                    path,
+                    format!("damaged or truncated JPEG: {e:?}"),
+                ));
             }
-            Err(e) => return Err(Error::bad_input(path, format!("damaged or truncated JPEG: {e:?}"))),
         };
         let info = info.ok_or_else(|| Error::bad_input(path, "JPEG without a frame header"))?;
         let (w, h) = (u32::from(info.width), u32::from(info.height));
-        return image::RgbImage::from_raw(w, h, pixels)
-            .ok_or_else(|| Error::bad_input(path, format!("JPEG decoded to the wrong number of bytes for {w} x {h}")));
+        return image::RgbImage::from_raw(w, h, pixels).ok_or_else(|| {
+            Error::bad_input(
+                path,
+                format!("JPEG decoded to the wrong number of bytes for {w} x {h}"),
+            )
+        });
     }
     image::load_from_memory_with_format(&bytes, format)
         .map(|i| i.to_rgb8())

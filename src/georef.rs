@@ -24,7 +24,12 @@ pub struct GridGeoref {
 impl GridGeoref {
     /// A grid with square spacing `spacing` whose sample (0,0) centre is at `(x, y)`.
     pub fn new(origin_x: f64, origin_y: f64, spacing: f64) -> Self {
-        GridGeoref { origin_x, origin_y, spacing_x: spacing, spacing_y: spacing }
+        GridGeoref {
+            origin_x,
+            origin_y,
+            spacing_x: spacing,
+            spacing_y: spacing,
+        }
     }
 
     /// Rejects non-finite origins and non-positive or non-finite spacings.
@@ -48,13 +53,19 @@ impl GridGeoref {
     /// World (x, y) of the fractional grid position (row, col).
     #[inline]
     pub fn world(&self, row: f64, col: f64) -> (f64, f64) {
-        (self.origin_x + col * self.spacing_x, self.origin_y - row * self.spacing_y)
+        (
+            self.origin_x + col * self.spacing_x,
+            self.origin_y - row * self.spacing_y,
+        )
     }
 
     /// Fractional grid position (row, col) of world (x, y); exact inverse of [`world`](Self::world).
     #[inline]
     pub fn grid(&self, x: f64, y: f64) -> (f64, f64) {
-        ((self.origin_y - y) / self.spacing_y, (x - self.origin_x) / self.spacing_x)
+        (
+            (self.origin_y - y) / self.spacing_y,
+            (x - self.origin_x) / self.spacing_x,
+        )
     }
 }
 
@@ -98,11 +109,19 @@ mod tests {
 
     #[test]
     fn world_grid_round_trip_at_utm_scale() {
-        let g = GridGeoref { origin_x: 445302.17, origin_y: 7396769.45, spacing_x: 3.0, spacing_y: 3.0 };
+        let g = GridGeoref {
+            origin_x: 445302.17,
+            origin_y: 7396769.45,
+            spacing_x: 3.0,
+            spacing_y: 3.0,
+        };
         for &(r, c) in &[(0.0, 0.0), (589.0, 506.0), (12.25, 400.5)] {
             let (x, y) = g.world(r, c);
             let (r2, c2) = g.grid(x, y);
-            assert!((r - r2).abs() < 1e-9 && (c - c2).abs() < 1e-9, "{r},{c} -> {r2},{c2}");
+            assert!(
+                (r - r2).abs() < 1e-9 && (c - c2).abs() < 1e-9,
+                "{r},{c} -> {r2},{c2}"
+            );
         }
         assert_eq!(g.world(0.0, 0.0), (445302.17, 7396769.45));
         assert!(GridGeoref::new(0.0, 0.0, -1.0).validate().is_err());

@@ -57,7 +57,9 @@ pub(crate) fn tiff_err(path: &Path, e: TiffError) -> Error {
         TiffError::IoError(io) => return Error::io(path, io),
         TiffError::FormatError(f) => format!("not a valid TIFF (truncated or corrupt?): {f}"),
         TiffError::UnsupportedError(u) => format!("unsupported TIFF feature: {u}"),
-        TiffError::LimitsExceeded => "TIFF exceeds the decoder's memory limits (raise --max-memory)".to_string(),
+        TiffError::LimitsExceeded => {
+            "TIFF exceeds the decoder's memory limits (raise --max-memory)".to_string()
+        }
         other => format!("cannot decode the TIFF: {other}"),
     };
     Error::bad_input(path, msg)
@@ -78,10 +80,15 @@ pub(crate) fn open(path: &Path, max_memory: u64) -> Result<Decoder<BufReader<Fil
 
 /// The SampleFormat tag's first value (1 uint, 2 int, 3 float, 4 void, 5/6 complex); 1 if absent.
 pub(crate) fn sample_format<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result<u16> {
-    match dec.find_tag(Tag::SampleFormat).map_err(|e| tag_err(path, "SampleFormat", e))? {
+    match dec
+        .find_tag(Tag::SampleFormat)
+        .map_err(|e| tag_err(path, "SampleFormat", e))?
+    {
         None => Ok(1),
         Some(v) => {
-            let v = v.into_u16_vec().map_err(|e| tag_err(path, "SampleFormat", e))?;
+            let v = v
+                .into_u16_vec()
+                .map_err(|e| tag_err(path, "SampleFormat", e))?;
             Ok(v.first().copied().unwrap_or(1))
         }
     }
@@ -89,7 +96,9 @@ pub(crate) fn sample_format<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
 
 /// True if the image stores each sample plane separately (PlanarConfiguration = 2).
 pub(crate) fn is_planar<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result<bool> {
-    Ok(dec.find_tag_unsigned::<u16>(Tag::PlanarConfiguration).map_err(|e| tag_err(path, "PlanarConfiguration", e))?
+    Ok(dec
+        .find_tag_unsigned::<u16>(Tag::PlanarConfiguration)
+        .map_err(|e| tag_err(path, "PlanarConfiguration", e))?
         == Some(2))
 }
 
@@ -99,12 +108,17 @@ fn tag_err(path: &Path, tag: &str, e: impl std::fmt::Display) -> Error {
 
 /// Parses the GDAL_NODATA ASCII value ("-9999", "nan", "-3.4e+38", ...).
 pub(crate) fn parse_nodata(path: &Path, s: &str) -> Result<f64> {
-    let t = s.trim_matches(|c: char| c == '\0' || c.is_whitespace()).to_ascii_lowercase();
+    let t = s
+        .trim_matches(|c: char| c == '\0' || c.is_whitespace())
+        .to_ascii_lowercase();
     match t.as_str() {
         "nan" | "-nan" | "+nan" => Ok(f64::NAN),
-        _ => t
-            .parse::<f64>()
-            .map_err(|_| Error::bad_input(path, format!("GDAL_NODATA tag holds {s:?}, which is not a number"))),
+        _ => t.parse::<f64>().map_err(|_| {
+            Error::bad_input(
+                path,
+                format!("GDAL_NODATA tag holds {s:?}, which is not a number"),
+            )
+        }),
     }
 }
 
@@ -114,13 +128,23 @@ pub(crate) fn parse_nodata(path: &Path, s: &str) -> Result<f64> {
 pub(crate) fn read_geo_tags<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result<GeoTags> {
     let mut out = GeoTags::default();
 
-    if let Some(v) = dec.find_tag(Tag::GdalNodata).map_err(|e| tag_err(path, "GDAL_NODATA", e))? {
-        let s = v.into_string().map_err(|e| tag_err(path, "GDAL_NODATA", e))?;
+    if let Some(v) = dec
+        .find_tag(Tag::GdalNodata)
+        .map_err(|e| tag_err(path, "GDAL_NODATA", e))?
+    {
+        let s = v
+            .into_string()
+            .map_err(|e| tag_err(path, "GDAL_NODATA", e))?;
         out.nodata = Some(parse_nodata(path, &s)?);
     }
 
-    if let Some(v) = dec.find_tag(Tag::GeoKeyDirectoryTag).map_err(|e| tag_err(path, "GeoKeyDirectory", e))? {
-        let keys = v.into_u16_vec().map_err(|e| tag_err(path, "GeoKeyDirectory", e))?;
+    if let Some(v) = dec
+        .find_tag(Tag::GeoKeyDirectoryTag)
+        .map_err(|e| tag_err(path, "GeoKeyDirectory", e))?
+    {
+        let keys = v
+            .into_u16_vec()
+            .map_err(|e| tag_err(path, "GeoKeyDirectory", e))?;
         // Header: version, revision, minor, number of keys; then 4 shorts per key.
         let n = keys.get(3).copied().unwrap_or(0) as usize;
         let (mut projected, mut geographic_cs) = (None, None);
@@ -144,14 +168,25 @@ pub(crate) fn read_geo_tags<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
     // Pixel centre of sample (0,0) in raster space.
     let c = if out.pixel_is_point { 0.0 } else { 0.5 };
 
-    let transform = dec.find_tag(Tag::ModelTransformationTag).map_err(|e| tag_err(path, "ModelTransformation", e))?;
-    let scale = dec.find_tag(Tag::ModelPixelScaleTag).map_err(|e| tag_err(path, "ModelPixelScale", e))?;
-    let ties = dec.find_tag(Tag::ModelTiepointTag).map_err(|e| tag_err(path, "ModelTiepoint", e))?;
+    let transform = dec
+        .find_tag(Tag::ModelTransformationTag)
+        .map_err(|e| tag_err(path, "ModelTransformation", e))?;
+    let scale = dec
+        .find_tag(Tag::ModelPixelScaleTag)
+        .map_err(|e| tag_err(path, "ModelPixelScale", e))?;
+    let ties = dec
+        .find_tag(Tag::ModelTiepointTag)
+        .map_err(|e| tag_err(path, "ModelTiepoint", e))?;
 
     let georef = if let Some(t) = transform {
-        let m = t.into_f64_vec().map_err(|e| tag_err(path, "ModelTransformation", e))?;
+        let m = t
+            .into_f64_vec()
+            .map_err(|e| tag_err(path, "ModelTransformation", e))?;
         if m.len() != 16 {
-            return Err(Error::bad_input(path, format!("ModelTransformation has {} values, expected 16", m.len())));
+            return Err(Error::bad_input(
+                path,
+                format!("ModelTransformation has {} values, expected 16", m.len()),
+            ));
         }
         if m[1] != 0.0 || m[4] != 0.0 {
             return Err(Error::bad_input(
@@ -160,11 +195,21 @@ pub(crate) fn read_geo_tags<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
             ));
         }
         // x = m0*I + m3, y = m5*J + m7
-        Some(GridGeoref { origin_x: m[3] + c * m[0], origin_y: m[7] + c * m[5], spacing_x: m[0], spacing_y: -m[5] })
+        Some(GridGeoref {
+            origin_x: m[3] + c * m[0],
+            origin_y: m[7] + c * m[5],
+            spacing_x: m[0],
+            spacing_y: -m[5],
+        })
     } else {
         match (scale, ties) {
             (None, None) => None,
-            (Some(_), None) => return Err(Error::bad_input(path, "has ModelPixelScale but no ModelTiepoint")),
+            (Some(_), None) => {
+                return Err(Error::bad_input(
+                    path,
+                    "has ModelPixelScale but no ModelTiepoint",
+                ));
+            }
             (None, Some(_)) => {
                 return Err(Error::bad_input(
                     path,
@@ -172,8 +217,12 @@ pub(crate) fn read_geo_tags<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
                 ));
             }
             (Some(s), Some(t)) => {
-                let s = s.into_f64_vec().map_err(|e| tag_err(path, "ModelPixelScale", e))?;
-                let t = t.into_f64_vec().map_err(|e| tag_err(path, "ModelTiepoint", e))?;
+                let s = s
+                    .into_f64_vec()
+                    .map_err(|e| tag_err(path, "ModelPixelScale", e))?;
+                let t = t
+                    .into_f64_vec()
+                    .map_err(|e| tag_err(path, "ModelTiepoint", e))?;
                 if s.len() < 2 || t.len() < 6 {
                     return Err(Error::bad_input(
                         path,
@@ -197,10 +246,17 @@ pub(crate) fn read_geo_tags<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -
     };
 
     if let Some(g) = &georef {
-        if !(g.spacing_x.is_finite() && g.spacing_x > 0.0 && g.spacing_y.is_finite() && g.spacing_y != 0.0) {
+        if !(g.spacing_x.is_finite()
+            && g.spacing_x > 0.0
+            && g.spacing_y.is_finite()
+            && g.spacing_y != 0.0)
+        {
             return Err(Error::bad_input(
                 path,
-                format!("GeoTIFF pixel size ({}, {}) is not a positive finite number", g.spacing_x, g.spacing_y),
+                format!(
+                    "GeoTIFF pixel size ({}, {}) is not a positive finite number",
+                    g.spacing_x, g.spacing_y
+                ),
             ));
         }
         if g.spacing_y < 0.0 {
@@ -227,7 +283,10 @@ mod tests {
         assert_eq!(parse_nodata(p, "-9999\0").unwrap(), -9999.0);
         assert!(parse_nodata(p, "nan").unwrap().is_nan());
         assert!(parse_nodata(p, "NaN").unwrap().is_nan());
-        assert_eq!(parse_nodata(p, " -3.4028234663852886e+38 ").unwrap(), f32::MIN as f64);
+        assert_eq!(
+            parse_nodata(p, " -3.4028234663852886e+38 ").unwrap(),
+            f32::MIN as f64
+        );
         let e = parse_nodata(p, "none").unwrap_err().to_string();
         assert!(e.contains("x.tif") && e.contains("none"), "{e}");
     }

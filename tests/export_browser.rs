@@ -7,55 +7,139 @@
 
 mod cli_util;
 
+use cli_util::ok;
 use cliffmap::camera::camera_to_json;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, build_store, project_store};
 use cliffmap::scene::DemoScene;
-use cli_util::ok;
 
 #[test]
 fn cesium_page_shows_what_cliffmap_renders() {
     let tools = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/js");
     assert!(
-        tools.join("node_modules/cesium").exists() && tools.join("node_modules/puppeteer-core").exists(),
+        tools.join("node_modules/cesium").exists()
+            && tools.join("node_modules/puppeteer-core").exists(),
         "CesiumJS / puppeteer-core are not installed: run `npm ci --prefix tools/js` (as .ci/run does)"
     );
     let tmp = tempfile::tempdir().unwrap();
     let scene = DemoScene::default();
     let (dem, ortho) = scene.generate().unwrap();
-    let inputs = BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "t".into(), ortho_source: Some("t".into()), fingerprint: "browser".into() };
+    let inputs = BuildInputs {
+        dem: &dem,
+        ortho: Some(&ortho),
+        dem_source: "t".into(),
+        ortho_source: Some("t".into()),
+        fingerprint: "browser".into(),
+    };
     let store = tmp.path().join("store");
-    build_store(&inputs, &BuildOptions { quiet: true, force: true, ..BuildOptions::default() }, &store).unwrap();
+    build_store(
+        &inputs,
+        &BuildOptions {
+            quiet: true,
+            force: true,
+            ..BuildOptions::default()
+        },
+        &store,
+    )
+    .unwrap();
     let list = scene
-        .write_demo_photos(&dem, &tmp.path().join("photos"), &cliffmap::scene::DemoPhotoOptions { width: 800, height: 600, supersample: 1 })
+        .write_demo_photos(
+            &dem,
+            &tmp.path().join("photos"),
+            &cliffmap::scene::DemoPhotoOptions {
+                width: 800,
+                height: 600,
+                supersample: 1,
+            },
+        )
         .unwrap();
     let photos = cliffmap::photo::read_photo_list(&list).unwrap();
-    project_store(&store, &photos, &ProjectOptions { quiet: true, ..ProjectOptions::default() }).unwrap();
+    project_store(
+        &store,
+        &photos,
+        &ProjectOptions {
+            quiet: true,
+            ..ProjectOptions::default()
+        },
+    )
+    .unwrap();
     let (w, h) = (640u32, 480u32);
     let cam = scene.photo_shots()[0].camera.resized(w, h);
     let cam_file = tmp.path().join("view.json");
-    std::fs::write(&cam_file, serde_json::to_string(&camera_to_json(&cam)).unwrap()).unwrap();
+    std::fs::write(
+        &cam_file,
+        serde_json::to_string(&camera_to_json(&cam)).unwrap(),
+    )
+    .unwrap();
     let out = tmp.path().join("tiles");
-    let (s, o, c) = (store.to_str().unwrap(), out.to_str().unwrap(), cam_file.to_str().unwrap());
-    ok(&["export-tiles", s, "--out", o, "--crs", "EPSG:32633", "--view", c, "--quiet"]);
+    let (s, o, c) = (
+        store.to_str().unwrap(),
+        out.to_str().unwrap(),
+        cam_file.to_str().unwrap(),
+    );
+    ok(&[
+        "export-tiles",
+        s,
+        "--out",
+        o,
+        "--crs",
+        "EPSG:32633",
+        "--view",
+        c,
+        "--quiet",
+    ]);
     assert!(out.join("index.html").exists() && out.join("views/view.json").exists());
     // The tiles carry the photo textures where the store has them.
     let m = cliffmap::store::Store::open(&store).unwrap();
-    let with_photo: Vec<_> = m.manifest.cells.iter().filter(|c| c.photo.is_some()).collect();
+    let with_photo: Vec<_> = m
+        .manifest
+        .cells
+        .iter()
+        .filter(|c| c.photo.is_some())
+        .collect();
     assert!(!with_photo.is_empty());
     for c in &with_photo {
-        let g = gltf::Gltf::from_slice(&std::fs::read(out.join(cliffmap::export::tile_path(c.level, c.x, c.y))).unwrap()).unwrap();
-        assert!(g.document.images().next().unwrap().name().unwrap().ends_with("photo"), "{}", c.id);
+        let g = gltf::Gltf::from_slice(
+            &std::fs::read(out.join(cliffmap::export::tile_path(c.level, c.x, c.y))).unwrap(),
+        )
+        .unwrap();
+        assert!(
+            g.document
+                .images()
+                .next()
+                .unwrap()
+                .name()
+                .unwrap()
+                .ends_with("photo"),
+            "{}",
+            c.id
+        );
     }
     let shot = tmp.path().join("cesium.png");
     let status = std::process::Command::new("node")
         .arg(tools.join("screenshot_tiles.mjs"))
-        .args([o, "views/view.json", shot.to_str().unwrap(), &w.to_string(), &h.to_string()])
+        .args([
+            o,
+            "views/view.json",
+            shot.to_str().unwrap(),
+            &w.to_string(),
+            &h.to_string(),
+        ])
         .status()
         .expect("cannot start node");
     assert!(status.success(), "the browser screenshot failed");
     let ours = tmp.path().join("cliffmap.png");
     // `--camera` takes a pinhole view; the demo's first photo has no distortion.
-    ok(&["render", s, "--camera", c, "--size", &format!("{w}x{h}"), "--unlit", "--out", ours.to_str().unwrap()]);
+    ok(&[
+        "render",
+        s,
+        "--camera",
+        c,
+        "--size",
+        &format!("{w}x{h}"),
+        "--unlit",
+        "--out",
+        ours.to_str().unwrap(),
+    ]);
     let a = image::open(&shot).unwrap().to_rgb8();
     let b = image::open(&ours).unwrap().to_rgb8();
     assert_eq!(a.dimensions(), b.dimensions());
@@ -65,13 +149,26 @@ fn cesium_page_shows_what_cliffmap_renders() {
         let is_sky = (0..3).map(|k| (pb[k] as i32 - sky[k]).abs()).sum::<i32>() <= 6;
         let is_background = pa.0.iter().map(|&v| v as i32).sum::<i32>() <= 6;
         if !is_sky && !is_background {
-            se += (0..3).map(|k| (pa[k] as f64 - pb[k] as f64).powi(2)).sum::<f64>() / 3.0;
+            se += (0..3)
+                .map(|k| (pa[k] as f64 - pb[k] as f64).powi(2))
+                .sum::<f64>()
+                / 3.0;
             n += 1;
         }
     }
     let share = n as f64 / (w * h) as f64;
-    assert!(share > 0.3, "only {:.0} % of the pixels are terrain in both images", 100.0 * share);
+    assert!(
+        share > 0.3,
+        "only {:.0} % of the pixels are terrain in both images",
+        100.0 * share
+    );
     let psnr = 10.0 * (255.0f64.powi(2) / (se / n as f64)).log10();
-    eprintln!("Cesium vs cliffmap render: {psnr:.1} dB on {:.0} % terrain pixels", 100.0 * share);
-    assert!(psnr >= 28.0, "Cesium's view differs from cliffmap's render: {psnr:.1} dB");
+    eprintln!(
+        "Cesium vs cliffmap render: {psnr:.1} dB on {:.0} % terrain pixels",
+        100.0 * share
+    );
+    assert!(
+        psnr >= 28.0,
+        "Cesium's view differs from cliffmap's render: {psnr:.1} dB"
+    );
 }

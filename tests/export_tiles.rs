@@ -7,9 +7,9 @@ mod common;
 
 use std::path::Path;
 
+use cli_util::{fails_naming, ok};
 use cliffmap::export::{ToEcef, ecef_to_enu};
 use cliffmap::store::Store;
-use cli_util::{fails_naming, ok};
 use glam::{DMat3, DVec3};
 
 fn small_store(dir: &Path) {
@@ -29,23 +29,58 @@ fn tileset_is_an_explicit_quadtree_placed_in_ecef() {
     let dir = tmp.path().join("store");
     small_store(&dir);
     let out = tmp.path().join("tiles");
-    ok(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--geoid-offset", "35", "--quiet"]);
+    ok(&[
+        "export-tiles",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--crs",
+        "EPSG:32633",
+        "--geoid-offset",
+        "35",
+        "--quiet",
+    ]);
     let store = Store::open(&dir).unwrap();
-    let ts: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("tileset.json")).unwrap()).unwrap();
+    let ts: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("tileset.json")).unwrap()).unwrap();
     assert_eq!(ts["asset"]["version"], "1.1");
     assert_eq!(ts["root"]["refine"], "REPLACE");
-    assert!(ts["asset"]["extras"]["cliffmap"]["heights"].as_str().unwrap().contains("35"));
-    let m: Vec<f64> = ts["root"]["transform"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    let rot_t = DMat3::from_cols(DVec3::new(m[0], m[1], m[2]), DVec3::new(m[4], m[5], m[6]), DVec3::new(m[8], m[9], m[10]));
+    assert!(
+        ts["asset"]["extras"]["cliffmap"]["heights"]
+            .as_str()
+            .unwrap()
+            .contains("35")
+    );
+    let m: Vec<f64> = ts["root"]["transform"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let rot_t = DMat3::from_cols(
+        DVec3::new(m[0], m[1], m[2]),
+        DVec3::new(m[4], m[5], m[6]),
+        DVec3::new(m[8], m[9], m[10]),
+    );
     let centre = DVec3::new(m[12], m[13], m[14]);
     let mut tiles = Vec::new();
     walk(&ts["root"], 0, &mut tiles);
-    let with_content: Vec<_> = tiles.iter().filter(|(t, _)| t.get("content").is_some()).collect();
-    assert_eq!(with_content.len(), store.manifest.cells.len(), "every cell is a tile (the demo's children cover their parents)");
+    let with_content: Vec<_> = tiles
+        .iter()
+        .filter(|(t, _)| t.get("content").is_some())
+        .collect();
+    assert_eq!(
+        with_content.len(),
+        store.manifest.cells.len(),
+        "every cell is a tile (the demo's children cover their parents)"
+    );
     let to_ecef = ToEcef::new("EPSG:32633", 35.0).unwrap();
     for (t, depth) in &with_content {
         let uri = t["content"]["uri"].as_str().unwrap();
-        let id = uri.trim_start_matches("tiles/").trim_end_matches(".glb").replace(['/', '-'], "-");
+        let id = uri
+            .trim_start_matches("tiles/")
+            .trim_end_matches(".glb")
+            .replace(['/', '-'], "-");
         let rec = store.cell(&id).unwrap();
         assert_eq!(*depth, rec.level as usize + 1);
         assert_eq!(t["geometricError"].as_f64().unwrap(), rec.max_error);
@@ -58,17 +93,40 @@ fn tileset_is_an_explicit_quadtree_placed_in_ecef() {
         }
         let bytes = std::fs::read(out.join(uri)).unwrap();
         let g = gltf::Gltf::from_slice(&bytes).unwrap();
-        let prim = g.document.meshes().next().unwrap().primitives().next().unwrap();
+        let prim = g
+            .document
+            .meshes()
+            .next()
+            .unwrap()
+            .primitives()
+            .next()
+            .unwrap();
         assert_eq!(prim.indices().unwrap().count() / 3, rec.triangles as usize);
-        let b: Vec<f64> = t["boundingVolume"]["box"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let b: Vec<f64> = t["boundingVolume"]["box"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
         let pos = prim.get(&gltf::Semantic::Positions).unwrap();
         let (lo, hi) = (pos.min().unwrap(), pos.max().unwrap());
         // glTF y-up → tile z-up: (x, y, z) → (x, −z, y).
-        let lo_t = [lo[0].as_f64().unwrap(), -hi[2].as_f64().unwrap(), lo[1].as_f64().unwrap()];
-        let hi_t = [hi[0].as_f64().unwrap(), -lo[2].as_f64().unwrap(), hi[1].as_f64().unwrap()];
+        let lo_t = [
+            lo[0].as_f64().unwrap(),
+            -hi[2].as_f64().unwrap(),
+            lo[1].as_f64().unwrap(),
+        ];
+        let hi_t = [
+            hi[0].as_f64().unwrap(),
+            -lo[2].as_f64().unwrap(),
+            hi[1].as_f64().unwrap(),
+        ];
         for k in 0..3 {
             let h = [b[3], b[7], b[11]][k];
-            assert!(lo_t[k] >= b[k] - h - 1e-3 && hi_t[k] <= b[k] + h + 1e-3, "{id} axis {k}");
+            assert!(
+                lo_t[k] >= b[k] - h - 1e-3 && hi_t[k] <= b[k] + h + 1e-3,
+                "{id} axis {k}"
+            );
         }
     }
     // A store corner: through ECEF into the root frame and back to the CRS within 1 mm.
@@ -79,7 +137,13 @@ fn tileset_is_an_explicit_quadtree_placed_in_ecef() {
     let back = to_ecef.from_ecef(centre + rot_t * enu).unwrap();
     assert!((back - corner).length() < 1e-3, "{back} vs {corner}");
     // The root frame is the ellipsoid's east-north-up frame at its origin.
-    assert!((ecef_to_enu(centre).transpose() - rot_t).abs().to_cols_array().iter().all(|v| *v < 1e-9));
+    assert!(
+        (ecef_to_enu(centre).transpose() - rot_t)
+            .abs()
+            .to_cols_array()
+            .iter()
+            .all(|v| *v < 1e-9)
+    );
 }
 
 #[test]
@@ -90,8 +154,23 @@ fn export_tiles_refuses_a_store_without_crs_and_bad_crs() {
     let out = tmp.path().join("tiles");
     let (d, o) = (dir.to_str().unwrap(), out.to_str().unwrap());
     fails_naming(&["export-tiles", d, "--out", o], "--crs");
-    fails_naming(&["export-tiles", d, "--out", o, "--crs", "EPSG:1"], "EPSG:1");
-    fails_naming(&["export-tiles", d, "--out", o, "--crs", "EPSG:32633", "--geoid-offset", "1e9"], "geoid-offset");
+    fails_naming(
+        &["export-tiles", d, "--out", o, "--crs", "EPSG:1"],
+        "EPSG:1",
+    );
+    fails_naming(
+        &[
+            "export-tiles",
+            d,
+            "--out",
+            o,
+            "--crs",
+            "EPSG:32633",
+            "--geoid-offset",
+            "1e9",
+        ],
+        "geoid-offset",
+    );
     assert!(!out.join("tileset.json").exists());
 }
 
@@ -99,16 +178,37 @@ fn export_tiles_refuses_a_store_without_crs_and_bad_crs() {
 fn ecef_agrees_with_pyproj_within_5_cm() {
     // Points in three UTM zones (Engabreen 33N, St Helens 10N, a southern zone), heights
     // with a geoid offset; pyproj (installed by .ci/run) is the independent transform.
-    let cases = [("EPSG:32633", 446_722.0, 7_396_671.0, 770.0), ("EPSG:32610", 562_000.0, 5_118_000.0, 2_500.0), ("EPSG:32755", 330_000.0, 6_250_000.0, 12.0)];
+    let cases = [
+        ("EPSG:32633", 446_722.0, 7_396_671.0, 770.0),
+        ("EPSG:32610", 562_000.0, 5_118_000.0, 2_500.0),
+        ("EPSG:32755", 330_000.0, 6_250_000.0, 12.0),
+    ];
     for (crs, x, y, z) in cases {
-        let ours = ToEcef::new(crs, 37.5).unwrap().to_ecef(DVec3::new(x, y, z)).unwrap();
+        let ours = ToEcef::new(crs, 37.5)
+            .unwrap()
+            .to_ecef(DVec3::new(x, y, z))
+            .unwrap();
         let script = format!(
             "import pyproj\nt = pyproj.Transformer.from_crs('{crs}', 'EPSG:4978', always_xy=True)\nprint(*t.transform({x}, {y}, {z} + 37.5))"
         );
-        let o = std::process::Command::new("python3").args(["-c", &script]).output().expect("python3 is needed (.ci/run installs python3-pyproj)");
-        assert!(o.status.success(), "pyproj failed (is python3-pyproj installed?): {}", String::from_utf8_lossy(&o.stderr));
-        let v: Vec<f64> = String::from_utf8_lossy(&o.stdout).split_whitespace().map(|s| s.parse().unwrap()).collect();
+        let o = std::process::Command::new("python3")
+            .args(["-c", &script])
+            .output()
+            .expect("python3 is needed (.ci/run installs python3-pyproj)");
+        assert!(
+            o.status.success(),
+            "pyproj failed (is python3-pyproj installed?): {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v: Vec<f64> = String::from_utf8_lossy(&o.stdout)
+            .split_whitespace()
+            .map(|s| s.parse().unwrap())
+            .collect();
         let theirs = DVec3::new(v[0], v[1], v[2]);
-        assert!((ours - theirs).length() < 0.05, "{crs}: {ours} vs pyproj {theirs} ({:.4} m)", (ours - theirs).length());
+        assert!(
+            (ours - theirs).length() < 0.05,
+            "{crs}: {ours} vs pyproj {theirs} ({:.4} m)",
+            (ours - theirs).length()
+        );
     }
 }

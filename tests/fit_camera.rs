@@ -4,9 +4,9 @@
 mod cli_util;
 mod common;
 
+use cli_util::{cliffmap, ok};
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::register::{PixelOrigin, read_gcps};
-use cli_util::{cliffmap, ok};
 
 fn path(rel: &str) -> String {
     common::real_data(rel).display().to_string()
@@ -15,7 +15,11 @@ fn path(rel: &str) -> String {
 /// GCP RMSE (px) of a camera file over the Engabreen GCPs.
 fn rmse_of(camera: &std::path::Path) -> f64 {
     let cam = camera_from_json_file(camera, (0, 0)).unwrap();
-    let gcps = read_gcps(&common::real_data("engabreen/gcp8902.txt"), PixelOrigin::Format).unwrap();
+    let gcps = read_gcps(
+        &common::real_data("engabreen/gcp8902.txt"),
+        PixelOrigin::Format,
+    )
+    .unwrap();
     let s: f64 = gcps
         .iter()
         .map(|g| {
@@ -33,21 +37,55 @@ fn engabreen_fit_matches_imgraft_from_its_camera_and_from_the_position_alone() {
     let free = "yaw,pitch,roll,fx,fy,k1";
     // from a start 2° / 1° / 3 % off ImGRAFT's camera
     let start = dir.path().join("start.json");
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(common::real_data("engabreen/engabreen_camera_IMG_8902.json")).unwrap()).unwrap();
-    let ypr = doc["viewdir_yaw_pitch_roll_deg"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect::<Vec<_>>();
-    doc.as_object_mut().unwrap().remove("viewdir_yaw_pitch_roll_rad");
-    doc["viewdir_yaw_pitch_roll_deg"] = serde_json::json!([ypr[0] + 2.0, ypr[1] - 1.0, ypr[2] + 1.0]);
+    let mut doc: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(common::real_data(
+            "engabreen/engabreen_camera_IMG_8902.json",
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let ypr = doc["viewdir_yaw_pitch_roll_deg"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect::<Vec<_>>();
+    doc.as_object_mut()
+        .unwrap()
+        .remove("viewdir_yaw_pitch_roll_rad");
+    doc["viewdir_yaw_pitch_roll_deg"] =
+        serde_json::json!([ypr[0] + 2.0, ypr[1] - 1.0, ypr[2] + 1.0]);
     doc["f_px"] = serde_json::json!([5830.0, 5840.0]);
     doc["k1"] = serde_json::json!(0.0);
     std::fs::write(&start, doc.to_string()).unwrap();
     let out = dir.path().join("fit.json");
-    let o = ok(&["fit-camera", "--gcps", &gcps, "--camera", start.to_str().unwrap(), "--free", free, "--out", out.to_str().unwrap(), "--json"]);
+    let o = ok(&[
+        "fit-camera",
+        "--gcps",
+        &gcps,
+        "--camera",
+        start.to_str().unwrap(),
+        "--free",
+        free,
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let rmse = report["rmse_px"].as_f64().unwrap();
-    assert!((rmse - 3.044).abs() < 0.01, "RMSE {rmse} px, ImGRAFT's fit 3.04 px");
-    assert!((rmse_of(&out) - rmse).abs() < 1e-6, "the written camera reproduces the fit");
-    assert!((report["params"]["yaw"].as_f64().unwrap() - 219.2258).abs() < 0.01, "{}", report["params"]);
+    assert!(
+        (rmse - 3.044).abs() < 0.01,
+        "RMSE {rmse} px, ImGRAFT's fit 3.04 px"
+    );
+    assert!(
+        (rmse_of(&out) - rmse).abs() < 1e-6,
+        "the written camera reproduces the fit"
+    );
+    assert!(
+        (report["params"]["yaw"].as_f64().unwrap() - 219.2258).abs() < 0.01,
+        "{}",
+        report["params"]
+    );
     assert!((report["params"]["k1"].as_f64().unwrap() + 0.1145).abs() < 0.002);
     assert_eq!(report["residuals"].as_array().unwrap().len(), 28);
     for k in ["yaw", "pitch", "roll", "fx", "fy", "k1"] {
@@ -58,13 +96,32 @@ fn engabreen_fit_matches_imgraft_from_its_camera_and_from_the_position_alone() {
     // from the position alone (orientation from the GCP bearings, focal length searched)
     let out2 = dir.path().join("fit2.json");
     ok(&[
-        "fit-camera", "--gcps", &gcps, "--position", "446722,7396671,770", "--size", "4290x2856", "--free", free, "--out",
+        "fit-camera",
+        "--gcps",
+        &gcps,
+        "--position",
+        "446722,7396671,770",
+        "--size",
+        "4290x2856",
+        "--free",
+        free,
+        "--out",
         out2.to_str().unwrap(),
     ]);
     assert!((rmse_of(&out2) - 3.044).abs() < 0.01, "{}", rmse_of(&out2));
     // from the GCPs alone (DLT + RANSAC start), the position free too
     let out3 = dir.path().join("fit3.json");
-    let o = ok(&["fit-camera", "--gcps", &gcps, "--size", "4290x2856", "--free", "angles,position,f,k1", "--out", out3.to_str().unwrap()]);
+    let o = ok(&[
+        "fit-camera",
+        "--gcps",
+        &gcps,
+        "--size",
+        "4290x2856",
+        "--free",
+        "angles,position,f,k1",
+        "--out",
+        out3.to_str().unwrap(),
+    ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("DLT"));
     let cam = camera_from_json_file(&out3, (0, 0)).unwrap();
     let off = cam.position - glam::DVec3::new(446722.0, 7396671.0, 770.0);
@@ -77,15 +134,31 @@ fn exif_focal_length_of_img_8902() {
     // Canon EOS Rebel T3, FocalLength 30 mm, no focal-plane resolution in the file: the
     // sensor width (22.0 mm) gives 5850 px, 2.7 % below the GCP fit's 6014 px
     let img = common::real_data("engabreen/IMG_8902.jpg");
-    let f = cliffmap::register::exif_focal_px(&img, 4290, 2856, Some(22.0)).unwrap().unwrap();
+    let f = cliffmap::register::exif_focal_px(&img, 4290, 2856, Some(22.0))
+        .unwrap()
+        .unwrap();
     assert!((f.focal_px - 5850.0).abs() < 0.5, "{f:?}");
-    assert_eq!(cliffmap::register::exif_focal_px(&img, 4290, 2856, None).unwrap(), None);
+    assert_eq!(
+        cliffmap::register::exif_focal_px(&img, 4290, 2856, None).unwrap(),
+        None
+    );
     // the command starts from it
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cam.json");
     let o = ok(&[
-        "fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--position", "446722,7396671,770", "--image",
-        img.to_str().unwrap(), "--sensor-width-mm", "22.0", "--free", "yaw,pitch,roll,fx,fy,k1", "--out", out.to_str().unwrap(),
+        "fit-camera",
+        "--gcps",
+        &path("engabreen/gcp8902.txt"),
+        "--position",
+        "446722,7396671,770",
+        "--image",
+        img.to_str().unwrap(),
+        "--sensor-width-mm",
+        "22.0",
+        "--free",
+        "yaw,pitch,roll,fx,fy,k1",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("from EXIF"));
     assert!((rmse_of(&out) - 3.044).abs() < 0.01);
@@ -98,16 +171,50 @@ fn bad_gcp_input_fails_naming_the_file() {
     std::fs::write(&bad, "446238 7396055 586.4 816+9\n").unwrap();
     let out = dir.path().join("cam.json");
     let cam = path("engabreen/engabreen_camera_IMG_8902.json");
-    for (gcps, want) in [(bad.to_str().unwrap(), "bad.txt"), ("/nonexistent/g.txt", "/nonexistent/g.txt")] {
-        let o = cliffmap(&["fit-camera", "--gcps", gcps, "--camera", &cam, "--out", out.to_str().unwrap()]);
+    for (gcps, want) in [
+        (bad.to_str().unwrap(), "bad.txt"),
+        ("/nonexistent/g.txt", "/nonexistent/g.txt"),
+    ] {
+        let o = cliffmap(&[
+            "fit-camera",
+            "--gcps",
+            gcps,
+            "--camera",
+            &cam,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains(want), "{err}");
     }
-    let o = cliffmap(&["fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--camera", &cam, "--free", "zoom", "--out", out.to_str().unwrap()]);
+    let o = cliffmap(&[
+        "fit-camera",
+        "--gcps",
+        &path("engabreen/gcp8902.txt"),
+        "--camera",
+        &cam,
+        "--free",
+        "zoom",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("zoom"));
     for bad in [["--focal-px", "0"], ["--huber-px", "0"]] {
-        let o = cliffmap(&["fit-camera", "--gcps", &path("engabreen/gcp8902.txt"), "--camera", &cam, bad[0], bad[1], "--out", out.to_str().unwrap()]);
-        assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains(bad[0]), "{bad:?}");
+        let o = cliffmap(&[
+            "fit-camera",
+            "--gcps",
+            &path("engabreen/gcp8902.txt"),
+            "--camera",
+            &cam,
+            bad[0],
+            bad[1],
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            !o.status.success() && String::from_utf8_lossy(&o.stderr).contains(bad[0]),
+            "{bad:?}"
+        );
     }
     assert!(!out.exists(), "nothing written on failure");
 }
@@ -115,23 +222,58 @@ fn bad_gcp_input_fails_naming_the_file() {
 #[test]
 fn img_8937_registers_to_img_8902_on_stable_ground() {
     // ImGRAFT: viewdir change +0.12633°, +0.017584°, +0.015242° from rock features, 0.41 px
-    let a = image::open(common::real_data("engabreen/IMG_8902.jpg")).unwrap().to_rgb8();
-    let b = image::open(common::real_data("engabreen/IMG_8937.jpg")).unwrap().to_rgb8();
-    let cam = camera_from_json_file(&common::real_data("engabreen/engabreen_camera_IMG_8902.json"), (0, 0)).unwrap();
-    let matches = cliffmap::register::match_photos(&a, &b, &cliffmap::register::MatchOptions::default()).unwrap();
+    let a = image::open(common::real_data("engabreen/IMG_8902.jpg"))
+        .unwrap()
+        .to_rgb8();
+    let b = image::open(common::real_data("engabreen/IMG_8937.jpg"))
+        .unwrap()
+        .to_rgb8();
+    let cam = camera_from_json_file(
+        &common::real_data("engabreen/engabreen_camera_IMG_8902.json"),
+        (0, 0),
+    )
+    .unwrap();
+    let matches =
+        cliffmap::register::match_photos(&a, &b, &cliffmap::register::MatchOptions::default())
+            .unwrap();
     let dem = common::engabreen_dem();
-    let mask = image::open(common::real_data("engabreen/engabreen_glacier_mask_507x590.png")).unwrap().to_luma8();
+    let mask = image::open(common::real_data(
+        "engabreen/engabreen_glacier_mask_507x590.png",
+    ))
+    .unwrap()
+    .to_luma8();
     let tracer = cliffmap::scene::DemTracer::new(&dem, cam.position).unwrap();
     let rock = |p: glam::DVec3| {
         let (r, c) = dem.georef.grid(p.x, p.y);
-        r >= -0.5 && c >= -0.5 && mask.get_pixel_checked(c.round() as u32, r.round() as u32).is_some_and(|m| m.0[0] < 128)
+        r >= -0.5
+            && c >= -0.5
+            && mask
+                .get_pixel_checked(c.round() as u32, r.round() as u32)
+                .is_some_and(|m| m.0[0] < 128)
     };
-    let stable = cliffmap::register::stable_matches(&cam, &matches, |o, d| tracer.nearest(o, d, f64::INFINITY).map(|h| h.point), rock);
-    assert!(stable.len() >= 200, "{} stable matches of {}", stable.len(), matches.len());
+    let stable = cliffmap::register::stable_matches(
+        &cam,
+        &matches,
+        |o, d| tracer.nearest(o, d, f64::INFINITY).map(|h| h.point),
+        rock,
+    );
+    assert!(
+        stable.len() >= 200,
+        "{} stable matches of {}",
+        stable.len(),
+        matches.len()
+    );
     let fit = cliffmap::register::fit_rotation(&cam, &stable).unwrap();
-    assert!(fit.rmse_inliers_px < 0.5, "match residual {} px", fit.rmse_inliers_px);
+    assert!(
+        fit.rmse_inliers_px < 0.5,
+        "match residual {} px",
+        fit.rmse_inliers_px
+    );
     let (ya, pa, _) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
     let (yb, pb, _) = cliffmap::camera::yaw_pitch_roll_from_rotation(&fit.camera.world_to_camera);
     let (dy, dp) = ((yb - ya).to_degrees(), (pb - pa).to_degrees());
-    assert!((dy - 0.12633).abs() < 0.005 && (dp - 0.017584).abs() < 0.005, "{dy} {dp}");
+    assert!(
+        (dy - 0.12633).abs() < 0.005 && (dp - 0.017584).abs() < 0.005,
+        "{dy} {dp}"
+    );
 }

@@ -16,14 +16,28 @@ fn no_parser_panics_on_mutated_inputs() {
         let rep = fuzz::fuzz(t, &fuzz::corpus(t.name), 0x5eed, 400, None, tmp.path());
         assert!(rep.runs >= 400);
         // Valid seeds parse (else the mutations would explore little but the error paths).
-        assert_eq!(rep.rejected_seeds, 0, "{}: a seed or corpus file is rejected", t.name);
+        assert_eq!(
+            rep.rejected_seeds, 0,
+            "{}: a seed or corpus file is rejected",
+            t.name
+        );
         for (input, msg) in rep.panics.iter().take(3) {
-            let p = tmp.path().join(format!("{}-panic-{}.bin", t.name, failures.len()));
+            let p = tmp
+                .path()
+                .join(format!("{}-panic-{}.bin", t.name, failures.len()));
             std::fs::write(&p, input).unwrap();
-            failures.push(format!("{}: {msg} (input of {} bytes)", t.name, input.len()));
+            failures.push(format!(
+                "{}: {msg} (input of {} bytes)",
+                t.name,
+                input.len()
+            ));
         }
     }
-    assert!(failures.is_empty(), "parsers panicked:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "parsers panicked:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -31,7 +45,9 @@ fn the_mutator_is_deterministic_and_changes_inputs() {
     let seed = b"{\"a\": [1, 2, 3.5], \"b\": \"x\"}".to_vec();
     let run = |s: u64| {
         let mut r = fuzz::Rng(s);
-        (0..50).map(|_| fuzz::mutate(&mut r, &seed, &seed)).collect::<Vec<_>>()
+        (0..50)
+            .map(|_| fuzz::mutate(&mut r, &seed, &seed))
+            .collect::<Vec<_>>()
     };
     assert_eq!(run(7), run(7));
     assert!(run(7).iter().filter(|m| **m != seed).count() > 40);

@@ -4,7 +4,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use cliffmap::{DemFormat, DemLoadOptions, Error, GridGeoref, OrthoPlacement, WorldRect, load_dem, load_ortho};
+use cliffmap::{
+    DemFormat, DemLoadOptions, Error, GridGeoref, OrthoPlacement, WorldRect, load_dem, load_ortho,
+};
 use common::tiffgen::{self, Geo, Raw};
 use image::{ImageBuffer, Luma, Rgb};
 use tiff::encoder::{Compression, colortype};
@@ -24,11 +26,19 @@ fn bad<T: std::fmt::Debug>(r: cliffmap::Result<T>, path: &Path, words: &[&str]) 
 }
 
 fn raw_opts(w: usize, h: usize) -> DemLoadOptions {
-    DemLoadOptions { width: Some(w), height: Some(h), ..Default::default() }
+    DemLoadOptions {
+        width: Some(w),
+        height: Some(h),
+        ..Default::default()
+    }
 }
 
 fn write_f32(path: &Path, v: &[f32]) {
-    std::fs::write(path, v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+    std::fs::write(
+        path,
+        v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(),
+    )
+    .unwrap();
 }
 
 fn grid(w: usize, h: usize) -> Vec<f32> {
@@ -47,7 +57,10 @@ fn geo() -> Geo {
 
 fn truncate(path: &Path, keep: usize) -> PathBuf {
     let b = std::fs::read(path).unwrap();
-    let out = path.with_file_name(format!("trunc_{}", path.file_name().unwrap().to_str().unwrap()));
+    let out = path.with_file_name(format!(
+        "trunc_{}",
+        path.file_name().unwrap().to_str().unwrap()
+    ));
     std::fs::write(&out, &b[..keep.min(b.len())]).unwrap();
     out
 }
@@ -84,8 +97,16 @@ fn raw_f32_wrong_size_missing_dims_and_tiny() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("short.f32");
     write_f32(&p, &grid(10, 9)); // one row short of 10x10
-    bad(load_dem(&p, &raw_opts(10, 10)), &p, &["360 bytes", "400 bytes", "9 rows"]);
-    bad(load_dem(&p, &DemLoadOptions::default()), &p, &["--width", "--height"]);
+    bad(
+        load_dem(&p, &raw_opts(10, 10)),
+        &p,
+        &["360 bytes", "400 bytes", "9 rows"],
+    );
+    bad(
+        load_dem(&p, &DemLoadOptions::default()),
+        &p,
+        &["--width", "--height"],
+    );
     bad(load_dem(&p, &raw_opts(0, 10)), &p, &["--width"]);
     // overflowing size claim
     bad(load_dem(&p, &raw_opts(usize::MAX / 2, 8)), &p, &["bytes"]);
@@ -100,9 +121,21 @@ fn undeclared_nan_inf_and_absurd_heights() {
     let d = tempfile::tempdir().unwrap();
     let (w, h) = (6usize, 5usize);
     for (name, val, words) in [
-        ("nan.f32", f32::NAN, &["row 3, column 4", "--nodata nan"][..]),
-        ("inf.f32", f32::INFINITY, &["row 3, column 4", "--nodata"][..]),
-        ("huge.f32", 3.0e6, &["row 3, column 4", "--nodata", "--z-scale"][..]),
+        (
+            "nan.f32",
+            f32::NAN,
+            &["row 3, column 4", "--nodata nan"][..],
+        ),
+        (
+            "inf.f32",
+            f32::INFINITY,
+            &["row 3, column 4", "--nodata"][..],
+        ),
+        (
+            "huge.f32",
+            3.0e6,
+            &["row 3, column 4", "--nodata", "--z-scale"][..],
+        ),
         ("fmin.f32", f32::MIN, &["row 3, column 4", "--nodata"][..]),
     ] {
         let mut v = grid(w, h);
@@ -124,7 +157,11 @@ fn undeclared_nan_inf_and_absurd_heights() {
         Predictor::None,
         Some(&geo()),
     );
-    bad(load_dem(&p, &Default::default()), &p, &["row 1, column 2", "--nodata nan"]);
+    bad(
+        load_dem(&p, &Default::default()),
+        &p,
+        &["row 1, column 2", "--nodata nan"],
+    );
     // a z-scale that makes heights absurd
     let p = d.path().join("scaled.tif");
     tiffgen::write_strips::<colortype::Gray32Float>(
@@ -137,7 +174,13 @@ fn undeclared_nan_inf_and_absurd_heights() {
         Some(&geo()),
     );
     bad(
-        load_dem(&p, &DemLoadOptions { z_scale: Some(1000.0), ..Default::default() }),
+        load_dem(
+            &p,
+            &DemLoadOptions {
+                z_scale: Some(1000.0),
+                ..Default::default()
+            },
+        ),
         &p,
         &["implausible", "--z-scale"],
     );
@@ -155,12 +198,25 @@ fn all_nodata() {
         &v,
         Compression::Uncompressed,
         Predictor::None,
-        Some(&Geo { nodata: Some("-9999".into()), ..geo() }),
+        Some(&Geo {
+            nodata: Some("-9999".into()),
+            ..geo()
+        }),
     );
     bad(load_dem(&p, &Default::default()), &p, &["no-data"]);
     let r = d.path().join("void.f32");
     write_f32(&r, &[f32::NAN; 9]);
-    bad(load_dem(&r, &DemLoadOptions { nodata: Some(f64::NAN), ..raw_opts(3, 3) }), &r, &["no-data"]);
+    bad(
+        load_dem(
+            &r,
+            &DemLoadOptions {
+                nodata: Some(f64::NAN),
+                ..raw_opts(3, 3)
+            },
+        ),
+        &r,
+        &["no-data"],
+    );
 }
 
 #[test]
@@ -169,17 +225,61 @@ fn bad_options_name_the_file() {
     let p = d.path().join("ok.f32");
     write_f32(&p, &grid(3, 3));
     for s in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        bad(load_dem(&p, &DemLoadOptions { spacing: Some(s), ..raw_opts(3, 3) }), &p, &["--spacing"]);
+        bad(
+            load_dem(
+                &p,
+                &DemLoadOptions {
+                    spacing: Some(s),
+                    ..raw_opts(3, 3)
+                },
+            ),
+            &p,
+            &["--spacing"],
+        );
     }
-    bad(load_dem(&p, &DemLoadOptions { origin: Some((f64::NAN, 0.0)), ..raw_opts(3, 3) }), &p, &["--origin"]);
-    bad(load_dem(&p, &DemLoadOptions { z_scale: Some(0.0), ..raw_opts(3, 3) }), &p, &["--z-scale"]);
-    bad(load_dem(&p, &DemLoadOptions { z_offset: Some(f64::NAN), ..raw_opts(3, 3) }), &p, &["--z-offset"]);
+    bad(
+        load_dem(
+            &p,
+            &DemLoadOptions {
+                origin: Some((f64::NAN, 0.0)),
+                ..raw_opts(3, 3)
+            },
+        ),
+        &p,
+        &["--origin"],
+    );
+    bad(
+        load_dem(
+            &p,
+            &DemLoadOptions {
+                z_scale: Some(0.0),
+                ..raw_opts(3, 3)
+            },
+        ),
+        &p,
+        &["--z-scale"],
+    );
+    bad(
+        load_dem(
+            &p,
+            &DemLoadOptions {
+                z_offset: Some(f64::NAN),
+                ..raw_opts(3, 3)
+            },
+        ),
+        &p,
+        &["--z-offset"],
+    );
 }
 
 #[test]
 fn bad_geotiff_georeference() {
     let d = tempfile::tempdir().unwrap();
-    for (name, scale) in [("zero.tif", (0.0, 10.0)), ("neg.tif", (10.0, -10.0)), ("nanscale.tif", (f64::NAN, 10.0))] {
+    for (name, scale) in [
+        ("zero.tif", (0.0, 10.0)),
+        ("neg.tif", (10.0, -10.0)),
+        ("nanscale.tif", (f64::NAN, 10.0)),
+    ] {
         let p = d.path().join(name);
         let g = Geo { scale, ..geo() };
         tiffgen::write_strips::<colortype::Gray32Float>(
@@ -216,7 +316,17 @@ fn huge_headers_are_refused_before_decoding() {
     // PNG claiming 60000 x 60000 16-bit grey.
     let q = d.path().join("huge.png");
     png_header_only(&q, 60_000, 60_000);
-    let e = bad(load_dem(&q, &DemLoadOptions { max_memory: 1 << 30, ..Default::default() }), &q, &["--max-memory"]);
+    let e = bad(
+        load_dem(
+            &q,
+            &DemLoadOptions {
+                max_memory: 1 << 30,
+                ..Default::default()
+            },
+        ),
+        &q,
+        &["--max-memory"],
+    );
     assert!(matches!(e, Error::TooLarge { .. }), "{e}");
     // A normal file over a small limit.
     let r = d.path().join("small.tif");
@@ -229,12 +339,42 @@ fn huge_headers_are_refused_before_decoding() {
         Predictor::None,
         Some(&geo()),
     );
-    let e = bad(load_dem(&r, &DemLoadOptions { max_memory: 500, ..Default::default() }), &r, &[]);
-    assert!(matches!(e, Error::TooLarge { needed: 900, limit: 500, .. }), "{e}");
+    let e = bad(
+        load_dem(
+            &r,
+            &DemLoadOptions {
+                max_memory: 500,
+                ..Default::default()
+            },
+        ),
+        &r,
+        &[],
+    );
+    assert!(
+        matches!(
+            e,
+            Error::TooLarge {
+                needed: 900,
+                limit: 500,
+                ..
+            }
+        ),
+        "{e}"
+    );
     // Raw f32 over the limit.
     let f = d.path().join("lim.f32");
     write_f32(&f, &grid(10, 10));
-    let e = bad(load_dem(&f, &DemLoadOptions { max_memory: 100, ..raw_opts(10, 10) }), &f, &[]);
+    let e = bad(
+        load_dem(
+            &f,
+            &DemLoadOptions {
+                max_memory: 100,
+                ..raw_opts(10, 10)
+            },
+        ),
+        &f,
+        &[],
+    );
     assert!(matches!(e, Error::TooLarge { .. }));
 }
 
@@ -258,7 +398,9 @@ fn zero_and_tiny_dimensions() {
     png_header_only(&q, 0, 10);
     bad(load_dem(&q, &Default::default()), &q, &[]);
     let one = d.path().join("one.png");
-    ImageBuffer::<Luma<u16>, Vec<u16>>::from_pixel(1, 1, Luma([5])).save(&one).unwrap();
+    ImageBuffer::<Luma<u16>, Vec<u16>>::from_pixel(1, 1, Luma([5]))
+        .save(&one)
+        .unwrap();
     bad(load_dem(&one, &Default::default()), &one, &["2x2"]);
     let t = d.path().join("one_row.tif");
     tiffgen::write_strips::<colortype::Gray32Float>(
@@ -312,13 +454,35 @@ fn truncated_and_corrupt_files() {
     bad(load_dem(&j, &Default::default()), &j, &["TIFF"]);
 
     let png = d.path().join("dem16.png");
-    ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(64, 64, |x, y| Luma([(x * 977 + y * 131) as u16])).save(&png).unwrap();
+    ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(64, 64, |x, y| Luma([(x * 977 + y * 131) as u16]))
+        .save(&png)
+        .unwrap();
     let plen = std::fs::metadata(&png).unwrap().len() as usize;
     for keep in [0, 20, 40, plen / 2, plen - 5] {
         let t = truncate(&png, keep);
         bad(load_dem(&t, &Default::default()), &t, &[]);
-        bad(load_dem(&t, &DemLoadOptions { format: Some(DemFormat::Png16), ..Default::default() }), &t, &[]);
-        bad(load_dem(&t, &DemLoadOptions { format: Some(DemFormat::TerrainRgb), ..Default::default() }), &t, &[]);
+        bad(
+            load_dem(
+                &t,
+                &DemLoadOptions {
+                    format: Some(DemFormat::Png16),
+                    ..Default::default()
+                },
+            ),
+            &t,
+            &[],
+        );
+        bad(
+            load_dem(
+                &t,
+                &DemLoadOptions {
+                    format: Some(DemFormat::TerrainRgb),
+                    ..Default::default()
+                },
+            ),
+            &t,
+            &[],
+        );
     }
 }
 
@@ -355,16 +519,42 @@ fn unsupported_sample_formats() {
     bad(load_dem(&b, &Default::default()), &b, &["1-bit"]);
     // RGB is not a DEM
     let c = d.path().join("rgb.tif");
-    tiffgen::write_strips::<colortype::RGB8>(&c, 3, 3, &[7u8; 27], Compression::Uncompressed, Predictor::None, None);
+    tiffgen::write_strips::<colortype::RGB8>(
+        &c,
+        3,
+        3,
+        &[7u8; 27],
+        Compression::Uncompressed,
+        Predictor::None,
+        None,
+    );
     bad(load_dem(&c, &Default::default()), &c, &[]);
     // 8-bit grey PNG without an explicit format
     let g = d.path().join("grey8.png");
-    ImageBuffer::<Luma<u8>, Vec<u8>>::from_pixel(4, 4, Luma([3])).save(&g).unwrap();
-    bad(load_dem(&g, &Default::default()), &g, &["--dem-format png16"]);
+    ImageBuffer::<Luma<u8>, Vec<u8>>::from_pixel(4, 4, Luma([3]))
+        .save(&g)
+        .unwrap();
+    bad(
+        load_dem(&g, &Default::default()),
+        &g,
+        &["--dem-format png16"],
+    );
     // RGB PNG read as png16
     let r = d.path().join("rgb.png");
-    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_pixel(4, 4, Rgb([1, 2, 3])).save(&r).unwrap();
-    bad(load_dem(&r, &DemLoadOptions { format: Some(DemFormat::Png16), ..Default::default() }), &r, &["terrain-rgb"]);
+    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_pixel(4, 4, Rgb([1, 2, 3]))
+        .save(&r)
+        .unwrap();
+    bad(
+        load_dem(
+            &r,
+            &DemLoadOptions {
+                format: Some(DemFormat::Png16),
+                ..Default::default()
+            },
+        ),
+        &r,
+        &["terrain-rgb"],
+    );
     // unknown extension, unknown content
     let u = d.path().join("mystery.xyz");
     std::fs::write(&u, [1u8, 2, 3, 4, 5, 6, 7, 8, 9]).unwrap();
@@ -374,21 +564,58 @@ fn unsupported_sample_formats() {
 #[test]
 fn bad_orthos() {
     let d = tempfile::tempdir().unwrap();
-    let dem = cliffmap::Dem::from_heights(4, 4, vec![1.0; 16], GridGeoref::new(100.0, 200.0, 2.0)).unwrap();
+    let dem = cliffmap::Dem::from_heights(4, 4, vec![1.0; 16], GridGeoref::new(100.0, 200.0, 2.0))
+        .unwrap();
     let p = d.path().join("photo.png");
-    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_pixel(5, 4, Rgb([9, 9, 9])).save(&p).unwrap();
-    bad(load_ortho(&p, OrthoPlacement::FromFile, &dem, 1 << 20), &p, &["--ortho-same-grid"]);
-    bad(load_ortho(&p, OrthoPlacement::SameGridAsDem, &dem, 1 << 20), &p, &["5x4", "4x4"]);
-    let far = WorldRect { min_x: 1e6, min_y: 1e6, max_x: 1e6 + 10.0, max_y: 1e6 + 10.0 };
-    bad(load_ortho(&p, OrthoPlacement::Extent(far), &dem, 1 << 20), &p, &["overlap"]);
-    let nan = WorldRect { min_x: f64::NAN, min_y: 0.0, max_x: 1.0, max_y: 1.0 };
-    bad(load_ortho(&p, OrthoPlacement::Extent(nan), &dem, 1 << 20), &p, &["--ortho-extent"]);
-    let e = bad(load_ortho(&p, OrthoPlacement::SameGridAsDem, &dem, 10), &p, &[]);
+    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_pixel(5, 4, Rgb([9, 9, 9]))
+        .save(&p)
+        .unwrap();
+    bad(
+        load_ortho(&p, OrthoPlacement::FromFile, &dem, 1 << 20),
+        &p,
+        &["--ortho-same-grid"],
+    );
+    bad(
+        load_ortho(&p, OrthoPlacement::SameGridAsDem, &dem, 1 << 20),
+        &p,
+        &["5x4", "4x4"],
+    );
+    let far = WorldRect {
+        min_x: 1e6,
+        min_y: 1e6,
+        max_x: 1e6 + 10.0,
+        max_y: 1e6 + 10.0,
+    };
+    bad(
+        load_ortho(&p, OrthoPlacement::Extent(far), &dem, 1 << 20),
+        &p,
+        &["overlap"],
+    );
+    let nan = WorldRect {
+        min_x: f64::NAN,
+        min_y: 0.0,
+        max_x: 1.0,
+        max_y: 1.0,
+    };
+    bad(
+        load_ortho(&p, OrthoPlacement::Extent(nan), &dem, 1 << 20),
+        &p,
+        &["--ortho-extent"],
+    );
+    let e = bad(
+        load_ortho(&p, OrthoPlacement::SameGridAsDem, &dem, 10),
+        &p,
+        &[],
+    );
     assert!(matches!(e, Error::TooLarge { .. }));
     let len = std::fs::metadata(&p).unwrap().len() as usize;
     for keep in [0, 30, len / 2] {
         let t = truncate(&p, keep);
-        bad(load_ortho(&t, OrthoPlacement::SameGridAsDem, &dem, 1 << 20), &t, &[]);
+        bad(
+            load_ortho(&t, OrthoPlacement::SameGridAsDem, &dem, 1 << 20),
+            &t,
+            &[],
+        );
     }
     // a 16-bit-per-sample TIFF ortho and a GeoTIFF outside the DEM
     let t16 = d.path().join("rgb16.tif");
@@ -401,7 +628,11 @@ fn bad_orthos() {
         Predictor::None,
         Some(&geo()),
     );
-    bad(load_ortho(&t16, OrthoPlacement::FromFile, &dem, 1 << 20), &t16, &["8-bit"]);
+    bad(
+        load_ortho(&t16, OrthoPlacement::FromFile, &dem, 1 << 20),
+        &t16,
+        &["8-bit"],
+    );
     let t8 = d.path().join("rgb8.tif");
     tiffgen::write_strips::<colortype::RGB8>(
         &t8,
@@ -412,7 +643,11 @@ fn bad_orthos() {
         Predictor::None,
         Some(&geo()),
     );
-    bad(load_ortho(&t8, OrthoPlacement::FromFile, &dem, 1 << 20), &t8, &["overlap"]);
+    bad(
+        load_ortho(&t8, OrthoPlacement::FromFile, &dem, 1 << 20),
+        &t8,
+        &["overlap"],
+    );
 }
 
 mod corrupted_bytes {
@@ -428,7 +663,10 @@ mod corrupted_bytes {
             b[pos % n] = val;
         }
         std::fs::write(&p, &b).unwrap();
-        let opts = DemLoadOptions { max_memory: 1 << 22, ..Default::default() };
+        let opts = DemLoadOptions {
+            max_memory: 1 << 22,
+            ..Default::default()
+        };
         match load_dem(&p, &opts) {
             Ok(dem) => {
                 assert_eq!(dem.heights.len(), dem.width * dem.height);
@@ -441,7 +679,10 @@ mod corrupted_bytes {
     fn sample_tiff() -> Vec<u8> {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("s.tif");
-        let g = Geo { nodata: Some("-9999".into()), ..geo() };
+        let g = Geo {
+            nodata: Some("-9999".into()),
+            ..geo()
+        };
         tiffgen::write_strips::<colortype::Gray32Float>(
             &p,
             12,
@@ -457,7 +698,9 @@ mod corrupted_bytes {
     fn sample_png() -> Vec<u8> {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("s.png");
-        ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(12, 10, |x, y| Luma([(x * 300 + y) as u16])).save(&p).unwrap();
+        ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(12, 10, |x, y| Luma([(x * 300 + y) as u16]))
+            .save(&p)
+            .unwrap();
         std::fs::read(&p).unwrap()
     }
 

@@ -60,7 +60,10 @@ fn steepest_engabreen_patch() {
     let bytes = std::fs::read(&path).unwrap();
     let (cols, rows) = (507usize, 590usize);
     assert_eq!(bytes.len(), cols * rows * 4);
-    let z: Vec<f64> = bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64).collect();
+    let z: Vec<f64> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64)
+        .collect();
     let n = 17;
     let mut best = (f64::NEG_INFINITY, 0, 0);
     for r0 in (0..rows - n).step_by(4) {
@@ -84,7 +87,16 @@ fn steepest_engabreen_patch() {
     let xs: Vec<f64> = (0..n).map(|i| 3.0 * i as f64).collect();
     // Rows run south; flip them so y points north and triangles stay CCW from above.
     // World offsets as in the file's georeference (UTM 33N).
-    let m = grid_mesh(&xs, &xs, |r, c| z[(r0 + n - 1 - r) * cols + c0 + c], [445302.17 + 3.0 * c0 as f64, 7396769.45 - 3.0 * (r0 + n - 1) as f64, 0.0]);
+    let m = grid_mesh(
+        &xs,
+        &xs,
+        |r, c| z[(r0 + n - 1 - r) * cols + c0 + c],
+        [
+            445302.17 + 3.0 * c0 as f64,
+            7396769.45 - 3.0 * (r0 + n - 1) as f64,
+            0.0,
+        ],
+    );
     let ch = parameterize(&m, &ParamOptions::default()).unwrap();
     assert_eq!(ch.metrics.flipped, 0);
     let ortho: Vec<[f64; 2]> = m.positions.iter().map(|p| [p[0], p[1]]).collect();

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use cliffmap::camera::{CameraModel, rotation_look_at};
 use cliffmap::photo::{BlendMode, PhotoInput};
 use cliffmap::pipeline::{
-    BuildInputs, BuildOptions, PhotoTextureOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store,
+    BuildInputs, BuildOptions, PhotoTextureOptions, ProjectOptions, ReparamOptions, build_store,
+    project_store, reparam_store,
 };
 use cliffmap::store::Store;
 use cliffmap::{Dem, GridGeoref};
@@ -40,7 +41,13 @@ fn build(dir: &Path) {
         ortho_source: None,
         fingerprint: "wall-1".into(),
     };
-    let opts = BuildOptions { max_error: 0.05, cell_intervals: 32, cell_texels: 64, quiet: true, force: false };
+    let opts = BuildOptions {
+        max_error: 0.05,
+        cell_intervals: 32,
+        cell_texels: 64,
+        quiet: true,
+        force: false,
+    };
     build_store(&inputs, &opts, dir).unwrap();
 }
 
@@ -55,12 +62,26 @@ fn tempdir(name: &str) -> PathBuf {
 fn photo(position: DVec3, target: DVec3) -> PhotoInput {
     let r = rotation_look_at(position, target).unwrap();
     let camera = CameraModel::with_fov(position, r, 160, 120, 0.6);
-    let image = RgbImage::from_fn(160, 120, |x, _| if (x / 8) % 2 == 0 { image::Rgb([200, 60, 40]) } else { image::Rgb([180, 70, 50]) });
-    PhotoInput { name: "wall.png".into(), image_path: PathBuf::from("wall.png"), image, camera }
+    let image = RgbImage::from_fn(160, 120, |x, _| {
+        if (x / 8) % 2 == 0 {
+            image::Rgb([200, 60, 40])
+        } else {
+            image::Rgb([180, 70, 50])
+        }
+    });
+    PhotoInput {
+        name: "wall.png".into(),
+        image_path: PathBuf::from("wall.png"),
+        image,
+        camera,
+    }
 }
 
 fn wall_photo() -> PhotoInput {
-    photo(DVec3::new(X0 + 2.0, Y0 - 32.0, 115.0), DVec3::new(X0 + 31.0, Y0 - 32.0, 110.0))
+    photo(
+        DVec3::new(X0 + 2.0, Y0 - 32.0, 115.0),
+        DVec3::new(X0 + 31.0, Y0 - 32.0, 110.0),
+    )
 }
 
 fn photo_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
@@ -77,7 +98,11 @@ fn photo_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 }
 
 fn opts() -> ProjectOptions {
-    ProjectOptions { quiet: true, level_colours: false, ..ProjectOptions::default() }
+    ProjectOptions {
+        quiet: true,
+        level_colours: false,
+        ..ProjectOptions::default()
+    }
 }
 
 #[test]
@@ -89,9 +114,20 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
     let p = &report.settings.photos[0];
     assert!(p.texels_written > 0 && p.pixels_hit > 0, "{p:?}");
     let finest = report.settings.levels.last().unwrap();
-    assert!(finest.steep_texels > 0 && finest.steep_photo_texels > 0, "{finest:?}");
+    assert!(
+        finest.steep_texels > 0 && finest.steep_photo_texels > 0,
+        "{finest:?}"
+    );
     // every level the wall is in got photo colour (coarser levels via the photo pyramid)
-    assert!(report.settings.levels.iter().all(|l| l.cells_with_photo > 0), "{:?}", report.settings.levels);
+    assert!(
+        report
+            .settings
+            .levels
+            .iter()
+            .all(|l| l.cells_with_photo > 0),
+        "{:?}",
+        report.settings.levels
+    );
 
     // confident texels carry the photo's colours (red-dominant), which the derived ortho lacks
     let store = Store::open(&dir).unwrap();
@@ -103,7 +139,11 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
         for (t, s) in tex.pixels().zip(conf.pixels()) {
             if s.0[0] == 255 {
                 confident += 1;
-                assert!((170..=210).contains(&t.0[0]) && (55..=75).contains(&t.0[1]), "{:?}", t.0);
+                assert!(
+                    (170..=210).contains(&t.0[0]) && (55..=75).contains(&t.0[1]),
+                    "{:?}",
+                    t.0
+                );
             }
         }
     }
@@ -111,21 +151,35 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
 
     // stats summary gains the photo figures
     let json = cliffmap::pipeline::write_stats(&dir, &store.manifest, 1.1).unwrap();
-    let f = json["summary"]["photo_improved_steep_fraction"].as_f64().unwrap();
+    let f = json["summary"]["photo_improved_steep_fraction"]
+        .as_f64()
+        .unwrap();
     assert!(f > 0.0 && f <= 1.0, "{f}");
-    assert_eq!(json["summary"]["photos"][0]["texels_written"].as_u64(), Some(p.texels_written));
+    assert_eq!(
+        json["summary"]["photos"][0]["texels_written"].as_u64(),
+        Some(p.texels_written)
+    );
 
     // same photos again: byte-identical files and records
     let before = photo_files(&dir);
     let manifest_before = std::fs::read(dir.join("manifest.json")).unwrap();
     project_store(&dir, &[wall_photo()], &opts()).unwrap();
     assert_eq!(photo_files(&dir), before);
-    assert_eq!(std::fs::read(dir.join("manifest.json")).unwrap(), manifest_before);
+    assert_eq!(
+        std::fs::read(dir.join("manifest.json")).unwrap(),
+        manifest_before
+    );
 
     // a camera facing away: no photo textures, stale files removed, no error
-    let away = photo(DVec3::new(X0 + 2.0, Y0 - 32.0, 115.0), DVec3::new(X0 - 50.0, Y0 - 32.0, 130.0));
+    let away = photo(
+        DVec3::new(X0 + 2.0, Y0 - 32.0, 115.0),
+        DVec3::new(X0 - 50.0, Y0 - 32.0, 130.0),
+    );
     let r = project_store(&dir, &[away], &opts()).unwrap();
-    assert_eq!((r.cells_written, r.settings.photos[0].texels_written), (0, 0));
+    assert_eq!(
+        (r.cells_written, r.settings.photos[0].texels_written),
+        (0, 0)
+    );
     for (path, _) in &before {
         assert!(!dir.join(path).exists(), "stale {path}");
     }
@@ -136,11 +190,33 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
 fn e2e_output_does_not_depend_on_threads_and_blend_modes_differ() {
     let dir = tempdir("threads");
     build(&dir);
-    let second = photo(DVec3::new(X0 + 5.0, Y0 - 10.0, 118.0), DVec3::new(X0 + 31.0, Y0 - 30.0, 110.0));
-    let photos = [wall_photo(), PhotoInput { image: RgbImage::from_pixel(160, 120, image::Rgb([40, 60, 200])), ..second }];
+    let second = photo(
+        DVec3::new(X0 + 5.0, Y0 - 10.0, 118.0),
+        DVec3::new(X0 + 31.0, Y0 - 30.0, 110.0),
+    );
+    let photos = [
+        wall_photo(),
+        PhotoInput {
+            image: RgbImage::from_pixel(160, 120, image::Rgb([40, 60, 200])),
+            ..second
+        },
+    ];
     let run = |threads: usize, mode: BlendMode| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| project_store(&dir, &photos, &ProjectOptions { blend: mode, ..opts() }).unwrap());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            project_store(
+                &dir,
+                &photos,
+                &ProjectOptions {
+                    blend: mode,
+                    ..opts()
+                },
+            )
+            .unwrap()
+        });
         photo_files(&dir)
     };
     let one = run(1, BlendMode::Confidence);
@@ -149,13 +225,30 @@ fn e2e_output_does_not_depend_on_threads_and_blend_modes_differ() {
     assert_ne!(best, one);
     // leveling on: still deterministic, and each photo reports its transform
     let lev = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        let r = pool.install(|| project_store(&dir, &photos, &ProjectOptions { level_colours: true, ..opts() }).unwrap());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let r = pool.install(|| {
+            project_store(
+                &dir,
+                &photos,
+                &ProjectOptions {
+                    level_colours: true,
+                    ..opts()
+                },
+            )
+            .unwrap()
+        });
         (r.settings, photo_files(&dir))
     };
     let (s1, f1) = lev(1);
     assert_eq!(lev(2), (s1.clone(), f1));
-    assert!(s1.photos.iter().all(|p| p.colour_gain.iter().all(|g| g.is_finite() && *g > 0.0)));
+    assert!(
+        s1.photos
+            .iter()
+            .all(|p| p.colour_gain.iter().all(|g| g.is_finite() && *g > 0.0))
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -166,9 +259,18 @@ fn e2e_reparam_drops_photo_textures() {
     project_store(&dir, &[wall_photo()], &opts()).unwrap();
     let files = photo_files(&dir);
     assert!(!files.is_empty());
-    reparam_store(&dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() }).unwrap();
+    reparam_store(
+        &dir,
+        &ReparamOptions {
+            quiet: true,
+            ..ReparamOptions::default()
+        },
+    )
+    .unwrap();
     let store = Store::open(&dir).unwrap();
-    assert!(store.manifest.photos.is_none() && store.manifest.cells.iter().all(|c| c.photo.is_none()));
+    assert!(
+        store.manifest.photos.is_none() && store.manifest.cells.iter().all(|c| c.photo.is_none())
+    );
     for (path, _) in &files {
         assert!(!dir.join(path).exists(), "stale {path}");
     }
@@ -176,7 +278,13 @@ fn e2e_reparam_drops_photo_textures() {
     // their size times a power of two (photo-driven sizes), or exactly their size with the
     // sizing off
     for photo_driven in [true, false] {
-        let o = ProjectOptions { texture: PhotoTextureOptions { photo_driven, ..PhotoTextureOptions::default() }, ..opts() };
+        let o = ProjectOptions {
+            texture: PhotoTextureOptions {
+                photo_driven,
+                ..PhotoTextureOptions::default()
+            },
+            ..opts()
+        };
         let r = project_store(&dir, &[wall_photo()], &o).unwrap();
         assert!(r.cells_written > 0);
         let store = Store::open(&dir).unwrap();
@@ -184,7 +292,11 @@ fn e2e_reparam_drops_photo_textures() {
             let p = c.photo.as_ref().unwrap();
             let base = c.reparam.as_ref().map_or(c.texels, |r| r.texels);
             let k = p.texels / base;
-            assert!(p.texels % base == 0 && k.is_power_of_two() && (photo_driven || k == 1), "{} {base}", p.texels);
+            assert!(
+                p.texels % base == 0 && k.is_power_of_two() && (photo_driven || k == 1),
+                "{} {base}",
+                p.texels
+            );
             let img = store.read_png(&p.texture).unwrap();
             assert_eq!((img.width(), img.height()), (p.texels, p.texels));
         }

@@ -5,11 +5,11 @@ mod cli_util;
 
 use std::path::Path;
 
+use cli_util::{fails_naming, ok};
 use cliffmap::camera::{camera_from_json_file, camera_to_json, yaw_pitch_roll_from_rotation};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::register::CameraParams;
 use cliffmap::scene::{DemoPhotoOptions, DemoScene};
-use cli_util::{fails_naming, ok};
 
 fn angle_diff_deg(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
@@ -28,8 +28,28 @@ fn scene_with_photos(dir: &Path) -> std::path::PathBuf {
         ortho_source: Some("test".into()),
         fingerprint: "register-test".into(),
     };
-    build_store(&inputs, &BuildOptions { max_error: 0.25, quiet: true, force: true, ..BuildOptions::default() }, &dir.join("store")).unwrap();
-    scene.write_demo_photos(&dem, &dir.join("photos"), &DemoPhotoOptions { width: 800, height: 600, supersample: 1 }).unwrap()
+    build_store(
+        &inputs,
+        &BuildOptions {
+            max_error: 0.25,
+            quiet: true,
+            force: true,
+            ..BuildOptions::default()
+        },
+        &dir.join("store"),
+    )
+    .unwrap();
+    scene
+        .write_demo_photos(
+            &dem,
+            &dir.join("photos"),
+            &DemoPhotoOptions {
+                width: 800,
+                height: 600,
+                supersample: 1,
+            },
+        )
+        .unwrap()
 }
 
 #[test]
@@ -46,11 +66,21 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     p.angles[2] += 0.7f64.to_radians();
     p.focal = [p.focal[0] * 1.02, p.focal[1] * 1.02];
     let rough = p.camera();
-    std::fs::write(photos.join("east_rough.json"), serde_json::to_string(&camera_to_json(&rough)).unwrap()).unwrap();
-    let mut up = CameraParams::from_camera(&camera_from_json_file(&photos.join("plateau_south.json"), (800, 600)).unwrap());
+    std::fs::write(
+        photos.join("east_rough.json"),
+        serde_json::to_string(&camera_to_json(&rough)).unwrap(),
+    )
+    .unwrap();
+    let mut up = CameraParams::from_camera(
+        &camera_from_json_file(&photos.join("plateau_south.json"), (800, 600)).unwrap(),
+    );
     up.angles[1] = -80f64.to_radians();
     let up = up.camera();
-    std::fs::write(photos.join("south_up.json"), serde_json::to_string(&camera_to_json(&up)).unwrap()).unwrap();
+    std::fs::write(
+        photos.join("south_up.json"),
+        serde_json::to_string(&camera_to_json(&up)).unwrap(),
+    )
+    .unwrap();
     let rough_list = photos.join("rough.json");
     std::fs::write(
         &rough_list,
@@ -59,26 +89,64 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     .unwrap();
     let _ = list;
     let out = tmp.path().join("out").join("registered.json");
-    let o = ok(&["register", tmp.path().join("store").to_str().unwrap(), "--photos", rough_list.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = ok(&[
+        "register",
+        tmp.path().join("store").to_str().unwrap(),
+        "--photos",
+        rough_list.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    let report_text = std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap();
-    assert!(stderr.contains("plateau_south.jpg: not registered"), "{stderr}");
-    assert!(!stderr.contains("plateau_east.jpg: not registered"), "{stderr}\n{report_text}");
+    let report_text =
+        std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap();
+    assert!(
+        stderr.contains("plateau_south.jpg: not registered"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("plateau_east.jpg: not registered"),
+        "{stderr}\n{report_text}"
+    );
     // The output list reads back like photos.json, images found.
     let specs = cliffmap::photo::read_photo_specs(&out).unwrap();
     assert_eq!(specs.len(), 2);
-    let (a, b) = (yaw_pitch_roll_from_rotation(&specs[0].camera.world_to_camera), yaw_pitch_roll_from_rotation(&truth.world_to_camera));
-    let errs = [angle_diff_deg(a.0, b.0), angle_diff_deg(a.1, b.1), angle_diff_deg(a.2, b.2)];
-    assert!(errs.iter().all(|&e| e < 0.1), "angle errors after register {errs:?} (start 1.6, 0.9, 0.7)");
-    assert!((specs[0].camera.fx / truth.fx - 1.0).abs() < 0.01, "focal {} vs {}", specs[0].camera.fx, truth.fx);
+    let (a, b) = (
+        yaw_pitch_roll_from_rotation(&specs[0].camera.world_to_camera),
+        yaw_pitch_roll_from_rotation(&truth.world_to_camera),
+    );
+    let errs = [
+        angle_diff_deg(a.0, b.0),
+        angle_diff_deg(a.1, b.1),
+        angle_diff_deg(a.2, b.2),
+    ];
+    assert!(
+        errs.iter().all(|&e| e < 0.1),
+        "angle errors after register {errs:?} (start 1.6, 0.9, 0.7)"
+    );
+    assert!(
+        (specs[0].camera.fx / truth.fx - 1.0).abs() < 0.01,
+        "focal {} vs {}",
+        specs[0].camera.fx,
+        truth.fx
+    );
     // The unregistrable photo keeps its camera exactly.
     let kept = specs[1].camera;
-    assert!(kept.world_to_camera.abs_diff_eq(up.world_to_camera, 1e-9) && kept.position.abs_diff_eq(up.position, 1e-9));
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap()).unwrap();
+    assert!(
+        kept.world_to_camera.abs_diff_eq(up.world_to_camera, 1e-9)
+            && kept.position.abs_diff_eq(up.position, 1e-9)
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
+    )
+    .unwrap();
     assert_eq!(report["photos"][0]["converged"], true);
     assert_eq!(report["photos"][1]["converged"], false);
-    assert!(report["photos"][1]["reason"].as_str().is_some_and(|r| !r.is_empty()));
+    assert!(
+        report["photos"][1]["reason"]
+            .as_str()
+            .is_some_and(|r| !r.is_empty())
+    );
 }
 
 #[test]
@@ -86,10 +154,42 @@ fn register_refuses_bad_input_naming_it() {
     let tmp = tempfile::tempdir().unwrap();
     let missing = tmp.path().join("nope.json");
     let out = tmp.path().join("r.json");
-    fails_naming(&["register", tmp.path().to_str().unwrap(), "--photos", missing.to_str().unwrap(), "--out", out.to_str().unwrap()], "nope.json");
+    fails_naming(
+        &[
+            "register",
+            tmp.path().to_str().unwrap(),
+            "--photos",
+            missing.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "nope.json",
+    );
     std::fs::write(tmp.path().join("bad.json"), "{\"photos\": 3}").unwrap();
     let bad = tmp.path().join("bad.json");
-    fails_naming(&["register", tmp.path().to_str().unwrap(), "--photos", bad.to_str().unwrap(), "--out", out.to_str().unwrap()], "bad.json");
-    fails_naming(&["register", tmp.path().to_str().unwrap(), "--photos", bad.to_str().unwrap(), "--out", out.to_str().unwrap(), "--free", "k1"], "k1");
+    fails_naming(
+        &[
+            "register",
+            tmp.path().to_str().unwrap(),
+            "--photos",
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "bad.json",
+    );
+    fails_naming(
+        &[
+            "register",
+            tmp.path().to_str().unwrap(),
+            "--photos",
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--free",
+            "k1",
+        ],
+        "k1",
+    );
     assert!(!out.exists());
 }

@@ -25,12 +25,21 @@ impl SmallFs {
     fn new(kib: u64) -> SmallFs {
         let dir = tempfile::tempdir().unwrap();
         let mounted = Command::new("mount")
-            .args(["-t", "tmpfs", "-o", &format!("size={kib}k"), "tmpfs", s(dir.path())])
+            .args([
+                "-t",
+                "tmpfs",
+                "-o",
+                &format!("size={kib}k"),
+                "tmpfs",
+                s(dir.path()),
+            ])
             .stderr(std::process::Stdio::null())
             .status()
             .is_ok_and(|st| st.success());
         if !mounted {
-            eprintln!("cannot mount a tmpfs (not root?): using cliffmap's injected ENOSPC after {kib} KiB instead");
+            eprintln!(
+                "cannot mount a tmpfs (not root?): using cliffmap's injected ENOSPC after {kib} KiB instead"
+            );
         }
         SmallFs { dir, mounted, kib }
     }
@@ -42,7 +51,10 @@ impl SmallFs {
         let mut c = Command::new(env!("CARGO_BIN_EXE_cliffmap"));
         c.args(args);
         if !self.mounted {
-            c.env("CLIFFMAP_TEST_DISK_BYTES", (self.kib.saturating_sub(already_kib) * 1024).to_string());
+            c.env(
+                "CLIFFMAP_TEST_DISK_BYTES",
+                (self.kib.saturating_sub(already_kib) * 1024).to_string(),
+            );
         }
         c.output().expect("cannot start cliffmap")
     }
@@ -72,13 +84,26 @@ fn a_second_writer_is_refused_while_the_first_holds_the_store() {
     let store = tmp.path().join("store");
     ok(&cliff_build_args(&dem, &store));
     // Hold the lock as another writer would (a separate open file description).
-    let f = std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).open(store.join(".lock")).unwrap();
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(store.join(".lock"))
+        .unwrap();
     f.try_lock().unwrap();
-    for args in [vec!["reparam", s(&store), "--quiet"], cliff_build_args(&dem, &store), vec!["verify", "--repair", s(&store)]] {
+    for args in [
+        vec!["reparam", s(&store), "--quiet"],
+        cliff_build_args(&dem, &store),
+        vec!["verify", "--repair", s(&store)],
+    ] {
         let o = cliffmap(&args);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?} should be refused");
-        assert!(err.contains("another cliffmap process is writing this store") && err.contains("store"), "{args:?}: {err}");
+        assert!(
+            err.contains("another cliffmap process is writing this store") && err.contains("store"),
+            "{args:?}: {err}"
+        );
     }
     // Readers keep working.
     ok(&["verify", s(&store)]);
@@ -97,11 +122,20 @@ fn a_build_that_fills_the_disk_fails_cleanly_and_resumes() {
     let o = fs.cliffmap(&cliff_build_args(&dem, &store), 0);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "the build should run out of space");
-    assert!(err.contains("No space left on device") && err.contains(s(&store)), "{err}");
+    assert!(
+        err.contains("No space left on device") && err.contains(s(&store)),
+        "{err}"
+    );
     assert!(!err.contains("panicked"), "{err}");
     let files = files_under(&store);
-    assert!(!files.iter().any(|p| p.to_string_lossy().ends_with(".tmp")), "temporary files left: {files:?}");
-    assert!(!store.join("manifest.json").exists(), "no manifest for an unfinished build");
+    assert!(
+        !files.iter().any(|p| p.to_string_lossy().ends_with(".tmp")),
+        "temporary files left: {files:?}"
+    );
+    assert!(
+        !store.join("manifest.json").exists(),
+        "no manifest for an unfinished build"
+    );
     // Resume on a disk with space: the same store as a build that never failed.
     let resumed = tmp.path().join("resumed");
     copy_dir(&store, &resumed);
@@ -110,12 +144,24 @@ fn a_build_that_fills_the_disk_fails_cleanly_and_resumes() {
     ok(&cliff_build_args(&dem, &fresh));
     ok(&["verify", s(&resumed)]);
     let (a, b) = (files_under(&resumed), files_under(&fresh));
-    let rel = |v: &[PathBuf], root: &Path| v.iter().map(|p| p.strip_prefix(root).unwrap().to_path_buf()).collect::<Vec<_>>();
-    let names = |v: Vec<PathBuf>| v.into_iter().filter(|p| !p.ends_with(".lock") && !p.ends_with("recipe.json")).collect::<Vec<_>>();
+    let rel = |v: &[PathBuf], root: &Path| {
+        v.iter()
+            .map(|p| p.strip_prefix(root).unwrap().to_path_buf())
+            .collect::<Vec<_>>()
+    };
+    let names = |v: Vec<PathBuf>| {
+        v.into_iter()
+            .filter(|p| !p.ends_with(".lock") && !p.ends_with("recipe.json"))
+            .collect::<Vec<_>>()
+    };
     let (ra, rb) = (names(rel(&a, &resumed)), names(rel(&b, &fresh)));
     assert_eq!(ra, rb);
     for r in &ra {
-        assert!(std::fs::read(resumed.join(r)).unwrap() == std::fs::read(fresh.join(r)).unwrap(), "{} differs", r.display());
+        assert!(
+            std::fs::read(resumed.join(r)).unwrap() == std::fs::read(fresh.join(r)).unwrap(),
+            "{} differs",
+            r.display()
+        );
     }
 }
 
@@ -126,7 +172,10 @@ fn a_reparam_that_fills_the_disk_leaves_the_store_as_it_was() {
     write_cliff_dem(&dem);
     let built = tmp.path().join("store");
     ok(&cliff_build_args(&dem, &built));
-    let size: u64 = files_under(&built).iter().map(|p| std::fs::metadata(p).unwrap().len().div_ceil(4096) * 4096).sum();
+    let size: u64 = files_under(&built)
+        .iter()
+        .map(|p| std::fs::metadata(p).unwrap().len().div_ceil(4096) * 4096)
+        .sum();
     let fs = SmallFs::new(size / 1024 + 200);
     let store = fs.path().join("store");
     copy_dir(&built, &store);
@@ -136,7 +185,15 @@ fn a_reparam_that_fills_the_disk_leaves_the_store_as_it_was() {
     assert!(!o.status.success(), "reparam should run out of space");
     assert!(err.contains("No space left on device"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
-    assert_eq!(std::fs::read(store.join("manifest.json")).unwrap(), manifest_before, "the manifest must be untouched");
-    assert!(!files_under(&store).iter().any(|p| p.to_string_lossy().ends_with(".tmp")));
+    assert_eq!(
+        std::fs::read(store.join("manifest.json")).unwrap(),
+        manifest_before,
+        "the manifest must be untouched"
+    );
+    assert!(
+        !files_under(&store)
+            .iter()
+            .any(|p| p.to_string_lossy().ends_with(".tmp"))
+    );
     ok(&["verify", s(&store)]);
 }

@@ -36,12 +36,21 @@ fn engabreen_store(out: &Path) {
         ortho_source: Some("engabreen".into()),
         fingerprint: "render-accuracy-engabreen".into(),
     };
-    let opts = BuildOptions { max_error: 1.0, cell_texels: 64, quiet: true, force: true, ..Default::default() };
+    let opts = BuildOptions {
+        max_error: 1.0,
+        cell_texels: 64,
+        quiet: true,
+        force: true,
+        ..Default::default()
+    };
     build_store(&inputs, &opts, out).unwrap();
 }
 
 fn demo_store(out: &Path) {
-    let scene = DemoScene { samples: 257, ..DemoScene::default() };
+    let scene = DemoScene {
+        samples: 257,
+        ..DemoScene::default()
+    };
     let (dem, ortho) = scene.generate().unwrap();
     let inputs = BuildInputs {
         dem: &dem,
@@ -50,7 +59,13 @@ fn demo_store(out: &Path) {
         ortho_source: Some("demo".into()),
         fingerprint: "render-accuracy-demo".into(),
     };
-    let opts = BuildOptions { max_error: 0.5, cell_texels: 256, quiet: true, force: true, ..Default::default() };
+    let opts = BuildOptions {
+        max_error: 0.5,
+        cell_texels: 256,
+        quiet: true,
+        force: true,
+        ..Default::default()
+    };
     build_store(&inputs, &opts, out).unwrap();
 }
 
@@ -64,10 +79,22 @@ fn views(scene: &TerrainScene) -> Vec<CameraModel> {
     let c = (lo + hi) / 2.0;
     let span = (hi - lo).truncate().length();
     let pos = DVec3::new(lo.x - 0.2 * span, lo.y - 0.2 * span, hi.z + 0.4 * span);
-    out.push(CameraModel::with_fov(pos, rotation_look_at(pos, c).unwrap(), W, H, 50f64.to_radians()));
+    out.push(CameraModel::with_fov(
+        pos,
+        rotation_look_at(pos, c).unwrap(),
+        W,
+        H,
+        50f64.to_radians(),
+    ));
     // Far enough that 0.5 px keeps coarse levels.
     let far = c + DVec3::new(-1.5, -1.0, 1.2) * span;
-    out.push(CameraModel::with_fov(far, rotation_look_at(far, c).unwrap(), W, H, 25f64.to_radians()));
+    out.push(CameraModel::with_fov(
+        far,
+        rotation_look_at(far, c).unwrap(),
+        W,
+        H,
+        25f64.to_radians(),
+    ));
     out
 }
 
@@ -80,28 +107,44 @@ struct Frame {
 fn render(scene: &mut TerrainScene, cam: &CameraModel, sse: f64) -> Frame {
     scene.set_sse(sse).unwrap();
     let r = scene.frame(cam, true).unwrap();
-    assert_eq!((r.holes, r.substituted), (0, 0), "a complete frame draws what it selected");
+    assert_eq!(
+        (r.holes, r.substituted),
+        (0, 0),
+        "a complete frame draws what it selected"
+    );
     let rc = scene.render_camera(cam);
     let cells = &scene.store().manifest.cells;
     let sel = select_cells(cells, &CellIndex::new(cells), &rc, sse);
-    Frame { depth: scene.read_depth().unwrap(), rgba: scene.read_rgba().unwrap(), cells: sel.cells }
+    Frame {
+        depth: scene.read_depth().unwrap(),
+        rgba: scene.read_rgba().unwrap(),
+        cells: sel.cells,
+    }
 }
 
 /// Renders every view at each threshold and at the finest level, checks the displacement
 /// bound and returns nothing; prints one table row per (view, threshold).
 fn check_store(name: &str, dir: &Path) {
     let opts = SceneOptions {
-        frame: FrameOptions { lit: false, ..Default::default() },
+        frame: FrameOptions {
+            lit: false,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut scene = TerrainScene::open(dir, W, H, opts).unwrap_or_else(|e| {
         panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers)")
     });
     eprintln!("{name}: adapter {}", scene.gpu().describe());
-    eprintln!("| store | view | threshold px | cells LOD / finest | bound px | max on-axis px | max px | p99 px | mean px | point-matched % | silhouette-excluded % | image mean abs | pixels > 16 levels % |");
+    eprintln!(
+        "| store | view | threshold px | cells LOD / finest | bound px | max on-axis px | max px | p99 px | mean px | point-matched % | silhouette-excluded % | image mean abs | pixels > 16 levels % |"
+    );
     for (v, cam) in views(&scene).iter().enumerate() {
         let fine = render(&mut scene, cam, FINEST);
-        assert!(fine.depth.iter().filter(|&&d| d > 0.0).count() > (W * H / 10) as usize, "view {v} sees terrain");
+        assert!(
+            fine.depth.iter().filter(|&&d| d > 0.0).count() > (W * H / 10) as usize,
+            "view {v} sees terrain"
+        );
         for thr in [0.5, 2.0] {
             let lod = render(&mut scene, cam, thr);
             let rc = scene.render_camera(cam);
@@ -117,7 +160,8 @@ fn check_store(name: &str, dir: &Path) {
             // Bound on the on-axis displacement (see `Displacement::max_on_axis_px`).
             let bound = thr + fine_err + RASTER_TOL;
             // Silhouette neighbourhoods as wide as the displacement allowed there are left out.
-            let d = surface_displacement(&rc, &lod.depth, &fine.depth, WINDOW, bound.ceil() as usize);
+            let d =
+                surface_displacement(&rc, &lod.depth, &fine.depth, WINDOW, bound.ceil() as usize);
             let img = image_difference(&lod.rgba, &fine.rgba, 16).unwrap();
             eprintln!(
                 "| {name} | {v} | {thr} | {} / {} | {bound:.2} | {:.2} | {:.2} | {:.2} | {:.3} | {:.1} | {:.1} | {:.2} | {:.2} |",
@@ -134,8 +178,12 @@ fn check_store(name: &str, dir: &Path) {
             );
             if let Some(dir) = std::env::var_os("CLIFFMAP_ACCURACY_DUMP") {
                 let dir = Path::new(&dir);
-                lod.rgba.save(dir.join(format!("{name}_{v}_{thr}_lod.png"))).unwrap();
-                fine.rgba.save(dir.join(format!("{name}_{v}_fine.png"))).unwrap();
+                lod.rgba
+                    .save(dir.join(format!("{name}_{v}_{thr}_lod.png")))
+                    .unwrap();
+                fine.rgba
+                    .save(dir.join(format!("{name}_{v}_fine.png")))
+                    .unwrap();
             }
             assert!(d.measured > 0);
             assert!(

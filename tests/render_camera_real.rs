@@ -101,7 +101,10 @@ fn engabreen_gcps_reproject_through_the_photo_list_camera() {
         .collect();
     let rmse = (sq.iter().sum::<f64>() / 28.0).sqrt();
     println!("Engabreen IMG_8902: GCP reprojection RMSE {rmse:.3} px over 28 points");
-    assert!((2.5..=3.5).contains(&rmse), "GCP RMSE {rmse:.3} px, the fit says ~3.0 px");
+    assert!(
+        (2.5..=3.5).contains(&rmse),
+        "GCP RMSE {rmse:.3} px, the fit says ~3.0 px"
+    );
     // Every GCP lies in front of the camera and inside the photo.
     for (x, _) in &pts {
         let p = cam.project(*x).unwrap();
@@ -111,7 +114,15 @@ fn engabreen_gcps_reproject_through_the_photo_list_camera() {
 
 /// Normalized cross-correlation of the `r`-radius patch of `a` at `(ua, va)` with that of
 /// `b` at `(ua + du, va + dv)`.
-fn ncc(a: &image::GrayImage, b: &image::GrayImage, ua: i64, va: i64, du: i64, dv: i64, r: i64) -> f64 {
+fn ncc(
+    a: &image::GrayImage,
+    b: &image::GrayImage,
+    ua: i64,
+    va: i64,
+    du: i64,
+    dv: i64,
+    r: i64,
+) -> f64 {
     let (mut sa, mut sb, mut saa, mut sbb, mut sab, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for y in -r..=r {
         for x in -r..=r {
@@ -128,13 +139,21 @@ fn ncc(a: &image::GrayImage, b: &image::GrayImage, ua: i64, va: i64, du: i64, dv
     let cov = sab - sa * sb / n;
     let va_ = saa - sa * sa / n;
     let vb = sbb - sb * sb / n;
-    if va_ <= 0.0 || vb <= 0.0 { 0.0 } else { cov / (va_ * vb).sqrt() }
+    if va_ <= 0.0 || vb <= 0.0 {
+        0.0
+    } else {
+        cov / (va_ * vb).sqrt()
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 #[test]
@@ -172,11 +191,23 @@ fn engabreen_img_8937_delta_matches_the_image_shift() {
         // Sub-pixel peak by parabola fits along each axis.
         let sub = |cm: f64, c0: f64, cp: f64| {
             let den = cm - 2.0 * c0 + cp;
-            if den.abs() > 1e-12 { 0.5 * (cm - cp) / den } else { 0.0 }
+            if den.abs() > 1e-12 {
+                0.5 * (cm - cp) / den
+            } else {
+                0.0
+            }
         };
         let (c0, du, dv) = best;
-        let fu = sub(ncc(&a, &b, ua, va, du - 1, dv, r), c0, ncc(&a, &b, ua, va, du + 1, dv, r));
-        let fv = sub(ncc(&a, &b, ua, va, du, dv - 1, r), c0, ncc(&a, &b, ua, va, du, dv + 1, r));
+        let fu = sub(
+            ncc(&a, &b, ua, va, du - 1, dv, r),
+            c0,
+            ncc(&a, &b, ua, va, du + 1, dv, r),
+        );
+        let fv = sub(
+            ncc(&a, &b, ua, va, du, dv - 1, r),
+            c0,
+            ncc(&a, &b, ua, va, du, dv + 1, r),
+        );
         mu.push(du as f64 + fu);
         mv.push(dv as f64 + fv);
         pu.push(q[0] - p[0]);
@@ -184,9 +215,14 @@ fn engabreen_img_8937_delta_matches_the_image_shift() {
     }
     let n = mu.len();
     let (mu, mv, pu, pv) = (median(mu), median(mv), median(pu), median(pv));
-    println!("IMG_8937 vs IMG_8902 at {n} GCP patches: measured shift ({mu:.2}, {mv:.2}) px, predicted by the delta ({pu:.2}, {pv:.2}) px");
+    println!(
+        "IMG_8937 vs IMG_8902 at {n} GCP patches: measured shift ({mu:.2}, {mv:.2}) px, predicted by the delta ({pu:.2}, {pv:.2}) px"
+    );
     assert!(n >= 10, "only {n} reliable matches");
-    assert!((mu - pu).abs() < 2.0 && (mv - pv).abs() < 2.0, "measured ({mu:.2}, {mv:.2}) vs predicted ({pu:.2}, {pv:.2})");
+    assert!(
+        (mu - pu).abs() < 2.0 && (mv - pv).abs() < 2.0,
+        "measured ({mu:.2}, {mv:.2}) vs predicted ({pu:.2}, {pv:.2})"
+    );
     // The shift is substantial, so applying the delta with the wrong sign would fail.
     assert!(pu > 10.0, "predicted du {pu}");
 }
@@ -194,12 +230,21 @@ fn engabreen_img_8937_delta_matches_the_image_shift() {
 /// Sobel gradient magnitude of a grey image.
 fn gradient(img: &image::GrayImage) -> Vec<f64> {
     let (w, h) = (img.width() as i64, img.height() as i64);
-    let g = |i: i64, j: i64| img.get_pixel(i.clamp(0, w - 1) as u32, j.clamp(0, h - 1) as u32).0[0] as f64;
+    let g = |i: i64, j: i64| {
+        img.get_pixel(i.clamp(0, w - 1) as u32, j.clamp(0, h - 1) as u32)
+            .0[0] as f64
+    };
     let mut out = vec![0.0; (w * h) as usize];
     for j in 0..h {
         for i in 0..w {
-            let gx = g(i + 1, j - 1) + 2.0 * g(i + 1, j) + g(i + 1, j + 1) - g(i - 1, j - 1) - 2.0 * g(i - 1, j) - g(i - 1, j + 1);
-            let gy = g(i - 1, j + 1) + 2.0 * g(i, j + 1) + g(i + 1, j + 1) - g(i - 1, j - 1) - 2.0 * g(i, j - 1) - g(i + 1, j - 1);
+            let gx = g(i + 1, j - 1) + 2.0 * g(i + 1, j) + g(i + 1, j + 1)
+                - g(i - 1, j - 1)
+                - 2.0 * g(i - 1, j)
+                - g(i - 1, j + 1);
+            let gy = g(i - 1, j + 1) + 2.0 * g(i, j + 1) + g(i + 1, j + 1)
+                - g(i - 1, j - 1)
+                - 2.0 * g(i, j - 1)
+                - g(i + 1, j - 1);
             out[(j * w + i) as usize] = gx.hypot(gy);
         }
     }
@@ -209,7 +254,12 @@ fn gradient(img: &image::GrayImage) -> Vec<f64> {
 /// For each tile of the lower two thirds of a 4 × 3 grid: the integer shift (within ±`r` px)
 /// of the photo's gradients that best matches the render's (NCC over non-sky render pixels),
 /// as (tile column, tile row, du, dv, ncc).
-fn tile_shifts(render: &image::RgbaImage, photo: &image::GrayImage, sky: [u8; 3], r: i64) -> Vec<(i64, i64, i64, i64, f64)> {
+fn tile_shifts(
+    render: &image::RgbaImage,
+    photo: &image::GrayImage,
+    sky: [u8; 3],
+    r: i64,
+) -> Vec<(i64, i64, i64, i64, f64)> {
     let (w, h) = (render.width() as i64, render.height() as i64);
     let gr = gradient(&image::DynamicImage::ImageRgba8(render.clone()).to_luma8());
     let gp = gradient(photo);
@@ -225,13 +275,17 @@ fn tile_shifts(render: &image::RgbaImage, photo: &image::GrayImage, sky: [u8; 3]
             let mut best = (f64::MIN, 0, 0);
             for dv in -r..=r {
                 for du in -r..=r {
-                    let (mut sa, mut sb, mut saa, mut sbb, mut sab, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+                    let (mut sa, mut sb, mut saa, mut sbb, mut sab, mut n) =
+                        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
                     for j in j0..j1 {
                         for i in i0..i1 {
                             if is_sky(i, j) {
                                 continue;
                             }
-                            let (p, q) = (gr[(j * w + i) as usize], gp[((j + dv) * w + i + du) as usize]);
+                            let (p, q) = (
+                                gr[(j * w + i) as usize],
+                                gp[((j + dv) * w + i + du) as usize],
+                            );
                             sa += p;
                             sb += q;
                             saa += p * p;
@@ -240,7 +294,8 @@ fn tile_shifts(render: &image::RgbaImage, photo: &image::GrayImage, sky: [u8; 3]
                             n += 1.0;
                         }
                     }
-                    let c = (sab - sa * sb / n) / ((saa - sa * sa / n) * (sbb - sb * sb / n)).sqrt();
+                    let c =
+                        (sab - sa * sb / n) / ((saa - sa * sa / n) * (sbb - sb * sb / n)).sqrt();
                     if n > 2000.0 && c > best.0 {
                         best = (c, du, dv);
                     }
@@ -268,37 +323,73 @@ fn engabreen_render_with_distortion_overlays_the_photo() {
         ortho_source: Some("engabreen".into()),
         fingerprint: "render-distortion-engabreen".into(),
     };
-    let opts = BuildOptions { max_error: 1.0, quiet: true, force: true, ..Default::default() };
+    let opts = BuildOptions {
+        max_error: 1.0,
+        quiet: true,
+        force: true,
+        ..Default::default()
+    };
     build_store(&inputs, &opts, t.path()).unwrap();
     let (w, h) = (1072, 714);
-    let cam = camera_from_json_file(&common::real_data("engabreen/engabreen_camera_IMG_8902.json"), (w, h))
+    let cam = camera_from_json_file(
+        &common::real_data("engabreen/engabreen_camera_IMG_8902.json"),
+        (w, h),
+    )
+    .unwrap()
+    .resized(w, h);
+    let photo = image::open(common::real_data("engabreen/IMG_8902.jpg"))
         .unwrap()
-        .resized(w, h);
-    let photo = image::open(common::real_data("engabreen/IMG_8902.jpg")).unwrap().to_luma8();
+        .to_luma8();
     let photo = image::imageops::resize(&photo, w, h, image::imageops::FilterType::Triangle);
     let sky = [170, 200, 235];
     let mut shifts = Vec::new();
     for mode in [DistortionMode::Auto, DistortionMode::Off] {
         let opts = SceneOptions {
-            frame: FrameOptions { lit: false, sky, ..Default::default() },
+            frame: FrameOptions {
+                lit: false,
+                sky,
+                ..Default::default()
+            },
             distortion: mode,
             ..Default::default()
         };
         let mut scene = TerrainScene::open(t.path(), w, h, opts).unwrap();
-        assert_eq!(scene.frame(&cam, true).unwrap().distorted, mode == DistortionMode::Auto);
+        assert_eq!(
+            scene.frame(&cam, true).unwrap().distorted,
+            mode == DistortionMode::Auto
+        );
         let s = tile_shifts(&scene.read_rgba().unwrap(), &photo, sky, 6);
         println!("{mode:?}: per-tile (column, row, du, dv, ncc) {s:.2?}");
         shifts.push(s);
     }
     // Tiles whose edges match well in both renders (NCC ≥ 0.25; the right edge of the middle
     // row shows cliffs beyond the DEM crop).
-    let reliable: Vec<usize> = (0..8).filter(|&k| shifts[0][k].4 >= 0.25 && shifts[1][k].4 >= 0.25).collect();
-    assert!(reliable.len() >= 6, "only {} tiles match the photo", reliable.len());
+    let reliable: Vec<usize> = (0..8)
+        .filter(|&k| shifts[0][k].4 >= 0.25 && shifts[1][k].4 >= 0.25)
+        .collect();
+    assert!(
+        reliable.len() >= 6,
+        "only {} tiles match the photo",
+        reliable.len()
+    );
     let len = |s: &(i64, i64, i64, i64, f64)| s.2.abs().max(s.3.abs());
     for &k in &reliable {
-        assert!(len(&shifts[0][k]) <= 1, "with distortion, tile {:?} is off the photo", shifts[0][k]);
+        assert!(
+            len(&shifts[0][k]) <= 1,
+            "with distortion, tile {:?} is off the photo",
+            shifts[0][k]
+        );
     }
     // Without the distortion the image corners are off by 2–3 px (towards the centre: barrel).
-    let corner_off = reliable.iter().filter(|&&k| shifts[0][k].0 % 3 == 0).map(|&k| len(&shifts[1][k])).max().unwrap_or(0);
-    assert!(corner_off >= 2, "without distortion the corner tiles should be off: {:?}", shifts[1]);
+    let corner_off = reliable
+        .iter()
+        .filter(|&&k| shifts[0][k].0 % 3 == 0)
+        .map(|&k| len(&shifts[1][k]))
+        .max()
+        .unwrap_or(0);
+    assert!(
+        corner_off >= 2,
+        "without distortion the corner tiles should be off: {:?}",
+        shifts[1]
+    );
 }

@@ -27,7 +27,10 @@ fn golden_dir() -> PathBuf {
 }
 
 fn small_store(out: &Path) {
-    let scene = DemoScene { samples: 129, ..DemoScene::default() };
+    let scene = DemoScene {
+        samples: 129,
+        ..DemoScene::default()
+    };
     let (dem, ortho) = scene.generate().unwrap();
     let inputs = BuildInputs {
         dem: &dem,
@@ -36,7 +39,13 @@ fn small_store(out: &Path) {
         ortho_source: Some("demo".into()),
         fingerprint: "render-golden".into(),
     };
-    let opts = BuildOptions { max_error: 0.5, cell_intervals: 32, cell_texels: 64, quiet: true, force: true };
+    let opts = BuildOptions {
+        max_error: 0.5,
+        cell_intervals: 32,
+        cell_texels: 64,
+        quiet: true,
+        force: true,
+    };
     build_store(&inputs, &opts, out).unwrap();
 }
 
@@ -54,7 +63,16 @@ fn views(scene: &TerrainScene) -> Vec<(&'static str, CameraModel)> {
     [("overview", over, c, 55.0), ("low", low, low_at, 60.0)]
         .into_iter()
         .map(|(n, p, t, fov)| {
-            (n, CameraModel::with_fov(p, rotation_look_at(p, t).unwrap(), W, H, f64::to_radians(fov)))
+            (
+                n,
+                CameraModel::with_fov(
+                    p,
+                    rotation_look_at(p, t).unwrap(),
+                    W,
+                    H,
+                    f64::to_radians(fov),
+                ),
+            )
         })
         .collect()
 }
@@ -67,7 +85,10 @@ fn fixed_views_match_the_golden_images() {
     let mut failures = Vec::new();
     for lit in [false, true] {
         let opts = SceneOptions {
-            frame: FrameOptions { lit, ..Default::default() },
+            frame: FrameOptions {
+                lit,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let mut scene = TerrainScene::open(t.path(), W, H, opts).unwrap_or_else(|e| {
@@ -76,7 +97,8 @@ fn fixed_views_match_the_golden_images() {
         for (name, cam) in views(&scene) {
             scene.frame(&cam, true).unwrap();
             let img = scene.read_rgba().unwrap();
-            let file = golden_dir().join(format!("{name}_{}.png", if lit { "lit" } else { "unlit" }));
+            let file =
+                golden_dir().join(format!("{name}_{}.png", if lit { "lit" } else { "unlit" }));
             if update {
                 std::fs::create_dir_all(golden_dir()).unwrap();
                 img.save(&file).unwrap();
@@ -88,11 +110,22 @@ fn fixed_views_match_the_golden_images() {
                 .to_rgba8();
             let d = image_difference(&img, &want, PIXEL_TOL)
                 .unwrap_or_else(|| panic!("{}: size differs from {W}x{H}", file.display()));
-            eprintln!("{}: mean {:.3} levels, max {}, {:.3} % over {PIXEL_TOL}", file.display(), d.mean_abs, d.max_abs, 100.0 * d.frac_over);
+            eprintln!(
+                "{}: mean {:.3} levels, max {}, {:.3} % over {PIXEL_TOL}",
+                file.display(),
+                d.mean_abs,
+                d.max_abs,
+                100.0 * d.frac_over
+            );
             if d.frac_over > MAX_DIFFERING {
                 let got = std::env::temp_dir().join(format!("cliffmap_golden_{name}_{lit}.png"));
                 let _ = img.save(&got);
-                failures.push(format!("{}: {:.2} % of pixels differ by more than {PIXEL_TOL} (got {})", file.display(), 100.0 * d.frac_over, got.display()));
+                failures.push(format!(
+                    "{}: {:.2} % of pixels differ by more than {PIXEL_TOL} (got {})",
+                    file.display(),
+                    100.0 * d.frac_over,
+                    got.display()
+                ));
             }
         }
     }

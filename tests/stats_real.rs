@@ -26,7 +26,10 @@ fn engabreen_statistics_are_consistent() {
         entries.push(CellStatsEntry::new(key, &tin, s));
     }
     // the data has rock walls: some finest cells are well above 1.2, and steep texels exist
-    let finest: Vec<_> = entries.iter().filter(|e| e.level == tree.finest_level()).collect();
+    let finest: Vec<_> = entries
+        .iter()
+        .filter(|e| e.level == tree.finest_level())
+        .collect();
     assert!(finest.iter().any(|e| e.stats.rel_texel > 1.5));
     assert!(finest.iter().any(|e| e.stats.steep_texel_fraction > 0.1));
     let v = stats_json(&entries, 1.2);
@@ -35,8 +38,10 @@ fn engabreen_statistics_are_consistent() {
 
     let dir = tempfile::tempdir().unwrap();
     let rels: Vec<f64> = entries.iter().map(|e| e.stats.rel_texel).collect();
-    let png = std::env::var_os("CLIFFMAP_KEEP_HISTOGRAM")
-        .map_or_else(|| dir.path().join("rel_texel_histogram.png"), std::path::PathBuf::from);
+    let png = std::env::var_os("CLIFFMAP_KEEP_HISTOGRAM").map_or_else(
+        || dir.path().join("rel_texel_histogram.png"),
+        std::path::PathBuf::from,
+    );
     write_histogram_png(&png, &rels, 1.2).unwrap();
     assert_eq!(image::image_dimensions(&png).unwrap(), (1000, 600));
 }
@@ -47,7 +52,11 @@ fn engabreen_textures_and_normals() {
     let ortho = common::engabreen_ortho(&dem);
     let tree = Quadtree::new(507, 590, 64);
     // level 2: 256-interval cells; cell 2-1-0 covers columns 256..=506 (clipped at 506)
-    let key = CellKey { level: 2, x: 1, y: 0 };
+    let key = CellKey {
+        level: 2,
+        x: 1,
+        y: 0,
+    };
     let ext = nominal_extent(&tree, &dem.georef, key);
     let tex = ortho_texture(&ortho, &dem, ext, 256);
     let nm = normal_map(&dem, ext, 256);
@@ -59,7 +68,11 @@ fn engabreen_textures_and_normals() {
     let known = tex.pixels().filter(|p| p.0[3] == 255).count();
     assert!(known > 200 * 200, "{known}");
     // fine-level normals agree with central differences of the DEM at a texel centre
-    let key = CellKey { level: 4, x: 2, y: 3 };
+    let key = CellKey {
+        level: 4,
+        x: 2,
+        y: 3,
+    };
     let (c0, r0, n) = tree.nominal(key);
     let ext = nominal_extent(&tree, &dem.georef, key);
     let nm = normal_map(&dem, ext, n); // texel = one sample interval, centre between samples
@@ -70,10 +83,14 @@ fn engabreen_textures_and_normals() {
         let gx = (h(r, c + 1) + h(r + 1, c + 1) - h(r, c) - h(r + 1, c)) / (2.0 * 3.0);
         let gy = -(h(r + 1, c) + h(r + 1, c + 1) - h(r, c) - h(r, c + 1)) / (2.0 * 3.0);
         let len = (gx * gx + gy * gy + 1.0).sqrt();
-        let want = [-gx / len, -gy / len, 1.0 / len].map(|v| ((v * 0.5 + 0.5) * 255.0).round() as i32);
+        let want =
+            [-gx / len, -gy / len, 1.0 / len].map(|v| ((v * 0.5 + 0.5) * 255.0).round() as i32);
         let got = nm.get_pixel(i, j).0;
         for k in 0..3 {
-            assert!((got[k] as i32 - want[k]).abs() <= 1, "({i},{j}): {got:?} vs {want:?}");
+            assert!(
+                (got[k] as i32 - want[k]).abs() <= 1,
+                "({i},{j}): {got:?} vs {want:?}"
+            );
         }
     }
 }

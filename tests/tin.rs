@@ -6,7 +6,8 @@ mod common;
 use std::collections::{BTreeSet, HashMap};
 
 use cliffmap::cells::{
-    LevelBorders, build_dem_tin, build_level, build_tin, level_epsilon, measure_max_error, simplify_rect_border,
+    LevelBorders, build_dem_tin, build_level, build_tin, level_epsilon, measure_max_error,
+    simplify_rect_border,
 };
 use cliffmap::{CellKey, Dem, GridGeoref, Quadtree, SampleRect, Tin};
 use proptest::prelude::*;
@@ -66,7 +67,10 @@ fn world(v: [u32; 2]) -> [f64; 2] {
 /// sample in its bounding box is tested with barycentric coordinates and the TIN height is
 /// the barycentric interpolation. Returns the max error, panicking if a sample is uncovered.
 fn brute_force_error(d: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
-    let (w, h) = ((rect.c1 - rect.c0 + 1) as usize, (rect.r1 - rect.r0 + 1) as usize);
+    let (w, h) = (
+        (rect.c1 - rect.c0 + 1) as usize,
+        (rect.r1 - rect.r0 + 1) as usize,
+    );
     let mut err = vec![f64::NAN; w * h];
     for t in &tin.triangles {
         let v = t.map(|i| tin.vertices[i as usize]);
@@ -93,7 +97,10 @@ fn brute_force_error(d: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
             }
         }
     }
-    assert!(err.iter().all(|e| !e.is_nan()), "some samples are not covered by the TIN");
+    assert!(
+        err.iter().all(|e| !e.is_nan()),
+        "some samples are not covered by the TIN"
+    );
     err.iter().cloned().fold(0.0, f64::max)
 }
 
@@ -104,9 +111,17 @@ fn check_topology(rect: SampleRect, tin: &Tin) {
     let set: BTreeSet<[u32; 2]> = tin.vertices.iter().copied().collect();
     assert_eq!(set.len(), tin.vertices.len(), "duplicate vertices");
     for v in &tin.vertices {
-        assert!(v[0] >= rect.c0 && v[0] <= rect.c1 && v[1] >= rect.r0 && v[1] <= rect.r1, "vertex {v:?} outside");
+        assert!(
+            v[0] >= rect.c0 && v[0] <= rect.c1 && v[1] >= rect.r0 && v[1] <= rect.r1,
+            "vertex {v:?} outside"
+        );
     }
-    for c in [[rect.c0, rect.r0], [rect.c1, rect.r0], [rect.c0, rect.r1], [rect.c1, rect.r1]] {
+    for c in [
+        [rect.c0, rect.r0],
+        [rect.c1, rect.r0],
+        [rect.c0, rect.r1],
+        [rect.c1, rect.r1],
+    ] {
         assert!(set.contains(&c), "corner {c:?} missing");
     }
     let mut used = vec![false; tin.vertices.len()];
@@ -115,7 +130,8 @@ fn check_topology(rect: SampleRect, tin: &Tin) {
     for t in &tin.triangles {
         let v = t.map(|i| tin.vertices[i as usize]);
         let p = v.map(|q| [q[0] as i64, -(q[1] as i64)]);
-        let a2 = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        let a2 =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
         assert!(a2 > 0, "triangle {v:?} degenerate or not CCW in world");
         twice_area += a2;
         for k in 0..3 {
@@ -126,7 +142,10 @@ fn check_topology(rect: SampleRect, tin: &Tin) {
     assert!(used.iter().all(|&u| u), "unused vertex");
     let rect_area2 = 2 * (rect.c1 - rect.c0) as i64 * (rect.r1 - rect.r0) as i64;
     assert_eq!(twice_area, rect_area2, "triangles do not tile the rect");
-    assert!(directed.values().all(|&n| n == 1), "a directed edge is used twice (non-manifold)");
+    assert!(
+        directed.values().all(|&n| n == 1),
+        "a directed edge is used twice (non-manifold)"
+    );
     let mut undirected = BTreeSet::new();
     for &(a, b) in directed.keys() {
         undirected.insert((a.min(b), a.max(b)));
@@ -134,7 +153,10 @@ fn check_topology(rect: SampleRect, tin: &Tin) {
             let (p, q) = (tin.vertices[a as usize], tin.vertices[b as usize]);
             let on = |f: fn(&[u32; 2]) -> u32, val: u32| f(&p) == val && f(&q) == val;
             assert!(
-                on(|v| v[0], rect.c0) || on(|v| v[0], rect.c1) || on(|v| v[1], rect.r0) || on(|v| v[1], rect.r1),
+                on(|v| v[0], rect.c0)
+                    || on(|v| v[0], rect.c1)
+                    || on(|v| v[1], rect.r0)
+                    || on(|v| v[1], rect.r1),
                 "boundary edge {p:?}-{q:?} not on the rect boundary"
             );
         }
@@ -218,13 +240,25 @@ fn tiny_flat_and_planar_cells_are_two_triangles() {
     let d = dem(2, 2, vec![1.0, 2.0, 3.0, 9.0]);
     let tin = build_dem_tin(&d, 0.0).unwrap();
     assert_eq!((tin.vertices.len(), tin.triangles.len()), (4, 2));
-    check_topology(SampleRect { c0: 0, r0: 0, c1: 1, r1: 1 }, &tin);
+    check_topology(
+        SampleRect {
+            c0: 0,
+            r0: 0,
+            c1: 1,
+            r1: 1,
+        },
+        &tin,
+    );
     let d = dem(50, 40, vec![7.0; 2000]);
     let tin = build_dem_tin(&d, 0.0).unwrap();
     assert_eq!(tin.triangles.len(), 2);
     assert_eq!(tin.max_error, 0.0);
     let cells = build_level(&d, &Quadtree::new(50, 40, 8), 3, 0.0).unwrap();
-    assert!(cells.iter().all(|(_, t)| t.triangles.len() == 2 && t.max_error == 0.0));
+    assert!(
+        cells
+            .iter()
+            .all(|(_, t)| t.triangles.len() == 2 && t.max_error == 0.0)
+    );
     // a spike in the middle of a flat square needs its vertex
     let mut hs = vec![0.0f32; 9 * 9];
     hs[4 * 9 + 4] = 10.0;
@@ -232,7 +266,15 @@ fn tiny_flat_and_planar_cells_are_two_triangles() {
     let tin = build_dem_tin(&d, 1.0).unwrap();
     assert!(tin.vertices.contains(&[4, 4]));
     assert!(tin.max_error <= 1.0);
-    check_topology(SampleRect { c0: 0, r0: 0, c1: 8, r1: 8 }, &tin);
+    check_topology(
+        SampleRect {
+            c0: 0,
+            r0: 0,
+            c1: 8,
+            r1: 8,
+        },
+        &tin,
+    );
     // ... but not when the bound tolerates it
     assert_eq!(build_dem_tin(&d, 10.0).unwrap().triangles.len(), 2);
 }
@@ -240,9 +282,51 @@ fn tiny_flat_and_planar_cells_are_two_triangles() {
 #[test]
 fn bad_arguments_are_errors() {
     let d = dem(10, 10, vec![0.0; 100]);
-    assert!(build_tin(&d, SampleRect { c0: 0, r0: 0, c1: 10, r1: 5 }, 1, 1.0, &[]).is_err());
-    assert!(build_tin(&d, SampleRect { c0: 3, r0: 0, c1: 3, r1: 5 }, 1, 1.0, &[]).is_err());
-    assert!(build_tin(&d, SampleRect { c0: 0, r0: 0, c1: 9, r1: 9 }, 0, 1.0, &[]).is_err());
+    assert!(
+        build_tin(
+            &d,
+            SampleRect {
+                c0: 0,
+                r0: 0,
+                c1: 10,
+                r1: 5
+            },
+            1,
+            1.0,
+            &[]
+        )
+        .is_err()
+    );
+    assert!(
+        build_tin(
+            &d,
+            SampleRect {
+                c0: 3,
+                r0: 0,
+                c1: 3,
+                r1: 5
+            },
+            1,
+            1.0,
+            &[]
+        )
+        .is_err()
+    );
+    assert!(
+        build_tin(
+            &d,
+            SampleRect {
+                c0: 0,
+                r0: 0,
+                c1: 9,
+                r1: 9
+            },
+            0,
+            1.0,
+            &[]
+        )
+        .is_err()
+    );
     assert!(build_dem_tin(&d, -1.0).is_err());
     assert!(build_dem_tin(&d, f64::NAN).is_err());
     assert!(build_level(&d, &Quadtree::new(11, 10, 4), 0, 1.0).is_err());
@@ -253,22 +337,49 @@ fn bad_arguments_are_errors() {
 #[test]
 fn output_does_not_depend_on_thread_count() {
     let (w, h) = (150, 130);
-    let d = dem(w, h, field(w, h, 3, 7).iter().zip(field(w, h, 0, 9)).map(|(a, b)| a + b * 0.05).collect());
+    let d = dem(
+        w,
+        h,
+        field(w, h, 3, 7)
+            .iter()
+            .zip(field(w, h, 0, 9))
+            .map(|(a, b)| a + b * 0.05)
+            .collect(),
+    );
     let tree = Quadtree::new(w as u32, h as u32, 16);
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| (0..tree.levels).map(|l| build_level(&d, &tree, l, 0.2).unwrap()).collect::<Vec<_>>())
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            (0..tree.levels)
+                .map(|l| build_level(&d, &tree, l, 0.2).unwrap())
+                .collect::<Vec<_>>()
+        })
     };
     assert_eq!(run(1), run(2));
-    assert_eq!(build_dem_tin(&d, 0.3).unwrap(), build_dem_tin(&d, 0.3).unwrap());
+    assert_eq!(
+        build_dem_tin(&d, 0.3).unwrap(),
+        build_dem_tin(&d, 0.3).unwrap()
+    );
 }
 
 fn engabreen() -> Dem {
     let path = common::real_data("engabreen/engabreen_dem_3m_507x590.f32");
     let bytes = std::fs::read(&path).unwrap();
     assert_eq!(bytes.len(), 507 * 590 * 4, "{}", path.display());
-    let heights = bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-    Dem::from_heights(507, 590, heights, GridGeoref::new(445302.17, 7396769.45, 3.0)).unwrap()
+    let heights = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    Dem::from_heights(
+        507,
+        590,
+        heights,
+        GridGeoref::new(445302.17, 7396769.45, 3.0),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -289,10 +400,18 @@ fn engabreen_every_cell_of_every_level_is_within_its_bound() {
             assert!(tin.triangles.len() >= 2);
             total += tin.triangles.len();
         }
-        eprintln!("level {level}: eps {eps} m, {} cells, {total} triangles so far", cells.len());
+        eprintln!(
+            "level {level}: eps {eps} m, {} cells, {total} triangles so far",
+            cells.len()
+        );
     }
     // whole-DEM TIN at the finest bound, checked independently
-    let rect = SampleRect { c0: 0, r0: 0, c1: 506, r1: 589 };
+    let rect = SampleRect {
+        c0: 0,
+        r0: 0,
+        c1: 506,
+        r1: 589,
+    };
     let tin = build_dem_tin(&d, finest).unwrap();
     check_topology(rect, &tin);
     let brute = brute_force_error(&d, rect, &tin);

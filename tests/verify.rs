@@ -6,7 +6,6 @@ mod cli_util;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-
 use cli_util::{cliff_build_args, cliffmap, files_under, ok, s, write_cliff_dem};
 
 fn build(dir: &Path) -> (PathBuf, PathBuf) {
@@ -23,7 +22,12 @@ fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     files_under(dir)
         .into_iter()
         .filter(|p| p.file_name().is_some_and(|n| n != ".lock"))
-        .map(|p| (p.strip_prefix(dir).unwrap().display().to_string(), std::fs::read(&p).unwrap()))
+        .map(|p| {
+            (
+                p.strip_prefix(dir).unwrap().display().to_string(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
         .collect()
 }
 
@@ -56,23 +60,41 @@ fn damaged_cells_are_found_and_rebuilt_byte_identical() {
     let before = snapshot(&store);
     let m = manifest(&store);
     let cells = m["cells"].as_array().unwrap();
-    let base_mesh = cells.last().unwrap()["files"]["mesh"]["path"].as_str().unwrap().to_string();
-    let truncated = cells[cells.len() - 2]["files"]["normal"]["path"].as_str().unwrap().to_string();
-    let reparam = cells.iter().find(|c| c.get("reparam").is_some()).expect("the cliff makes some cell reparameterized");
-    let reparam_tex = reparam["reparam"]["files"]["texture"]["path"].as_str().unwrap().to_string();
+    let base_mesh = cells.last().unwrap()["files"]["mesh"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let truncated = cells[cells.len() - 2]["files"]["normal"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let reparam = cells
+        .iter()
+        .find(|c| c.get("reparam").is_some())
+        .expect("the cliff makes some cell reparameterized");
+    let reparam_tex = reparam["reparam"]["files"]["texture"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
 
     flip_byte(&store.join(&base_mesh), 100);
     flip_byte(&store.join(&reparam_tex), 200);
     let t = std::fs::read(store.join(&truncated)).unwrap();
     std::fs::write(store.join(&truncated), &t[..t.len() / 2]).unwrap();
-    verify_fails_naming(&store, &[&base_mesh, &reparam_tex, &truncated, "3 problem(s)"]);
+    verify_fails_naming(
+        &store,
+        &[&base_mesh, &reparam_tex, &truncated, "3 problem(s)"],
+    );
 
     let o = ok(&["verify", "--repair", s(&store)]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("repaired"), "{out}");
     ok(&["verify", s(&store)]);
     let after = snapshot(&store);
-    assert_eq!(before.keys().collect::<Vec<_>>(), after.keys().collect::<Vec<_>>());
+    assert_eq!(
+        before.keys().collect::<Vec<_>>(),
+        after.keys().collect::<Vec<_>>()
+    );
     for (k, v) in &before {
         assert!(after[k] == *v, "{k} differs after the repair");
     }
@@ -93,7 +115,10 @@ fn a_damaged_manifest_is_detected_and_the_base_rebuilt() {
     let o = cliffmap(&["stats", s(&store)]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("manifest.json"));
     let o = ok(&["verify", "--repair", s(&store)]);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("cliffmap reparam"), "the repair must say what to rerun");
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("cliffmap reparam"),
+        "the repair must say what to rerun"
+    );
     ok(&["verify", s(&store)]);
     assert!(store.join("manifest.json.damaged").is_file());
 }
@@ -103,7 +128,10 @@ fn a_repair_without_the_inputs_says_which_are_missing() {
     let tmp = tempfile::tempdir().unwrap();
     let (dem, store) = build(tmp.path());
     let m = manifest(&store);
-    let mesh = m["cells"][0]["files"]["mesh"]["path"].as_str().unwrap().to_string();
+    let mesh = m["cells"][0]["files"]["mesh"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
     flip_byte(&store.join(&mesh), 40);
     std::fs::rename(&dem, tmp.path().join("moved.f32")).unwrap();
     let o = cliffmap(&["verify", "--repair", s(&store)]);
@@ -120,5 +148,8 @@ fn not_a_store_is_a_clear_error() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("nothing"));
     let o = cliffmap(&["verify", s(tmp.path())]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(!o.status.success() && out.contains("manifest.json"), "{out}");
+    assert!(
+        !o.status.success() && out.contains("manifest.json"),
+        "{out}"
+    );
 }

@@ -3,7 +3,7 @@
 
 Usage: python3 benches/peers/param_tables.py OUT_DIR
 OUT_DIR holds ours.json (examples/param_bench.rs or examples/param_store_bench.rs) and
-peers.json (benches/peers/param_libigl.py run on it). Prints
+peers.json (benches/peers/param_libigl.py run on it; without it only table 1). Prints
 1. the configuration table of our knobs (ours.json alone),
 2. the per-cell table against SLIM 200 it (converged), SLIM 5/50 it, ARAP and LSCM,
 3. the summary per group (grid size or store) and over all cells.
@@ -29,7 +29,8 @@ def fmt(x, spec=".3f"):
 def main():
     out = sys.argv[1]
     ours = json.load(open(os.path.join(out, "ours.json")))
-    peers = json.load(open(os.path.join(out, "peers.json")))
+    peers_path = os.path.join(out, "peers.json")
+    peers = json.load(open(peers_path)) if os.path.exists(peers_path) else None
     cfgs = {}
     for r in ours:
         if "metrics" in r and r.get("config"):
@@ -53,6 +54,9 @@ def main():
         exs = f"{st.median(ex):.3f} / {max(ex):.3f}" if ex else "–"
         print(f"| {name} | " + " | ".join(ms) + f" | {exs} | {area:.4f} | {ang:.4f} | {fl} |")
 
+    if peers is None:
+        print(f"\n(no {peers_path}: run benches/peers/param_libigl.py for the peer tables)")
+        return
     by = {}
     for r in peers:
         by.setdefault(r["cell"], {})[r["method"]] = r

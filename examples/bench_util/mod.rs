@@ -13,7 +13,11 @@ pub fn shared_data(rel: &str) -> PathBuf {
         return PathBuf::from(d).join(rel);
     }
     let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real")).join(rel);
-    if p.exists() { p } else { PathBuf::from("/work/shared/data/real").join(rel) }
+    if p.exists() {
+        p
+    } else {
+        PathBuf::from("/work/shared/data/real").join(rel)
+    }
 }
 
 /// Writes `m` with texture coordinates `uvs` as OBJ (`v`, `vt`, `f v/vt`).
@@ -26,7 +30,16 @@ pub fn write_obj(path: &Path, m: &ParamMesh, uvs: &[[f64; 2]]) -> std::io::Resul
         writeln!(f, "vt {:.9} {:.9}", uv[0], uv[1])?;
     }
     for t in &m.triangles {
-        writeln!(f, "f {}/{} {}/{} {}/{}", t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1)?;
+        writeln!(
+            f,
+            "f {}/{} {}/{} {}/{}",
+            t[0] + 1,
+            t[0] + 1,
+            t[1] + 1,
+            t[1] + 1,
+            t[2] + 1,
+            t[2] + 1
+        )?;
     }
     f.flush()
 }
@@ -35,7 +48,11 @@ pub fn write_obj(path: &Path, m: &ParamMesh, uvs: &[[f64; 2]]) -> std::io::Resul
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 /// CPU seconds (user + system, all threads) this process has used so far (Linux
@@ -65,12 +82,31 @@ pub fn build_engabreen_store(dir: &Path, fingerprint: &str) -> anyhow::Result<f6
         origin: Some((445302.17, 7396769.45)),
         ..Default::default()
     };
-    let dem = cliffmap::load_dem(&shared_data("engabreen/engabreen_dem_3m_507x590.f32"), &dem_opts)?;
-    let ortho =
-        cliffmap::load_ortho(&shared_data("engabreen/engabreen_ortho_3m_507x590.png"), OrthoPlacement::SameGridAsDem, &dem, 1 << 30)?;
-    let inputs =
-        BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "engabreen".into(), ortho_source: None, fingerprint: fingerprint.into() };
+    let dem = cliffmap::load_dem(
+        &shared_data("engabreen/engabreen_dem_3m_507x590.f32"),
+        &dem_opts,
+    )?;
+    let ortho = cliffmap::load_ortho(
+        &shared_data("engabreen/engabreen_ortho_3m_507x590.png"),
+        OrthoPlacement::SameGridAsDem,
+        &dem,
+        1 << 30,
+    )?;
+    let inputs = BuildInputs {
+        dem: &dem,
+        ortho: Some(&ortho),
+        dem_source: "engabreen".into(),
+        ortho_source: None,
+        fingerprint: fingerprint.into(),
+    };
     let t = std::time::Instant::now();
-    build_store(&inputs, &BuildOptions { quiet: true, ..BuildOptions::default() }, dir)?;
+    build_store(
+        &inputs,
+        &BuildOptions {
+            quiet: true,
+            ..BuildOptions::default()
+        },
+        dir,
+    )?;
     Ok(t.elapsed().as_secs_f64())
 }

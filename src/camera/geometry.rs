@@ -33,17 +33,31 @@ impl CameraModel {
     /// must increase up to the image corner farthest from the principal point).
     pub fn problem(&self) -> Option<String> {
         if self.width == 0 || self.height == 0 {
-            return Some(format!("image size {} x {} must be positive", self.width, self.height));
+            return Some(format!(
+                "image size {} x {} must be positive",
+                self.width, self.height
+            ));
         }
         let scalars = [self.fx, self.fy, self.cx, self.cy, self.k1, self.k2];
-        if !self.position.is_finite() || !self.world_to_camera.is_finite() || scalars.iter().any(|v| !v.is_finite()) {
-            return Some("camera has a non-finite value (NaN or infinity) in its pose or intrinsics".into());
+        if !self.position.is_finite()
+            || !self.world_to_camera.is_finite()
+            || scalars.iter().any(|v| !v.is_finite())
+        {
+            return Some(
+                "camera has a non-finite value (NaN or infinity) in its pose or intrinsics".into(),
+            );
         }
         if !(self.fx > 0.0 && self.fy > 0.0) {
-            return Some(format!("focal lengths must be positive, got fx {} fy {}", self.fx, self.fy));
+            return Some(format!(
+                "focal lengths must be positive, got fx {} fy {}",
+                self.fx, self.fy
+            ));
         }
         let r = self.world_to_camera;
-        let err = (r * r.transpose() - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let err = (r * r.transpose() - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
         if err > 1e-6 || (r.determinant() - 1.0).abs() > 1e-6 {
             return Some(format!(
                 "rotation is not orthonormal with determinant +1 (max |R·Rᵀ − I| = {err:.3e}, det = {:.6})",
@@ -52,7 +66,11 @@ impl CameraModel {
         }
         if self.k1 != 0.0 || self.k2 != 0.0 {
             let corner_x = self.cx.abs().max((self.width as f64 - 1.0 - self.cx).abs()) / self.fx;
-            let corner_y = self.cy.abs().max((self.height as f64 - 1.0 - self.cy).abs()) / self.fy;
+            let corner_y = self
+                .cy
+                .abs()
+                .max((self.height as f64 - 1.0 - self.cy).abs())
+                / self.fy;
             // Undistorted radius of the corner is at most its distorted radius / min factor;
             // check monotonicity up to the distorted corner radius (and r² ≤ 4, the clamp).
             let rmax = corner_x.hypot(corner_y);
@@ -79,17 +97,30 @@ mod tests {
 
     #[test]
     fn angles_round_trip() {
-        for &(y, p, r) in &[(0.3, 0.1, -0.02), (3.8262, 0.1011, -0.0132), (-2.0, -1.2, 0.5), (1.0, 0.0, 3.0)] {
+        for &(y, p, r) in &[
+            (0.3, 0.1, -0.02),
+            (3.8262, 0.1011, -0.0132),
+            (-2.0, -1.2, 0.5),
+            (1.0, 0.0, 3.0),
+        ] {
             let m = rotation_from_yaw_pitch_roll(y, p, r);
             let (y2, p2, r2) = yaw_pitch_roll_from_rotation(&m);
             let m2 = rotation_from_yaw_pitch_roll(y2, p2, r2);
-            assert!((m - m2).to_cols_array().iter().all(|v| v.abs() < 1e-12), "{y} {p} {r}");
+            assert!(
+                (m - m2).to_cols_array().iter().all(|v| v.abs() < 1e-12),
+                "{y} {p} {r}"
+            );
             assert!((p - p2).abs() < 1e-12);
         }
         let down = rotation_look_at(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0)).unwrap();
         let (y, p, r) = yaw_pitch_roll_from_rotation(&down);
         let again = rotation_from_yaw_pitch_roll(y, p, r);
-        assert!((down - again).to_cols_array().iter().all(|v| v.abs() < 1e-12));
+        assert!(
+            (down - again)
+                .to_cols_array()
+                .iter()
+                .all(|v| v.abs() < 1e-12)
+        );
     }
 
     #[test]
@@ -102,7 +133,10 @@ mod tests {
         for &(u, v) in &[(0.0, 0.0), (399.0, 299.0), (200.0, 10.0), (c.cx, c.cy)] {
             let d = c.pixel_ray(u, v).unwrap();
             let p = c.project(c.position + 50.0 * d).unwrap();
-            assert!((p[0] - u).abs() < 1e-6 && (p[1] - v).abs() < 1e-6, "{u} {v} -> {p:?}");
+            assert!(
+                (p[0] - u).abs() < 1e-6 && (p[1] - v).abs() < 1e-6,
+                "{u} {v} -> {p:?}"
+            );
         }
         let mut bad = c;
         bad.k1 = -2.0;

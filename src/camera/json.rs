@@ -307,9 +307,26 @@ mod tests {
             k2: 0.01,
         };
         let back = parse(&camera_to_imgraft_json(&cam).to_string()).unwrap();
-        assert_eq!((back.width, back.height, back.fx, back.fy, back.cx, back.cy, back.k1, back.k2), (4290, 2856, 6014.4, 6021.5, 2144.5, 1427.0, -0.11, 0.01));
+        assert_eq!(
+            (
+                back.width,
+                back.height,
+                back.fx,
+                back.fy,
+                back.cx,
+                back.cy,
+                back.k1,
+                back.k2
+            ),
+            (4290, 2856, 6014.4, 6021.5, 2144.5, 1427.0, -0.11, 0.01)
+        );
         assert!(back.position == cam.position);
-        assert!((back.world_to_camera - cam.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-12));
+        assert!(
+            (back.world_to_camera - cam.world_to_camera)
+                .to_cols_array()
+                .iter()
+                .all(|v| v.abs() < 1e-12)
+        );
     }
 
     fn parse(s: &str) -> Result<CameraModel> {
@@ -336,14 +353,28 @@ mod tests {
     #[test]
     fn writer_round_trips() {
         let r = crate::camera::rotation_look_at(DVec3::ZERO, DVec3::new(-3.0, 1.0, -0.4)).unwrap();
-        let mut cam = CameraModel::with_fov(DVec3::new(431_234.5, 6_877_100.25, 612.7), r, 1600, 1200, 0.8);
+        let mut cam = CameraModel::with_fov(
+            DVec3::new(431_234.5, 6_877_100.25, 612.7),
+            r,
+            1600,
+            1200,
+            0.8,
+        );
         cam.k1 = -0.05;
         cam.cx += 3.5;
         let text = camera_to_json(&cam).to_string();
         let back = parse(&text).unwrap();
-        assert_eq!((back.width, back.height, back.fx, back.cx, back.k1), (1600, 1200, cam.fx, cam.cx, -0.05));
+        assert_eq!(
+            (back.width, back.height, back.fx, back.cx, back.k1),
+            (1600, 1200, cam.fx, cam.cx, -0.05)
+        );
         assert_eq!(back.position, cam.position);
-        assert!((back.world_to_camera - cam.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-12));
+        assert!(
+            (back.world_to_camera - cam.world_to_camera)
+                .to_cols_array()
+                .iter()
+                .all(|v| v.abs() < 1e-12)
+        );
     }
 
     #[test]

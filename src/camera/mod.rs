@@ -13,7 +13,9 @@ mod json;
 mod undistort;
 
 pub use geometry::yaw_pitch_roll_from_rotation;
-pub use json::{camera_from_json_file, camera_from_json_str, camera_to_imgraft_json, camera_to_json};
+pub use json::{
+    camera_from_json_file, camera_from_json_str, camera_to_imgraft_json, camera_to_json,
+};
 pub(crate) use undistort::{PlaneRay, RayCaster};
 
 use glam::{DMat3, DVec3};

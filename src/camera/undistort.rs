@@ -26,7 +26,12 @@ pub(crate) struct Radial {
 
 impl Radial {
     pub(crate) fn new(k1: f64, k2: f64) -> Radial {
-        let mut r = Radial { k1, k2, r_fold: f64::INFINITY, f_fold: f64::INFINITY };
+        let mut r = Radial {
+            k1,
+            k2,
+            r_fold: f64::INFINITY,
+            f_fold: f64::INFINITY,
+        };
         // Smallest positive root s = r² < 4 of 1 + 3k1·s + 5k2·s² = 0.
         let (a, b, c) = (5.0 * k2, 3.0 * k1, 1.0);
         let mut roots = [f64::NAN; 2];
@@ -41,7 +46,10 @@ impl Radial {
                 roots = [q / a, if q != 0.0 { c / q } else { f64::NAN }];
             }
         }
-        let s_fold = roots.into_iter().filter(|s| s.is_finite() && *s > 0.0 && *s < 4.0).fold(f64::INFINITY, f64::min);
+        let s_fold = roots
+            .into_iter()
+            .filter(|s| s.is_finite() && *s > 0.0 && *s < 4.0)
+            .fold(f64::INFINITY, f64::min);
         if s_fold.is_finite() {
             r.r_fold = s_fold.sqrt();
         } else if r.d(4.0) <= 0.0 {
@@ -86,7 +94,11 @@ impl Radial {
         if hi_end < 2.0 || rd <= self.f(2.0) {
             // On [0, hi_end] f is increasing: safeguarded Newton.
             let (mut lo, mut hi) = (0.0f64, hi_end);
-            let mut r = if guess.is_finite() && guess >= 0.0 { guess.min(hi_end) } else { rd.min(hi_end) };
+            let mut r = if guess.is_finite() && guess >= 0.0 {
+                guess.min(hi_end)
+            } else {
+                rd.min(hi_end)
+            };
             for _ in 0..60 {
                 let fr = self.f(r) - rd;
                 if fr.abs() <= 1e-15 * rd.max(1e-300) {
@@ -100,7 +112,11 @@ impl Radial {
                 let s = r * r;
                 let df = 1.0 + 3.0 * self.k1 * s + 5.0 * self.k2 * s * s;
                 let newton = r - fr / df;
-                r = if df > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+                r = if df > 0.0 && newton > lo && newton < hi {
+                    newton
+                } else {
+                    0.5 * (lo + hi)
+                };
                 if hi - lo <= 1e-16 * hi {
                     break;
                 }
@@ -132,7 +148,12 @@ impl CameraModel {
 
     /// A reusable pixel-ray generator (precomputes the distortion inverse's range).
     pub(crate) fn ray_caster(&self) -> RayCaster {
-        RayCaster { cam: *self, radial: Radial::new(self.k1, self.k2), camera_to_world: self.world_to_camera.transpose(), table: None }
+        RayCaster {
+            cam: *self,
+            radial: Radial::new(self.k1, self.k2),
+            camera_to_world: self.world_to_camera.transpose(),
+            table: None,
+        }
     }
 }
 
@@ -212,7 +233,8 @@ impl RatioTable {
             };
             // q·d(q²s) = 1: implicit derivative dq/ds.
             let (q2, q3) = (q * q, q * q * q);
-            let dq = -(k1 * q3 + 2.0 * k2 * q3 * q2 * s) / (1.0 + 3.0 * k1 * q2 * s + 5.0 * k2 * q2 * q2 * s * s);
+            let dq = -(k1 * q3 + 2.0 * k2 * q3 * q2 * s)
+                / (1.0 + 3.0 * k1 * q2 * s + 5.0 * k2 * q2 * q2 * s * s);
             (q.is_finite() && dq.is_finite()).then_some((q, dq * h))
         };
         let nodes: Vec<(f64, f64)> = (0..=TABLE_INTERVALS).map(node).collect::<Option<_>>()?;
@@ -220,10 +242,18 @@ impl RatioTable {
             .windows(2)
             .map(|w| {
                 let ((q0, m0), (q1, m1)) = (w[0], w[1]);
-                [q0, m0, 3.0 * (q1 - q0) - 2.0 * m0 - m1, 2.0 * (q0 - q1) + m0 + m1]
+                [
+                    q0,
+                    m0,
+                    3.0 * (q1 - q0) - 2.0 * m0 - m1,
+                    2.0 * (q0 - q1) + m0 + m1,
+                ]
             })
             .collect();
-        Some(RatioTable { inv_h: 1.0 / h, coef })
+        Some(RatioTable {
+            inv_h: 1.0 / h,
+            coef,
+        })
     }
 
     /// `q(s)`, or `None` outside the table's range.
@@ -282,7 +312,13 @@ impl RayCaster {
 
     /// [`RayCaster::row`] handing each ray to `f(i, ray)` in order instead of storing it.
     #[inline]
-    pub(crate) fn row_with(&self, u0: f64, v: f64, n: usize, mut f: impl FnMut(usize, Option<PlaneRay>)) {
+    pub(crate) fn row_with(
+        &self,
+        u0: f64,
+        v: f64,
+        n: usize,
+        mut f: impl FnMut(usize, Option<PlaneRay>),
+    ) {
         let c = &self.cam;
         let yd = (v - c.cy) / c.fy;
         if let Some(tab) = &self.table {
@@ -290,7 +326,8 @@ impl RayCaster {
                 let xd = (u0 + i as f64 - c.cx) / c.fx;
                 let ray = match tab.ratio(xd * xd + yd * yd) {
                     Some(q) => plane_ray(&self.camera_to_world, xd * q, yd * q),
-                    None => undistort_with(&self.radial, xd, yd).and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y)),
+                    None => undistort_with(&self.radial, xd, yd)
+                        .and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y)),
                 };
                 f(i, ray);
             }
@@ -309,15 +346,26 @@ impl RayCaster {
             let xy = if rd == 0.0 {
                 Some([0.0, 0.0])
             } else {
-                let guess = if rd_prev.is_finite() { ratio + slope * (rd - rd_prev) } else { ratio };
+                let guess = if rd_prev.is_finite() {
+                    ratio + slope * (rd - rd_prev)
+                } else {
+                    ratio
+                };
                 self.radial.invert_near(rd, rd * guess).map(|r| {
                     let q = r / rd;
-                    slope = if rd_prev.is_finite() && rd != rd_prev { (q - ratio) / (rd - rd_prev) } else { 0.0 };
+                    slope = if rd_prev.is_finite() && rd != rd_prev {
+                        (q - ratio) / (rd - rd_prev)
+                    } else {
+                        0.0
+                    };
                     (ratio, rd_prev) = (q, rd);
                     [xd * q, yd * q]
                 })
             };
-            f(i, xy.and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y)));
+            f(
+                i,
+                xy.and_then(|[x, y]| plane_ray(&self.camera_to_world, x, y)),
+            );
         }
     }
 
@@ -340,7 +388,8 @@ mod tests {
 
     fn cam(k1: f64, k2: f64) -> CameraModel {
         let r = rotation_from_yaw_pitch_roll(0.4, 0.1, -0.02);
-        let mut c = CameraModel::with_fov(DVec3::new(431_000.0, 6_878_000.0, 700.0), r, 640, 480, 0.9);
+        let mut c =
+            CameraModel::with_fov(DVec3::new(431_000.0, 6_878_000.0, 700.0), r, 640, 480, 0.9);
         c.cx += 3.5;
         c.cy -= 2.0;
         c.k1 = k1;
@@ -358,7 +407,10 @@ mod tests {
                     let d = c.pixel_ray(u, v).expect("inside the monotone range");
                     assert!((d.length() - 1.0).abs() < 1e-12);
                     let p = c.project(c.position + d * 250.0).unwrap();
-                    assert!((p[0] - u).abs() < 1e-7 && (p[1] - v).abs() < 1e-7, "k=({k1},{k2}) {u},{v} -> {p:?}");
+                    assert!(
+                        (p[0] - u).abs() < 1e-7 && (p[1] - v).abs() < 1e-7,
+                        "k=({k1},{k2}) {u},{v} -> {p:?}"
+                    );
                 }
             }
         }
@@ -400,9 +452,16 @@ mod tests {
                     let want = c.pixel_ray(u, v);
                     assert_eq!(r.is_some(), want.is_some(), "k=({k1},{k2}) ({u},{v})");
                     if let (Some(r), Some(w)) = (r, want) {
-                        assert!((r.dir - w).length() < 1e-13, "k=({k1},{k2}) ({u},{v}): {:?} vs {w:?}", r.dir);
+                        assert!(
+                            (r.dir - w).length() < 1e-13,
+                            "k=({k1},{k2}) ({u},{v}): {:?} vs {w:?}",
+                            r.dir
+                        );
                         let cf = c.world_to_camera * r.dir;
-                        assert!((cf.x / cf.z - r.xy[0]).abs() < 1e-12 && (cf.y / cf.z - r.xy[1]).abs() < 1e-12);
+                        assert!(
+                            (cf.x / cf.z - r.xy[0]).abs() < 1e-12
+                                && (cf.y / cf.z - r.xy[1]).abs() < 1e-12
+                        );
                     }
                 }
             }
@@ -411,7 +470,13 @@ mod tests {
 
     #[test]
     fn tabulated_rows_equal_pixel_rays() {
-        for (k1, k2) in [(-0.115, 0.0), (0.08, -0.01), (-0.2, 0.05), (0.3, 0.1), (-0.02, -0.001)] {
+        for (k1, k2) in [
+            (-0.115, 0.0),
+            (0.08, -0.01),
+            (-0.2, 0.05),
+            (0.3, 0.1),
+            (-0.02, -0.001),
+        ] {
             let c = cam(k1, k2);
             let rc = c.ray_caster().with_table();
             assert!(rc.table.is_some(), "k=({k1},{k2})");
@@ -422,7 +487,11 @@ mod tests {
                 for (i, r) in row.iter().enumerate() {
                     let u = i as f64 - 0.5;
                     let (r, w) = (r.expect("inside the table"), c.pixel_ray(u, v).unwrap());
-                    assert!((r.dir - w).length() < 1e-14, "k=({k1},{k2}) ({u},{v}): {:?} vs {w:?}", r.dir);
+                    assert!(
+                        (r.dir - w).length() < 1e-14,
+                        "k=({k1},{k2}) ({u},{v}): {:?} vs {w:?}",
+                        r.dir
+                    );
                 }
             }
         }

@@ -16,7 +16,13 @@ use crate::error::{Error, Result};
 /// Kept sample positions of one straight run of samples `p0..=p1` whose heights are `h(p)`.
 /// Always keeps both ends; every sample is within `epsilon` (vertical) of the linear
 /// interpolation between its kept neighbours. Sorted, unique, deterministic.
-pub(crate) fn simplify_run(h: impl Fn(u32) -> f64, p0: u32, p1: u32, stride: u32, epsilon: f64) -> Vec<u32> {
+pub(crate) fn simplify_run(
+    h: impl Fn(u32) -> f64,
+    p0: u32,
+    p1: u32,
+    stride: u32,
+    epsilon: f64,
+) -> Vec<u32> {
     let mut kept = vec![p0];
     if p1 > p0 {
         kept.push(p1);
@@ -37,7 +43,15 @@ pub(crate) fn simplify_run(h: impl Fn(u32) -> f64, p0: u32, p1: u32, stride: u32
 
 /// Inserts into `out` the samples needed between `a` and `b` (exclusive) so that every
 /// candidate (positions `origin + k*step`) is within `epsilon` of the polyline.
-fn refine(h: &impl Fn(u32) -> f64, a: u32, b: u32, origin: u32, step: u32, epsilon: f64, out: &mut Vec<u32>) {
+fn refine(
+    h: &impl Fn(u32) -> f64,
+    a: u32,
+    b: u32,
+    origin: u32,
+    step: u32,
+    epsilon: f64,
+    out: &mut Vec<u32>,
+) {
     let mut stack = vec![(a, b)];
     while let Some((a, b)) = stack.pop() {
         if b - a < 2 {
@@ -103,22 +117,41 @@ fn side_height(dem: &Dem, fixed: u32, is_row: bool) -> impl Fn(u32) -> f64 + '_ 
 /// Assembles the border vertex list (clockwise in image order from the north-west corner:
 /// north W->E, east N->S, south E->W, west S->N; each corner once) from the kept positions
 /// of the four sides.
-fn assemble(rect: SampleRect, north: &[u32], east: &[u32], south: &[u32], west: &[u32]) -> Vec<[u32; 2]> {
+fn assemble(
+    rect: SampleRect,
+    north: &[u32],
+    east: &[u32],
+    south: &[u32],
+    west: &[u32],
+) -> Vec<[u32; 2]> {
     let mut out = Vec::with_capacity(north.len() + east.len() + south.len() + west.len());
     out.extend(north.iter().map(|&c| [c, rect.r0]));
     out.extend(east.iter().skip(1).map(|&r| [rect.c1, r]));
     out.extend(south.iter().rev().skip(1).map(|&c| [c, rect.r1]));
     let n = west.len();
-    out.extend(west.iter().rev().skip(1).take(n.saturating_sub(2)).map(|&r| [rect.c0, r]));
+    out.extend(
+        west.iter()
+            .rev()
+            .skip(1)
+            .take(n.saturating_sub(2))
+            .map(|&r| [rect.c0, r]),
+    );
     out
 }
 
 /// Simplifies the whole boundary of `rect` on its own (no neighbours): the border a
 /// single TIN over `rect` needs. Same order and guarantees as [`LevelBorders::cell_border`].
-pub fn simplify_rect_border(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64) -> Vec<[u32; 2]> {
+pub fn simplify_rect_border(
+    dem: &Dem,
+    rect: SampleRect,
+    stride: u32,
+    epsilon: f64,
+) -> Vec<[u32; 2]> {
     let runs: Vec<Vec<u32>> = sides(rect)
         .iter()
-        .map(|&(fixed, is_row, a, b)| simplify_run(side_height(dem, fixed, is_row), a, b, stride, epsilon))
+        .map(|&(fixed, is_row, a, b)| {
+            simplify_run(side_height(dem, fixed, is_row), a, b, stride, epsilon)
+        })
         .collect();
     assemble(rect, &runs[0], &runs[1], &runs[2], &runs[3])
 }
@@ -189,7 +222,14 @@ impl LevelBorders {
                 simplify_run(side_height(dem, col, false), a, b, stride, epsilon)
             })
             .collect();
-        Ok(LevelBorders { tree: *tree, level, nx, ny, h_sides, v_sides })
+        Ok(LevelBorders {
+            tree: *tree,
+            level,
+            nx,
+            ny,
+            h_sides,
+            v_sides,
+        })
     }
 
     /// The level these borders belong to.
@@ -205,7 +245,9 @@ impl LevelBorders {
         if key.level != self.level || key.x >= self.nx || key.y >= self.ny {
             return Vec::new();
         }
-        let Some(rect) = self.tree.clipped(key) else { return Vec::new() };
+        let Some(rect) = self.tree.clipped(key) else {
+            return Vec::new();
+        };
         let (x, y, nx) = (key.x, key.y, self.nx);
         let north = &self.h_sides[(y * nx + x) as usize];
         let south = &self.h_sides[((y + 1) * nx + x) as usize];
@@ -223,14 +265,19 @@ pub(crate) fn check_tree(dem: &Dem, tree: &Quadtree, level: u8) -> Result<()> {
         )));
     }
     if level >= tree.levels {
-        return Err(Error::BadOption(format!("level {level} does not exist (the quadtree has {} levels)", tree.levels)));
+        return Err(Error::BadOption(format!(
+            "level {level} does not exist (the quadtree has {} levels)",
+            tree.levels
+        )));
     }
     Ok(())
 }
 
 pub(crate) fn check_epsilon(epsilon: f64) -> Result<()> {
     if !(epsilon.is_finite() && epsilon >= 0.0) {
-        return Err(Error::BadOption(format!("maximum error must be a finite number >= 0, got {epsilon}")));
+        return Err(Error::BadOption(format!(
+            "maximum error must be a finite number >= 0, got {epsilon}"
+        )));
     }
     Ok(())
 }
@@ -241,7 +288,9 @@ mod tests {
 
     #[test]
     fn run_is_within_epsilon_and_keeps_ends() {
-        let hs: Vec<f64> = (0..200).map(|i| ((i as f64) * 0.37).sin() * 10.0 + if i == 77 { 30.0 } else { 0.0 }).collect();
+        let hs: Vec<f64> = (0..200)
+            .map(|i| ((i as f64) * 0.37).sin() * 10.0 + if i == 77 { 30.0 } else { 0.0 })
+            .collect();
         for stride in [1, 2, 4, 16] {
             for eps in [0.0, 0.5, 3.0, 100.0] {
                 let k = simplify_run(|p| hs[p as usize], 3, 190, stride, eps);
@@ -254,7 +303,10 @@ mod tests {
             }
         }
         // flat and collinear runs keep only the ends
-        assert_eq!(simplify_run(|p| p as f64 * 2.0 - 5.0, 0, 50, 4, 1e-9), vec![0, 50]);
+        assert_eq!(
+            simplify_run(|p| p as f64 * 2.0 - 5.0, 0, 50, 4, 1e-9),
+            vec![0, 50]
+        );
         assert_eq!(simplify_run(|_| 1.0, 7, 8, 4, 0.0), vec![7, 8]);
     }
 }

@@ -10,7 +10,12 @@ pub fn nominal_extent(tree: &Quadtree, georef: &GridGeoref, key: CellKey) -> Wor
     let (c0, r0, n) = tree.nominal(key);
     let (x0, y0) = georef.world(r0 as f64, c0 as f64);
     let (x1, y1) = georef.world((r0 + n) as f64, (c0 + n) as f64);
-    WorldRect { min_x: x0, min_y: y1, max_x: x1, max_y: y0 }
+    WorldRect {
+        min_x: x0,
+        min_y: y1,
+        max_x: x1,
+        max_y: y0,
+    }
 }
 
 /// The cell's rectangle clipped to the DEM's data (sample-centre) rectangle, or `None` if
@@ -19,7 +24,12 @@ pub fn clipped_extent(tree: &Quadtree, georef: &GridGeoref, key: CellKey) -> Opt
     let r = tree.clipped(key)?;
     let (x0, y0) = georef.world(r.r0 as f64, r.c0 as f64);
     let (x1, y1) = georef.world(r.r1 as f64, r.c1 as f64);
-    Some(WorldRect { min_x: x0, min_y: y1, max_x: x1, max_y: y0 })
+    Some(WorldRect {
+        min_x: x0,
+        min_y: y1,
+        max_x: x1,
+        max_y: y0,
+    })
 }
 
 #[cfg(test)]
@@ -30,11 +40,31 @@ mod tests {
     fn nominal_and_clipped_extents() {
         let q = Quadtree::new(101, 81, 32); // span 100 -> 32 * 4 = 128 -> 3 levels
         let g = GridGeoref::new(1000.0, 5000.0, 2.0);
-        let k = CellKey { level: q.finest_level(), x: 3, y: 2 };
+        let k = CellKey {
+            level: q.finest_level(),
+            x: 3,
+            y: 2,
+        };
         let nom = nominal_extent(&q, &g, k);
-        assert_eq!(nom, WorldRect { min_x: 1192.0, min_y: 4808.0, max_x: 1256.0, max_y: 4872.0 });
+        assert_eq!(
+            nom,
+            WorldRect {
+                min_x: 1192.0,
+                min_y: 4808.0,
+                max_x: 1256.0,
+                max_y: 4872.0
+            }
+        );
         let cl = clipped_extent(&q, &g, k).unwrap();
         // columns 96..=100, rows 64..=80
-        assert_eq!(cl, WorldRect { min_x: 1192.0, min_y: 4840.0, max_x: 1200.0, max_y: 4872.0 });
+        assert_eq!(
+            cl,
+            WorldRect {
+                min_x: 1192.0,
+                min_y: 4840.0,
+                max_x: 1200.0,
+                max_y: 4872.0
+            }
+        );
     }
 }

@@ -51,7 +51,11 @@ impl FaceHeap {
             (p, Some(k)) => {
                 let old = self.heap[p as usize].0;
                 self.heap[p as usize].0 = k;
-                if k > old { self.sift_up(p as usize) } else { self.sift_down(p as usize) }
+                if k > old {
+                    self.sift_up(p as usize)
+                } else {
+                    self.sift_down(p as usize)
+                }
             }
             (p, None) => {
                 let p = p as usize;
@@ -92,7 +96,11 @@ impl FaceHeap {
                 break;
             }
             let r = l + 1;
-            let c = if r < n && Self::above(self.heap[r], self.heap[l]) { r } else { l };
+            let c = if r < n && Self::above(self.heap[r], self.heap[l]) {
+                r
+            } else {
+                l
+            };
             if !Self::above(self.heap[c], e) {
                 break;
             }
@@ -115,12 +123,18 @@ mod tests {
         let mut model: Vec<Option<f64>> = vec![None; 200];
         let mut seed = 99u64;
         let mut rnd = |m: u64| {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 33) % m
         };
         for step in 0..20000 {
             let f = rnd(200) as usize;
-            let key = if rnd(4) == 0 { None } else { Some(rnd(50) as f64) };
+            let key = if rnd(4) == 0 {
+                None
+            } else {
+                Some(rnd(50) as f64)
+            };
             h.set(f as u32, key);
             model[f] = key;
             let best = model

@@ -62,9 +62,15 @@ pub fn normal_map(dem: &Dem, extent: WorldRect, texels: u32) -> RgbImage {
         .collect();
 
     // integer DEM columns touched by any filter box
-    let kmin =
-        (cols.iter().map(|c| c.0).fold(f64::INFINITY, f64::min).floor().max(0.0) as usize).min(dem.width - 2);
-    let kmax = (cols.iter().map(|c| c.1).fold(0.0, f64::max).ceil() as usize).clamp(kmin + 1, dem.width - 1);
+    let kmin = (cols
+        .iter()
+        .map(|c| c.0)
+        .fold(f64::INFINITY, f64::min)
+        .floor()
+        .max(0.0) as usize)
+        .min(dem.width - 2);
+    let kmax = (cols.iter().map(|c| c.1).fold(0.0, f64::max).ceil() as usize)
+        .clamp(kmin + 1, dem.width - 1);
     let span = kmax - kmin + 1;
 
     buf.par_chunks_mut(t * 3).enumerate().for_each(|(j, row)| {
@@ -213,7 +219,12 @@ mod tests {
 
     #[test]
     fn tilted_plane_gives_analytic_normal_everywhere() {
-        let g = GridGeoref { origin_x: 445302.0, origin_y: 7396769.0, spacing_x: 3.0, spacing_y: 2.0 };
+        let g = GridGeoref {
+            origin_x: 445302.0,
+            origin_y: 7396769.0,
+            spacing_x: 3.0,
+            spacing_y: 2.0,
+        };
         let (p, q) = (0.75, -1.25); // dh/dx, dh/dy
         let dem = plane_dem(70, 50, g, p, q);
         let len = (p * p + q * q + 1.0f64).sqrt();
@@ -268,9 +279,15 @@ mod tests {
         let g = GridGeoref::new(0.0, 16.0, 1.0);
         let dem = Dem::from_heights(17, 17, vec![5.0; 17 * 17], g).unwrap();
         let ext = dem.extent();
-        assert!(normal_map(&dem, ext, 8).pixels().all(|p| p.0 == [128, 128, 255]));
+        assert!(
+            normal_map(&dem, ext, 8)
+                .pixels()
+                .all(|p| p.0 == [128, 128, 255])
+        );
         // a west-facing slope (h = -x) east of x = 8, flat to the west
-        let z: Vec<f32> = (0..17 * 17).map(|k| -((k % 17) as f32 - 8.0).max(0.0)).collect();
+        let z: Vec<f32> = (0..17 * 17)
+            .map(|k| -((k % 17) as f32 - 8.0).max(0.0))
+            .collect();
         let dem = Dem::from_heights(17, 17, z, g).unwrap();
         let nm = normal_map(&dem, ext, 16);
         let s = (0.5f64).sqrt();

@@ -41,15 +41,31 @@ impl CellKey {
         let (l, x, y) = (self.level + 1, self.x * 2, self.y * 2);
         [
             CellKey { level: l, x, y },
-            CellKey { level: l, x: x + 1, y },
-            CellKey { level: l, x, y: y + 1 },
-            CellKey { level: l, x: x + 1, y: y + 1 },
+            CellKey {
+                level: l,
+                x: x + 1,
+                y,
+            },
+            CellKey {
+                level: l,
+                x,
+                y: y + 1,
+            },
+            CellKey {
+                level: l,
+                x: x + 1,
+                y: y + 1,
+            },
         ]
     }
 
     /// The parent cell, or `None` for the root.
     pub fn parent(&self) -> Option<CellKey> {
-        (self.level > 0).then(|| CellKey { level: self.level - 1, x: self.x / 2, y: self.y / 2 })
+        (self.level > 0).then(|| CellKey {
+            level: self.level - 1,
+            x: self.x / 2,
+            y: self.y / 2,
+        })
     }
 }
 
@@ -96,7 +112,12 @@ impl Quadtree {
         while (finest_intervals as u64) << (levels - 1) < span {
             levels += 1;
         }
-        Quadtree { dem_width, dem_height, finest_intervals, levels }
+        Quadtree {
+            dem_width,
+            dem_height,
+            finest_intervals,
+            levels,
+        }
     }
 
     /// The finest level index.
@@ -166,10 +187,30 @@ mod tests {
         let fin = q.cells(q.finest_level());
         // 506/64 -> 8 columns, 589/64 -> 10 rows (the last ones clipped)
         assert_eq!(fin.len(), 8 * 10);
-        let last = q.clipped(CellKey { level: 4, x: 7, y: 9 }).unwrap();
+        let last = q
+            .clipped(CellKey {
+                level: 4,
+                x: 7,
+                y: 9,
+            })
+            .unwrap();
         assert_eq!((last.c1, last.r1), (506, 589));
-        assert!(q.clipped(CellKey { level: 4, x: 8, y: 0 }).is_none());
-        assert_eq!(CellKey::parse("4-7-9"), Some(CellKey { level: 4, x: 7, y: 9 }));
+        assert!(
+            q.clipped(CellKey {
+                level: 4,
+                x: 8,
+                y: 0
+            })
+            .is_none()
+        );
+        assert_eq!(
+            CellKey::parse("4-7-9"),
+            Some(CellKey {
+                level: 4,
+                x: 7,
+                y: 9
+            })
+        );
         assert_eq!(CellKey::parse("4-7"), None);
         for k in q.cells(2) {
             for c in k.children() {

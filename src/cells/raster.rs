@@ -33,7 +33,11 @@ fn ceil_div(n: i64, d: i64) -> i64 {
 /// `floor(n / d)` for `d > 0`; a shift for powers of two.
 #[inline]
 fn floor_div(n: i64, d: i64) -> i64 {
-    if d & (d - 1) == 0 { n >> d.trailing_zeros() } else { n.div_euclid(d) }
+    if d & (d - 1) == 0 {
+        n >> d.trailing_zeros()
+    } else {
+        n.div_euclid(d)
+    }
 }
 
 /// Calls `f(row, j, i0, i1)` for every lattice row that has lattice samples inside the
@@ -42,7 +46,11 @@ fn floor_div(n: i64, d: i64) -> i64 {
 /// `i0..=i1` (`col = origin_c + i * stride`). Rows are visited in increasing order.
 /// Degenerate triangles visit nothing.
 #[inline]
-pub(crate) fn for_each_span(tri: [[i64; 2]; 3], lat: &Lattice, mut f: impl FnMut(i64, usize, usize, usize)) {
+pub(crate) fn for_each_span(
+    tri: [[i64; 2]; 3],
+    lat: &Lattice,
+    mut f: impl FnMut(i64, usize, usize, usize),
+) {
     let [a, mut b, mut c] = tri;
     let orient = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     if orient == 0 {
@@ -101,7 +109,10 @@ pub(crate) fn for_each_span(tri: [[i64; 2]; 3], lat: &Lattice, mut f: impl FnMut
             let (i0, i1) = if s == 1 {
                 (lo - lat.origin_c, hi - lat.origin_c)
             } else {
-                (ceil_div(lo - lat.origin_c, s), floor_div(hi - lat.origin_c, s))
+                (
+                    ceil_div(lo - lat.origin_c, s),
+                    floor_div(hi - lat.origin_c, s),
+                )
             };
             if i0 <= i1 {
                 f(y, j, i0 as usize, i1 as usize);
@@ -121,7 +132,9 @@ mod tests {
 
     fn brute(tri: [[i64; 2]; 3], lat: &Lattice) -> Vec<(i64, i64)> {
         let mut out = Vec::new();
-        let cross = |p: [i64; 2], q: [i64; 2], r: [i64; 2]| (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+        let cross = |p: [i64; 2], q: [i64; 2], r: [i64; 2]| {
+            (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+        };
         let o = cross(tri[0], tri[1], tri[2]);
         if o == 0 {
             return out;
@@ -135,7 +148,11 @@ mod tests {
                     continue;
                 }
                 let p = [x, y];
-                let e = [cross(tri[0], tri[1], p), cross(tri[1], tri[2], p), cross(tri[2], tri[0], p)];
+                let e = [
+                    cross(tri[0], tri[1], p),
+                    cross(tri[1], tri[2], p),
+                    cross(tri[2], tri[0], p),
+                ];
                 if e.iter().all(|&v| v * o.signum() >= 0) {
                     out.push((y, x));
                 }
@@ -148,7 +165,9 @@ mod tests {
     fn spans_match_brute_force() {
         let mut seed = 12345u64;
         let mut rnd = |m: i64| {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 33) % m as u64) as i64
         };
         for _ in 0..3000 {

@@ -26,8 +26,13 @@ impl AxisTaps {
         clip: (f64, f64),
         min_filter: f64,
     ) -> AxisTaps {
-        let mut t =
-            AxisTaps { first: Vec::new(), offs: vec![0], cov: Vec::new(), filt: Vec::new(), len: Vec::new() };
+        let mut t = AxisTaps {
+            first: Vec::new(),
+            offs: vec![0],
+            cov: Vec::new(),
+            filt: Vec::new(),
+            len: Vec::new(),
+        };
         for (lo, hi) in footprints {
             let c = 0.5 * (lo + hi);
             let half = (0.5 * (hi - lo)).max(0.5 * min_filter);
@@ -114,7 +119,10 @@ mod tests {
         let r = t.range(1);
         assert_eq!(t.first[1], 3);
         let (f, c) = (&t.filt[r.clone()], &t.cov[r]);
-        assert!((f[0] - 0.3).abs() < 1e-12 && (f[1] - 0.7).abs() < 1e-12, "{f:?}");
+        assert!(
+            (f[0] - 0.3).abs() < 1e-12 && (f[1] - 0.7).abs() < 1e-12,
+            "{f:?}"
+        );
         assert!(c[0].abs() < 1e-12 && (c[1] - 0.2).abs() < 1e-12, "{c:?}");
         assert_eq!(t.span(), Some((0, 4)));
         // clipped axis: cell 4 covers only [3.5, 4.0], so [3, 5] has 1.0 over data

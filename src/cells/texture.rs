@@ -54,14 +54,18 @@ pub fn ortho_texture(ortho: &Ortho, dem: &Dem, extent: WorldRect, texels: u32) -
     let og = ortho.georef;
     let ox = AxisTaps::new(
         iw,
-        footprints(extent.min_x, extent.max_x, texels, |x| (x - og.origin_x) / og.spacing_x),
+        footprints(extent.min_x, extent.max_x, texels, |x| {
+            (x - og.origin_x) / og.spacing_x
+        }),
         (-0.5, iw as f64 - 0.5),
         1.0,
     );
     // rows: north (max_y) to south; grid row increases southwards
     let oy = AxisTaps::new(
         ih,
-        footprints(-extent.max_y, -extent.min_y, texels, |ny| (og.origin_y + ny) / og.spacing_y),
+        footprints(-extent.max_y, -extent.min_y, texels, |ny| {
+            (og.origin_y + ny) / og.spacing_y
+        }),
         (-0.5, ih as f64 - 0.5),
         1.0,
     );
@@ -70,13 +74,17 @@ pub fn ortho_texture(ortho: &Ortho, dem: &Dem, extent: WorldRect, texels: u32) -
     let (dw, dh) = (dem.width, dem.height);
     let dx = AxisTaps::new(
         dw,
-        footprints(extent.min_x, extent.max_x, texels, |x| (x - dg.origin_x) / dg.spacing_x),
+        footprints(extent.min_x, extent.max_x, texels, |x| {
+            (x - dg.origin_x) / dg.spacing_x
+        }),
         (0.0, dw as f64 - 1.0),
         0.0,
     );
     let dy = AxisTaps::new(
         dh,
-        footprints(-extent.max_y, -extent.min_y, texels, |ny| (dg.origin_y + ny) / dg.spacing_y),
+        footprints(-extent.max_y, -extent.min_y, texels, |ny| {
+            (dg.origin_y + ny) / dg.spacing_y
+        }),
         (0.0, dh as f64 - 1.0),
         0.0,
     );
@@ -116,9 +124,11 @@ pub fn ortho_texture(ortho: &Ortho, dem: &Dem, extent: WorldRect, texels: u32) -
             let area = ox.len[i] * oy.len[j];
             let ortho_known = cov / (255.0 * area);
             let dem_area = dx.len[i] * dy.len[j];
-            let dem_known =
-                if any_void { dem_known_with_voids(dem, &dx, &dy, i, j) } else { dx_sum[i] * dy_sum }
-                    / dem_area;
+            let dem_known = if any_void {
+                dem_known_with_voids(dem, &dx, &dy, i, j)
+            } else {
+                dx_sum[i] * dy_sum
+            } / dem_area;
             let known = (ortho_known * dem_known).clamp(0.0, 1.0);
             let px = &mut row[i * 4..i * 4 + 4];
             if wsum > 0.0 {
@@ -157,7 +167,10 @@ mod tests {
     }
 
     fn ortho_from(w: u32, h: u32, g: GridGeoref, f: impl Fn(u32, u32) -> [u8; 4]) -> Ortho {
-        Ortho { image: RgbaImage::from_fn(w, h, |c, r| Rgba(f(c, r))), georef: g }
+        Ortho {
+            image: RgbaImage::from_fn(w, h, |c, r| Rgba(f(c, r))),
+            georef: g,
+        }
     }
 
     #[test]
@@ -165,7 +178,12 @@ mod tests {
         let g = GridGeoref::new(500.0, 900.0, 1.0);
         let dem = flat_dem(101, 101, g);
         let ortho = ortho_from(101, 101, g, |_, _| [10, 200, 77, 255]);
-        let ext = WorldRect { min_x: 510.0, min_y: 820.0, max_x: 574.0, max_y: 884.0 };
+        let ext = WorldRect {
+            min_x: 510.0,
+            min_y: 820.0,
+            max_x: 574.0,
+            max_y: 884.0,
+        };
         for t in [16, 64, 256] {
             let tex = ortho_texture(&ortho, &dem, ext, t);
             assert_eq!(tex.dimensions(), (t, t));
@@ -191,7 +209,9 @@ mod tests {
                 let p = tex.get_pixel(i, j).0;
                 assert_eq!(p[3], 255);
                 assert_eq!(p[2], 50);
-                worst = worst.max((p[0] as f64 - 2.0 * col).abs()).max((p[1] as f64 - 3.0 * row).abs());
+                worst = worst
+                    .max((p[0] as f64 - 2.0 * col).abs())
+                    .max((p[1] as f64 - 3.0 * row).abs());
             }
         }
         assert!(worst <= tol, "T={t}: worst error {worst} > {tol}");
@@ -200,7 +220,12 @@ mod tests {
     #[test]
     fn gradient_magnified_is_bilinear() {
         // 20 x 20 pixels onto 160 x 160 texels (8 texels per pixel), away from the border
-        let g = GridGeoref { origin_x: 1000.0, origin_y: 2000.0, spacing_x: 2.0, spacing_y: 2.0 };
+        let g = GridGeoref {
+            origin_x: 1000.0,
+            origin_y: 2000.0,
+            spacing_x: 2.0,
+            spacing_y: 2.0,
+        };
         let ext = WorldRect {
             min_x: 1000.0 + 2.0 * 30.0,
             max_x: 1000.0 + 2.0 * 50.0,
@@ -214,7 +239,12 @@ mod tests {
     fn gradient_minified_is_box_average() {
         // 100 x 64 pixels onto 16 x 16 texels (6.25 x 4 pixels per texel, fractional coverage)
         let g = GridGeoref::new(0.0, 0.0, 1.0);
-        let ext = WorldRect { min_x: 5.0, max_x: 105.0, min_y: -72.0, max_y: -8.0 };
+        let ext = WorldRect {
+            min_x: 5.0,
+            max_x: 105.0,
+            min_y: -72.0,
+            max_y: -8.0,
+        };
         // box average of the pixel staircase deviates from the linear value by at most
         // slope / (8 * footprint) per axis, plus 0.5 for rounding
         check_gradient(16, ext, g, 0.5 + 3.0 / 32.0 + 1e-9);
@@ -225,15 +255,29 @@ mod tests {
         // DEM 0..=63; ortho covers columns 0..=31 only (pixel edges -0.5..31.5)
         let g = GridGeoref::new(0.0, 63.0, 1.0);
         let dem = flat_dem(64, 64, g);
-        let ortho =
-            ortho_from(32, 64, g, |c, r| if r >= 40 && c < 8 { [9, 9, 9, 0] } else { [100, 100, 100, 255] });
+        let ortho = ortho_from(32, 64, g, |c, r| {
+            if r >= 40 && c < 8 {
+                [9, 9, 9, 0]
+            } else {
+                [100, 100, 100, 255]
+            }
+        });
         // extent [-0.5, 63.5] split into 64 texels of one pixel each: texel i == pixel i
-        let ext = WorldRect { min_x: -0.5, max_x: 63.5, min_y: -0.5, max_y: 63.5 };
+        let ext = WorldRect {
+            min_x: -0.5,
+            max_x: 63.5,
+            min_y: -0.5,
+            max_y: 63.5,
+        };
         let tex = ortho_texture(&ortho, &dem, ext, 64);
         for j in 1..63 {
             for i in 1..63 {
                 let a = tex.get_pixel(i, j).0[3];
-                let want = if i >= 32 || (j >= 40 && i < 8) { 0 } else { 255 };
+                let want = if i >= 32 || (j >= 40 && i < 8) {
+                    0
+                } else {
+                    255
+                };
                 assert_eq!(a, want, "texel ({i},{j})");
                 if want == 255 {
                     assert_eq!(&tex.get_pixel(i, j).0[..3], &[100, 100, 100]);
@@ -241,16 +285,37 @@ mod tests {
             }
         }
         // texels half over the ortho: 2 texels per pixel, ortho edge at x = 31.5
-        let ext = WorldRect { min_x: 30.0, max_x: 34.0, min_y: 10.0, max_y: 14.0 };
+        let ext = WorldRect {
+            min_x: 30.0,
+            max_x: 34.0,
+            min_y: 10.0,
+            max_y: 14.0,
+        };
         let tex = ortho_texture(&ortho, &dem, ext, 4);
         let alphas: Vec<u8> = (0..4).map(|i| tex.get_pixel(i, 1).0[3]).collect();
         // texel columns [30,31], [31,32], [32,33], [33,34]: known 1, 0.5, 0, 0
         assert_eq!(alphas, vec![255, 128, 0, 0]);
-        assert_eq!(&tex.get_pixel(1, 1).0[..3], &[100, 100, 100], "colour from known pixels only");
-        assert_eq!(tex.get_pixel(2, 1).0, [0, 0, 0, 0], "no ortho pixel in the filter footprint");
+        assert_eq!(
+            &tex.get_pixel(1, 1).0[..3],
+            &[100, 100, 100],
+            "colour from known pixels only"
+        );
+        assert_eq!(
+            tex.get_pixel(2, 1).0,
+            [0, 0, 0, 0],
+            "no ortho pixel in the filter footprint"
+        );
         // magnified texel [31.375, 31.625]: bilinear footprint [31, 32] sees only pixel 31
-        let ext = WorldRect { min_x: 31.375, max_x: 31.625, min_y: 10.0, max_y: 10.25 };
-        assert_eq!(ortho_texture(&ortho, &dem, ext, 1).get_pixel(0, 0).0, [100, 100, 100, 128]);
+        let ext = WorldRect {
+            min_x: 31.375,
+            max_x: 31.625,
+            min_y: 10.0,
+            max_y: 10.25,
+        };
+        assert_eq!(
+            ortho_texture(&ortho, &dem, ext, 1).get_pixel(0, 0).0,
+            [100, 100, 100, 128]
+        );
     }
 
     #[test]
@@ -267,7 +332,12 @@ mod tests {
         let og = GridGeoref::new(-50.0, 81.0, 0.5);
         let ortho = ortho_from(300, 300, og, |_, _| [1, 2, 3, 255]);
         // extent [0, 64] x [-33, 31]: the DEM data rectangle is x in [0, 31], y in [0, 31]
-        let ext = WorldRect { min_x: 0.0, max_x: 64.0, min_y: -33.0, max_y: 31.0 };
+        let ext = WorldRect {
+            min_x: 0.0,
+            max_x: 64.0,
+            min_y: -33.0,
+            max_y: 31.0,
+        };
         let tex = ortho_texture(&ortho, &dem, ext, 128); // texel = 0.5 world units
         for j in 0..128u32 {
             for i in 0..128u32 {
@@ -276,7 +346,8 @@ mod tests {
                 let (x1, y0) = (x0 + 0.5, y1 - 0.5);
                 let outside = x0 >= 31.0 || y1 <= 0.0;
                 let in_void = x0 >= 19.5 && x1 <= 23.5 && y0 >= 17.5 && y1 <= 21.5;
-                let inside = x1 <= 31.0 && y0 >= 0.0 && !(x1 > 19.5 && x0 < 23.5 && y1 > 17.5 && y0 < 21.5);
+                let inside =
+                    x1 <= 31.0 && y0 >= 0.0 && !(x1 > 19.5 && x0 < 23.5 && y1 > 17.5 && y0 < 21.5);
                 let a = tex.get_pixel(i, j).0[3];
                 if outside || in_void {
                     assert_eq!(a, 0, "texel ({i},{j})");
@@ -286,8 +357,16 @@ mod tests {
             }
         }
         // a texel straddling the void's west edge by a quarter: [19.25, 19.75] -> known 0.5
-        let ext = WorldRect { min_x: 19.25, max_x: 19.75, min_y: 18.0, max_y: 18.5 };
-        assert_eq!(ortho_texture(&ortho, &dem, ext, 1).get_pixel(0, 0).0[3], 128);
+        let ext = WorldRect {
+            min_x: 19.25,
+            max_x: 19.75,
+            min_y: 18.0,
+            max_y: 18.5,
+        };
+        assert_eq!(
+            ortho_texture(&ortho, &dem, ext, 1).get_pixel(0, 0).0[3],
+            128
+        );
     }
 
     #[test]
@@ -295,18 +374,37 @@ mod tests {
         let g = GridGeoref::new(0.0, 10.0, 1.0);
         let dem = flat_dem(11, 11, g);
         let ortho = ortho_from(11, 11, g, |_, _| [5, 5, 5, 255]);
-        let ext = WorldRect { min_x: 3.0, max_x: 3.0, min_y: 0.0, max_y: 5.0 };
-        assert!(ortho_texture(&ortho, &dem, ext, 8).pixels().all(|p| p.0 == [0; 4]));
+        let ext = WorldRect {
+            min_x: 3.0,
+            max_x: 3.0,
+            min_y: 0.0,
+            max_y: 5.0,
+        };
+        assert!(
+            ortho_texture(&ortho, &dem, ext, 8)
+                .pixels()
+                .all(|p| p.0 == [0; 4])
+        );
         assert_eq!(ortho_texture(&ortho, &dem, ext, 0).dimensions(), (0, 0));
-        let far = WorldRect { min_x: 1e6, max_x: 1e6 + 10.0, min_y: 0.0, max_y: 10.0 };
-        assert!(ortho_texture(&ortho, &dem, far, 8).pixels().all(|p| p.0 == [0; 4]));
+        let far = WorldRect {
+            min_x: 1e6,
+            max_x: 1e6 + 10.0,
+            min_y: 0.0,
+            max_y: 10.0,
+        };
+        assert!(
+            ortho_texture(&ortho, &dem, far, 8)
+                .pixels()
+                .all(|p| p.0 == [0; 4])
+        );
     }
 
     #[test]
     fn output_does_not_depend_on_thread_count() {
         let g = GridGeoref::new(0.0, 99.0, 1.0);
-        let z: Vec<f32> =
-            (0..100 * 100).map(|k| ((k % 100) as f32 * 0.37).sin() * 20.0 + (k / 100) as f32).collect();
+        let z: Vec<f32> = (0..100 * 100)
+            .map(|k| ((k % 100) as f32 * 0.37).sin() * 20.0 + (k / 100) as f32)
+            .collect();
         let mut dem = Dem::from_heights(100, 100, z, g).unwrap();
         dem.void[4321] = true;
         let ortho = ortho_from(140, 140, GridGeoref::new(-10.0, 110.0, 0.8), |c, r| {
@@ -317,11 +415,23 @@ mod tests {
                 if (c + r) % 17 == 0 { 0 } else { 255 },
             ]
         });
-        let ext = WorldRect { min_x: 20.0, max_x: 148.0, min_y: -20.0, max_y: 108.0 };
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let ext = WorldRect {
+            min_x: 20.0,
+            max_x: 148.0,
+            min_y: -20.0,
+            max_y: 108.0,
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         for t in [37, 256] {
-            let (a, b) = pool
-                .install(|| (ortho_texture(&ortho, &dem, ext, t), crate::cells::normal_map(&dem, ext, t)));
+            let (a, b) = pool.install(|| {
+                (
+                    ortho_texture(&ortho, &dem, ext, t),
+                    crate::cells::normal_map(&dem, ext, t),
+                )
+            });
             assert_eq!(a, ortho_texture(&ortho, &dem, ext, t));
             assert_eq!(b, crate::cells::normal_map(&dem, ext, t));
         }

@@ -26,7 +26,13 @@ impl LatticeTiles {
     /// Copies the lattice samples of a row-major height grid of `width` columns, from the
     /// lattice origin up to `(store_c_hi, store_c_hi)` (which must lie inside the grid and
     /// cover `lat`'s bounds).
-    pub fn new(heights: &[f32], width: usize, lat: Lattice, store_c_hi: i64, store_r_hi: i64) -> LatticeTiles {
+    pub fn new(
+        heights: &[f32],
+        width: usize,
+        lat: Lattice,
+        store_c_hi: i64,
+        store_r_hi: i64,
+    ) -> LatticeTiles {
         let s = lat.stride;
         let ni = ((store_c_hi.max(lat.c_hi) - lat.origin_c).max(0) / s + 1) as usize;
         let nj = ((store_r_hi.max(lat.r_hi) - lat.origin_r).max(0) / s + 1) as usize;
@@ -40,7 +46,13 @@ impl LatticeTiles {
                 tiles[tj * tiles_x + (i >> 2)].0[rj + (i & 3)] = heights[row + col];
             }
         }
-        LatticeTiles { tiles, tiles_x, ni, nj, lat }
+        LatticeTiles {
+            tiles,
+            tiles_x,
+            ni,
+            nj,
+            lat,
+        }
     }
 
     /// Height of sample `(col, row)` if it is a stored lattice sample.
@@ -58,7 +70,8 @@ impl LatticeTiles {
         } else {
             ((dc / s) as usize, (dr / s) as usize)
         };
-        (i < self.ni && j < self.nj).then(|| self.tiles[(j >> 2) * self.tiles_x + (i >> 2)].0[(j & 3) * 4 + (i & 3)])
+        (i < self.ni && j < self.nj)
+            .then(|| self.tiles[(j >> 2) * self.tiles_x + (i >> 2)].0[(j & 3) * 4 + (i & 3)])
     }
 
     /// Calls `f(i, h)` for the lattice columns `i0..=i1` (lattice indices) of lattice row
@@ -88,7 +101,15 @@ mod tests {
         let (w, h) = (23usize, 17usize);
         let heights: Vec<f32> = (0..w * h).map(|i| i as f32 * 0.5).collect();
         for stride in [1i64, 2, 3, 4] {
-            let lat = Lattice { origin_c: 2, origin_r: 1, stride, c_lo: 3, c_hi: 20, r_lo: 2, r_hi: 14 };
+            let lat = Lattice {
+                origin_c: 2,
+                origin_r: 1,
+                stride,
+                c_lo: 3,
+                c_hi: 20,
+                r_lo: 2,
+                r_hi: 14,
+            };
             let t = LatticeTiles::new(&heights, w, lat, 22, 16);
             for r in 0..h as i64 {
                 for c in 0..w as i64 {
@@ -100,7 +121,9 @@ mod tests {
             let mut got = Vec::new();
             t.for_row(3, 1, 5, |i, v| got.push((i, v)));
             let row = (1 + 3 * stride) as usize;
-            let want: Vec<_> = (1..=5).map(|i| (i, heights[row * w + (2 + i as i64 * stride) as usize])).collect();
+            let want: Vec<_> = (1..=5)
+                .map(|i| (i, heights[row * w + (2 + i as i64 * stride) as usize]))
+                .collect();
             assert_eq!(got, want);
         }
     }

@@ -46,13 +46,22 @@ impl Plane {
         } else {
             (0.0, 0.0)
         };
-        Plane { c0: p[0][0] as f64, r0: p[0][1] as f64, h0: h[0], a, b }
+        Plane {
+            c0: p[0][0] as f64,
+            r0: p[0][1] as f64,
+            h0: h[0],
+            a,
+            b,
+        }
     }
 
     /// `(base, a)` such that z(col, row) = base + a * col on this row.
     #[inline]
     fn row(&self, row: i64) -> (f64, f64) {
-        (self.h0 + self.b * (row as f64 - self.r0) - self.a * self.c0, self.a)
+        (
+            self.h0 + self.b * (row as f64 - self.r0) - self.a * self.c0,
+            self.a,
+        )
     }
 }
 
@@ -60,9 +69,17 @@ impl Plane {
 /// `(error, col, row)`, or error -1 if the triangle holds no such sample. Corner heights
 /// come from the full-resolution grid (corners need not be on the lattice).
 #[inline]
-fn worst_sample(heights: &[f32], width: usize, p: [[i64; 2]; 3], grid: &LatticeTiles) -> (f64, i64, i64) {
+fn worst_sample(
+    heights: &[f32],
+    width: usize,
+    p: [[i64; 2]; 3],
+    grid: &LatticeTiles,
+) -> (f64, i64, i64) {
     // corners from the compact copy when stored there (always at stride 1), else the DEM
-    let hz = |q: [i64; 2]| grid.get(q[0], q[1]).unwrap_or_else(|| heights[q[1] as usize * width + q[0] as usize]) as f64;
+    let hz = |q: [i64; 2]| {
+        grid.get(q[0], q[1])
+            .unwrap_or_else(|| heights[q[1] as usize * width + q[0] as usize]) as f64
+    };
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
     let lat = &grid.lat;
     let (oc, or, s) = (lat.origin_c, lat.origin_r, lat.stride);
@@ -157,7 +174,10 @@ impl Greedy<'_> {
             let before = self.tri.num_vertices();
             // Integer coordinates are always valid spade input; stop (and report the
             // measured error honestly) if that ever changes.
-            let Ok(v) = self.tri.insert_with_hint(point, FixedVertexHandle::from_index(hint as usize)) else {
+            let Ok(v) = self
+                .tri
+                .insert_with_hint(point, FixedVertexHandle::from_index(hint as usize))
+            else {
                 break;
             };
             if self.tri.num_vertices() == before {
@@ -182,7 +202,11 @@ impl Greedy<'_> {
 }
 
 fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
-    if !(rect.c0 < rect.c1 && rect.r0 < rect.r1 && (rect.c1 as usize) < dem.width && (rect.r1 as usize) < dem.height) {
+    if !(rect.c0 < rect.c1
+        && rect.r0 < rect.r1
+        && (rect.c1 as usize) < dem.width
+        && (rect.r1 as usize) < dem.height)
+    {
         return Err(Error::BadOption(format!(
             "sample rectangle {rect:?} is empty or outside the {}x{} DEM",
             dem.width, dem.height
@@ -201,7 +225,13 @@ fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
 /// maximum over all samples of `rect`. Triangles are CCW in world (x east, y north).
 /// Errors on an empty or out-of-DEM rectangle, stride 0, or a negative / non-finite epsilon.
 /// Deterministic.
-pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border: &[[u32; 2]]) -> Result<Tin> {
+pub fn build_tin(
+    dem: &Dem,
+    rect: SampleRect,
+    stride: u32,
+    epsilon: f64,
+    border: &[[u32; 2]],
+) -> Result<Tin> {
     check_rect(dem, rect)?;
     check_epsilon(epsilon)?;
     if stride == 0 {
@@ -214,10 +244,18 @@ pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border:
             && (c == rect.c0 || c == rect.c1 || r == rect.r0 || r == rect.r1)
     };
     let mut pts: Vec<[u32; 2]> = border.iter().copied().filter(on_boundary).collect();
-    pts.extend([[rect.c0, rect.r0], [rect.c1, rect.r0], [rect.c1, rect.r1], [rect.c0, rect.r1]]);
+    pts.extend([
+        [rect.c0, rect.r0],
+        [rect.c1, rect.r0],
+        [rect.c1, rect.r1],
+        [rect.c0, rect.r1],
+    ]);
     pts.sort_unstable_by_key(|v| (v[1], v[0]));
     pts.dedup();
-    let spade_pts: Vec<Point2<f64>> = pts.iter().map(|v| Point2::new(v[0] as f64, -(v[1] as f64))).collect();
+    let spade_pts: Vec<Point2<f64>> = pts
+        .iter()
+        .map(|v| Point2::new(v[0] as f64, -(v[1] as f64)))
+        .collect();
     let tri = match DelaunayTriangulation::bulk_load(spade_pts.clone()) {
         Ok(t) => t,
         Err(_) => {
@@ -247,16 +285,32 @@ pub fn build_tin(dem: &Dem, rect: SampleRect, stride: u32, epsilon: f64, border:
         r_lo: rect.r0 as i64 + 1,
         r_hi: rect.r1 as i64 - 1,
     };
-    let coarse = LatticeTiles::new(&dem.heights, dem.width, interior(stride), rect.c1 as i64, rect.r1 as i64);
+    let coarse = LatticeTiles::new(
+        &dem.heights,
+        dem.width,
+        interior(stride),
+        rect.c1 as i64,
+        rect.r1 as i64,
+    );
     g.rescan_all(&coarse);
     g.run(&coarse);
     drop(coarse);
     if stride > 1 {
-        let fine = LatticeTiles::new(&dem.heights, dem.width, interior(1), rect.c1 as i64, rect.r1 as i64);
+        let fine = LatticeTiles::new(
+            &dem.heights,
+            dem.width,
+            interior(1),
+            rect.c1 as i64,
+            rect.r1 as i64,
+        );
         g.rescan_all(&fine);
         g.run(&fine);
     }
-    let interior_err = g.tri.fixed_inner_faces().map(|f| g.face_err[f.index()]).fold(0.0f64, f64::max);
+    let interior_err = g
+        .tri
+        .fixed_inner_faces()
+        .map(|f| g.face_err[f.index()])
+        .fold(0.0f64, f64::max);
     let max_error = interior_err.max(border_error(dem, rect, &pts));
     Ok(to_tin(&g.tri, max_error))
 }
@@ -269,8 +323,15 @@ fn to_tin(tri: &DelaunayTriangulation<Point2<f64>>, max_error: f64) -> Tin {
             [p.x as u32, (-p.y) as u32]
         })
         .collect();
-    let triangles = tri.inner_faces().map(|f| f.vertices().map(|v| v.fix().index() as u32)).collect();
-    Tin { vertices, triangles, max_error }
+    let triangles = tri
+        .inner_faces()
+        .map(|f| f.vertices().map(|v| v.fix().index() as u32))
+        .collect();
+    Tin {
+        vertices,
+        triangles,
+        max_error,
+    }
 }
 
 /// One TIN over the whole DEM within `epsilon` (height units) of every sample, with the
@@ -278,7 +339,12 @@ fn to_tin(tri: &DelaunayTriangulation<Point2<f64>>, max_error: f64) -> Tin {
 /// non-finite epsilon.
 pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
     check_epsilon(epsilon)?;
-    let rect = SampleRect { c0: 0, r0: 0, c1: dem.width as u32 - 1, r1: dem.height as u32 - 1 };
+    let rect = SampleRect {
+        c0: 0,
+        r0: 0,
+        c1: dem.width as u32 - 1,
+        r1: dem.height as u32 - 1,
+    };
     let border = simplify_rect_border(dem, rect, 1, epsilon);
     build_tin(dem, rect, 1, epsilon, &border)
 }
@@ -287,7 +353,12 @@ pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
 /// [`level_epsilon`]`(tree, level, max_error_finest)` of every full-resolution sample of
 /// its clipped rectangle, and crack-free with its neighbours (shared sides have identical
 /// vertices). Cells run in parallel; the output does not depend on the thread count.
-pub fn build_level(dem: &Dem, tree: &Quadtree, level: u8, max_error_finest: f64) -> Result<Vec<(CellKey, Tin)>> {
+pub fn build_level(
+    dem: &Dem,
+    tree: &Quadtree,
+    level: u8,
+    max_error_finest: f64,
+) -> Result<Vec<(CellKey, Tin)>> {
     check_tree(dem, tree, level)?;
     check_epsilon(max_error_finest)?;
     let eps = level_epsilon(tree, level, max_error_finest);
@@ -299,7 +370,10 @@ pub fn build_level(dem: &Dem, tree: &Quadtree, level: u8, max_error_finest: f64)
             let rect = tree
                 .clipped(key)
                 .ok_or_else(|| Error::BadOption(format!("cell {} has no samples", key.id())))?;
-            Ok((key, build_tin(dem, rect, stride, eps, &borders.cell_border(key))?))
+            Ok((
+                key,
+                build_tin(dem, rect, stride, eps, &borders.cell_border(key))?,
+            ))
         })
         .collect()
 }
@@ -311,7 +385,10 @@ pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
     if check_rect(dem, rect).is_err() {
         return f64::INFINITY;
     }
-    let (w, h) = ((rect.c1 - rect.c0 + 1) as usize, (rect.r1 - rect.r0 + 1) as usize);
+    let (w, h) = (
+        (rect.c1 - rect.c0 + 1) as usize,
+        (rect.r1 - rect.r0 + 1) as usize,
+    );
     let mut covered = vec![false; w * h];
     let lat = Lattice {
         origin_c: 0,
@@ -327,7 +404,9 @@ pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
         let mut p = [[0i64; 2]; 3];
         let mut hz = [0.0; 3];
         for k in 0..3 {
-            let Some(v) = tin.vertices.get(t[k] as usize) else { return f64::INFINITY };
+            let Some(v) = tin.vertices.get(t[k] as usize) else {
+                return f64::INFINITY;
+            };
             if v[0] as usize >= dem.width || v[1] as usize >= dem.height {
                 return f64::INFINITY;
             }
@@ -344,5 +423,9 @@ pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
             }
         });
     }
-    if covered.iter().all(|&c| c) { worst } else { f64::INFINITY }
+    if covered.iter().all(|&c| c) {
+        worst
+    } else {
+        f64::INFINITY
+    }
 }

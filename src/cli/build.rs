@@ -76,16 +76,27 @@ pub struct Args {
 fn parse_colour(s: &str) -> Result<[u8; 3], String> {
     let v: Vec<u8> = s
         .split(',')
-        .map(|p| p.trim().parse::<u8>().map_err(|_| format!("not a colour component 0..255: {p:?}")))
+        .map(|p| {
+            p.trim()
+                .parse::<u8>()
+                .map_err(|_| format!("not a colour component 0..255: {p:?}"))
+        })
         .collect::<Result<_, _>>()?;
     <[u8; 3]>::try_from(v).map_err(|_| format!("expected R,G,B, got {s:?}"))
 }
 
 fn parse_extent(s: &str) -> Result<WorldRect, String> {
     let v = super::parse_list(s, 4)?;
-    let r = WorldRect { min_x: v[0], min_y: v[1], max_x: v[2], max_y: v[3] };
+    let r = WorldRect {
+        min_x: v[0],
+        min_y: v[1],
+        max_x: v[2],
+        max_y: v[3],
+    };
     if r.max_x <= r.min_x || r.max_y <= r.min_y {
-        return Err(format!("extent {s:?} must be MINX,MINY,MAXX,MAXY with MAX > MIN"));
+        return Err(format!(
+            "extent {s:?} must be MINX,MINY,MAXX,MAXY with MAX > MIN"
+        ));
     }
     Ok(r)
 }
@@ -130,7 +141,10 @@ pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
             let mut o = load_ortho(p, placement, &dem, a.max_memory)?;
             if let Some(c) = a.ortho_nodata_colour {
                 let n = o.mask_colour(c);
-                tracing::info!("{}: {n} pixels of colour {c:?} marked as no data", p.display());
+                tracing::info!(
+                    "{}: {n} pixels of colour {c:?} marked as no data",
+                    p.display()
+                );
             }
             Some(o)
         }
@@ -140,7 +154,11 @@ pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
     let fingerprint = format!(
         "{}|{}|{:?}|{:?}|{:?}|{}",
         file_crc(&a.dem)?,
-        a.ortho.as_deref().map(file_crc).transpose()?.unwrap_or_default(),
+        a.ortho
+            .as_deref()
+            .map(file_crc)
+            .transpose()?
+            .unwrap_or_default(),
         dem_opts,
         a.ortho_extent,
         a.ortho_nodata_colour,

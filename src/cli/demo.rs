@@ -4,22 +4,35 @@ use std::path::PathBuf;
 
 use cliffmap::fsutil::write_png_atomic;
 use cliffmap::pipeline::{
-    BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store, reparam_store,
+    BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store,
+    reparam_store,
 };
 use cliffmap::scene::{DemoScene, TextureChoice, texel_truth, texel_truth_covered};
 
 use super::stats::print_summary;
 
 /// Renders the middle camera of the store's default flight to `out` (960x540, lit).
-fn render_view(store: &std::path::Path, m: &cliffmap::store::Manifest, out: &std::path::Path) -> anyhow::Result<String> {
+fn render_view(
+    store: &std::path::Path,
+    m: &cliffmap::store::Manifest,
+    out: &std::path::Path,
+) -> anyhow::Result<String> {
     use cliffmap::render::{FlightPath, SceneOptions, TerrainScene};
     let (w, h) = (960, 540);
     let cams = FlightPath::default_for(m)?.cameras(9, w, h);
-    let cam = cams.get(4).ok_or_else(|| anyhow::anyhow!("empty default flight"))?;
+    let cam = cams
+        .get(4)
+        .ok_or_else(|| anyhow::anyhow!("empty default flight"))?;
     let mut scene = TerrainScene::open(store, w, h, SceneOptions::default())?;
     let r = scene.frame(cam, true)?;
     write_png_atomic(out, &scene.read_rgba()?)?;
-    Ok(format!("rendered {} ({} cells, {} triangles) on {}", out.display(), r.drawn, r.triangles, scene.gpu().describe()))
+    Ok(format!(
+        "rendered {} ({} cells, {} triangles) on {}",
+        out.display(),
+        r.drawn,
+        r.triangles,
+        scene.gpu().describe()
+    ))
 }
 
 /// Renders the scene's novel views from the store in three texture modes and scores them
@@ -33,29 +46,53 @@ fn view_stage(
     store: &std::path::Path,
     dir: &std::path::Path,
 ) -> anyhow::Result<String> {
-    use cliffmap::eval::{EvalOptions, ReferenceSources, evaluate_views, gains_table, write_view_images};
+    use cliffmap::eval::{
+        EvalOptions, ReferenceSources, evaluate_views, gains_table, write_view_images,
+    };
     let views = scene.novel_views(960, 540);
-    let (c, (lo, hi)) = (dem.georef.world(dem.height as f64 / 2.0, dem.width as f64 / 2.0), dem.height_range());
-    let tracer = cliffmap::scene::DemTracer::new(dem, glam::DVec3::new(c.0, c.1, 0.5 * (lo + hi) as f64))?;
-    let src = ReferenceSources { scene, tracer: &tracer, ortho, photos };
+    let (c, (lo, hi)) = (
+        dem.georef
+            .world(dem.height as f64 / 2.0, dem.width as f64 / 2.0),
+        dem.height_range(),
+    );
+    let tracer =
+        cliffmap::scene::DemTracer::new(dem, glam::DVec3::new(c.0, c.1, 0.5 * (lo + hi) as f64))?;
+    let src = ReferenceSources {
+        scene,
+        tracer: &tracer,
+        ortho,
+        photos,
+    };
     let (reports, images) = evaluate_views(store, &src, &views, &EvalOptions::default())?;
     std::fs::create_dir_all(dir)?;
     for v in &images {
         write_view_images(dir, v)?;
     }
-    cliffmap::fsutil::write_atomic(&dir.join("eval.json"), serde_json::to_string_pretty(&reports)?.as_bytes())?;
+    cliffmap::fsutil::write_atomic(
+        &dir.join("eval.json"),
+        serde_json::to_string_pretty(&reports)?.as_bytes(),
+    )?;
     Ok(gains_table(&reports))
 }
 
 /// Ray-traces the scene's ground-truth photos, projects them into the store and reports the
 /// texel PSNR against the solid texture before and after (written to DIR/truth.json), then
 /// the render-space evaluation of novel views (DIR/views/).
-fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, ortho: &cliffmap::Ortho, a: &Args, store: &std::path::Path) -> anyhow::Result<()> {
+fn photo_stage(
+    scene: &DemoScene,
+    dem: &cliffmap::Dem,
+    ortho: &cliffmap::Ortho,
+    a: &Args,
+    store: &std::path::Path,
+) -> anyhow::Result<()> {
     if !(64..=8192).contains(&a.photo_width) {
         anyhow::bail!("--photo-width must be in 64..=8192, got {}", a.photo_width);
     }
     if !(1..=8).contains(&a.photo_supersample) {
-        anyhow::bail!("--photo-supersample must be in 1..=8, got {}", a.photo_supersample);
+        anyhow::bail!(
+            "--photo-supersample must be in 1..=8, got {}",
+            a.photo_supersample
+        );
     }
     let opts = cliffmap::scene::DemoPhotoOptions {
         width: a.photo_width,
@@ -64,7 +101,14 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, ortho: &cliffmap::Ortho, 
     };
     let list = scene.write_demo_photos(dem, &a.out.join("photos"), &opts)?;
     let photos = cliffmap::photo::read_photo_list(&list)?;
-    let report = project_store(store, &photos, &ProjectOptions { quiet: a.quiet, ..ProjectOptions::default() })?;
+    let report = project_store(
+        store,
+        &photos,
+        &ProjectOptions {
+            quiet: a.quiet,
+            ..ProjectOptions::default()
+        },
+    )?;
     let st = cliffmap::store::Store::open(store)?;
     let before = texel_truth(&st, scene, TextureChoice::Active)?;
     let after = texel_truth(&st, scene, TextureChoice::Photo)?;
@@ -75,7 +119,10 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, ortho: &cliffmap::Ortho, 
         "photo_covered_before": covered_before,
         "photo_covered_after": covered_after,
     });
-    cliffmap::fsutil::write_atomic(&a.out.join("truth.json"), serde_json::to_string_pretty(&json)?.as_bytes())?;
+    cliffmap::fsutil::write_atomic(
+        &a.out.join("truth.json"),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
+    )?;
     if !a.quiet {
         println!(
             "projected {} ground photos ({}) into {} cells",
@@ -95,9 +142,13 @@ fn photo_stage(scene: &DemoScene, dem: &cliffmap::Dem, ortho: &cliffmap::Ortho, 
     // Render-space evaluation: novel views, cliffmap's renders against the exact truth, the
     // oracle and the baseline (needs a GPU driver or Mesa).
     match view_stage(scene, dem, ortho, &photos, store, &a.out.join("views")) {
-        Ok(table) if !a.quiet => println!("render-space PSNR on novel views (docs/evaluation.md):\n{table}"),
+        Ok(table) if !a.quiet => {
+            println!("render-space PSNR on novel views (docs/evaluation.md):\n{table}")
+        }
         Ok(_) => {}
-        Err(e) => eprintln!("warning: no render-space evaluation ({e:#}); install a GPU driver or Mesa (see README)"),
+        Err(e) => eprintln!(
+            "warning: no render-space evaluation ({e:#}); install a GPU driver or Mesa (see README)"
+        ),
     }
     Ok(())
 }
@@ -136,11 +187,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.samples < 17 || a.samples > 8193 {
         anyhow::bail!("--samples must be in 17..=8193, got {}", a.samples);
     }
-    let scene = DemoScene { seed: a.seed, samples: a.samples, ..DemoScene::default() };
+    let scene = DemoScene {
+        seed: a.seed,
+        samples: a.samples,
+        ..DemoScene::default()
+    };
     let (dem, ortho) = scene.generate()?;
     write_png_atomic(&a.out.join("scene_ortho.png"), &ortho.image)?;
     let store = a.out.join("store");
-    let opts = BuildOptions { max_error: a.max_error, quiet: a.quiet, force: true, ..BuildOptions::default() };
+    let opts = BuildOptions {
+        max_error: a.max_error,
+        quiet: a.quiet,
+        force: true,
+        ..BuildOptions::default()
+    };
     let inputs = BuildInputs {
         dem: &dem,
         ortho: Some(&ortho),
@@ -150,13 +210,29 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let manifest = build_store(&inputs, &opts, &store)?;
     if !a.quiet {
-        println!("demo scene: {} cells in {} levels -> {}", manifest.cells.len(), manifest.quadtree.levels, store.display());
+        println!(
+            "demo scene: {} cells in {} levels -> {}",
+            manifest.cells.len(),
+            manifest.quadtree.levels,
+            store.display()
+        );
     }
-    let reparam = ReparamOptions { quiet: a.quiet, ..ReparamOptions::default() };
+    let reparam = ReparamOptions {
+        quiet: a.quiet,
+        ..ReparamOptions::default()
+    };
     let st = reparam_store(&store, &reparam)?;
     if !a.quiet {
-        let n = st.manifest.cells.iter().filter(|c| c.reparam.is_some()).count();
-        println!("reparameterized {n} stretched cells (Rel_texel > {})", reparam.threshold);
+        let n = st
+            .manifest
+            .cells
+            .iter()
+            .filter(|c| c.reparam.is_some())
+            .count();
+        println!(
+            "reparameterized {n} stretched cells (Rel_texel > {})",
+            reparam.threshold
+        );
         print_summary(&store, &st.manifest, reparam.threshold)?;
     }
     if !a.no_photos {
@@ -166,7 +242,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     match render_view(&store, &st.manifest, &a.out.join("frame.png")) {
         Ok(msg) if !a.quiet => println!("{msg}"),
         Ok(_) => {}
-        Err(e) => eprintln!("warning: no frame rendered ({e:#}); install a GPU driver or Mesa (see README)"),
+        Err(e) => eprintln!(
+            "warning: no frame rendered ({e:#}); install a GPU driver or Mesa (see README)"
+        ),
     }
     Ok(())
 }

@@ -43,7 +43,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             Some([v[0], v[1], v[2], v[3]])
         }
     };
-    let r = export_glb(&a.store, &CellSelection { level: a.level, max_error: a.max_error, region }, &a.out)?;
+    let r = export_glb(
+        &a.store,
+        &CellSelection {
+            level: a.level,
+            max_error: a.max_error,
+            region,
+        },
+        &a.out,
+    )?;
     if !a.quiet {
         println!(
             "wrote {} ({} cells, {} triangles, textures: {} photo, {} reparam, {} ortho; {:.1} MB; origin {:.0}, {:.0}, {:.0})",

@@ -38,10 +38,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     for v in &a.view {
         let cam = cliffmap::camera::camera_from_json_file(v, (0, 0))?;
         cliffmap::photo::validate_camera(&cam, v)?;
-        let name = v.file_stem().map_or_else(|| "view".to_string(), |s| s.to_string_lossy().into_owned());
+        let name = v
+            .file_stem()
+            .map_or_else(|| "view".to_string(), |s| s.to_string_lossy().into_owned());
         views.push((name, cam));
     }
-    let r = export_tiles(&a.store, &a.out, &TilesOptions { crs: a.crs, geoid_offset: a.geoid_offset, views })?;
+    let r = export_tiles(
+        &a.store,
+        &a.out,
+        &TilesOptions {
+            crs: a.crs,
+            geoid_offset: a.geoid_offset,
+            views,
+        },
+    )?;
     if !a.quiet {
         println!(
             "wrote {} ({} tiles, {} left out where children do not cover their parent; textures: {} photo, {} reparam, {} ortho; {:.1} MB)",

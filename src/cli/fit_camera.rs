@@ -3,9 +3,13 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use cliffmap::camera::{CameraModel, camera_from_json_file, camera_to_imgraft_json, rotation_from_yaw_pitch_roll};
+use cliffmap::camera::{
+    CameraModel, camera_from_json_file, camera_to_imgraft_json, rotation_from_yaw_pitch_roll,
+};
 use cliffmap::fsutil::write_atomic;
-use cliffmap::register::{CameraFit, FitOptions, PixelOrigin, fit_camera, parse_free, read_gcps, start_from_position};
+use cliffmap::register::{
+    CameraFit, FitOptions, PixelOrigin, fit_camera, parse_free, read_gcps, start_from_position,
+};
 use glam::DVec3;
 use serde_json::json;
 
@@ -82,19 +86,33 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let free = parse_free(&a.free)?;
     let position = a.position.as_deref().map(parse_position).transpose()?;
     if let Some(f) = a.focal_px {
-        anyhow::ensure!(f.is_finite() && f > 0.0, "--focal-px must be a positive number of pixels, got {f}");
+        anyhow::ensure!(
+            f.is_finite() && f > 0.0,
+            "--focal-px must be a positive number of pixels, got {f}"
+        );
     }
     if let Some(d) = a.huber_px {
-        anyhow::ensure!(d.is_finite() && d > 0.0, "--huber-px must be a positive number of pixels, got {d}");
+        anyhow::ensure!(
+            d.is_finite() && d > 0.0,
+            "--huber-px must be a positive number of pixels, got {d}"
+        );
     }
     if let Some(s) = a.sensor_width_mm {
-        anyhow::ensure!(s.is_finite() && s > 0.0, "--sensor-width-mm must be positive, got {s}");
+        anyhow::ensure!(
+            s.is_finite() && s > 0.0,
+            "--sensor-width-mm must be positive, got {s}"
+        );
     }
     let start = start_camera(&a, position, &gcps)?;
     if let Some(problem) = start.problem() {
         anyhow::bail!("the start camera is unusable: {problem}");
     }
-    let opts = FitOptions { free, robust: !a.no_robust, huber_px: a.huber_px, ..FitOptions::default() };
+    let opts = FitOptions {
+        free,
+        robust: !a.no_robust,
+        huber_px: a.huber_px,
+        ..FitOptions::default()
+    };
     let fit = fit_camera(&start, &gcps, &opts).with_context(|| format!("{}", a.gcps.display()))?;
     let report = fit_json(&fit, &a.gcps.display().to_string());
     let mut doc = camera_to_imgraft_json(&fit.camera);
@@ -116,7 +134,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 /// The start camera: --camera (position replaced by --position), else --yaw with
 /// --focal-px, else the orientation from the GCP bearings at --position, else the DLT of
 /// the GCPs.
-fn start_camera(a: &Args, position: Option<DVec3>, gcps: &[cliffmap::register::Gcp]) -> anyhow::Result<CameraModel> {
+fn start_camera(
+    a: &Args,
+    position: Option<DVec3>,
+    gcps: &[cliffmap::register::Gcp],
+) -> anyhow::Result<CameraModel> {
     if let Some(path) = &a.camera {
         let mut cam = camera_from_json_file(path, (0, 0))?;
         if let Some(p) = position {
@@ -140,38 +162,60 @@ fn start_camera(a: &Args, position: Option<DVec3>, gcps: &[cliffmap::register::G
     let mut focal = a.focal_px;
     if let (None, Some(img)) = (focal, &a.image) {
         if let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)? {
-            eprintln!("start focal length {:.1} px from EXIF ({})", e.focal_px, e.source);
+            eprintln!(
+                "start focal length {:.1} px from EXIF ({})",
+                e.focal_px, e.source
+            );
             focal = Some(e.focal_px);
         }
     }
     match (a.yaw, focal) {
         (Some(yaw), Some(f)) => {
-            let r = rotation_from_yaw_pitch_roll(yaw.to_radians(), a.pitch.unwrap_or(0.0).to_radians(), a.roll.unwrap_or(0.0).to_radians());
+            let r = rotation_from_yaw_pitch_roll(
+                yaw.to_radians(),
+                a.pitch.unwrap_or(0.0).to_radians(),
+                a.roll.unwrap_or(0.0).to_radians(),
+            );
             let mut cam = CameraModel::with_fov(position, r, w, h, 1.0);
             cam.fx = f;
             cam.fy = f;
             Ok(cam)
         }
-        (Some(_), None) => anyhow::bail!("--yaw needs --focal-px (or leave out --yaw to solve the orientation from the GCPs)"),
+        (Some(_), None) => anyhow::bail!(
+            "--yaw needs --focal-px (or leave out --yaw to solve the orientation from the GCPs)"
+        ),
         (None, f) => Ok(start_from_position(position, w, h, gcps, f)?),
     }
 }
 
 fn parse_position(s: &str) -> anyhow::Result<DVec3> {
-    let v: Vec<f64> = s.split(',').map(|t| t.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("--position must be X,Y,Z metres, got {s}"))?;
-    anyhow::ensure!(v.len() == 3 && v.iter().all(|x| x.is_finite()), "--position must be X,Y,Z metres, got {s}");
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--position must be X,Y,Z metres, got {s}"))?;
+    anyhow::ensure!(
+        v.len() == 3 && v.iter().all(|x| x.is_finite()),
+        "--position must be X,Y,Z metres, got {s}"
+    );
     Ok(DVec3::new(v[0], v[1], v[2]))
 }
 
 fn image_size(a: &Args) -> anyhow::Result<(u32, u32)> {
     if let Some(s) = &a.size {
-        let (w, h) = s.split_once(['x', 'X']).with_context(|| format!("--size must be WxH, got {s}"))?;
-        let (w, h): (u32, u32) = (w.trim().parse().with_context(|| format!("--size {s}"))?, h.trim().parse().with_context(|| format!("--size {s}"))?);
+        let (w, h) = s
+            .split_once(['x', 'X'])
+            .with_context(|| format!("--size must be WxH, got {s}"))?;
+        let (w, h): (u32, u32) = (
+            w.trim().parse().with_context(|| format!("--size {s}"))?,
+            h.trim().parse().with_context(|| format!("--size {s}"))?,
+        );
         anyhow::ensure!(w > 0 && h > 0, "--size must be positive, got {s}");
         return Ok((w, h));
     }
     if let Some(p) = &a.image {
-        let (w, h) = image::image_dimensions(p).with_context(|| format!("{}: cannot read the image size", p.display()))?;
+        let (w, h) = image::image_dimensions(p)
+            .with_context(|| format!("{}: cannot read the image size", p.display()))?;
         return Ok((w, h));
     }
     anyhow::bail!("without --camera, give the image size: --size WxH or --image PHOTO")
@@ -184,15 +228,31 @@ fn fit_json(fit: &CameraFit, gcp_file: &str) -> serde_json::Value {
         _ if p.is_angle() => v.to_degrees(),
         _ => v,
     };
-    let spread = |p: cliffmap::register::Param, v: f64| if p.is_angle() { v.to_degrees() } else { v };
-    let params: serde_json::Map<String, serde_json::Value> =
-        fit.params.iter().map(|p| (p.param.name().to_string(), json!(value(p.param, p.value)))).collect();
-    let start: serde_json::Map<String, serde_json::Value> =
-        fit.params.iter().map(|p| (p.param.name().to_string(), json!(value(p.param, p.start)))).collect();
+    let spread =
+        |p: cliffmap::register::Param, v: f64| if p.is_angle() { v.to_degrees() } else { v };
+    let params: serde_json::Map<String, serde_json::Value> = fit
+        .params
+        .iter()
+        .map(|p| (p.param.name().to_string(), json!(value(p.param, p.value))))
+        .collect();
+    let start: serde_json::Map<String, serde_json::Value> = fit
+        .params
+        .iter()
+        .map(|p| (p.param.name().to_string(), json!(value(p.param, p.start))))
+        .collect();
     let sigma: serde_json::Map<String, serde_json::Value> = fit
         .params
         .iter()
-        .map(|p| (p.param.name().to_string(), if p.sigma.is_finite() { json!(spread(p.param, p.sigma)) } else { serde_json::Value::Null }))
+        .map(|p| {
+            (
+                p.param.name().to_string(),
+                if p.sigma.is_finite() {
+                    json!(spread(p.param, p.sigma))
+                } else {
+                    serde_json::Value::Null
+                },
+            )
+        })
         .collect();
     let residuals: Vec<serde_json::Value> = fit
         .gcps
@@ -210,7 +270,13 @@ fn fit_json(fit: &CameraFit, gcp_file: &str) -> serde_json::Value {
             })
         })
         .collect();
-    let finite = |v: f64| if v.is_finite() { json!(v) } else { serde_json::Value::Null };
+    let finite = |v: f64| {
+        if v.is_finite() {
+            json!(v)
+        } else {
+            serde_json::Value::Null
+        }
+    };
     json!({
         "gcp_file": gcp_file,
         "rmse_px": finite(fit.rmse_px),
@@ -241,18 +307,44 @@ fn print_table(fit: &CameraFit) {
                 r[0].hypot(r[1]),
                 g.status.name()
             ),
-            None => println!("| {} | {:.1} | {:.1} | | | | {} |", g.name, g.observed[0], g.observed[1], g.status.name()),
+            None => println!(
+                "| {} | {:.1} | {:.1} | | | | {} |",
+                g.name,
+                g.observed[0],
+                g.observed[1],
+                g.status.name()
+            ),
         }
     }
     println!();
     println!("| parameter | start | fitted | σ |");
     println!("|---|---|---|---|");
     for p in &fit.params {
-        let (k, unit) = if p.param.is_angle() { (180.0 / std::f64::consts::PI, "°") } else { (1.0, "") };
-        let shown = |v: f64| if p.param == cliffmap::register::Param::Yaw { (v * k).rem_euclid(360.0) } else { v * k };
-        println!("| {} | {:.6}{unit} | {:.6}{unit} | {:.2e}{unit} |", p.param.name(), shown(p.start), shown(p.value), p.sigma * k);
+        let (k, unit) = if p.param.is_angle() {
+            (180.0 / std::f64::consts::PI, "°")
+        } else {
+            (1.0, "")
+        };
+        let shown = |v: f64| {
+            if p.param == cliffmap::register::Param::Yaw {
+                (v * k).rem_euclid(360.0)
+            } else {
+                v * k
+            }
+        };
+        println!(
+            "| {} | {:.6}{unit} | {:.6}{unit} | {:.2e}{unit} |",
+            p.param.name(),
+            shown(p.start),
+            shown(p.value),
+            p.sigma * k
+        );
     }
-    let outliers = fit.gcps.iter().filter(|g| g.status == cliffmap::register::GcpStatus::Outlier).count();
+    let outliers = fit
+        .gcps
+        .iter()
+        .filter(|g| g.status == cliffmap::register::GcpStatus::Outlier)
+        .count();
     println!(
         "\nRMSE {:.3} px over the fitted GCPs ({:.3} px over the inliers, {outliers} outliers), AIC {:.2}, robust scale {:.3} px, {} rounds",
         fit.rmse_px, fit.rmse_inliers_px, fit.aic, fit.sigma_px, fit.rounds

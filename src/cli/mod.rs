@@ -75,7 +75,10 @@ pub fn run() -> ExitCode {
         .with_writer(std::io::stderr)
         .try_init();
     if let Some(n) = cli.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+        {
             eprintln!("error: cannot set up {n} threads: {e}");
             return ExitCode::from(2);
         }
@@ -138,10 +141,16 @@ fn parse_pair(s: &str) -> Result<(f64, f64), String> {
 fn parse_list(s: &str, n: usize) -> Result<Vec<f64>, String> {
     let v: Vec<f64> = s
         .split(',')
-        .map(|p| p.trim().parse::<f64>().map_err(|_| format!("not a number: {p:?} in {s:?}")))
+        .map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("not a number: {p:?} in {s:?}"))
+        })
         .collect::<Result<_, _>>()?;
     if v.len() != n || v.iter().any(|x| !x.is_finite()) {
-        return Err(format!("expected {n} finite comma-separated numbers, got {s:?}"));
+        return Err(format!(
+            "expected {n} finite comma-separated numbers, got {s:?}"
+        ));
     }
     Ok(v)
 }
@@ -155,7 +164,10 @@ mod tests {
         assert_eq!(parse_bytes("8G").unwrap(), 8 << 30);
         assert_eq!(parse_bytes("1000").unwrap(), 1000);
         assert!(parse_bytes("-1").is_err() && parse_bytes("3X").is_err());
-        assert_eq!(parse_pair("445302.17, 7396769.45").unwrap(), (445302.17, 7396769.45));
+        assert_eq!(
+            parse_pair("445302.17, 7396769.45").unwrap(),
+            (445302.17, 7396769.45)
+        );
         assert!(parse_pair("1").is_err() && parse_pair("1,nan").is_err());
     }
 }

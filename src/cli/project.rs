@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput, RayAccel};
 use cliffmap::colour::ColourSpace;
+use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput, RayAccel};
 use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
 
 use super::stats::print_summary;
@@ -67,14 +67,25 @@ pub struct Args {
 /// The library options these flags describe.
 pub fn options(a: &Args) -> ProjectOptions {
     ProjectOptions {
-        blend: if a.blend == "best" { BlendMode::Best } else { BlendMode::Confidence },
-        footprint: FootprintOptions { reconstruct: !a.no_reconstruct, ..FootprintOptions::default() },
+        blend: if a.blend == "best" {
+            BlendMode::Best
+        } else {
+            BlendMode::Confidence
+        },
+        footprint: FootprintOptions {
+            reconstruct: !a.no_reconstruct,
+            ..FootprintOptions::default()
+        },
         level_colours: !a.no_level_colours,
         ray: match &a.bvh {
             Some(p) => RayAccel::Bvh(BvhQuality::parse(p).unwrap_or_default()),
             None => a.ray_accel,
         },
-        colour_space: if a.colour_space == "srgb" { ColourSpace::Srgb } else { ColourSpace::Linear },
+        colour_space: if a.colour_space == "srgb" {
+            ColourSpace::Srgb
+        } else {
+            ColourSpace::Linear
+        },
         texture: PhotoTextureOptions {
             photo_driven: !a.fixed_photo_texels,
             max_texels: a.max_photo_texels,
@@ -88,7 +99,8 @@ pub fn options(a: &Args) -> ProjectOptions {
 }
 
 fn parse_ray_accel(s: &str) -> Result<RayAccel, String> {
-    RayAccel::parse(s).ok_or_else(|| format!("'{s}' is not grid, grid:BIN_PX (pixels > 0), bvh or bvh:PRESET"))
+    RayAccel::parse(s)
+        .ok_or_else(|| format!("'{s}' is not grid, grid:BIN_PX (pixels > 0), bvh or bvh:PRESET"))
 }
 
 /// Reads the photos and their cameras from `--photos` or `--colmap`.
@@ -106,7 +118,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     cliffmap::store::Store::open(&a.store)?;
     let t = std::time::Instant::now();
     let photos = load_photos(&a)?;
-    tracing::debug!("project: {} photos decoded in {:.3} s", photos.len(), t.elapsed().as_secs_f64());
+    tracing::debug!(
+        "project: {} photos decoded in {:.3} s",
+        photos.len(),
+        t.elapsed().as_secs_f64()
+    );
     let report = project_store(&a.store, &photos, &options(&a))?;
     if !a.quiet {
         println!("photo textures for {} cells", report.cells_written);

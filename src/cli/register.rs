@@ -33,25 +33,41 @@ pub struct Args {
 
 /// Runs `cliffmap register`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let v = super::parse_list(&a.search_deg, 3).map_err(|e| anyhow::anyhow!("--search-deg: {e}"))?;
+    let v =
+        super::parse_list(&a.search_deg, 3).map_err(|e| anyhow::anyhow!("--search-deg: {e}"))?;
     if v.iter().any(|&x| !(0.0..=30.0).contains(&x)) {
-        anyhow::bail!("--search-deg: each half-width must be in 0..=30 degrees, got {}", a.search_deg);
+        anyhow::bail!(
+            "--search-deg: each half-width must be in 0..=30 degrees, got {}",
+            a.search_deg
+        );
     }
     if !(a.repeat_px.is_finite() && a.repeat_px > 0.0) {
         anyhow::bail!("--repeat-px must be positive, got {}", a.repeat_px);
     }
-    let opts = TerrainOptions { free: parse_free(&a.free)?, search_deg: [v[0], v[1], v[2]], repeat_px: a.repeat_px, ..TerrainOptions::default() };
+    let opts = TerrainOptions {
+        free: parse_free(&a.free)?,
+        search_deg: [v[0], v[1], v[2]],
+        repeat_px: a.repeat_px,
+        ..TerrainOptions::default()
+    };
     opts.validate()?;
     let specs = cliffmap::photo::read_photo_specs(&a.photos)?;
     let mut warn = |s: &str| eprintln!("warning: {s}");
     let results = register_photos(&a.store, &specs, &a.out, &opts, &mut warn)?;
     if !a.quiet {
-        println!("{:<28} {:>10} {:>9} {:>9} {:>8} {:>7}", "photo", "verdict", "score", "repeat", "evals", "s");
+        println!(
+            "{:<28} {:>10} {:>9} {:>9} {:>8} {:>7}",
+            "photo", "verdict", "score", "repeat", "evals", "s"
+        );
         for r in &results {
             println!(
                 "{:<28} {:>10} {:>4.3}>{:.3} {:>7.2}px {:>8} {:>7.1}",
                 r.name,
-                if r.fit.converged { "registered" } else { "kept" },
+                if r.fit.converged {
+                    "registered"
+                } else {
+                    "kept"
+                },
                 r.fit.score_start,
                 r.fit.score_final,
                 r.fit.repeat_px,

@@ -119,7 +119,10 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let (ow, oh) = a.size;
     // supersampled internally, at most 16384 pixels a side
-    let ss = (1..=a.supersample).rev().find(|s| ow * s <= 16384 && oh * s <= 16384).unwrap_or(1);
+    let ss = (1..=a.supersample)
+        .rev()
+        .find(|s| ow * s <= 16384 && oh * s <= 16384)
+        .unwrap_or(1);
     let (w, h) = (ow * ss, oh * ss);
     let cam = camera_from_json_file(&a.camera, (ow, oh))?.resized(w, h);
     let overlay = match (a.unlit, a.levels, a.overlay.overlay()) {
@@ -150,7 +153,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
     eprintln!("adapter: {}", scene.gpu().describe());
     if matches!(a.mode, TextureMode::Photo) && !scene.has_photo() {
-        eprintln!("note: the store has no photo-enhanced textures (run `cliffmap project`); showing reparam");
+        eprintln!(
+            "note: the store has no photo-enhanced textures (run `cliffmap project`); showing reparam"
+        );
     }
     if let Some(d) = scene.distorted_view(&cam)? {
         eprintln!(

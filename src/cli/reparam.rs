@@ -62,7 +62,9 @@ fn parse_mode(s: &str) -> Result<Mode, String> {
             .and_then(|n| n.parse::<u32>().ok())
             .filter(|n| (1..=64).contains(n))
             .map(Mode::Subtexel)
-            .ok_or_else(|| format!("expected subtexel:N (N in 1..=64), bilinear or exact, got {s:?}")),
+            .ok_or_else(|| {
+                format!("expected subtexel:N (N in 1..=64), bilinear or exact, got {s:?}")
+            }),
     }
 }
 
@@ -77,13 +79,21 @@ pub fn options(a: &Args) -> ReparamOptions {
             gutter_texels: a.gutter,
             newton_iterations: a.newton_iterations,
             newton_tolerance: a.newton_tol,
-            objective: if a.objective == "distortion" { Objective::Distortion } else { Objective::PackedStretch },
+            objective: if a.objective == "distortion" {
+                Objective::Distortion
+            } else {
+                Objective::PackedStretch
+            },
             ..ParamOptions::default()
         },
         mixed_resolution: a.mixed_resolution,
         resample: ResampleOptions {
             mode: a.resample,
-            fill: if a.fill == "pull-push" { Fill::PullPush } else { Fill::AverageBorder },
+            fill: if a.fill == "pull-push" {
+                Fill::PullPush
+            } else {
+                Fill::AverageBorder
+            },
             ..ResampleOptions::default()
         },
         quiet: a.quiet,
@@ -94,8 +104,17 @@ pub fn options(a: &Args) -> ReparamOptions {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let store = reparam_store(&a.store, &options(&a))?;
     if !a.quiet {
-        let n = store.manifest.cells.iter().filter(|c| c.reparam.is_some()).count();
-        println!("reparameterized {n} of {} cells (threshold {})", store.manifest.cells.len(), a.threshold);
+        let n = store
+            .manifest
+            .cells
+            .iter()
+            .filter(|c| c.reparam.is_some())
+            .count();
+        println!(
+            "reparameterized {n} of {} cells (threshold {})",
+            store.manifest.cells.len(),
+            a.threshold
+        );
         print_summary(&a.store, &store.manifest, a.threshold)?;
     }
     Ok(())

@@ -49,7 +49,10 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
         f(&r["p99"]),
         f(&r["max"])
     );
-    println!("{:>5} {:>6} {:>7} {:>9} {:>9}", "level", "cells", "above", "p50", "max");
+    println!(
+        "{:>5} {:>6} {:>7} {:>9} {:>9}",
+        "level", "cells", "above", "p50", "max"
+    );
     for l in s["levels"].as_array().into_iter().flatten() {
         println!(
             "{:>5} {:>6} {:>7} {:>9.3} {:>9.3}",
@@ -97,6 +100,10 @@ pub fn print_summary(dir: &Path, manifest: &Manifest, threshold: f64) -> anyhow:
             100.0 * f(&s["photo_improved_steep_fraction_all_levels"])
         );
     }
-    println!("wrote {} and {}", dir.join("stats.json").display(), dir.join("stats_histogram.png").display());
+    println!(
+        "wrote {} and {}",
+        dir.join("stats.json").display(),
+        dir.join("stats_histogram.png").display()
+    );
     Ok(())
 }

@@ -39,33 +39,61 @@ struct Recipe {
 /// Records this process's command line as `STORE/recipe.json` (called by `build`).
 pub(super) fn write_recipe(store: &Path) -> anyhow::Result<()> {
     let cwd = std::env::current_dir().context("cannot read the current directory")?;
-    let recipe = Recipe { cwd, argv: std::env::args().collect() };
-    cliffmap::fsutil::write_atomic(&store.join("recipe.json"), &serde_json::to_vec_pretty(&recipe)?)?;
+    let recipe = Recipe {
+        cwd,
+        argv: std::env::args().collect(),
+    };
+    cliffmap::fsutil::write_atomic(
+        &store.join("recipe.json"),
+        &serde_json::to_vec_pretty(&recipe)?,
+    )?;
     Ok(())
 }
 
 /// Runs `verify`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     if !a.store.is_dir() {
-        bail!("{}: not a directory (expected a cliffmap store)", a.store.display());
+        bail!(
+            "{}: not a directory (expected a cliffmap store)",
+            a.store.display()
+        );
     }
     // A repair holds the writer lock from the first check on.
-    let _lock = if a.repair { Some(cliffmap::store::StoreLock::acquire(&a.store, "cliffmap verify --repair")?) } else { None };
+    let _lock = if a.repair {
+        Some(cliffmap::store::StoreLock::acquire(
+            &a.store,
+            "cliffmap verify --repair",
+        )?)
+    } else {
+        None
+    };
     let report = verify_store(&a.store);
     print_report(&a, &report)?;
     if report.is_intact() {
         return Ok(());
     }
     if !a.repair {
-        bail!("{}: {} problem(s) found; `cliffmap verify --repair {}` rebuilds the damaged cells", a.store.display(), report.findings.len(), a.store.display());
+        bail!(
+            "{}: {} problem(s) found; `cliffmap verify --repair {}` rebuilds the damaged cells",
+            a.store.display(),
+            report.findings.len(),
+            a.store.display()
+        );
     }
     repair(&a.store, &report)?;
     let after = verify_store(&a.store);
     if !after.is_intact() {
         print_report(&a, &after)?;
-        bail!("{}: {} problem(s) remain after the repair", a.store.display(), after.findings.len());
+        bail!(
+            "{}: {} problem(s) remain after the repair",
+            a.store.display(),
+            after.findings.len()
+        );
     }
-    println!("repaired: {} cells, {} files verified intact", after.cells, after.files_checked);
+    println!(
+        "repaired: {} cells, {} files verified intact",
+        after.cells, after.files_checked
+    );
     Ok(())
 }
 
@@ -75,10 +103,20 @@ fn print_report(a: &Args, r: &VerifyReport) -> anyhow::Result<()> {
         return Ok(());
     }
     for f in &r.findings {
-        let cell = f.cell.as_deref().map(|c| format!("cell {c}: ")).unwrap_or_default();
+        let cell = f
+            .cell
+            .as_deref()
+            .map(|c| format!("cell {c}: "))
+            .unwrap_or_default();
         println!("{cell}{}: {} ({:?} layer)", f.file, f.problem, f.layer);
     }
-    println!("{}: {} cells, {} files checked, {} problem(s)", a.store.display(), r.cells, r.files_checked, r.findings.len());
+    println!(
+        "{}: {} cells, {} files checked, {} problem(s)",
+        a.store.display(),
+        r.cells,
+        r.files_checked,
+        r.findings.len()
+    );
     Ok(())
 }
 
@@ -107,11 +145,22 @@ fn repair(dir: &Path, report: &VerifyReport) -> anyhow::Result<()> {
                 "the manifest was damaged: the base cells were rebuilt (damaged manifest kept as manifest.json.damaged); the reparameterized and photo records were in it, so run `cliffmap reparam` and `cliffmap project` again"
             ),
         }
-        println!("rebuilt base cells: {}", if plan.manifest { "all damaged ones".into() } else { plan.base.join(", ") });
+        println!(
+            "rebuilt base cells: {}",
+            if plan.manifest {
+                "all damaged ones".into()
+            } else {
+                plan.base.join(", ")
+            }
+        );
     }
     let mut store = Store::open(dir)?;
     if !plan.reparam.is_empty() && !plan.manifest {
-        let settings = store.manifest.reparam.clone().context("damaged reparameterized cells but the manifest records no reparam run")?;
+        let settings = store
+            .manifest
+            .reparam
+            .clone()
+            .context("damaged reparameterized cells but the manifest records no reparam run")?;
         let Some(opts) = recorded_reparam_options(&settings) else {
             bail!(
                 "cells {} have damaged reparameterized files, but this store was reparameterized before its options were recorded: run `cliffmap reparam` again",
@@ -122,10 +171,17 @@ fn repair(dir: &Path, report: &VerifyReport) -> anyhow::Result<()> {
         println!("redid reparameterized cells: {}", plan.reparam.join(", "));
     }
     if !plan.photo.is_empty() && !plan.manifest {
-        for c in store.manifest.cells.iter_mut().filter(|c| plan.photo.contains(&c.id)) {
+        for c in store
+            .manifest
+            .cells
+            .iter_mut()
+            .filter(|c| plan.photo.contains(&c.id))
+        {
             c.photo = None;
             for ext in ["photo.png", "photo.conf.png"] {
-                let _ = std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
+                let _ = std::fs::remove_file(
+                    dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))),
+                );
             }
         }
         println!(
@@ -145,18 +201,40 @@ fn rebuild_base(dir: &Path) -> anyhow::Result<()> {
     let bytes = std::fs::read(&path).with_context(|| {
         format!("{}: no build recipe (the store was not made by `cliffmap build` of this version); rebuild it with the original `cliffmap build` command", path.display())
     })?;
-    let recipe: Recipe = serde_json::from_slice(&bytes).with_context(|| format!("{}: invalid build recipe", path.display()))?;
-    let cli = super::Cli::try_parse_from(&recipe.argv).with_context(|| format!("{}: the recorded command line does not parse", path.display()))?;
+    let recipe: Recipe = serde_json::from_slice(&bytes)
+        .with_context(|| format!("{}: invalid build recipe", path.display()))?;
+    let cli = super::Cli::try_parse_from(&recipe.argv).with_context(|| {
+        format!(
+            "{}: the recorded command line does not parse",
+            path.display()
+        )
+    })?;
     let super::Command::Build(mut b) = cli.command else {
-        bail!("{}: the recorded command is not `cliffmap build`", path.display());
+        bail!(
+            "{}: the recorded command is not `cliffmap build`",
+            path.display()
+        );
     };
-    let abs = |p: &Path| if p.is_absolute() { p.to_path_buf() } else { recipe.cwd.join(p) };
+    let abs = |p: &Path| {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            recipe.cwd.join(p)
+        }
+    };
     b.dem = abs(&b.dem);
     b.ortho = b.ortho.as_deref().map(abs);
-    let missing: Vec<String> =
-        std::iter::once(&b.dem).chain(b.ortho.iter()).filter(|p| !p.is_file()).map(|p| p.display().to_string()).collect();
+    let missing: Vec<String> = std::iter::once(&b.dem)
+        .chain(b.ortho.iter())
+        .filter(|p| !p.is_file())
+        .map(|p| p.display().to_string())
+        .collect();
     if !missing.is_empty() {
-        bail!("cannot repair {}: the recorded build inputs are missing: {}", dir.display(), missing.join(", "));
+        bail!(
+            "cannot repair {}: the recorded build inputs are missing: {}",
+            dir.display(),
+            missing.join(", ")
+        );
     }
     b.out = dir.to_path_buf();
     b.quiet = true;

@@ -105,8 +105,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
              window; use `cliffmap render` or `cliffmap fly` for headless frames"
         );
     }
-    let event_loop =
-        EventLoop::new().map_err(|e| anyhow!("cannot connect to the display: {e}"))?;
+    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot connect to the display: {e}"))?;
     let exit_after = a.frames.or(a.smoke_test.then_some(8));
     let mut app = App {
         args: a,
@@ -180,9 +179,10 @@ impl App {
         let window = Arc::new(el.create_window(attrs).context("cannot create a window")?);
         let size = window.inner_size();
         let (w, h) = (size.width.max(1), size.height.max(1));
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-            Box::new(Arc::clone(&window)),
-        ));
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(Arc::clone(&window)),
+            ));
         let surface = instance
             .create_surface(Arc::clone(&window))
             .context("cannot create a drawing surface for the window")?;
@@ -213,7 +213,11 @@ impl App {
         let extent = r
             .iter()
             .filter(|c| c.level == 0)
-            .map(|c| (DVec3::from(c.bbox_max) - DVec3::from(c.bbox_min)).truncate().length())
+            .map(|c| {
+                (DVec3::from(c.bbox_max) - DVec3::from(c.bbox_min))
+                    .truncate()
+                    .length()
+            })
             .fold(0.0, f64::max);
         // Cross the terrain in about 30 s at base speed.
         let cam = FlyCamera::look_at(p, t, (extent / 30.0).max(1.0));
@@ -246,7 +250,8 @@ impl ViewState {
             forward: k(KeyCode::KeyW) - k(KeyCode::KeyS),
             right: k(KeyCode::KeyD) - k(KeyCode::KeyA),
             up: k(KeyCode::KeyE) - k(KeyCode::KeyQ),
-            fast: self.keys.contains(&KeyCode::ShiftLeft) || self.keys.contains(&KeyCode::ShiftRight),
+            fast: self.keys.contains(&KeyCode::ShiftLeft)
+                || self.keys.contains(&KeyCode::ShiftRight),
         }
     }
 
@@ -289,7 +294,11 @@ impl ViewState {
             KeyCode::Tab => self.toggle_capture(),
             KeyCode::KeyG => self.toggle_geomorph(),
             KeyCode::KeyL | KeyCode::KeyH => {
-                let o = if code == KeyCode::KeyL { Overlay::Levels } else { Overlay::Stretch };
+                let o = if code == KeyCode::KeyL {
+                    Overlay::Levels
+                } else {
+                    Overlay::Stretch
+                };
                 self.overlay = if self.overlay == o { Overlay::None } else { o };
                 self.scene.set_mode(modes[self.mode], self.overlay);
             }
@@ -298,10 +307,12 @@ impl ViewState {
                 self.scene.set_mode(modes[self.mode], self.overlay);
             }
             KeyCode::Equal | KeyCode::NumpadAdd => {
-                self.scene.set_sse(adjust_sse(self.scene.options().sse_px, 1))?;
+                self.scene
+                    .set_sse(adjust_sse(self.scene.options().sse_px, 1))?;
             }
             KeyCode::Minus | KeyCode::NumpadSubtract => {
-                self.scene.set_sse(adjust_sse(self.scene.options().sse_px, -1))?;
+                self.scene
+                    .set_sse(adjust_sse(self.scene.options().sse_px, -1))?;
             }
             _ => {}
         }
@@ -318,9 +329,12 @@ impl ViewState {
         if (width, height) == self.scene.size() {
             return Ok(());
         }
-        self.presenter.resize(&self.scene.gpu().device, width, height);
+        self.presenter
+            .resize(&self.scene.gpu().device, width, height);
         self.scene.resize(width, height)?;
-        self.note(&format!("resized to {width}x{height} (surface and render target)"));
+        self.note(&format!(
+            "resized to {width}x{height} (surface and render target)"
+        ));
         Ok(())
     }
 
@@ -377,9 +391,17 @@ impl ViewState {
             r.triangles,
             mode_name(modes[self.mode]),
             ov,
-            if self.scene.options().geomorph.enabled { ", geomorph" } else { "" },
+            if self.scene.options().geomorph.enabled {
+                ", geomorph"
+            } else {
+                ""
+            },
             self.scene.options().sse_px,
-            if self.captured.is_some() { " — mouse captured (Tab/Esc releases)" } else { "" },
+            if self.captured.is_some() {
+                " — mouse captured (Tab/Esc releases)"
+            } else {
+                ""
+            },
         ));
         Ok(true)
     }
@@ -443,11 +465,19 @@ impl ApplicationHandler for App {
                     Ok(())
                 }
             }
-            WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
                 s.dragging = state == ElementState::Pressed && s.captured.is_none();
                 Ok(())
             }
-            WindowEvent::MouseInput { state: ElementState::Pressed, button: MouseButton::Right, .. } => {
+            WindowEvent::MouseInput {
+                state: ElementState::Pressed,
+                button: MouseButton::Right,
+                ..
+            } => {
                 s.toggle_capture();
                 Ok(())
             }
@@ -494,7 +524,12 @@ mod tests {
     #[test]
     fn display_detection_reads_both_variables() {
         let env = |pairs: &'static [(&'static str, &'static str)]| {
-            move |k: &str| pairs.iter().find(|(n, _)| *n == k).map(|(_, v)| v.to_string())
+            move |k: &str| {
+                pairs
+                    .iter()
+                    .find(|(n, _)| *n == k)
+                    .map(|(_, v)| v.to_string())
+            }
         };
         if cfg!(all(unix, not(target_os = "macos"))) {
             assert!(!display_available(env(&[])));

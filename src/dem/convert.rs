@@ -43,7 +43,11 @@ impl Sample for f32 {
     }
     #[inline]
     fn is_nodata(self, nd: f64) -> bool {
-        if nd.is_nan() { self.is_nan() } else { self == nd as f32 }
+        if nd.is_nan() {
+            self.is_nan()
+        } else {
+            self == nd as f32
+        }
     }
 }
 
@@ -54,14 +58,22 @@ impl Sample for f64 {
     }
     #[inline]
     fn is_nodata(self, nd: f64) -> bool {
-        if nd.is_nan() { self.is_nan() } else { self == nd }
+        if nd.is_nan() {
+            self.is_nan()
+        } else {
+            self == nd
+        }
     }
 }
 
 /// Formats a value compactly (scientific notation when huge) but exactly enough to be
 /// passed back as `--nodata` (Rust's shortest round-trip representation).
 fn num(v: f64) -> String {
-    if v.abs() >= 1e9 { format!("{v:e}") } else { format!("{v}") }
+    if v.abs() >= 1e9 {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// How stored values become heights.
@@ -143,19 +155,38 @@ mod tests {
 
     #[test]
     fn scaling_and_errors() {
-        let s = Scaling { scale: 0.1, offset: 5.0 };
+        let s = Scaling {
+            scale: 0.1,
+            offset: 5.0,
+        };
         let vals = [10.0, 20.0, -1.0, 30.0];
-        let (h, v) = to_heights(Path::new("a.png"), 2, 4, s, false, |i| (vals[i], vals[i] < 0.0)).unwrap();
+        let (h, v) = to_heights(Path::new("a.png"), 2, 4, s, false, |i| {
+            (vals[i], vals[i] < 0.0)
+        })
+        .unwrap();
         assert_eq!(h, vec![6.0, 7.0, 0.0, 8.0]);
         assert_eq!(v, vec![false, false, true, false]);
 
         let vals = [1.0, 2.0, 3.0, f64::NAN];
-        let e = to_heights(Path::new("n.tif"), 2, 4, s, false, |i| (vals[i], false)).unwrap_err().to_string();
-        assert!(e.contains("n.tif") && e.contains("row 1, column 1") && e.contains("--nodata nan"), "{e}");
+        let e = to_heights(Path::new("n.tif"), 2, 4, s, false, |i| (vals[i], false))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("n.tif") && e.contains("row 1, column 1") && e.contains("--nodata nan"),
+            "{e}"
+        );
 
         let vals = [1.0, 2e6, 3.0, 4.0];
-        let one = Scaling { scale: 1.0, offset: 0.0 };
-        let e = to_heights(Path::new("b.f32"), 2, 4, one, false, |i| (vals[i], false)).unwrap_err().to_string();
-        assert!(e.contains("b.f32") && e.contains("row 0, column 1") && e.contains("--nodata"), "{e}");
+        let one = Scaling {
+            scale: 1.0,
+            offset: 0.0,
+        };
+        let e = to_heights(Path::new("b.f32"), 2, 4, one, false, |i| (vals[i], false))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("b.f32") && e.contains("row 0, column 1") && e.contains("--nodata"),
+            "{e}"
+        );
     }
 }

@@ -27,7 +27,9 @@ pub(crate) struct PngHeader {
 fn read_prefix(path: &Path, n: usize) -> Result<Vec<u8>> {
     let f = File::open(path).map_err(|e| Error::io(path, e))?;
     let mut buf = Vec::with_capacity(n);
-    f.take(n as u64).read_to_end(&mut buf).map_err(|e| Error::io(path, e))?;
+    f.take(n as u64)
+        .read_to_end(&mut buf)
+        .map_err(|e| Error::io(path, e))?;
     Ok(buf)
 }
 
@@ -38,20 +40,34 @@ pub(crate) fn png_header(path: &Path) -> Result<PngHeader> {
         return Err(Error::bad_input(path, "not a PNG file (bad signature)"));
     }
     if b.len() < 26 || &b[12..16] != b"IHDR" {
-        return Err(Error::bad_input(path, "truncated PNG: no complete IHDR header"));
+        return Err(Error::bad_input(
+            path,
+            "truncated PNG: no complete IHDR header",
+        ));
     }
     let be = |o: usize| u32::from_be_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
-    Ok(PngHeader { width: be(16), height: be(20), bit_depth: b[24], colour_type: b[25] })
+    Ok(PngHeader {
+        width: be(16),
+        height: be(20),
+        bit_depth: b[24],
+        colour_type: b[25],
+    })
 }
 
 fn is_tiff_magic(b: &[u8]) -> bool {
-    matches!(b, [b'I', b'I', 42 | 43, 0, ..] | [b'M', b'M', 0, 42 | 43, ..])
+    matches!(
+        b,
+        [b'I', b'I', 42 | 43, 0, ..] | [b'M', b'M', 0, 42 | 43, ..]
+    )
 }
 
 /// Picks the DEM format of `path` from its extension (and PNG header). Errors, naming the
 /// file, when the format cannot be inferred or the PNG kind is ambiguous.
 pub(crate) fn detect(path: &Path) -> Result<DemFormat> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("tif" | "tiff" | "gtiff") => Ok(DemFormat::Geotiff),
         Some("f32" | "raw" | "bin") => Ok(DemFormat::F32),
@@ -116,22 +132,54 @@ mod tests {
         assert_eq!(detect(Path::new("x.tiff")).unwrap(), DemFormat::Geotiff);
         assert_eq!(detect(Path::new("x.f32")).unwrap(), DemFormat::F32);
         assert_eq!(detect(Path::new("x.bin")).unwrap(), DemFormat::F32);
-        let g16 = png(d.path(), "g16.png", image::DynamicImage::ImageLuma16(image::ImageBuffer::new(3, 2)));
+        let g16 = png(
+            d.path(),
+            "g16.png",
+            image::DynamicImage::ImageLuma16(image::ImageBuffer::new(3, 2)),
+        );
         assert_eq!(detect(&g16).unwrap(), DemFormat::Png16);
-        assert_eq!(png_header(&g16).unwrap(), PngHeader { width: 3, height: 2, bit_depth: 16, colour_type: 0 });
-        let rgb = png(d.path(), "t.png", image::DynamicImage::ImageRgb8(image::ImageBuffer::new(3, 2)));
+        assert_eq!(
+            png_header(&g16).unwrap(),
+            PngHeader {
+                width: 3,
+                height: 2,
+                bit_depth: 16,
+                colour_type: 0
+            }
+        );
+        let rgb = png(
+            d.path(),
+            "t.png",
+            image::DynamicImage::ImageRgb8(image::ImageBuffer::new(3, 2)),
+        );
         assert_eq!(detect(&rgb).unwrap(), DemFormat::TerrainRgb);
-        let rgba = png(d.path(), "t4.png", image::DynamicImage::ImageRgba8(image::ImageBuffer::new(3, 2)));
+        let rgba = png(
+            d.path(),
+            "t4.png",
+            image::DynamicImage::ImageRgba8(image::ImageBuffer::new(3, 2)),
+        );
         assert_eq!(detect(&rgba).unwrap(), DemFormat::TerrainRgb);
-        let g8 = png(d.path(), "g8.png", image::DynamicImage::ImageLuma8(image::ImageBuffer::new(3, 2)));
+        let g8 = png(
+            d.path(),
+            "g8.png",
+            image::DynamicImage::ImageLuma8(image::ImageBuffer::new(3, 2)),
+        );
         let e = detect(&g8).unwrap_err().to_string();
-        assert!(e.contains("g8.png") && e.contains("--dem-format png16") && e.contains("8-bit"), "{e}");
+        assert!(
+            e.contains("g8.png") && e.contains("--dem-format png16") && e.contains("8-bit"),
+            "{e}"
+        );
         // unknown extension: sniffed
         let sniff = d.path().join("noext");
         std::fs::copy(&g16, &sniff).unwrap();
         assert_eq!(detect(&sniff).unwrap(), DemFormat::Png16);
         let junk = d.path().join("junk.dat");
         std::fs::write(&junk, b"hello world").unwrap();
-        assert!(detect(&junk).unwrap_err().to_string().contains("--dem-format"));
+        assert!(
+            detect(&junk)
+                .unwrap_err()
+                .to_string()
+                .contains("--dem-format")
+        );
     }
 }

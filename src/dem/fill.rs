@@ -28,12 +28,18 @@ pub fn fill_voids(width: usize, height: usize, heights: &mut [f32], void: &[bool
         (-1isize..=1)
             .flat_map(move |dr| (-1isize..=1).map(move |dc| (r + dr, c + dc)))
             .filter(move |&(rr, cc)| {
-                (rr, cc) != (r, c) && rr >= 0 && cc >= 0 && (rr as usize) < height && (cc as usize) < width
+                (rr, cc) != (r, c)
+                    && rr >= 0
+                    && cc >= 0
+                    && (rr as usize) < height
+                    && (cc as usize) < width
             })
             .map(move |(rr, cc)| rr as usize * width + cc as usize)
     };
 
-    let mut front: Vec<usize> = (0..n).filter(|&i| !known[i] && neighbours(i).any(|j| known[j])).collect();
+    let mut front: Vec<usize> = (0..n)
+        .filter(|&i| !known[i] && neighbours(i).any(|j| known[j]))
+        .collect();
     for &i in &front {
         queued[i] = 1;
     }
@@ -95,10 +101,19 @@ mod tests {
         // (1,2) has (0,1),(0,2),(0,3): 10
         assert_eq!(hs[w + 2], 10.0);
         // centre (2,2) is filled in pass 2 from its 8 ring neighbours (pass-1 values).
-        let ring: Vec<f64> = [(1, 1), (1, 2), (1, 3), (2, 1), (2, 3), (3, 1), (3, 2), (3, 3)]
-            .iter()
-            .map(|&(r, c)| hs[r * w + c] as f64)
-            .collect();
+        let ring: Vec<f64> = [
+            (1, 1),
+            (1, 2),
+            (1, 3),
+            (2, 1),
+            (2, 3),
+            (3, 1),
+            (3, 2),
+            (3, 3),
+        ]
+        .iter()
+        .map(|&(r, c)| hs[r * w + c] as f64)
+        .collect();
         assert_eq!(hs[2 * w + 2], (ring.iter().sum::<f64>() / 8.0) as f32);
         assert!(hs.iter().all(|&x| (10.0..=20.0).contains(&x)));
     }
@@ -106,7 +121,9 @@ mod tests {
     #[test]
     fn large_hole_is_filled_and_deterministic() {
         let (w, h) = (60, 40);
-        let base: Vec<f32> = (0..w * h).map(|i| ((i % w) as f32 * 0.7 + (i / w) as f32 * 1.3).sin() * 50.0).collect();
+        let base: Vec<f32> = (0..w * h)
+            .map(|i| ((i % w) as f32 * 0.7 + (i / w) as f32 * 1.3).sin() * 50.0)
+            .collect();
         let void: Vec<bool> = (0..w * h).map(|i| (i % w) > 3 || (i / w) > 30).collect();
         let mut a = base.clone();
         let mut b = base.clone();
@@ -120,7 +137,12 @@ mod tests {
             .fold((f32::MAX, f32::MIN), |(l, u), (&x, _)| (l.min(x), u.max(x)));
         assert!(a.iter().all(|&x| x.is_finite() && x >= lo && x <= hi));
         // valid samples untouched
-        assert!(a.iter().zip(&base).zip(&void).all(|((x, y), v)| *v || x == y));
+        assert!(
+            a.iter()
+                .zip(&base)
+                .zip(&void)
+                .all(|((x, y), v)| *v || x == y)
+        );
     }
 
     #[test]

@@ -38,7 +38,9 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         ColorType::Multiband { num_samples, .. } => {
             return Err(Error::bad_input(
                 path,
-                format!("TIFF has {num_samples} bands; a DEM must have exactly one (extract the height band first)"),
+                format!(
+                    "TIFF has {num_samples} bands; a DEM must have exactly one (extract the height band first)"
+                ),
             ));
         }
         other => {
@@ -54,9 +56,17 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         2 => "signed integer",
         3 => "floating-point",
         5 | 6 => {
-            return Err(Error::bad_input(path, "TIFF holds complex samples, which cannot be heights"));
+            return Err(Error::bad_input(
+                path,
+                "TIFF holds complex samples, which cannot be heights",
+            ));
         }
-        other => return Err(Error::bad_input(path, format!("TIFF has unknown SampleFormat {other}"))),
+        other => {
+            return Err(Error::bad_input(
+                path,
+                format!("TIFF has unknown SampleFormat {other}"),
+            ));
+        }
     };
     let ok = match fmt {
         3 => matches!(bits, 16 | 32 | 64),
@@ -71,7 +81,13 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         ));
     }
     super::check_size(path, w, h)?;
-    limits::check(path, w as u64, h as u64, bits as u64 / 8 + limits::DEM_BYTES_PER_SAMPLE, opts.max_memory)?;
+    limits::check(
+        path,
+        w as u64,
+        h as u64,
+        bits as u64 / 8 + limits::DEM_BYTES_PER_SAMPLE,
+        opts.max_memory,
+    )?;
 
     let tags = gt::read_geo_tags(path, &mut dec)?;
     let nodata = opts.nodata.or(tags.nodata);
@@ -101,12 +117,25 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
             tags.crs.as_deref().unwrap_or("unknown CRS")
         );
     }
-    Ok(Decoded { width: w, height: h, heights, void, georef: tags.georef, crs: tags.crs, geographic: tags.geographic })
+    Ok(Decoded {
+        width: w,
+        height: h,
+        heights,
+        void,
+        georef: tags.georef,
+        crs: tags.crs,
+        geographic: tags.geographic,
+    })
 }
 
 /// The first `n` decoded samples, or an error if the decoder returned fewer.
 fn short<'a, T>(path: &Path, v: &'a [T], n: usize) -> Result<&'a [T]> {
-    v.get(..n).ok_or_else(|| Error::bad_input(path, format!("TIFF decoded to {} samples, expected {n}", v.len())))
+    v.get(..n).ok_or_else(|| {
+        Error::bad_input(
+            path,
+            format!("TIFF decoded to {} samples, expected {n}", v.len()),
+        )
+    })
 }
 
 #[cfg(test)]
@@ -129,7 +158,9 @@ mod tests {
     }
 
     fn f32_grid(w: usize, h: usize) -> Vec<f32> {
-        (0..w * h).map(|i| 500.0 + (i % w) as f32 * 1.5 - (i / w) as f32 * 0.25 + 0.125).collect()
+        (0..w * h)
+            .map(|i| 500.0 + (i % w) as f32 * 1.5 - (i / w) as f32 * 0.25 + 0.125)
+            .collect()
     }
 
     #[test]
@@ -153,7 +184,11 @@ mod tests {
             assert_eq!(dem.heights, v);
             assert_eq!(dem.crs.as_deref(), Some("EPSG:32718"));
             // PixelIsArea: tiepoint is the NW pixel's outer corner, centre is half a pixel in.
-            let want = if point { (627175.0, 4852085.0) } else { (627190.0, 4852070.0) };
+            let want = if point {
+                (627175.0, 4852085.0)
+            } else {
+                (627190.0, 4852070.0)
+            };
             assert_eq!(dem.georef, GridGeoref::new(want.0, want.1, 30.0));
         }
     }
@@ -182,8 +217,15 @@ mod tests {
         let dem = load_dem(&p, &Default::default()).unwrap();
         assert_eq!(dem.georef, GridGeoref::new(445302.17, 7396769.45, 3.0));
         assert_eq!(dem.crs, None);
-        let o = DemLoadOptions { spacing: Some(2.0), origin: Some((1.0, 2.0)), ..Default::default() };
-        assert_eq!(load_dem(&p, &o).unwrap().georef, GridGeoref::new(1.0, 2.0, 2.0));
+        let o = DemLoadOptions {
+            spacing: Some(2.0),
+            origin: Some((1.0, 2.0)),
+            ..Default::default()
+        };
+        assert_eq!(
+            load_dem(&p, &o).unwrap().georef,
+            GridGeoref::new(1.0, 2.0, 2.0)
+        );
     }
 
     #[test]
@@ -194,12 +236,24 @@ mod tests {
         let vu: Vec<u16> = (0..w * h).map(|i| 1000 + i as u16 * 17).collect();
         let cases = [
             ("i16_lzw.tif", Compression::Lzw, Predictor::Horizontal),
-            ("i16_deflate.tif", Compression::Deflate(DeflateLevel::Balanced), Predictor::None),
+            (
+                "i16_deflate.tif",
+                Compression::Deflate(DeflateLevel::Balanced),
+                Predictor::None,
+            ),
             ("i16_none.tif", Compression::Uncompressed, Predictor::None),
         ];
         for (name, c, pred) in cases {
             let p = d.path().join(name);
-            tiffgen::write_strips::<colortype::GrayI16>(&p, w, h, &vi, c, pred, Some(&geo(false, None)));
+            tiffgen::write_strips::<colortype::GrayI16>(
+                &p,
+                w,
+                h,
+                &vi,
+                c,
+                pred,
+                Some(&geo(false, None)),
+            );
             let dem = load_dem(&p, &Default::default()).unwrap();
             let want: Vec<f32> = vi.iter().map(|&x| x as f32).collect();
             assert_eq!(dem.heights, want, "{name}");
@@ -214,7 +268,11 @@ mod tests {
             Predictor::Horizontal,
             Some(&geo(false, Some("1017"))),
         );
-        let o = DemLoadOptions { z_scale: Some(0.1), z_offset: Some(-100.0), ..Default::default() };
+        let o = DemLoadOptions {
+            z_scale: Some(0.1),
+            z_offset: Some(-100.0),
+            ..Default::default()
+        };
         let dem = load_dem(&p, &o).unwrap();
         assert!(dem.void[1] && dem.void.iter().filter(|v| **v).count() == 1);
         for i in (0..vu.len()).filter(|&i| i != 1) {
@@ -232,17 +290,40 @@ mod tests {
             Predictor::None,
             None,
         );
-        let dem = load_dem(&p, &DemLoadOptions { spacing: Some(1.0), origin: Some((0.0, 0.0)), ..Default::default() })
-            .unwrap();
+        let dem = load_dem(
+            &p,
+            &DemLoadOptions {
+                spacing: Some(1.0),
+                origin: Some((0.0, 0.0)),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert!(dem.heights.iter().zip(&v64).all(|(a, b)| *a == *b as f32));
         // i32 and u8
         let p = d.path().join("i32.tif");
         let v32: Vec<i32> = (0..w * h).map(|i| i as i32 - 20).collect();
-        tiffgen::write_strips::<colortype::GrayI32>(&p, w, h, &v32, Compression::Lzw, Predictor::None, None);
+        tiffgen::write_strips::<colortype::GrayI32>(
+            &p,
+            w,
+            h,
+            &v32,
+            Compression::Lzw,
+            Predictor::None,
+            None,
+        );
         assert_eq!(load_dem(&p, &Default::default()).unwrap().heights[0], -20.0);
         let p = d.path().join("u8.tif");
         let v8: Vec<u8> = (0..w * h).map(|i| i as u8).collect();
-        tiffgen::write_strips::<colortype::Gray8>(&p, w, h, &v8, Compression::Uncompressed, Predictor::None, None);
+        tiffgen::write_strips::<colortype::Gray8>(
+            &p,
+            w,
+            h,
+            &v8,
+            Compression::Uncompressed,
+            Predictor::None,
+            None,
+        );
         assert_eq!(load_dem(&p, &Default::default()).unwrap().heights[70], 70.0);
     }
 
@@ -263,7 +344,13 @@ mod tests {
             extra_alpha: false,
         };
         let p = d.path().join("tiled.tif");
-        tiffgen::write_raw(&p, &raw, &tiffgen::f32_bytes(&v), Some(&geo(false, Some("nan"))), false);
+        tiffgen::write_raw(
+            &p,
+            &raw,
+            &tiffgen::f32_bytes(&v),
+            Some(&geo(false, Some("nan"))),
+            false,
+        );
         let dem = load_dem(&p, &Default::default()).unwrap();
         assert_eq!((dem.width, dem.height), (w, h));
         assert!(dem.is_void(5, 30));
@@ -297,10 +384,19 @@ mod tests {
         let dem = load_dem(&p, &Default::default()).unwrap();
         assert_eq!(dem.void.iter().filter(|x| **x).count(), 9);
         let valid: Vec<f32> = v.iter().copied().filter(|&x| x != -9999.0).collect();
-        let (lo, hi) = valid.iter().fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        let (lo, hi) = valid
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
         assert!(dem.heights.iter().all(|&x| x >= lo && x <= hi));
         // opts.nodata overrides the tag: -9999 is then a plausible (if odd) height
-        let dem = load_dem(&p, &DemLoadOptions { nodata: Some(-1.0), ..Default::default() }).unwrap();
+        let dem = load_dem(
+            &p,
+            &DemLoadOptions {
+                nodata: Some(-1.0),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(dem.void_fraction(), 0.0);
         assert_eq!(dem.at(2, 3), -9999.0);
     }

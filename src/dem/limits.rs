@@ -11,13 +11,29 @@ use crate::error::{Error, Result};
 
 /// Refuses a `width x height` grid needing `bytes_per_sample` bytes per sample if the total
 /// exceeds `max_memory`, or if either dimension is zero. Overflow counts as too large.
-pub(crate) fn check(path: &Path, width: u64, height: u64, bytes_per_sample: u64, max_memory: u64) -> Result<()> {
+pub(crate) fn check(
+    path: &Path,
+    width: u64,
+    height: u64,
+    bytes_per_sample: u64,
+    max_memory: u64,
+) -> Result<()> {
     if width == 0 || height == 0 {
-        return Err(Error::bad_input(path, format!("image has zero size ({width}x{height})")));
+        return Err(Error::bad_input(
+            path,
+            format!("image has zero size ({width}x{height})"),
+        ));
     }
-    let needed = width.checked_mul(height).and_then(|n| n.checked_mul(bytes_per_sample)).unwrap_or(u64::MAX);
+    let needed = width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(bytes_per_sample))
+        .unwrap_or(u64::MAX);
     if needed > max_memory {
-        return Err(Error::TooLarge { path: path.to_path_buf(), needed, limit: max_memory });
+        return Err(Error::TooLarge {
+            path: path.to_path_buf(),
+            needed,
+            limit: max_memory,
+        });
     }
     Ok(())
 }
@@ -37,7 +53,9 @@ pub(crate) fn decode_image(
     check_header: impl FnOnce(u32, u32, image::ColorType) -> Result<()>,
 ) -> Result<DynamicImage> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut reader = ImageReader::new(BufReader::new(file)).with_guessed_format().map_err(|e| Error::io(path, e))?;
+    let mut reader = ImageReader::new(BufReader::new(file))
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?;
     if reader.format().is_none() {
         reader.set_format(fallback);
     }
@@ -45,8 +63,9 @@ pub(crate) fn decode_image(
     // reports an oversized image as `TooLarge`; then the decoder gets the cap.
     reader.no_limits();
     let reader_format = reader.format();
-    let mut decoder =
-        reader.into_decoder().map_err(|e| Error::bad_input(path, format!("cannot read the image header: {e}")))?;
+    let mut decoder = reader
+        .into_decoder()
+        .map_err(|e| Error::bad_input(path, format!("cannot read the image header: {e}")))?;
     let (w, h) = decoder.dimensions();
     check_header(w, h, decoder.color_type())?;
     if reader_format == Some(ImageFormat::Jpeg) {
@@ -56,9 +75,15 @@ pub(crate) fn decode_image(
     }
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(max_memory);
-    decoder.set_limits(limits).map_err(|e| Error::bad_input(path, format!("image exceeds the memory limit: {e}")))?;
-    DynamicImage::from_decoder(decoder)
-        .map_err(|e| Error::bad_input(path, format!("cannot decode the image (truncated or corrupt?): {e}")))
+    decoder
+        .set_limits(limits)
+        .map_err(|e| Error::bad_input(path, format!("image exceeds the memory limit: {e}")))?;
+    DynamicImage::from_decoder(decoder).map_err(|e| {
+        Error::bad_input(
+            path,
+            format!("cannot decode the image (truncated or corrupt?): {e}"),
+        )
+    })
 }
 
 #[cfg(test)]
@@ -68,16 +93,30 @@ mod tests {
     #[test]
     fn truncated_png_and_jpeg_are_refused() {
         let dir = tempfile::tempdir().unwrap();
-        let img = image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([(x * 37 % 251) as u8, (y * 91 % 241) as u8, ((x * y) % 256) as u8]));
+        let img = image::RgbImage::from_fn(64, 48, |x, y| {
+            image::Rgb([
+                (x * 37 % 251) as u8,
+                (y * 91 % 241) as u8,
+                ((x * y) % 256) as u8,
+            ])
+        });
         for ext in ["png", "jpg"] {
             let full = dir.path().join(format!("full.{ext}"));
             img.save(&full).unwrap();
             let bytes = std::fs::read(&full).unwrap();
             let cut = dir.path().join(format!("cut.{ext}"));
             std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
-            assert!(decode_image(&full, ImageFormat::Png, 1 << 30, |_, _, _| Ok(())).is_ok(), "{ext}");
-            let e = decode_image(&cut, ImageFormat::Png, 1 << 30, |_, _, _| Ok(())).unwrap_err().to_string();
-            assert!(e.contains("cut.") && (e.contains("truncated") || e.contains("corrupt")), "{ext}: {e}");
+            assert!(
+                decode_image(&full, ImageFormat::Png, 1 << 30, |_, _, _| Ok(())).is_ok(),
+                "{ext}"
+            );
+            let e = decode_image(&cut, ImageFormat::Png, 1 << 30, |_, _, _| Ok(()))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("cut.") && (e.contains("truncated") || e.contains("corrupt")),
+                "{ext}: {e}"
+            );
             assert!(crate::fsutil::decode_rgb8(&cut).is_err(), "{ext}");
         }
     }
@@ -87,8 +126,26 @@ mod tests {
         let p = Path::new("big.tif");
         assert!(check(p, 100, 100, 4, 40_000).is_ok());
         let e = check(p, 100, 101, 4, 40_000).unwrap_err();
-        assert!(matches!(e, Error::TooLarge { needed: 40_400, limit: 40_000, .. }), "{e}");
-        assert!(matches!(check(p, u64::MAX, 3, 4, u64::MAX - 1).unwrap_err(), Error::TooLarge { .. }));
-        assert!(check(p, 0, 10, 4, 1000).unwrap_err().to_string().contains("big.tif"));
+        assert!(
+            matches!(
+                e,
+                Error::TooLarge {
+                    needed: 40_400,
+                    limit: 40_000,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(matches!(
+            check(p, u64::MAX, 3, 4, u64::MAX - 1).unwrap_err(),
+            Error::TooLarge { .. }
+        ));
+        assert!(
+            check(p, 0, 10, 4, 1000)
+                .unwrap_err()
+                .to_string()
+                .contains("big.tif")
+        );
     }
 }

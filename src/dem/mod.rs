@@ -34,7 +34,9 @@ use crate::error::{Error, Result};
 use crate::georef::{GridGeoref, WorldRect};
 
 /// On-disk DEM formats cliffmap reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum DemFormat {
     /// GeoTIFF (or plain TIFF with explicit spacing/origin).
@@ -107,9 +109,16 @@ pub struct Dem {
 impl Dem {
     /// Builds a DEM from complete, finite heights (no voids). Errors on size mismatch,
     /// fewer than 2x2 samples, non-finite heights or an invalid georeference.
-    pub fn from_heights(width: usize, height: usize, heights: Vec<f32>, georef: GridGeoref) -> Result<Dem> {
+    pub fn from_heights(
+        width: usize,
+        height: usize,
+        heights: Vec<f32>,
+        georef: GridGeoref,
+    ) -> Result<Dem> {
         if width < 2 || height < 2 {
-            return Err(Error::BadOption(format!("a DEM needs at least 2x2 samples, got {width}x{height}")));
+            return Err(Error::BadOption(format!(
+                "a DEM needs at least 2x2 samples, got {width}x{height}"
+            )));
         }
         if heights.len() != width * height {
             return Err(Error::BadOption(format!(
@@ -128,7 +137,14 @@ impl Dem {
         }
         georef.validate()?;
         let void = vec![false; heights.len()];
-        Ok(Dem { width, height, heights, void, georef, crs: None })
+        Ok(Dem {
+            width,
+            height,
+            heights,
+            void,
+            georef,
+            crs: None,
+        })
     }
 
     /// Height of sample (row, col). Panics if out of range (internal use with checked indices).
@@ -159,13 +175,24 @@ impl Dem {
     /// World rectangle spanned by the sample centres.
     pub fn extent(&self) -> WorldRect {
         let (x0, y0) = self.georef.world(0.0, 0.0);
-        let (x1, y1) = self.georef.world((self.height - 1) as f64, (self.width - 1) as f64);
-        WorldRect { min_x: x0, min_y: y1, max_x: x1, max_y: y0 }
+        let (x1, y1) = self
+            .georef
+            .world((self.height - 1) as f64, (self.width - 1) as f64);
+        WorldRect {
+            min_x: x0,
+            min_y: y1,
+            max_x: x1,
+            max_y: y0,
+        }
     }
 
     /// Smallest and largest height.
     pub fn height_range(&self) -> (f32, f32) {
-        self.heights.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &h| (a.min(h), b.max(h)))
+        self.heights
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &h| {
+                (a.min(h), b.max(h))
+            })
     }
 
     /// Fraction of samples that were no-data.
@@ -189,35 +216,62 @@ pub(crate) struct Decoded {
 /// Refuses grids smaller than 2x2 (and absurd sizes that overflow indices).
 pub(crate) fn check_size(path: &Path, width: usize, height: usize) -> Result<()> {
     if width < 2 || height < 2 {
-        return Err(Error::bad_input(path, format!("a DEM needs at least 2x2 samples, the file has {width}x{height}")));
+        return Err(Error::bad_input(
+            path,
+            format!("a DEM needs at least 2x2 samples, the file has {width}x{height}"),
+        ));
     }
-    if width.checked_mul(height).is_none_or(|n| n > u32::MAX as usize * 4) {
-        return Err(Error::bad_input(path, format!("absurd DEM size {width}x{height}")));
+    if width
+        .checked_mul(height)
+        .is_none_or(|n| n > u32::MAX as usize * 4)
+    {
+        return Err(Error::bad_input(
+            path,
+            format!("absurd DEM size {width}x{height}"),
+        ));
     }
     Ok(())
 }
 
 pub(crate) fn scaling(opts: &DemLoadOptions) -> convert::Scaling {
-    convert::Scaling { scale: opts.z_scale.unwrap_or(1.0), offset: opts.z_offset.unwrap_or(0.0) }
+    convert::Scaling {
+        scale: opts.z_scale.unwrap_or(1.0),
+        offset: opts.z_offset.unwrap_or(0.0),
+    }
 }
 
 fn validate_options(path: &Path, opts: &DemLoadOptions) -> Result<()> {
     let bad = |flag: &str, v: String, why: &str| {
-        Err(Error::BadOption(format!("{flag} {v} for {}: {why}", path.display())))
+        Err(Error::BadOption(format!(
+            "{flag} {v} for {}: {why}",
+            path.display()
+        )))
     };
     if let Some(s) = opts.spacing {
         if !(s.is_finite() && s > 0.0) {
-            return bad("--spacing", s.to_string(), "must be a positive finite number of metres");
+            return bad(
+                "--spacing",
+                s.to_string(),
+                "must be a positive finite number of metres",
+            );
         }
     }
     if let Some((x, y)) = opts.origin {
         if !(x.is_finite() && y.is_finite()) {
-            return bad("--origin", format!("{x},{y}"), "must be two finite coordinates");
+            return bad(
+                "--origin",
+                format!("{x},{y}"),
+                "must be two finite coordinates",
+            );
         }
     }
     if let Some(z) = opts.z_scale {
         if !(z.is_finite() && z != 0.0) {
-            return bad("--z-scale", z.to_string(), "must be a finite non-zero number");
+            return bad(
+                "--z-scale",
+                z.to_string(),
+                "must be a finite non-zero number",
+            );
         }
     }
     if let Some(z) = opts.z_offset {
@@ -262,27 +316,48 @@ pub fn load_dem(path: &Path, opts: &DemLoadOptions) -> Result<Dem> {
         DemFormat::TerrainRgb => terrain_rgb::read(path, opts)?,
         DemFormat::F32 => raw_f32::read(path, opts)?,
     };
-    let Decoded { width, height, mut heights, void, georef, crs, .. } = d;
+    let Decoded {
+        width,
+        height,
+        mut heights,
+        void,
+        georef,
+        crs,
+        ..
+    } = d;
     if format != DemFormat::F32 {
-        for (flag, v, actual) in [("--width", opts.width, width), ("--height", opts.height, height)] {
+        for (flag, v, actual) in [
+            ("--width", opts.width, width),
+            ("--height", opts.height, height),
+        ] {
             if v.is_some_and(|v| v != actual) {
                 return Err(Error::bad_input(
                     path,
-                    format!("{flag} {} does not match the file's size ({width}x{height})", v.unwrap_or(0)),
+                    format!(
+                        "{flag} {} does not match the file's size ({width}x{height})",
+                        v.unwrap_or(0)
+                    ),
                 ));
             }
         }
     }
     let nvoid = void.iter().filter(|&&v| v).count();
     if nvoid == void.len() {
-        return Err(Error::bad_input(path, "every sample is no-data; check --nodata"));
+        return Err(Error::bad_input(
+            path,
+            "every sample is no-data; check --nodata",
+        ));
     }
     if nvoid > 0 {
         fill::fill_voids(width, height, &mut heights, &void);
     }
     if opts.nodata.is_none() {
         for s in SUSPECT_NODATA {
-            let count = heights.iter().zip(&void).filter(|(h, v)| !**v && **h == s).count();
+            let count = heights
+                .iter()
+                .zip(&void)
+                .filter(|(h, v)| !**v && **h == s)
+                .count();
             if count > 0 {
                 tracing::warn!(
                     "{}: {count} samples have height {s}, a common no-data marker; pass --nodata {s} if they are missing data",
@@ -296,17 +371,31 @@ pub fn load_dem(path: &Path, opts: &DemLoadOptions) -> Result<Dem> {
     match opts.spacing {
         Some(s) => (g.spacing_x, g.spacing_y) = (s, s),
         None if georef.is_none() => {
-            tracing::warn!("{}: no georeference in the file and no --spacing; using spacing 1", path.display())
+            tracing::warn!(
+                "{}: no georeference in the file and no --spacing; using spacing 1",
+                path.display()
+            )
         }
         None => {}
     }
     match opts.origin {
         Some((x, y)) => (g.origin_x, g.origin_y) = (x, y),
         None if georef.is_none() => {
-            tracing::warn!("{}: no georeference in the file and no --origin; using origin (0, 0)", path.display())
+            tracing::warn!(
+                "{}: no georeference in the file and no --origin; using origin (0, 0)",
+                path.display()
+            )
         }
         None => {}
     }
-    g.validate().map_err(|e| Error::bad_input(path, e.to_string()))?;
-    Ok(Dem { width, height, heights, void, georef: g, crs })
+    g.validate()
+        .map_err(|e| Error::bad_input(path, e.to_string()))?;
+    Ok(Dem {
+        width,
+        height,
+        heights,
+        void,
+        georef: g,
+        crs,
+    })
 }

@@ -18,7 +18,9 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
             other => {
                 return Err(Error::bad_input(
                     path,
-                    format!("is not a greyscale image ({other:?}); for Terrain-RGB pass --dem-format terrain-rgb"),
+                    format!(
+                        "is not a greyscale image ({other:?}); for Terrain-RGB pass --dem-format terrain-rgb"
+                    ),
                 ));
             }
         }
@@ -63,10 +65,21 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
             })?
         }
         other => {
-            return Err(Error::bad_input(path, format!("unexpected decoded colour type {:?}", other.color())));
+            return Err(Error::bad_input(
+                path,
+                format!("unexpected decoded colour type {:?}", other.color()),
+            ));
         }
     };
-    Ok(Decoded { width: w, height: h, heights, void, georef: None, crs: None, geographic: false })
+    Ok(Decoded {
+        width: w,
+        height: h,
+        heights,
+        void,
+        georef: None,
+        crs: None,
+        geographic: false,
+    })
 }
 
 #[cfg(test)]
@@ -83,8 +96,12 @@ mod tests {
         let img: ImageBuffer<Luma<u16>, Vec<u16>> =
             ImageBuffer::from_fn(5, 4, |x, y| Luma([1000 + (y * 5 + x) as u16 * 7]));
         img.save(&p).unwrap();
-        let opts =
-            DemLoadOptions { z_scale: Some(0.1), z_offset: Some(-50.0), spacing: Some(10.0), ..Default::default() };
+        let opts = DemLoadOptions {
+            z_scale: Some(0.1),
+            z_offset: Some(-50.0),
+            spacing: Some(10.0),
+            ..Default::default()
+        };
         let dem = load_dem(&p, &opts).unwrap();
         assert_eq!((dem.width, dem.height), (5, 4));
         for (i, &hgt) in dem.heights.iter().enumerate() {
@@ -94,13 +111,24 @@ mod tests {
         assert_eq!(dem.georef, GridGeoref::new(0.0, 0.0, 10.0));
 
         // nodata on the stored integer
-        let dem = load_dem(&p, &DemLoadOptions { nodata: Some(1007.0), ..opts.clone() }).unwrap();
+        let dem = load_dem(
+            &p,
+            &DemLoadOptions {
+                nodata: Some(1007.0),
+                ..opts.clone()
+            },
+        )
+        .unwrap();
         assert!(dem.void[1] && dem.void_fraction() == 1.0 / 20.0);
 
         // grey+alpha: alpha 0 is void
         let p2 = d.path().join("la.png");
-        let img: ImageBuffer<LumaA<u16>, Vec<u16>> =
-            ImageBuffer::from_fn(3, 3, |x, y| LumaA([100 * (x + y) as u16, if (x, y) == (1, 1) { 0 } else { 65535 }]));
+        let img: ImageBuffer<LumaA<u16>, Vec<u16>> = ImageBuffer::from_fn(3, 3, |x, y| {
+            LumaA([
+                100 * (x + y) as u16,
+                if (x, y) == (1, 1) { 0 } else { 65535 },
+            ])
+        });
         img.save(&p2).unwrap();
         let dem = load_dem(&p2, &DemLoadOptions::default()).unwrap();
         assert!(dem.is_void(1, 1));
@@ -112,10 +140,15 @@ mod tests {
     fn eight_bit_only_when_explicit() {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("g8.png");
-        let img: ImageBuffer<Luma<u8>, Vec<u8>> = ImageBuffer::from_fn(3, 3, |x, _| Luma([x as u8 * 10]));
+        let img: ImageBuffer<Luma<u8>, Vec<u8>> =
+            ImageBuffer::from_fn(3, 3, |x, _| Luma([x as u8 * 10]));
         img.save(&p).unwrap();
         assert!(load_dem(&p, &DemLoadOptions::default()).is_err());
-        let opts = DemLoadOptions { format: Some(DemFormat::Png16), z_scale: Some(2.0), ..Default::default() };
+        let opts = DemLoadOptions {
+            format: Some(DemFormat::Png16),
+            z_scale: Some(2.0),
+            ..Default::default()
+        };
         let dem = load_dem(&p, &opts).unwrap();
         assert_eq!(&dem.heights[..3], &[0.0, 20.0, 40.0]);
     }

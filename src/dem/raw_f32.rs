@@ -12,13 +12,23 @@ use crate::error::{Error, Result};
 /// Reads a raw f32 DEM. `opts.width` and `opts.height` are required.
 pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
     let (Some(w), Some(h)) = (opts.width, opts.height) else {
-        return Err(Error::bad_input(path, "raw f32 DEM needs its size: pass --width and --height (in samples)"));
+        return Err(Error::bad_input(
+            path,
+            "raw f32 DEM needs its size: pass --width and --height (in samples)",
+        ));
     };
-    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
-    let expected = (w as u64).checked_mul(h as u64).and_then(|n| n.checked_mul(4));
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    let expected = (w as u64)
+        .checked_mul(h as u64)
+        .and_then(|n| n.checked_mul(4));
     if expected != Some(len) {
         let hint = if len % 4 == 0 && w > 0 && (len / 4) % w as u64 == 0 {
-            format!(" (with width {w} the file holds {} rows)", len / 4 / w as u64)
+            format!(
+                " (with width {w} the file holds {} rows)",
+                len / 4 / w as u64
+            )
         } else {
             String::new()
         };
@@ -31,19 +41,49 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         ));
     }
     super::check_size(path, w, h)?;
-    limits::check(path, w as u64, h as u64, 4 + limits::DEM_BYTES_PER_SAMPLE, opts.max_memory)?;
+    limits::check(
+        path,
+        w as u64,
+        h as u64,
+        4 + limits::DEM_BYTES_PER_SAMPLE,
+        opts.max_memory,
+    )?;
     let mut bytes = Vec::with_capacity(len as usize);
-    File::open(path).and_then(|f| f.take(len).read_to_end(&mut bytes)).map_err(|e| Error::io(path, e))?;
+    File::open(path)
+        .and_then(|f| f.take(len).read_to_end(&mut bytes))
+        .map_err(|e| Error::io(path, e))?;
     if bytes.len() as u64 != len {
         return Err(Error::bad_input(path, "file shrank while being read"));
     }
     let nodata = opts.nodata;
-    let value = |i: usize| f32::from_le_bytes([bytes[4 * i], bytes[4 * i + 1], bytes[4 * i + 2], bytes[4 * i + 3]]);
-    let (heights, void) = convert::to_heights(path, w, w * h, super::scaling(opts), nodata.is_some(), |i| {
-        let v = value(i);
-        (v as f64, nodata.is_some_and(|nd| v.is_nodata(nd)))
-    })?;
-    Ok(Decoded { width: w, height: h, heights, void, georef: None, crs: None, geographic: false })
+    let value = |i: usize| {
+        f32::from_le_bytes([
+            bytes[4 * i],
+            bytes[4 * i + 1],
+            bytes[4 * i + 2],
+            bytes[4 * i + 3],
+        ])
+    };
+    let (heights, void) = convert::to_heights(
+        path,
+        w,
+        w * h,
+        super::scaling(opts),
+        nodata.is_some(),
+        |i| {
+            let v = value(i);
+            (v as f64, nodata.is_some_and(|nd| v.is_nodata(nd)))
+        },
+    )?;
+    Ok(Decoded {
+        width: w,
+        height: h,
+        heights,
+        void,
+        georef: None,
+        crs: None,
+        geographic: false,
+    })
 }
 
 #[cfg(test)]
@@ -53,7 +93,11 @@ mod tests {
     use crate::georef::GridGeoref;
 
     fn write(path: &Path, v: &[f32]) {
-        std::fs::write(path, v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+        std::fs::write(
+            path,
+            v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(),
+        )
+        .unwrap();
     }
 
     #[test]
@@ -80,16 +124,34 @@ mod tests {
         v2[6] = f32::NAN;
         write(&p, &v2);
         let e = load_dem(&p, &opts).unwrap_err().to_string();
-        assert!(e.contains("dem.f32") && e.contains("row 1, column 2") && e.contains("--nodata"), "{e}");
+        assert!(
+            e.contains("dem.f32") && e.contains("row 1, column 2") && e.contains("--nodata"),
+            "{e}"
+        );
         // NaN declared: sample 6 is a void filled from its neighbours; -9999 is a (plausible) height.
-        let dem = load_dem(&p, &DemLoadOptions { nodata: Some(f64::NAN), ..opts.clone() }).unwrap();
+        let dem = load_dem(
+            &p,
+            &DemLoadOptions {
+                nodata: Some(f64::NAN),
+                ..opts.clone()
+            },
+        )
+        .unwrap();
         assert!(dem.void[6] && dem.void.iter().filter(|v| **v).count() == 1);
         assert_eq!(dem.heights[5], -9999.0);
         let nbrs = [1usize, 2, 3, 5, 7, 9, 10, 11];
         let mean = nbrs.iter().map(|&i| v2[i] as f64).sum::<f64>() / 8.0;
         assert_eq!(dem.heights[6], mean as f32);
         // -9999 declared: the undeclared NaN is an error.
-        let e = load_dem(&p, &DemLoadOptions { nodata: Some(-9999.0), ..opts.clone() }).unwrap_err().to_string();
+        let e = load_dem(
+            &p,
+            &DemLoadOptions {
+                nodata: Some(-9999.0),
+                ..opts.clone()
+            },
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("row 1, column 2") && e.contains("NaN"), "{e}");
     }
 }

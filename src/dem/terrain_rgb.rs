@@ -19,24 +19,44 @@ pub fn decode_terrain_rgb(r: u8, g: u8, b: u8) -> f64 {
 
 /// Reads a Terrain-RGB PNG (or any 8-bit colour image the image crate decodes).
 pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
-    let img = limits::decode_image(path, ImageFormat::Png, opts.max_memory, |w, h, ct: ColorType| {
-        super::check_size(path, w as usize, h as usize)?;
-        // decoded buffer + the RGBA8 copy
-        let per = ct.bytes_per_pixel() as u64 + 4 + limits::DEM_BYTES_PER_SAMPLE;
-        limits::check(path, w as u64, h as u64, per, opts.max_memory)
-    })?;
+    let img = limits::decode_image(
+        path,
+        ImageFormat::Png,
+        opts.max_memory,
+        |w, h, ct: ColorType| {
+            super::check_size(path, w as usize, h as usize)?;
+            // decoded buffer + the RGBA8 copy
+            let per = ct.bytes_per_pixel() as u64 + 4 + limits::DEM_BYTES_PER_SAMPLE;
+            limits::check(path, w as u64, h as u64, per, opts.max_memory)
+        },
+    )?;
     let has_alpha = img.color().has_alpha();
     let rgba = img.into_rgba8();
     let (w, h) = (rgba.width() as usize, rgba.height() as usize);
     let px = rgba.as_raw();
     let nodata = opts.nodata;
-    let (heights, void) = convert::to_heights(path, w, w * h, super::scaling(opts), nodata.is_some(), |i| {
-        let p = &px[4 * i..4 * i + 4];
-        let v = decode_terrain_rgb(p[0], p[1], p[2]);
-        let nd = nodata.is_some_and(|nd| (v - nd).abs() < 0.05);
-        (v, nd || (has_alpha && p[3] == 0))
-    })?;
-    Ok(Decoded { width: w, height: h, heights, void, georef: None, crs: None, geographic: false })
+    let (heights, void) = convert::to_heights(
+        path,
+        w,
+        w * h,
+        super::scaling(opts),
+        nodata.is_some(),
+        |i| {
+            let p = &px[4 * i..4 * i + 4];
+            let v = decode_terrain_rgb(p[0], p[1], p[2]);
+            let nd = nodata.is_some_and(|nd| (v - nd).abs() < 0.05);
+            (v, nd || (has_alpha && p[3] == 0))
+        },
+    )?;
+    Ok(Decoded {
+        width: w,
+        height: h,
+        heights,
+        void,
+        georef: None,
+        crs: None,
+        geographic: false,
+    })
 }
 
 #[cfg(test)]
@@ -68,11 +88,22 @@ mod tests {
         // RGBA with a transparent pixel and a declared no-data height
         let p2 = d.path().join("tile4.png");
         let img: ImageBuffer<Rgba<u8>, Vec<u8>> = ImageBuffer::from_fn(3, 3, |x, y| {
-            let [r, g, b] = encode(if (x, y) == (2, 0) { -10000.0 } else { 1000.0 + x as f64 });
+            let [r, g, b] = encode(if (x, y) == (2, 0) {
+                -10000.0
+            } else {
+                1000.0 + x as f64
+            });
             Rgba([r, g, b, if (x, y) == (0, 2) { 0 } else { 255 }])
         });
         img.save(&p2).unwrap();
-        let dem = load_dem(&p2, &DemLoadOptions { nodata: Some(-10000.0), ..Default::default() }).unwrap();
+        let dem = load_dem(
+            &p2,
+            &DemLoadOptions {
+                nodata: Some(-10000.0),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert!(dem.is_void(0, 2) && dem.is_void(2, 0));
         assert_eq!(dem.void.iter().filter(|v| **v).count(), 2);
         assert!(dem.heights.iter().all(|h| (1000.0..=1002.0).contains(h)));

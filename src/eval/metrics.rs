@@ -19,7 +19,9 @@ pub fn low_pass(img: &Plane, width: usize, height: usize, sigma: f64) -> Plane {
         return img.clone();
     }
     let r = (3.0 * sigma).ceil() as isize;
-    let mut k: Vec<f32> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp() as f32).collect();
+    let mut k: Vec<f32> = (-r..=r)
+        .map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp() as f32)
+        .collect();
     let sum: f32 = k.iter().sum();
     k.iter_mut().for_each(|v| *v /= sum);
     let pass = |src: &Plane, horizontal: bool| -> Plane {
@@ -93,7 +95,10 @@ mod tests {
         }
         let (db, n) = psnr_masked(&a, &b, |i| i < 32);
         assert_eq!(n, 32);
-        assert!((db - 10.0 * (65025.0f64 / 100.0).log10()).abs() < 1e-9, "{db}");
+        assert!(
+            (db - 10.0 * (65025.0f64 / 100.0).log10()).abs() < 1e-9,
+            "{db}"
+        );
         assert_eq!(psnr_masked(&a, &b, |i| i >= 32).0, f64::INFINITY);
         assert!(psnr_masked(&a, &b, |_| false).0.is_nan());
     }
@@ -113,7 +118,11 @@ mod tests {
         let sum: f32 = f.iter().map(|p| p[0]).sum();
         assert!((sum - 1000.0).abs() < 0.05, "{sum}");
         // the peak drops to 1000 / (2π σ²) and the spread is symmetric
-        assert!((f[8 * w + 10][0] - 1000.0 / (std::f32::consts::TAU * 4.0)).abs() < 0.5, "{}", f[8 * w + 10][0]);
+        assert!(
+            (f[8 * w + 10][0] - 1000.0 / (std::f32::consts::TAU * 4.0)).abs() < 0.5,
+            "{}",
+            f[8 * w + 10][0]
+        );
         assert!((f[8 * w + 12][0] - f[8 * w + 8][0]).abs() < 1e-4);
         assert!((f[6 * w + 10][0] - f[8 * w + 12][0]).abs() < 1e-4);
     }

@@ -28,11 +28,14 @@ mod tin;
 
 pub use metrics::{ClassScore, Plane, low_pass, plane, psnr_masked};
 pub use reference::{
-    COVERED, FLAT, PhotoMips, Reference, ReferenceSources, STEEP, TERRAIN, VISIBILITY_TOLERANCE_M, VISIBILITY_TOLERANCE_REL, finest_photo,
-    finest_photo_with, oracle_colour, ortho_colour, reference_images,
+    COVERED, FLAT, PhotoMips, Reference, ReferenceSources, STEEP, TERRAIN, VISIBILITY_TOLERANCE_M,
+    VISIBILITY_TOLERANCE_REL, finest_photo, finest_photo_with, oracle_colour, ortho_colour,
+    reference_images,
 };
 pub use render::render_views;
-pub use run::{EvalOptions, MODES, TIN_BASELINE, TIN_ORACLE, ViewImages, evaluate_views, write_view_images};
+pub use run::{
+    EvalOptions, MODES, TIN_BASELINE, TIN_ORACLE, ViewImages, evaluate_views, write_view_images,
+};
 pub use score::{BASELINE, Class, MethodScore, ORACLE, ViewReport, gains_table, score_view};
 pub use tiles::side_by_side;
 pub use tin::{TinTracer, tin_references};

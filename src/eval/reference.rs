@@ -74,7 +74,9 @@ pub const VISIBILITY_TOLERANCE_REL: f64 = 0.003;
 /// surface's tangent plane at the point: a point next to one of the photo's silhouettes would
 /// take sky or an occluder's colour.
 pub fn finest_photo(src: &ReferenceSources, hit: &DemHit) -> Option<(usize, [f64; 2], f64)> {
-    finest_photo_with(src.photos, hit, |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t))
+    finest_photo_with(src.photos, hit, |from, dir, t_max| {
+        src.tracer.nearest(from, dir, t_max).map(|h| h.t)
+    })
 }
 
 /// [`finest_photo`] among `photos` against another surface, given by `cast(from, unit
@@ -87,7 +89,9 @@ pub fn finest_photo_with(
     let mut candidates: Vec<(usize, [f64; 2], f64, f64)> = Vec::new();
     for (i, p) in photos.iter().enumerate() {
         let cam = &p.camera;
-        let Some([u, v]) = cam.project(hit.point) else { continue };
+        let Some([u, v]) = cam.project(hit.point) else {
+            continue;
+        };
         if !(u >= 0.0 && v >= 0.0 && u <= (cam.width - 1) as f64 && v <= (cam.height - 1) as f64) {
             continue;
         }
@@ -103,21 +107,37 @@ pub fn finest_photo_with(
     candidates.into_iter().find_map(|(i, uv, footprint, dist)| {
         let cam = &photos[i].camera;
         let tol = VISIBILITY_TOLERANCE_M + VISIBILITY_TOLERANCE_REL * dist;
-        let seen = cast(cam.position, (hit.point - cam.position) / dist, dist + tol).is_none_or(|t| t >= dist - tol);
+        let seen = cast(cam.position, (hit.point - cam.position) / dist, dist + tol)
+            .is_none_or(|t| t >= dist - tol);
         if !seen {
             return None;
         }
         let (x0, y0) = (uv[0].floor(), uv[1].floor());
-        let clean = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].iter().all(|(dx, dy)| {
-            let (x, y) = ((x0 + dx).min((cam.width - 1) as f64), (y0 + dy).min((cam.height - 1) as f64));
-            let Some(dir) = cam.pixel_ray(x, y) else { return false };
-            // where the ray would meet the surface's tangent plane at the point
-            let dn = dir.dot(hit.normal);
-            let plane = if dn.abs() > 1e-9 { (hit.point - cam.position).dot(hit.normal) / dn } else { dist };
-            let expect = if plane > 0.0 && plane.is_finite() { plane } else { dist };
-            let slack = tol.max(0.1 * expect);
-            cast(cam.position, dir, expect + slack).is_some_and(|t| (t - expect).abs() <= slack)
-        });
+        let clean = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+            .iter()
+            .all(|(dx, dy)| {
+                let (x, y) = (
+                    (x0 + dx).min((cam.width - 1) as f64),
+                    (y0 + dy).min((cam.height - 1) as f64),
+                );
+                let Some(dir) = cam.pixel_ray(x, y) else {
+                    return false;
+                };
+                // where the ray would meet the surface's tangent plane at the point
+                let dn = dir.dot(hit.normal);
+                let plane = if dn.abs() > 1e-9 {
+                    (hit.point - cam.position).dot(hit.normal) / dn
+                } else {
+                    dist
+                };
+                let expect = if plane > 0.0 && plane.is_finite() {
+                    plane
+                } else {
+                    dist
+                };
+                let slack = tol.max(0.1 * expect);
+                cast(cam.position, dir, expect + slack).is_some_and(|t| (t - expect).abs() <= slack)
+            });
         clean.then_some((i, uv, footprint))
     })
 }
@@ -133,7 +153,10 @@ impl PhotoMips {
     /// The pyramid of `image` (level 0 = the image, down to 2 pixels a side).
     pub fn new(image: &RgbImage) -> PhotoMips {
         let mut levels = vec![image.clone()];
-        while let Some(next) = levels.last().and_then(|l| crate::photo::downsample2_in(l, crate::colour::ColourSpace::Linear)) {
+        while let Some(next) = levels
+            .last()
+            .and_then(|l| crate::photo::downsample2_in(l, crate::colour::ColourSpace::Linear))
+        {
             levels.push(next);
         }
         PhotoMips { levels }
@@ -144,7 +167,11 @@ impl PhotoMips {
     /// interpolated in linear light.
     pub fn sample(&self, u: f64, v: f64, scale: f64) -> [f64; 3] {
         let top = (self.levels.len() - 1) as f64;
-        let l = if scale > 1.0 { scale.log2().min(top) } else { 0.0 };
+        let l = if scale > 1.0 {
+            scale.log2().min(top)
+        } else {
+            0.0
+        };
         let l0 = l.floor();
         let t = l - l0;
         let at = |k: usize| {
@@ -165,9 +192,15 @@ fn bilinear_linear(img: &RgbImage, u: f64, v: f64) -> [f64; 3] {
     let (x0, y0) = (u.floor() as u32, v.floor() as u32);
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
     let (fx, fy) = (u - x0 as f64, v - y0 as f64);
-    let p = |x, y| img.get_pixel(x, y).0.map(|c| crate::colour::decode_u8(c) as f64);
+    let p = |x, y| {
+        img.get_pixel(x, y)
+            .0
+            .map(|c| crate::colour::decode_u8(c) as f64)
+    };
     let (a, b, c, d) = (p(x0, y0), p(x1, y0), p(x0, y1), p(x1, y1));
-    std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+    std::array::from_fn(|k| {
+        (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+    })
 }
 
 /// The oracle's colour (sRGB 0..1) at `hit`, seen along a view ray from `eye` whose
@@ -187,7 +220,10 @@ pub fn oracle_colour(
     let cam = &photos[i].camera;
     let (dv, dp) = (hit.point - eye, hit.point - cam.position);
     let (lv, lp) = (dv.length(), dp.length());
-    let (cv, cp) = ((dv / lv).dot(hit.normal).abs().max(1e-6), (dp / lp).dot(hit.normal).abs().max(1e-6));
+    let (cv, cp) = (
+        (dv / lv).dot(hit.normal).abs().max(1e-6),
+        (dp / lp).dot(hit.normal).abs().max(1e-6),
+    );
     let photo_angle = 1.0 / (cam.fx * cam.fy).sqrt();
     let scale = (lv * pixel_angle) / (lp * photo_angle) * (cp / cv).sqrt();
     Some(mips.get(i)?.sample(u, v, scale))
@@ -208,7 +244,9 @@ pub fn ortho_colour(ortho: &Ortho, x: f64, y: f64) -> [f64; 3] {
         [c[0], c[1], c[2]].map(|c| c as f64 / 255.0)
     };
     let (a, b, c, d) = (p(x0, y0), p(x1, y0), p(x0, y1), p(x1, y1));
-    std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+    std::array::from_fn(|k| {
+        (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+    })
 }
 
 /// Ray casts the [`Reference`] of `camera` (a pinhole or distorted camera; rays through
@@ -216,20 +254,33 @@ pub fn ortho_colour(ortho: &Ortho, x: f64, y: f64) -> [f64; 3] {
 /// colours averaged in linear light as the demo photos are; classes and the oracle's photo from the
 /// ray through the pixel centre. Misses are [`SKY_COLOUR`] in all three images.
 /// Deterministic whatever the thread count.
-pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersample: u32) -> Result<Reference> {
+pub fn reference_images(
+    src: &ReferenceSources,
+    camera: &CameraModel,
+    supersample: u32,
+) -> Result<Reference> {
     if !(1..=8).contains(&supersample) {
-        return Err(Error::BadOption(format!("supersample must be in 1..=8, got {supersample}")));
+        return Err(Error::BadOption(format!(
+            "supersample must be in 1..=8, got {supersample}"
+        )));
     }
     if let Some(p) = camera.problem() {
         return Err(Error::BadOption(format!("evaluation view camera: {p}")));
     }
     if src.photos.len() >= u8::MAX as usize {
-        return Err(Error::BadOption(format!("at most 254 photos can be evaluated, got {}", src.photos.len())));
+        return Err(Error::BadOption(format!(
+            "at most 254 photos can be evaluated, got {}",
+            src.photos.len()
+        )));
     }
     let colour = src.scene.surface_colour_fn();
     let sky = SKY_COLOUR.map(|c| c as f64 / 255.0);
     let ss = supersample as usize;
-    let mips: Vec<PhotoMips> = src.photos.iter().map(|p| PhotoMips::new(&p.image)).collect();
+    let mips: Vec<PhotoMips> = src
+        .photos
+        .iter()
+        .map(|p| PhotoMips::new(&p.image))
+        .collect();
     let pixel_angle = 1.0 / ((camera.fx * camera.fy).sqrt() * ss as f64);
     let (w, h) = (camera.width as usize, camera.height as usize);
     let cast = |u: f64, v: f64| -> Option<DemHit> {
@@ -240,16 +291,30 @@ pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersampl
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|row| {
-            let mut out: Row =
-                (Vec::with_capacity(3 * w), Vec::with_capacity(3 * w), Vec::with_capacity(3 * w), vec![0; w], vec![u8::MAX; w]);
+            let mut out: Row = (
+                Vec::with_capacity(3 * w),
+                Vec::with_capacity(3 * w),
+                Vec::with_capacity(3 * w),
+                vec![0; w],
+                vec![u8::MAX; w],
+            );
             for col in 0..w {
                 let [t, o, b] = supersampled(col, row, ss, |u, v| match cast(u, v) {
                     None => [sky; 3],
                     Some(hit) => {
                         let p = hit.point;
                         let base = ortho_colour(src.ortho, p.x, p.y);
-                        let cast = |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t);
-                        let oracle = oracle_colour(src.photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(base);
+                        let cast =
+                            |from, dir, t_max| src.tracer.nearest(from, dir, t_max).map(|h| h.t);
+                        let oracle = oracle_colour(
+                            src.photos,
+                            &mips,
+                            &hit,
+                            camera.position,
+                            pixel_angle,
+                            cast,
+                        )
+                        .unwrap_or(base);
                         [colour(p.x, p.y, p.z, hit.slope_deg), oracle, base]
                     }
                 });
@@ -283,8 +348,17 @@ pub fn reference_images(src: &ReferenceSources, camera: &CameraModel, supersampl
         planes[4].extend(r.4);
     }
     let [truth, oracle, baseline, classes, oracle_photo] = planes;
-    let img = |v: Vec<u8>| RgbImage::from_raw(camera.width, camera.height, v).ok_or_else(|| Error::BadOption("reference size mismatch".into()));
-    Ok(Reference { truth: img(truth)?, oracle: img(oracle)?, baseline: img(baseline)?, classes, oracle_photo })
+    let img = |v: Vec<u8>| {
+        RgbImage::from_raw(camera.width, camera.height, v)
+            .ok_or_else(|| Error::BadOption("reference size mismatch".into()))
+    };
+    Ok(Reference {
+        truth: img(truth)?,
+        oracle: img(oracle)?,
+        baseline: img(baseline)?,
+        classes,
+        oracle_photo,
+    })
 }
 
 /// The mean in linear light of the `N` colours (sRGB, 0..1) `sample(u, v)` gives at the

@@ -20,10 +20,15 @@ pub fn render_views(
     sse_px: f64,
     supersample: u32,
 ) -> Result<Vec<Vec<RgbImage>>> {
-    let Some(first) = cameras.first() else { return Ok(vec![Vec::new(); modes.len()]) };
+    let Some(first) = cameras.first() else {
+        return Ok(vec![Vec::new(); modes.len()]);
+    };
     let (w, h) = (first.width, first.height);
     if let Some(c) = cameras.iter().find(|c| (c.width, c.height) != (w, h)) {
-        return Err(Error::BadOption(format!("evaluation views differ in size: {w}x{h} and {}x{}", c.width, c.height)));
+        return Err(Error::BadOption(format!(
+            "evaluation views differ in size: {w}x{h} and {}x{}",
+            c.width, c.height
+        )));
     }
     let s = supersample.clamp(1, 8);
     let mut out = Vec::with_capacity(modes.len());
@@ -31,7 +36,10 @@ pub fn render_views(
         let opts = SceneOptions {
             sse_px: sse_px * s as f64,
             uv_mode: mode,
-            frame: FrameOptions { lit: false, ..FrameOptions::default() },
+            frame: FrameOptions {
+                lit: false,
+                ..FrameOptions::default()
+            },
             ..SceneOptions::default()
         };
         let mut scene = TerrainScene::open(dir, w * s, h * s, opts)?;

@@ -16,7 +16,11 @@ use crate::store::Store;
 
 /// The texture modes rendered, with their method names: the ortho alone, the reparameterized
 /// textures (as stored, no photos) and each cell's best texture (`cliffmap render`'s default).
-pub const MODES: [(&str, UvMode); 3] = [("ortho", UvMode::Ortho), ("reparam", UvMode::Mixed), ("photo", UvMode::Photo)];
+pub const MODES: [(&str, UvMode); 3] = [
+    ("ortho", UvMode::Ortho),
+    ("reparam", UvMode::Mixed),
+    ("photo", UvMode::Photo),
+];
 
 /// Name of the baseline on the store's TIN.
 pub const TIN_BASELINE: &str = "tin_baseline";
@@ -42,7 +46,13 @@ pub struct EvalOptions {
 
 impl Default for EvalOptions {
     fn default() -> Self {
-        EvalOptions { supersample: 2, render_supersample: 2, sse_px: 0.5, sigma_px: 2.0, tin_baseline: true }
+        EvalOptions {
+            supersample: 2,
+            render_supersample: 2,
+            sse_px: 0.5,
+            sigma_px: 2.0,
+            tin_baseline: true,
+        }
     }
 }
 
@@ -60,9 +70,20 @@ pub struct ViewImages {
 
 /// Evaluates the store in `dir` from `views` (all of one size) against `src` (see the
 /// [module docs](super)). Needs a GPU driver (Mesa's software drivers suffice).
-pub fn evaluate_views(dir: &Path, src: &ReferenceSources, views: &[PhotoShot], opts: &EvalOptions) -> Result<(Vec<ViewReport>, Vec<ViewImages>)> {
+pub fn evaluate_views(
+    dir: &Path,
+    src: &ReferenceSources,
+    views: &[PhotoShot],
+    opts: &EvalOptions,
+) -> Result<(Vec<ViewReport>, Vec<ViewImages>)> {
     let cams: Vec<_> = views.iter().map(|v| v.camera).collect();
-    let renders = render_views(dir, &cams, &MODES.map(|m| m.1), opts.sse_px, opts.render_supersample)?;
+    let renders = render_views(
+        dir,
+        &cams,
+        &MODES.map(|m| m.1),
+        opts.sse_px,
+        opts.render_supersample,
+    )?;
     let tin = if opts.tin_baseline {
         let store = Store::open(dir)?;
         let finest = store.manifest.quadtree.levels.saturating_sub(1);
@@ -74,15 +95,22 @@ pub fn evaluate_views(dir: &Path, src: &ReferenceSources, views: &[PhotoShot], o
     let mut images = Vec::with_capacity(views.len());
     for (vi, v) in views.iter().enumerate() {
         let reference = reference_images(src, &v.camera, opts.supersample)?;
-        let mut methods: Vec<(String, RgbImage)> =
-            MODES.iter().enumerate().map(|(mi, (name, _))| (name.to_string(), renders[mi][vi].clone())).collect();
+        let mut methods: Vec<(String, RgbImage)> = MODES
+            .iter()
+            .enumerate()
+            .map(|(mi, (name, _))| (name.to_string(), renders[mi][vi].clone()))
+            .collect();
         if let Some(t) = &tin {
             let (b, o) = tin_references(t, src.ortho, src.photos, &v.camera, opts.supersample)?;
             methods.push((TIN_BASELINE.into(), b));
             methods.push((TIN_ORACLE.into(), o));
         }
         reports.push(score_view(&v.name, &reference, &methods, opts.sigma_px)?);
-        images.push(ViewImages { view: v.name.clone(), reference, renders: methods });
+        images.push(ViewImages {
+            view: v.name.clone(),
+            reference,
+            renders: methods,
+        });
     }
     Ok((reports, images))
 }
@@ -94,7 +122,11 @@ pub fn evaluate_views(dir: &Path, src: &ReferenceSources, views: &[PhotoShot], o
 pub fn write_view_images(dir: &Path, v: &ViewImages) -> Result<()> {
     use crate::fsutil::write_png_atomic;
     let r = &v.reference;
-    for (name, img) in [("truth", &r.truth), ("oracle", &r.oracle), ("baseline", &r.baseline)] {
+    for (name, img) in [
+        ("truth", &r.truth),
+        ("oracle", &r.oracle),
+        ("baseline", &r.baseline),
+    ] {
         write_png_atomic(&dir.join(format!("{}_{name}.png", v.view)), img)?;
     }
     for (name, img) in &v.renders {
@@ -109,7 +141,12 @@ pub fn write_view_images(dir: &Path, v: &ViewImages) -> Result<()> {
     write_png_atomic(&dir.join(format!("{}_classes.png", v.view)), &classes)?;
     let find = |n: &str| v.renders.iter().find(|(m, _)| m == n).map(|(_, i)| i);
     if let (Some(o), Some(re), Some(p)) = (find("ortho"), find("reparam"), find("photo")) {
-        let tiles = [(o, "ortho"), (re, "reparameterized"), (p, "photo-enhanced (default)"), (&r.truth, "ground truth")];
+        let tiles = [
+            (o, "ortho"),
+            (re, "reparameterized"),
+            (p, "photo-enhanced (default)"),
+            (&r.truth, "ground truth"),
+        ];
         if let Some(s) = super::side_by_side(&tiles) {
             write_png_atomic(&dir.join(format!("{}_side_by_side.png", v.view)), &s)?;
         }

@@ -96,7 +96,12 @@ impl ViewReport {
 /// first, so the low-pass does not mix sky into terrain differently per method; a method
 /// that draws sky over terrain (or terrain over sky) keeps that error. Errors if an image
 /// has another size.
-pub fn score_view(view: &str, r: &Reference, methods: &[(String, RgbImage)], sigma_px: f64) -> crate::Result<ViewReport> {
+pub fn score_view(
+    view: &str,
+    r: &Reference,
+    methods: &[(String, RgbImage)],
+    sigma_px: f64,
+) -> crate::Result<ViewReport> {
     let (w, h) = r.truth.dimensions();
     let (wu, hu) = (w as usize, h as usize);
     let truth = plane(&r.truth);
@@ -119,7 +124,11 @@ pub fn score_view(view: &str, r: &Reference, methods: &[(String, RgbImage)], sig
             let m = |i: usize| r.classes[i] & bits == bits;
             let (psnr, pixels) = psnr_masked(&p, &truth, m);
             let (psnr_low, _) = psnr_masked(&low, &truth_low, m);
-            ClassScore { pixels, psnr, psnr_low }
+            ClassScore {
+                pixels,
+                psnr,
+                psnr_low,
+            }
         };
         Ok(MethodScore {
             method: name.to_string(),
@@ -133,7 +142,11 @@ pub fn score_view(view: &str, r: &Reference, methods: &[(String, RgbImage)], sig
     for (name, img) in methods {
         out.push(score(name, img)?);
     }
-    Ok(ViewReport { view: view.to_string(), sigma_px, methods: out })
+    Ok(ViewReport {
+        view: view.to_string(),
+        sigma_px,
+        methods: out,
+    })
 }
 
 /// A Markdown table of the gains over the baseline per view and method: steep covered
@@ -145,15 +158,29 @@ pub fn gains_table(reports: &[ViewReport]) -> String {
     for r in reports {
         for m in &r.methods {
             let sc = &m.steep_covered;
-            let g = r.gain(&m.method, Class::SteepCovered).unwrap_or([f64::NAN; 2]);
+            let g = r
+                .gain(&m.method, Class::SteepCovered)
+                .unwrap_or([f64::NAN; 2]);
             let f = r.oracle_fraction(&m.method).unwrap_or([f64::NAN; 2]);
             let fl = r.gain(&m.method, Class::Flat).unwrap_or([f64::NAN; 2]);
-            let reference = m.method == BASELINE || m.method == ORACLE || m.method.starts_with("tin_");
-            let pct = |f: [f64; 2]| if reference || f[0].is_nan() { String::new() } else { format!("{:.0} % / {:.0} %", 100.0 * f[0], 100.0 * f[1]) };
+            let reference =
+                m.method == BASELINE || m.method == ORACLE || m.method.starts_with("tin_");
+            let pct = |f: [f64; 2]| {
+                if reference || f[0].is_nan() {
+                    String::new()
+                } else {
+                    format!("{:.0} % / {:.0} %", 100.0 * f[0], 100.0 * f[1])
+                }
+            };
             let share = pct(f);
-            let tin_share = pct(r.fraction_of(&m.method, "tin_oracle").unwrap_or([f64::NAN; 2]));
+            let tin_share = pct(r
+                .fraction_of(&m.method, "tin_oracle")
+                .unwrap_or([f64::NAN; 2]));
             let view = if m.method == BASELINE {
-                format!("{} ({} steep covered, {} flat px)", r.view, sc.pixels, m.flat.pixels)
+                format!(
+                    "{} ({} steep covered, {} flat px)",
+                    r.view, sc.pixels, m.flat.pixels
+                )
             } else {
                 r.view.clone()
             };

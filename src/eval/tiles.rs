@@ -25,13 +25,23 @@ pub fn side_by_side(images: &[(&RgbImage, &str)]) -> Option<RgbImage> {
         let root = BitMapBackend::with_buffer(&mut buf, (tw, th)).into_drawing_area();
         for (k, (_, label)) in images.iter().enumerate() {
             let x = (k as u32 * (w + GAP) + 8) as i32;
-            root.draw(&Text::new(label.to_string(), (x, 5), ("sans-serif", 20).into_font().color(&BLACK))).ok()?;
+            root.draw(&Text::new(
+                label.to_string(),
+                (x, 5),
+                ("sans-serif", 20).into_font().color(&BLACK),
+            ))
+            .ok()?;
         }
         root.present().ok()?;
     }
     let mut out = RgbImage::from_raw(tw, th, buf)?;
     for (k, (img, _)) in images.iter().enumerate() {
-        image::imageops::replace(&mut out, *img, (k as u32 * (w + GAP)) as i64, CAPTION as i64);
+        image::imageops::replace(
+            &mut out,
+            *img,
+            (k as u32 * (w + GAP)) as i64,
+            CAPTION as i64,
+        );
     }
     Some(out)
 }
@@ -51,7 +61,11 @@ mod tests {
         assert_eq!(s.get_pixel(60, 40).0, [0, 0, 200]);
         assert_eq!(s.get_pixel(42, 40).0, [255, 255, 255]);
         // the caption strip has some dark text pixels
-        assert!((0..84).flat_map(|x| (0..30).map(move |y| (x, y))).any(|(x, y)| s.get_pixel(x, y).0[0] < 100));
+        assert!(
+            (0..84)
+                .flat_map(|x| (0..30).map(move |y| (x, y)))
+                .any(|(x, y)| s.get_pixel(x, y).0[0] < 100)
+        );
         let c = RgbImage::new(10, 10);
         assert!(side_by_side(&[(&a, "a"), (&c, "c")]).is_none());
         assert!(side_by_side(&[]).is_none());

@@ -31,7 +31,12 @@ impl TinTracer {
             let mesh = store.read_active_mesh(rec)?;
             let o = DVec3::from_array(rec.origin);
             let p = |k: u32| -> Result<DVec3> {
-                let v = mesh.positions.get(k as usize).ok_or_else(|| Error::store(&store.dir, format!("cell {}: vertex {k} out of range", rec.id)))?;
+                let v = mesh.positions.get(k as usize).ok_or_else(|| {
+                    Error::store(
+                        &store.dir,
+                        format!("cell {}: vertex {k} out of range", rec.id),
+                    )
+                })?;
                 Ok(o + Vec3::from_array(*v).as_dvec3())
             };
             for t in mesh.surface() {
@@ -39,15 +44,30 @@ impl TinTracer {
             }
         }
         if tris.is_empty() {
-            return Err(Error::store(&store.dir, format!("no surface triangles on level {level}")));
+            return Err(Error::store(
+                &store.dir,
+                format!("no surface triangles on level {level}"),
+            ));
         }
-        let local: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|v| (v - origin).as_vec3())).collect();
-        Ok(TinTracer { origin, bvh: TriangleBvh::build(&local, BvhQuality::Medium), tris })
+        let local: Vec<[Vec3; 3]> = tris
+            .iter()
+            .map(|t| t.map(|v| (v - origin).as_vec3()))
+            .collect();
+        Ok(TinTracer {
+            origin,
+            bvh: TriangleBvh::build(&local, BvhQuality::Medium),
+            tris,
+        })
     }
 
     /// The nearest hit of the ray from `from` along unit `dir` within `t_max` metres.
     pub fn nearest(&self, from: DVec3, dir: DVec3, t_max: f64) -> Option<DemHit> {
-        let hit = self.bvh.nearest((from - self.origin).as_vec3(), dir.as_vec3(), 0.0, t_max as f32)?;
+        let hit = self.bvh.nearest(
+            (from - self.origin).as_vec3(),
+            dir.as_vec3(),
+            0.0,
+            t_max as f32,
+        )?;
         let t = self.tris.get(hit.triangle as usize)?;
         Some(DemHit::on_triangle(hit.t as f64, *t, hit.bary))
     }
@@ -73,36 +93,52 @@ pub fn tin_references(
     supersample: u32,
 ) -> Result<(RgbImage, RgbImage)> {
     if !(1..=8).contains(&supersample) {
-        return Err(Error::BadOption(format!("supersample must be in 1..=8, got {supersample}")));
+        return Err(Error::BadOption(format!(
+            "supersample must be in 1..=8, got {supersample}"
+        )));
     }
     let ss = supersample as usize;
     let (w, h) = (camera.width as usize, camera.height as usize);
     let sky = SKY_COLOUR.map(|c| c as f64 / 255.0);
     let mips: Vec<PhotoMips> = photos.iter().map(|p| PhotoMips::new(&p.image)).collect();
     let pixel_angle = 1.0 / ((camera.fx * camera.fy).sqrt() * ss as f64);
-    let rows: Vec<(Vec<u8>, Vec<u8>)> = (0..h)
-        .into_par_iter()
-        .map(|row| {
-            let (mut base, mut oracle) = (Vec::with_capacity(3 * w), Vec::with_capacity(3 * w));
-            for col in 0..w {
-                let [b, o] = super::reference::supersampled(col, row, ss, |u, v| {
-                    match camera.pixel_ray(u, v).and_then(|d| tracer.nearest(camera.position, d, f64::INFINITY)) {
+    let rows: Vec<(Vec<u8>, Vec<u8>)> =
+        (0..h)
+            .into_par_iter()
+            .map(|row| {
+                let (mut base, mut oracle) = (Vec::with_capacity(3 * w), Vec::with_capacity(3 * w));
+                for col in 0..w {
+                    let [b, o] = super::reference::supersampled(col, row, ss, |u, v| match camera
+                        .pixel_ray(u, v)
+                        .and_then(|d| tracer.nearest(camera.position, d, f64::INFINITY))
+                    {
                         None => [sky; 2],
                         Some(hit) => {
                             let b = ortho_colour(ortho, hit.point.x, hit.point.y);
-                            let cast = |from, dir, t_max| tracer.nearest(from, dir, t_max).map(|h| h.t);
-                            let o = oracle_colour(photos, &mips, &hit, camera.position, pixel_angle, cast).unwrap_or(b);
+                            let cast =
+                                |from, dir, t_max| tracer.nearest(from, dir, t_max).map(|h| h.t);
+                            let o = oracle_colour(
+                                photos,
+                                &mips,
+                                &hit,
+                                camera.position,
+                                pixel_angle,
+                                cast,
+                            )
+                            .unwrap_or(b);
                             [b, o]
                         }
-                    }
-                });
-                base.extend(b);
-                oracle.extend(o);
-            }
-            (base, oracle)
-        })
-        .collect();
+                    });
+                    base.extend(b);
+                    oracle.extend(o);
+                }
+                (base, oracle)
+            })
+            .collect();
     let (b, o): (Vec<Vec<u8>>, Vec<Vec<u8>>) = rows.into_iter().unzip();
-    let img = |v: Vec<Vec<u8>>| RgbImage::from_raw(camera.width, camera.height, v.concat()).ok_or_else(|| Error::BadOption("reference size mismatch".into()));
+    let img = |v: Vec<Vec<u8>>| {
+        RgbImage::from_raw(camera.width, camera.height, v.concat())
+            .ok_or_else(|| Error::BadOption("reference size mismatch".into()))
+    };
     Ok((img(b)?, img(o)?))
 }

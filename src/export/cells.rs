@@ -73,12 +73,20 @@ pub fn read_export_cell(store: &Store, rec: &CellRecord) -> Result<ExportCell> {
     };
     let texture_png = store.read_file(file)?;
     let origin = DVec3::from_array(rec.origin);
-    let positions: Vec<DVec3> =
-        mesh.positions.iter().map(|p| origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)).collect();
-    let uvs: Vec<[f32; 2]> = (0..mesh.positions.len()).map(|i| texcoord(rec, &mesh, i)).collect();
+    let positions: Vec<DVec3> = mesh
+        .positions
+        .iter()
+        .map(|p| origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect();
+    let uvs: Vec<[f32; 2]> = (0..mesh.positions.len())
+        .map(|i| texcoord(rec, &mesh, i))
+        .collect();
     let n = mesh.positions.len() as u32;
     if let Some(t) = mesh.triangles.iter().find(|t| t.iter().any(|&i| i >= n)) {
-        return Err(Error::store(store.dir.join(&rec.files.mesh.path), format!("triangle {t:?} indexes past {n} vertices")));
+        return Err(Error::store(
+            store.dir.join(&rec.files.mesh.path),
+            format!("triangle {t:?} indexes past {n} vertices"),
+        ));
     }
     let split = (mesh.surface_triangles as usize).min(mesh.triangles.len());
     Ok(ExportCell {
@@ -110,22 +118,51 @@ pub fn select_cells(store: &Store, sel: &CellSelection) -> Result<Vec<usize>> {
     let levels = store.manifest.quadtree.levels;
     let level = match (sel.level, sel.max_error) {
         (Some(l), _) if l >= levels => {
-            return Err(Error::BadOption(format!("level {l} is not in store {} (levels 0..{levels})", store.dir.display())));
+            return Err(Error::BadOption(format!(
+                "level {l} is not in store {} (levels 0..{levels})",
+                store.dir.display()
+            )));
         }
         (Some(l), _) => l,
         (None, Some(m)) => (0..levels)
-            .find(|&l| store.manifest.cells.iter().filter(|c| c.level == l).all(|c| c.max_error <= m))
-            .ok_or_else(|| Error::BadOption(format!("no level of store {} has every cell's error within {m} m", store.dir.display())))?,
+            .find(|&l| {
+                store
+                    .manifest
+                    .cells
+                    .iter()
+                    .filter(|c| c.level == l)
+                    .all(|c| c.max_error <= m)
+            })
+            .ok_or_else(|| {
+                Error::BadOption(format!(
+                    "no level of store {} has every cell's error within {m} m",
+                    store.dir.display()
+                ))
+            })?,
         (None, None) => levels.saturating_sub(1),
     };
     let meets = |c: &CellRecord| match sel.region {
         None => true,
-        Some([x0, y0, x1, y1]) => c.extent.min_x <= x1 && c.extent.max_x >= x0 && c.extent.min_y <= y1 && c.extent.max_y >= y0,
+        Some([x0, y0, x1, y1]) => {
+            c.extent.min_x <= x1
+                && c.extent.max_x >= x0
+                && c.extent.min_y <= y1
+                && c.extent.max_y >= y0
+        }
     };
-    let picked: Vec<usize> =
-        store.manifest.cells.iter().enumerate().filter(|(_, c)| c.level == level && meets(c)).map(|(i, _)| i).collect();
+    let picked: Vec<usize> = store
+        .manifest
+        .cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.level == level && meets(c))
+        .map(|(i, _)| i)
+        .collect();
     if picked.is_empty() {
-        return Err(Error::BadOption(format!("no cell of level {level} meets the region {:?}", sel.region)));
+        return Err(Error::BadOption(format!(
+            "no cell of level {level} meets the region {:?}",
+            sel.region
+        )));
     }
     Ok(picked)
 }

@@ -22,24 +22,44 @@ impl ToEcef {
     /// `crs`: `EPSG:CODE` or a PROJ string (`+proj=utm +zone=33 +datum=WGS84`).
     pub fn new(crs: &str, height_offset: f64) -> Result<ToEcef> {
         let def = proj_string(crs)?;
-        let src = Proj::from_proj_string(&def).map_err(|e| Error::BadOption(format!("CRS {crs:?} ({def}): {e}")))?;
+        let src = Proj::from_proj_string(&def)
+            .map_err(|e| Error::BadOption(format!("CRS {crs:?} ({def}): {e}")))?;
         let geocent = Proj::from_proj_string("+proj=geocent +datum=WGS84 +units=m +no_defs")
             .map_err(|e| Error::BadOption(format!("geocentric CRS: {e}")))?;
         if !height_offset.is_finite() {
-            return Err(Error::BadOption(format!("geoid offset {height_offset} is not finite")));
+            return Err(Error::BadOption(format!(
+                "geoid offset {height_offset} is not finite"
+            )));
         }
-        Ok(ToEcef { latlong: src.is_latlong(), src, geocent, height_offset })
+        Ok(ToEcef {
+            latlong: src.is_latlong(),
+            src,
+            geocent,
+            height_offset,
+        })
     }
 
     /// The ECEF position (metres) of a point in the CRS (x, y in its units, degrees for a
     /// geographic CRS; z the store's height).
     pub fn to_ecef(&self, p: DVec3) -> Result<DVec3> {
-        let (x, y) = if self.latlong { (p.x.to_radians(), p.y.to_radians()) } else { (p.x, p.y) };
-        let (a, b, c) = proj4rs::adaptors::transform_xyz(&self.src, &self.geocent, x, y, p.z + self.height_offset)
-            .map_err(|e| Error::BadOption(format!("cannot transform {p} to ECEF: {e}")))?;
+        let (x, y) = if self.latlong {
+            (p.x.to_radians(), p.y.to_radians())
+        } else {
+            (p.x, p.y)
+        };
+        let (a, b, c) = proj4rs::adaptors::transform_xyz(
+            &self.src,
+            &self.geocent,
+            x,
+            y,
+            p.z + self.height_offset,
+        )
+        .map_err(|e| Error::BadOption(format!("cannot transform {p} to ECEF: {e}")))?;
         let q = DVec3::new(a, b, c);
         if !q.is_finite() {
-            return Err(Error::BadOption(format!("cannot transform {p} to ECEF (not finite)")));
+            return Err(Error::BadOption(format!(
+                "cannot transform {p} to ECEF (not finite)"
+            )));
         }
         Ok(q)
     }
@@ -48,7 +68,11 @@ impl ToEcef {
     pub fn from_ecef(&self, q: DVec3) -> Result<DVec3> {
         let (a, b, c) = proj4rs::adaptors::transform_xyz(&self.geocent, &self.src, q.x, q.y, q.z)
             .map_err(|e| Error::BadOption(format!("cannot transform ECEF {q}: {e}")))?;
-        let (a, b) = if self.latlong { (a.to_degrees(), b.to_degrees()) } else { (a, b) };
+        let (a, b) = if self.latlong {
+            (a.to_degrees(), b.to_degrees())
+        } else {
+            (a, b)
+        };
         Ok(DVec3::new(a, b, c - self.height_offset))
     }
 }
@@ -63,7 +87,11 @@ pub fn proj_string(crs: &str) -> Result<String> {
         .strip_prefix("EPSG:")
         .or_else(|| t.strip_prefix("epsg:"))
         .and_then(|c| c.parse::<u16>().ok())
-        .ok_or_else(|| Error::BadOption(format!("CRS {crs:?}: expected EPSG:CODE or a PROJ string (+proj=...)")))?;
+        .ok_or_else(|| {
+            Error::BadOption(format!(
+                "CRS {crs:?}: expected EPSG:CODE or a PROJ string (+proj=...)"
+            ))
+        })?;
     crs_definitions::from_code(code)
         .map(|d| d.proj4.to_string())
         .ok_or_else(|| Error::BadOption(format!("CRS {crs:?}: EPSG code {code} is not known")))
@@ -104,7 +132,11 @@ mod tests {
         let t = ToEcef::new("EPSG:32633", 0.0).unwrap();
         let q = t.to_ecef(DVec3::new(500_000.0, 0.0, 0.0)).unwrap();
         let a = 6_378_137.0f64;
-        let want = DVec3::new(a * 15f64.to_radians().cos(), a * 15f64.to_radians().sin(), 0.0);
+        let want = DVec3::new(
+            a * 15f64.to_radians().cos(),
+            a * 15f64.to_radians().sin(),
+            0.0,
+        );
         assert!((q - want).length() < 1e-3, "{q} vs {want}");
     }
 
@@ -126,16 +158,29 @@ mod tests {
         let p = DVec3::new(446_722.0, 7_396_671.0, 0.0);
         let q = t.to_ecef(p).unwrap();
         let r = ecef_to_enu(q);
-        assert!((r * r.transpose() - DMat3::IDENTITY).abs().to_cols_array().iter().all(|v| *v < 1e-12));
+        assert!(
+            (r * r.transpose() - DMat3::IDENTITY)
+                .abs()
+                .to_cols_array()
+                .iter()
+                .all(|v| *v < 1e-12)
+        );
         // 100 m up in height moves along the frame's up axis.
         let q2 = t.to_ecef(p + DVec3::Z * 100.0).unwrap();
         let d = r * (q2 - q);
-        assert!(d.x.abs() < 1e-6 && d.y.abs() < 1e-6 && (d.z - 100.0).abs() < 1e-6, "{d}");
+        assert!(
+            d.x.abs() < 1e-6 && d.y.abs() < 1e-6 && (d.z - 100.0).abs() < 1e-6,
+            "{d}"
+        );
     }
 
     #[test]
     fn bad_crs_names_are_refused() {
         assert!(ToEcef::new("EPSG:1", 0.0).is_err());
-        assert!(ToEcef::new("UTM33", 0.0).err().is_some_and(|e| e.to_string().contains("UTM33")));
+        assert!(
+            ToEcef::new("UTM33", 0.0)
+                .err()
+                .is_some_and(|e| e.to_string().contains("UTM33"))
+        );
     }
 }

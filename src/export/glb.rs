@@ -16,7 +16,11 @@ use crate::error::{Error, Result};
 /// non-finite value is an error); `extras` goes
 /// into the glTF's top-level `extras`. POSITION accessors carry min/max; every buffer view
 /// is 4-byte aligned.
-pub fn write_glb(cells: &[ExportCell], to_local: &dyn Fn(usize, usize) -> [f64; 3], extras: &serde_json::Value) -> Result<Vec<u8>> {
+pub fn write_glb(
+    cells: &[ExportCell],
+    to_local: &dyn Fn(usize, usize) -> [f64; 3],
+    extras: &serde_json::Value,
+) -> Result<Vec<u8>> {
     let mut root = json::Root::default();
     root.asset.generator = Some(format!("cliffmap {}", env!("CARGO_PKG_VERSION")));
     root.extensions_used.push("KHR_materials_unlit".into());
@@ -37,7 +41,10 @@ pub fn write_glb(cells: &[ExportCell], to_local: &dyn Fn(usize, usize) -> [f64; 
             })
             .collect();
         if local.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(Error::BadOption(format!("cell {}: a position is not finite in the export frame", cell.id)));
+            return Err(Error::BadOption(format!(
+                "cell {}: a position is not finite in the export frame",
+                cell.id
+            )));
         }
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
         for p in &local {
@@ -46,10 +53,32 @@ pub fn write_glb(cells: &[ExportCell], to_local: &dyn Fn(usize, usize) -> [f64; 
                 hi[k] = hi[k].max(p[k]);
             }
         }
-        let pos_view = push_view(&mut root, &mut bin, bytes_of_f32(local.iter().flatten()), Some(json::buffer::Target::ArrayBuffer));
-        let uv_view = push_view(&mut root, &mut bin, bytes_of_f32(cell.uvs.iter().flatten()), Some(json::buffer::Target::ArrayBuffer));
-        let pos = root.push(accessor(pos_view, local.len(), json::accessor::ComponentType::F32, json::accessor::Type::Vec3, Some((lo, hi))));
-        let uv = root.push(accessor(uv_view, cell.uvs.len(), json::accessor::ComponentType::F32, json::accessor::Type::Vec2, None));
+        let pos_view = push_view(
+            &mut root,
+            &mut bin,
+            bytes_of_f32(local.iter().flatten()),
+            Some(json::buffer::Target::ArrayBuffer),
+        );
+        let uv_view = push_view(
+            &mut root,
+            &mut bin,
+            bytes_of_f32(cell.uvs.iter().flatten()),
+            Some(json::buffer::Target::ArrayBuffer),
+        );
+        let pos = root.push(accessor(
+            pos_view,
+            local.len(),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Vec3,
+            Some((lo, hi)),
+        ));
+        let uv = root.push(accessor(
+            uv_view,
+            cell.uvs.len(),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Vec2,
+            None,
+        ));
         let image_view = push_view(&mut root, &mut bin, cell.texture_png.clone(), None);
         let image = root.push(json::Image {
             buffer_view: Some(image_view),
@@ -59,16 +88,30 @@ pub fn write_glb(cells: &[ExportCell], to_local: &dyn Fn(usize, usize) -> [f64; 
             extensions: None,
             extras: Default::default(),
         });
-        let texture = root.push(json::Texture { name: None, sampler: Some(sampler), source: image, extensions: None, extras: Default::default() });
+        let texture = root.push(json::Texture {
+            name: None,
+            sampler: Some(sampler),
+            source: image,
+            extensions: None,
+            extras: Default::default(),
+        });
         let material = root.push(json::Material {
             name: Some(cell.id.clone()),
             pbr_metallic_roughness: json::material::PbrMetallicRoughness {
-                base_color_texture: Some(json::texture::Info { index: texture, tex_coord: 0, extensions: None, extras: Default::default() }),
+                base_color_texture: Some(json::texture::Info {
+                    index: texture,
+                    tex_coord: 0,
+                    extensions: None,
+                    extras: Default::default(),
+                }),
                 metallic_factor: json::material::StrengthFactor(0.0),
                 roughness_factor: json::material::StrengthFactor(1.0),
                 ..Default::default()
             },
-            extensions: Some(json::extensions::material::Material { unlit: Some(json::extensions::material::Unlit {}), ..Default::default() }),
+            extensions: Some(json::extensions::material::Material {
+                unlit: Some(json::extensions::material::Unlit {}),
+                ..Default::default()
+            }),
             ..Default::default()
         });
         let mut primitives = Vec::new();
@@ -76,9 +119,24 @@ pub fn write_glb(cells: &[ExportCell], to_local: &dyn Fn(usize, usize) -> [f64; 
             if tris.is_empty() {
                 continue;
             }
-            let idx: Vec<u8> = tris.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
-            let view = push_view(&mut root, &mut bin, idx, Some(json::buffer::Target::ElementArrayBuffer));
-            let indices = root.push(accessor(view, tris.len() * 3, json::accessor::ComponentType::U32, json::accessor::Type::Scalar, None));
+            let idx: Vec<u8> = tris
+                .iter()
+                .flatten()
+                .flat_map(|i| i.to_le_bytes())
+                .collect();
+            let view = push_view(
+                &mut root,
+                &mut bin,
+                idx,
+                Some(json::buffer::Target::ElementArrayBuffer),
+            );
+            let indices = root.push(accessor(
+                view,
+                tris.len() * 3,
+                json::accessor::ComponentType::U32,
+                json::accessor::Type::Scalar,
+                None,
+            ));
             let mut attributes = BTreeMap::new();
             attributes.insert(Valid(json::mesh::Semantic::Positions), pos);
             attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
@@ -92,29 +150,62 @@ pub fn write_glb(cells: &[ExportCell], to_local: &dyn Fn(usize, usize) -> [f64; 
                 targets: None,
             });
         }
-        let mesh = root.push(json::Mesh { extensions: None, extras: Default::default(), name: Some(cell.id.clone()), primitives, weights: None });
-        nodes.push(root.push(json::Node { mesh: Some(mesh), name: Some(cell.id.clone()), ..Default::default() }));
+        let mesh = root.push(json::Mesh {
+            extensions: None,
+            extras: Default::default(),
+            name: Some(cell.id.clone()),
+            primitives,
+            weights: None,
+        });
+        nodes.push(root.push(json::Node {
+            mesh: Some(mesh),
+            name: Some(cell.id.clone()),
+            ..Default::default()
+        }));
     }
-    let scene = root.push(json::Scene { extensions: None, extras: Default::default(), name: None, nodes });
+    let scene = root.push(json::Scene {
+        extensions: None,
+        extras: Default::default(),
+        name: None,
+        nodes,
+    });
     root.scene = Some(scene);
-    root.buffers.push(json::Buffer { byte_length: USize64(bin.len() as u64), extensions: None, extras: Default::default(), name: None, uri: None });
+    root.buffers.push(json::Buffer {
+        byte_length: USize64(bin.len() as u64),
+        extensions: None,
+        extras: Default::default(),
+        name: None,
+        uri: None,
+    });
     root.extras = Some(
-        serde_json::value::to_raw_value(extras).map_err(|e| Error::BadOption(format!("glTF extras: {e}")))?,
+        serde_json::value::to_raw_value(extras)
+            .map_err(|e| Error::BadOption(format!("glTF extras: {e}")))?,
     );
-    let mut text = json::serialize::to_vec(&root).map_err(|e| Error::BadOption(format!("glTF JSON: {e}")))?;
+    let mut text =
+        json::serialize::to_vec(&root).map_err(|e| Error::BadOption(format!("glTF JSON: {e}")))?;
     while text.len() % 4 != 0 {
         text.push(b' ');
     }
     let glb = gltf::binary::Glb {
-        header: gltf::binary::Header { magic: *b"glTF", version: 2, length: 0 },
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
         json: std::borrow::Cow::Owned(text),
         bin: Some(std::borrow::Cow::Owned(bin)),
     };
-    glb.to_vec().map_err(|e| Error::BadOption(format!("GLB: {e}")))
+    glb.to_vec()
+        .map_err(|e| Error::BadOption(format!("GLB: {e}")))
 }
 
 /// Appends `bytes` (padded to 4 bytes) to the binary chunk as a new buffer view.
-fn push_view(root: &mut json::Root, bin: &mut Vec<u8>, bytes: Vec<u8>, target: Option<json::buffer::Target>) -> json::Index<json::buffer::View> {
+fn push_view(
+    root: &mut json::Root,
+    bin: &mut Vec<u8>,
+    bytes: Vec<u8>,
+    target: Option<json::buffer::Target>,
+) -> json::Index<json::buffer::View> {
     let offset = bin.len();
     let len = bytes.len();
     bin.extend(bytes);

@@ -57,7 +57,10 @@ pub fn local_y_up(origin: DVec3, p: DVec3) -> [f64; 3] {
 pub fn export_glb(dir: &Path, sel: &CellSelection, out: &Path) -> Result<GlbReport> {
     let store = Store::open(dir)?;
     let picked = select_cells(&store, sel)?;
-    let cells: Vec<ExportCell> = picked.par_iter().map(|&i| read_export_cell(&store, &store.manifest.cells[i])).collect::<Result<_>>()?;
+    let cells: Vec<ExportCell> = picked
+        .par_iter()
+        .map(|&i| read_export_cell(&store, &store.manifest.cells[i]))
+        .collect::<Result<_>>()?;
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for &i in &picked {
         let c = &store.manifest.cells[i];
@@ -73,7 +76,11 @@ pub fn export_glb(dir: &Path, sel: &CellSelection, out: &Path) -> Result<GlbRepo
         "level": level,
         "cells": cells.iter().map(|c| json!({"id": c.id, "texture": c.texture.name(), "max_error_m": c.max_error})).collect::<Vec<_>>(),
     }});
-    let bytes = write_glb(&cells, &|c, v| local_y_up(origin, cells[c].positions[v]), &extras)?;
+    let bytes = write_glb(
+        &cells,
+        &|c, v| local_y_up(origin, cells[c].positions[v]),
+        &extras,
+    )?;
     crate::fsutil::write_atomic(out, &bytes)?;
     let mut textures = [0usize; 3];
     for c in &cells {

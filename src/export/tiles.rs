@@ -52,14 +52,24 @@ pub struct TilesReport {
 /// bounds of its mesh), so REPLACE refinement leaves no hole. Every file is written atomically, `tileset.json` last.
 pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<TilesReport> {
     let store = Store::open(dir)?;
-    let crs = opts.crs.clone().or_else(|| store.manifest.crs.clone()).ok_or_else(|| {
-        Error::BadOption(format!("store {} records no CRS: give it with --crs EPSG:CODE", dir.display()))
-    })?;
+    let crs = opts
+        .crs
+        .clone()
+        .or_else(|| store.manifest.crs.clone())
+        .ok_or_else(|| {
+            Error::BadOption(format!(
+                "store {} records no CRS: give it with --crs EPSG:CODE",
+                dir.display()
+            ))
+        })?;
     let offset = opts.geoid_offset.unwrap_or(0.0);
     let to_ecef = ToEcef::new(&crs, offset)?;
     let cells = &store.manifest.cells;
     if cells.is_empty() {
-        return Err(Error::store(dir.join("manifest.json"), "the store has no cells"));
+        return Err(Error::store(
+            dir.join("manifest.json"),
+            "the store has no cells",
+        ));
     }
     // Frame: ENU at the centre of the store's bounding box.
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -103,13 +113,29 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
     }
 
     // The explicit tree.
-    let index: std::collections::HashMap<(u8, u32, u32), usize> = cells.iter().enumerate().map(|(i, c)| ((c.level, c.x, c.y), i)).collect();
+    let index: std::collections::HashMap<(u8, u32, u32), usize> = cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ((c.level, c.x, c.y), i))
+        .collect();
     let mut pruned = 0usize;
     let mut listed = 0usize;
-    let top: Vec<usize> = cells.iter().enumerate().filter(|(_, c)| c.level == 0).map(|(i, _)| i).collect();
+    let top: Vec<usize> = cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.level == 0)
+        .map(|(i, _)| i)
+        .collect();
     let mut children = Vec::new();
     for &i in &top {
-        children.push(tile_json(i, &store, &index, &boxes, &mut pruned, &mut listed));
+        children.push(tile_json(
+            i,
+            &store,
+            &index,
+            &boxes,
+            &mut pruned,
+            &mut listed,
+        ));
     }
     let top_error = top.iter().map(|&i| cells[i].max_error).fold(0.0, f64::max);
     let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -136,12 +162,25 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
     });
     for (name, cam) in &opts.views {
         let v = view_json(&to_ecef, cam)?;
-        write_atomic(&out.join("views").join(format!("{name}.json")), v.to_string().as_bytes())?;
+        write_atomic(
+            &out.join("views").join(format!("{name}.json")),
+            v.to_string().as_bytes(),
+        )?;
     }
-    write_atomic(&out.join("index.html"), include_str!("index.html").as_bytes())?;
-    let text = serde_json::to_string(&tileset).map_err(|e| Error::BadOption(format!("tileset.json: {e}")))?;
+    write_atomic(
+        &out.join("index.html"),
+        include_str!("index.html").as_bytes(),
+    )?;
+    let text = serde_json::to_string(&tileset)
+        .map_err(|e| Error::BadOption(format!("tileset.json: {e}")))?;
     write_atomic(&out.join("tileset.json"), text.as_bytes())?;
-    Ok(TilesReport { tiles: listed, pruned, textures, bytes, heights })
+    Ok(TilesReport {
+        tiles: listed,
+        pruned,
+        textures,
+        bytes,
+        heights,
+    })
 }
 
 /// A camera for the page: ECEF position, forward and up directions (through ECEF by
@@ -149,7 +188,8 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
 /// view of the image's larger side (Cesium's `fov`). The principal point is taken as centred.
 fn view_json(to_ecef: &ToEcef, cam: &crate::camera::CameraModel) -> Result<Value> {
     let p = to_ecef.to_ecef(cam.position)?;
-    let dir = |d: DVec3| -> Result<DVec3> { Ok((to_ecef.to_ecef(cam.position + d)? - p).normalize()) };
+    let dir =
+        |d: DVec3| -> Result<DVec3> { Ok((to_ecef.to_ecef(cam.position + d)? - p).normalize()) };
     let forward = dir(cam.world_to_camera.row(2))?;
     let up = dir(-cam.world_to_camera.row(1))?;
     let fov = if cam.width >= cam.height {
@@ -157,8 +197,10 @@ fn view_json(to_ecef: &ToEcef, cam: &crate::camera::CameraModel) -> Result<Value
     } else {
         2.0 * (cam.height as f64 / (2.0 * cam.fy)).atan()
     };
-    Ok(json!({"position_ecef": p.to_array(), "direction_ecef": forward.to_array(), "up_ecef": up.to_array(),
-              "fov_larger_rad": fov, "width": cam.width, "height": cam.height}))
+    Ok(
+        json!({"position_ecef": p.to_array(), "direction_ecef": forward.to_array(), "up_ecef": up.to_array(),
+              "fov_larger_rad": fov, "width": cam.width, "height": cam.height}),
+    )
 }
 
 /// The GLB of cell (level, x, y), relative to the tileset's folder.
@@ -176,22 +218,32 @@ fn tile_json(
 ) -> Value {
     let c = &store.manifest.cells[i];
     *listed += 1;
-    let kids: Vec<usize> =
-        [(0, 0), (1, 0), (0, 1), (1, 1)].iter().filter_map(|&(dx, dy)| index.get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy)).copied()).collect();
+    let kids: Vec<usize> = [(0, 0), (1, 0), (0, 1), (1, 1)]
+        .iter()
+        .filter_map(|&(dx, dy)| {
+            index
+                .get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy))
+                .copied()
+        })
+        .collect();
     // Footprints are the meshes' x-y bounds (a cell's nominal square may reach past the DEM,
     // where no child exists).
     let area = |k: usize| {
         let r = &store.manifest.cells[k];
         (r.bbox_max[0] - r.bbox_min[0]).max(0.0) * (r.bbox_max[1] - r.bbox_min[1]).max(0.0)
     };
-    let covered = !kids.is_empty() && kids.iter().map(|&k| area(k)).sum::<f64>() >= area(i) * (1.0 - 1e-6);
+    let covered =
+        !kids.is_empty() && kids.iter().map(|&k| area(k)).sum::<f64>() >= area(i) * (1.0 - 1e-6);
     let mut t = json!({
         "boundingVolume": {"box": box_json(boxes[i])},
         "geometricError": c.max_error,
         "content": {"uri": tile_path(c.level, c.x, c.y)},
     });
     if covered {
-        let children: Vec<Value> = kids.iter().map(|&k| tile_json(k, store, index, boxes, pruned, listed)).collect();
+        let children: Vec<Value> = kids
+            .iter()
+            .map(|&k| tile_json(k, store, index, boxes, pruned, listed))
+            .collect();
         t["children"] = Value::Array(children);
     } else if !kids.is_empty() {
         *pruned += count_subtree(c.level, c.x, c.y, index) - 1;
@@ -200,11 +252,19 @@ fn tile_json(
 }
 
 /// Cells in the subtree of (level, x, y), itself included.
-fn count_subtree(level: u8, x: u32, y: u32, index: &std::collections::HashMap<(u8, u32, u32), usize>) -> usize {
+fn count_subtree(
+    level: u8,
+    x: u32,
+    y: u32,
+    index: &std::collections::HashMap<(u8, u32, u32), usize>,
+) -> usize {
     if !index.contains_key(&(level, x, y)) {
         return 0;
     }
-    1 + [(0, 0), (1, 0), (0, 1), (1, 1)].iter().map(|&(dx, dy)| count_subtree(level + 1, 2 * x + dx, 2 * y + dy, index)).sum::<usize>()
+    1 + [(0, 0), (1, 0), (0, 1), (1, 1)]
+        .iter()
+        .map(|&(dx, dy)| count_subtree(level + 1, 2 * x + dx, 2 * y + dy, index))
+        .sum::<usize>()
 }
 
 /// 3D Tiles `box`: centre, then the three half-axes (axis-aligned in the tile frame).
@@ -219,5 +279,8 @@ fn box_json(b: [DVec3; 2]) -> Value {
 fn enu_to_ecef_matrix(rot: DMat3, centre: DVec3) -> Value {
     let m = rot.transpose(); // columns: east, north, up in ECEF
     let c = m.to_cols_array();
-    json!([c[0], c[1], c[2], 0.0, c[3], c[4], c[5], 0.0, c[6], c[7], c[8], 0.0, centre.x, centre.y, centre.z, 1.0])
+    json!([
+        c[0], c[1], c[2], 0.0, c[3], c[4], c[5], 0.0, c[6], c[7], c[8], 0.0, centre.x, centre.y,
+        centre.z, 1.0
+    ])
 }

@@ -59,18 +59,38 @@ impl Ortho {
         let (w, h) = (self.image.width() as f64, self.image.height() as f64);
         let (x0, y0) = g.world(-0.5, -0.5);
         let (x1, y1) = g.world(h - 0.5, w - 0.5);
-        WorldRect { min_x: x0, min_y: y1, max_x: x1, max_y: y0 }
+        WorldRect {
+            min_x: x0,
+            min_y: y1,
+            max_x: x1,
+            max_y: y0,
+        }
     }
 }
 
 /// Reads an ortho image and places it. Errors (naming the file) if it is unreadable, too
 /// large for `max_memory` (checked from the header before decoding), lacks the placement
 /// information `placement` needs, or does not overlap the DEM's sample areas.
-pub fn load_ortho(path: &Path, placement: OrthoPlacement, dem: &Dem, max_memory: u64) -> Result<Ortho> {
+pub fn load_ortho(
+    path: &Path,
+    placement: OrthoPlacement,
+    dem: &Dem,
+    max_memory: u64,
+) -> Result<Ortho> {
     let d = read::read(path, max_memory)?;
-    let georef = placement::place(path, placement, d.image.width(), d.image.height(), d.tags.as_ref(), dem)?;
+    let georef = placement::place(
+        path,
+        placement,
+        d.image.width(),
+        d.image.height(),
+        d.tags.as_ref(),
+        dem,
+    )?;
     if placement == OrthoPlacement::FromFile {
-        if let (Some(t), Some(dc)) = (d.tags.as_ref().and_then(|t| t.crs.as_deref()), dem.crs.as_deref()) {
+        if let (Some(t), Some(dc)) = (
+            d.tags.as_ref().and_then(|t| t.crs.as_deref()),
+            dem.crs.as_deref(),
+        ) {
             if t != dc {
                 return Err(Error::bad_input(
                     path,
@@ -79,7 +99,10 @@ pub fn load_ortho(path: &Path, placement: OrthoPlacement, dem: &Dem, max_memory:
             }
         }
     }
-    let ortho = Ortho { image: d.image, georef };
+    let ortho = Ortho {
+        image: d.image,
+        georef,
+    };
     let area = dem_area(dem);
     let e = ortho.extent();
     if e.intersect(&area).is_none() {
@@ -109,8 +132,13 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("o.png");
         // pure black pixel at (0,0): ordinary colour, not no-data
-        let img: ImageBuffer<Rgb<u8>, Vec<u8>> =
-            ImageBuffer::from_fn(4, 3, |x, y| if (x, y) == (0, 0) { Rgb([0, 0, 0]) } else { Rgb([x as u8 * 50, y as u8 * 60, 7]) });
+        let img: ImageBuffer<Rgb<u8>, Vec<u8>> = ImageBuffer::from_fn(4, 3, |x, y| {
+            if (x, y) == (0, 0) {
+                Rgb([0, 0, 0])
+            } else {
+                Rgb([x as u8 * 50, y as u8 * 60, 7])
+            }
+        });
         img.save(&p).unwrap();
         let g = GridGeoref::new(445302.17, 7396769.45, 3.0);
         let dm = dem(4, 3, g);
@@ -120,27 +148,59 @@ mod tests {
         assert_eq!(*o.image.get_pixel(3, 2), Rgba([150, 120, 7, 255]));
 
         // size mismatch
-        let e = load_ortho(&p, OrthoPlacement::SameGridAsDem, &dem(5, 3, g), 1 << 30).unwrap_err().to_string();
-        assert!(e.contains("o.png") && e.contains("4x3") && e.contains("5x3"), "{e}");
+        let e = load_ortho(&p, OrthoPlacement::SameGridAsDem, &dem(5, 3, g), 1 << 30)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("o.png") && e.contains("4x3") && e.contains("5x3"),
+            "{e}"
+        );
         // no georeference in a PNG
-        let e = load_ortho(&p, OrthoPlacement::FromFile, &dm, 1 << 30).unwrap_err().to_string();
+        let e = load_ortho(&p, OrthoPlacement::FromFile, &dm, 1 << 30)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("o.png") && e.contains("--ortho-extent"), "{e}");
 
         // explicit extent of outer pixel edges
-        let r = WorldRect { min_x: 445300.67, min_y: 7396761.95, max_x: 445312.67, max_y: 7396770.95 };
+        let r = WorldRect {
+            min_x: 445300.67,
+            min_y: 7396761.95,
+            max_x: 445312.67,
+            max_y: 7396770.95,
+        };
         let o = load_ortho(&p, OrthoPlacement::Extent(r), &dm, 1 << 30).unwrap();
         assert!((o.georef.spacing_x - 3.0).abs() < 1e-9 && (o.georef.spacing_y - 3.0).abs() < 1e-9);
-        assert!((o.georef.origin_x - 445302.17).abs() < 1e-9 && (o.georef.origin_y - 7396769.45).abs() < 1e-9);
+        assert!(
+            (o.georef.origin_x - 445302.17).abs() < 1e-9
+                && (o.georef.origin_y - 7396769.45).abs() < 1e-9
+        );
         let e = o.extent();
         assert!((e.min_x - r.min_x).abs() < 1e-9 && (e.max_y - r.max_y).abs() < 1e-9);
 
         // not overlapping the DEM
-        let far = WorldRect { min_x: 0.0, min_y: 0.0, max_x: 10.0, max_y: 10.0 };
-        let e = load_ortho(&p, OrthoPlacement::Extent(far), &dm, 1 << 30).unwrap_err().to_string();
+        let far = WorldRect {
+            min_x: 0.0,
+            min_y: 0.0,
+            max_x: 10.0,
+            max_y: 10.0,
+        };
+        let e = load_ortho(&p, OrthoPlacement::Extent(far), &dm, 1 << 30)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("o.png") && e.contains("does not overlap"), "{e}");
         // inverted extent
-        let bad = WorldRect { min_x: 10.0, min_y: 0.0, max_x: 0.0, max_y: 10.0 };
-        assert!(load_ortho(&p, OrthoPlacement::Extent(bad), &dm, 1 << 30).unwrap_err().to_string().contains("o.png"));
+        let bad = WorldRect {
+            min_x: 10.0,
+            min_y: 0.0,
+            max_x: 0.0,
+            max_y: 10.0,
+        };
+        assert!(
+            load_ortho(&p, OrthoPlacement::Extent(bad), &dm, 1 << 30)
+                .unwrap_err()
+                .to_string()
+                .contains("o.png")
+        );
         // memory limit checked from the header
         let e = load_ortho(&p, OrthoPlacement::SameGridAsDem, &dm, 40).unwrap_err();
         assert!(matches!(e, Error::TooLarge { .. }), "{e}");
@@ -150,8 +210,9 @@ mod tests {
     fn rgba_alpha_and_jpeg() {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("a.png");
-        let img: ImageBuffer<Rgba<u8>, Vec<u8>> =
-            ImageBuffer::from_fn(3, 3, |x, y| Rgba([10, 20, 30, if (x, y) == (1, 2) { 0 } else { 255 }]));
+        let img: ImageBuffer<Rgba<u8>, Vec<u8>> = ImageBuffer::from_fn(3, 3, |x, y| {
+            Rgba([10, 20, 30, if (x, y) == (1, 2) { 0 } else { 255 }])
+        });
         img.save(&p).unwrap();
         let dm = dem(3, 3, GridGeoref::new(0.0, 0.0, 1.0));
         let o = load_ortho(&p, OrthoPlacement::SameGridAsDem, &dm, 1 << 20).unwrap();
@@ -163,18 +224,35 @@ mod tests {
         img.save(&j).unwrap();
         let o = load_ortho(&j, OrthoPlacement::SameGridAsDem, &dm, 1 << 20).unwrap();
         let px = o.image.get_pixel(1, 1);
-        assert!(px[3] == 255 && (px[0] as i32 - 200).abs() < 8 && (px[2] as i32 - 50).abs() < 8, "{px:?}");
+        assert!(
+            px[3] == 255 && (px[0] as i32 - 200).abs() < 8 && (px[2] as i32 - 50).abs() < 8,
+            "{px:?}"
+        );
     }
 
     #[test]
     fn geotiff_rgb_and_rgba_from_file() {
         let d = tempfile::tempdir().unwrap();
         let (w, h) = (5u32, 4u32);
-        let geo = Geo { scale: (0.5, 0.5), tie: (0.0, 0.0, 1000.0, 2000.0), pixel_is_point: false, epsg: Some(32633), nodata: Some("0".into()) };
+        let geo = Geo {
+            scale: (0.5, 0.5),
+            tie: (0.0, 0.0, 1000.0, 2000.0),
+            pixel_is_point: false,
+            epsg: Some(32633),
+            nodata: Some("0".into()),
+        };
         let mut rgb: Vec<u8> = (0..w * h).flat_map(|i| [i as u8 + 1, 2, 3]).collect();
         rgb[0..3].copy_from_slice(&[0, 0, 0]); // equals GDAL_NODATA 0 in every band -> no data
         let p = d.path().join("rgb.tif");
-        tiffgen::write_strips::<tiff::encoder::colortype::RGB8>(&p, w, h, &rgb, Default::default(), tiff::tags::Predictor::None, Some(&geo));
+        tiffgen::write_strips::<tiff::encoder::colortype::RGB8>(
+            &p,
+            w,
+            h,
+            &rgb,
+            Default::default(),
+            tiff::tags::Predictor::None,
+            Some(&geo),
+        );
         let mut dm = dem(20, 20, GridGeoref::new(1000.0, 2000.0, 0.25));
         dm.crs = Some("EPSG:32633".into());
         let o = load_ortho(&p, OrthoPlacement::FromFile, &dm, 1 << 20).unwrap();
@@ -183,14 +261,39 @@ mod tests {
         assert_eq!(*o.image.get_pixel(1, 0), Rgba([2, 2, 3, 255]));
         // CRS mismatch is refused
         dm.crs = Some("EPSG:25833".into());
-        assert!(load_ortho(&p, OrthoPlacement::FromFile, &dm, 1 << 20).unwrap_err().to_string().contains("EPSG:25833"));
+        assert!(
+            load_ortho(&p, OrthoPlacement::FromFile, &dm, 1 << 20)
+                .unwrap_err()
+                .to_string()
+                .contains("EPSG:25833")
+        );
         dm.crs = None;
 
         // tiled RGBA with unassociated alpha
-        let rgba: Vec<u8> = (0..w * h).flat_map(|i| [9, 8, 7, if i == 6 { 0 } else { 255 }]).collect();
-        let raw = Raw { width: w, height: h, bits: 8, sample_format: 1, samples: 4, photometric: 2, tile: Some((16, 16)), extra_alpha: true };
+        let rgba: Vec<u8> = (0..w * h)
+            .flat_map(|i| [9, 8, 7, if i == 6 { 0 } else { 255 }])
+            .collect();
+        let raw = Raw {
+            width: w,
+            height: h,
+            bits: 8,
+            sample_format: 1,
+            samples: 4,
+            photometric: 2,
+            tile: Some((16, 16)),
+            extra_alpha: true,
+        };
         let p = d.path().join("rgba.tif");
-        tiffgen::write_raw(&p, &raw, &rgba, Some(&Geo { nodata: None, ..geo.clone() }), false);
+        tiffgen::write_raw(
+            &p,
+            &raw,
+            &rgba,
+            Some(&Geo {
+                nodata: None,
+                ..geo.clone()
+            }),
+            false,
+        );
         let o = load_ortho(&p, OrthoPlacement::FromFile, &dm, 1 << 20).unwrap();
         assert_eq!(o.image.get_pixel(1, 1)[3], 0);
         assert_eq!(*o.image.get_pixel(0, 0), Rgba([9, 8, 7, 255]));

@@ -13,7 +13,12 @@ use crate::geotiff::GeoTags;
 pub fn georef_from_extent(r: &WorldRect, width: u32, height: u32) -> GridGeoref {
     let sx = r.width() / width as f64;
     let sy = r.height() / height as f64;
-    GridGeoref { origin_x: r.min_x + 0.5 * sx, origin_y: r.max_y - 0.5 * sy, spacing_x: sx, spacing_y: sy }
+    GridGeoref {
+        origin_x: r.min_x + 0.5 * sx,
+        origin_y: r.max_y - 0.5 * sy,
+        spacing_x: sx,
+        spacing_y: sy,
+    }
 }
 
 /// Computes the pixel-centre georeference for `placement`. Errors name the file.
@@ -48,7 +53,9 @@ pub(crate) fn place(
             dem.georef
         }
         OrthoPlacement::Extent(r) => {
-            let finite = [r.min_x, r.min_y, r.max_x, r.max_y].iter().all(|v| v.is_finite());
+            let finite = [r.min_x, r.min_y, r.max_x, r.max_y]
+                .iter()
+                .all(|v| v.is_finite());
             if !finite || r.max_x <= r.min_x || r.max_y <= r.min_y {
                 return Err(Error::BadOption(format!(
                     "--ortho-extent {},{},{},{} for {}: needs finite MINX<MAXX and MINY<MAXY",
@@ -62,7 +69,8 @@ pub(crate) fn place(
             georef_from_extent(&r, width, height)
         }
     };
-    g.validate().map_err(|e| Error::bad_input(path, e.to_string()))?;
+    g.validate()
+        .map_err(|e| Error::bad_input(path, e.to_string()))?;
     Ok(g)
 }
 
@@ -70,5 +78,10 @@ pub(crate) fn place(
 pub fn dem_area(dem: &Dem) -> WorldRect {
     let e = dem.extent();
     let (hx, hy) = (0.5 * dem.georef.spacing_x, 0.5 * dem.georef.spacing_y);
-    WorldRect { min_x: e.min_x - hx, min_y: e.min_y - hy, max_x: e.max_x + hx, max_y: e.max_y + hy }
+    WorldRect {
+        min_x: e.min_x - hx,
+        min_y: e.min_y - hy,
+        max_x: e.max_x + hx,
+        max_y: e.max_y + hy,
+    }
 }

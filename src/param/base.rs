@@ -5,7 +5,9 @@ use super::mesh::{Topo, VertId, cross3, dot3, len3, sub3};
 
 /// Lays out the single alive triangle of `topo` congruent to its 3D shape, CCW.
 pub(crate) fn triangle(topo: &Topo, pos: &[[f64; 3]], uvs: &mut [[f64; 2]]) {
-    let Some(f) = topo.face_alive.iter().position(|&a| a) else { return };
+    let Some(f) = topo.face_alive.iter().position(|&a| a) else {
+        return;
+    };
     let t = topo.faces[f];
     let (a, b, c) = (pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]);
     let e1 = sub3(b, a);
@@ -49,12 +51,22 @@ pub(crate) fn tutte(topo: &Topo, pos: &[[f64; 3]], uvs: &mut [[f64; 2]]) {
     }
     let mut cum = vec![0.0];
     for i in 0..lp.len() {
-        let d = len3(sub3(pos[lp[(i + 1) % lp.len()] as usize], pos[lp[i] as usize]));
+        let d = len3(sub3(
+            pos[lp[(i + 1) % lp.len()] as usize],
+            pos[lp[i] as usize],
+        ));
         cum.push(cum[i] + d);
     }
     let total = cum[lp.len()].max(f64::MIN_POSITIVE);
-    let area: f64 =
-        topo.faces.iter().enumerate().filter(|(f, _)| topo.face_alive[*f]).map(|(_, t)| super::mesh::area2_3d(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]) * 0.5).sum();
+    let area: f64 = topo
+        .faces
+        .iter()
+        .enumerate()
+        .filter(|(f, _)| topo.face_alive[*f])
+        .map(|(_, t)| {
+            super::mesh::area2_3d(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]) * 0.5
+        })
+        .sum();
     let radius = (area / std::f64::consts::PI).sqrt();
     let mut fixed = vec![false; nv];
     for (i, &v) in lp.iter().enumerate() {
@@ -63,7 +75,9 @@ pub(crate) fn tutte(topo: &Topo, pos: &[[f64; 3]], uvs: &mut [[f64; 2]]) {
         fixed[v as usize] = true;
     }
     // Interior unknowns.
-    let interior: Vec<usize> = (0..nv).filter(|&v| topo.vert_alive[v] && !fixed[v]).collect();
+    let interior: Vec<usize> = (0..nv)
+        .filter(|&v| topo.vert_alive[v] && !fixed[v])
+        .collect();
     if interior.is_empty() {
         return;
     }
@@ -71,7 +85,10 @@ pub(crate) fn tutte(topo: &Topo, pos: &[[f64; 3]], uvs: &mut [[f64; 2]]) {
     for (i, &v) in interior.iter().enumerate() {
         index[v] = i;
     }
-    let nbrs: Vec<Vec<VertId>> = interior.iter().map(|&v| topo.neighbours(VertId(v as u32))).collect();
+    let nbrs: Vec<Vec<VertId>> = interior
+        .iter()
+        .map(|&v| topo.neighbours(VertId(v as u32)))
+        .collect();
     for dim in 0..2 {
         // A x = b with A = deg I - adjacency(interior), b = sum of fixed neighbours.
         let mut b = vec![0.0; interior.len()];

@@ -116,7 +116,11 @@ fn legal(topo: &Topo, pos: &[[f64; 3]], u: VertId, v: VertId, fold_cos: f64) -> 
     opp.sort_unstable();
     let nu = topo.neighbours(u);
     let nvv = topo.neighbours(v);
-    let common: Vec<VertId> = nu.iter().copied().filter(|w| nvv.binary_search(w).is_ok()).collect();
+    let common: Vec<VertId> = nu
+        .iter()
+        .copied()
+        .filter(|w| nvv.binary_search(w).is_ok())
+        .collect();
     if common != opp {
         return false;
     }
@@ -136,7 +140,9 @@ fn legal(topo: &Topo, pos: &[[f64; 3]], u: VertId, v: VertId, fold_cos: f64) -> 
         let n0 = cross3(sub3(pb, pos[u.ix()]), sub3(pc, pos[u.ix()]));
         let n1 = cross3(sub3(pb, pv), sub3(pc, pv));
         let l1 = len3(n1);
-        let emax = len3(sub3(pb, pv)).max(len3(sub3(pc, pv))).max(len3(sub3(pc, pb)));
+        let emax = len3(sub3(pb, pv))
+            .max(len3(sub3(pc, pv)))
+            .max(len3(sub3(pc, pb)));
         if !(l1 > 1e-10 * emax * emax) {
             return false;
         }
@@ -176,7 +182,12 @@ pub(crate) fn apply(topo: &mut Topo, u: VertId, v: VertId) -> Collapse {
         }
     }
     topo.vert_alive[u.ix()] = false;
-    Collapse { u, v, deleted, modified }
+    Collapse {
+        u,
+        v,
+        deleted,
+        modified,
+    }
 }
 
 #[cfg(test)]
@@ -192,7 +203,11 @@ mod tests {
         let orig = topo.clone();
         let h = simplify(&mut topo, &m.positions);
         assert_eq!(topo.alive_faces, 1);
-        assert!(h.rounds.len() >= 3 && h.rounds.len() < 40, "{} rounds", h.rounds.len());
+        assert!(
+            h.rounds.len() >= 3 && h.rounds.len() < 40,
+            "{} rounds",
+            h.rounds.len()
+        );
         // Independence: removed vertices of a round are distinct and none is a target.
         for round in &h.rounds {
             let mut us: Vec<u32> = round.iter().map(|c| c.u.0).collect();

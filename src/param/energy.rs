@@ -30,7 +30,10 @@ impl FaceGeom {
         let l1 = len3(e1);
         let area2 = area2_3d(p0, p1, p2);
         if !(l1 > 0.0) || !(area2 > 0.0) {
-            return FaceGeom { area: 0.0, grad: [[0.0; 2]; 3] };
+            return FaceGeom {
+                area: 0.0,
+                grad: [[0.0; 2]; 3],
+            };
         }
         let x = [e1[0] / l1, e1[1] / l1, e1[2] / l1];
         let n = cross3(e1, e2);
@@ -45,7 +48,10 @@ impl FaceGeom {
             // perp(b - a) / (2A): rotates the opposite edge by +90 degrees (points inward).
             grad[k] = [-(b[1] - a[1]) / area2, (b[0] - a[0]) / area2];
         }
-        FaceGeom { area: 0.5 * area2, grad }
+        FaceGeom {
+            area: 0.5 * area2,
+            grad,
+        }
     }
 
     /// The Jacobian J[r][c] = Σ_k uv_k[r] · grad_k[c].
@@ -133,7 +139,12 @@ pub(crate) fn energy_grad(j: &[[f64; 2]; 2], theta: f64) -> Option<(f64, [[f64; 
 
 /// Energy, gradient and Hessian with respect to the UV of corner `k` alone (the other
 /// corners fixed); `None` if det <= 0. J is affine in that UV and det J is linear in it.
-pub(crate) fn vertex_grad_hess(geom: &FaceGeom, j: &[[f64; 2]; 2], k: usize, theta: f64) -> Option<(f64, [f64; 2], [[f64; 2]; 2])> {
+pub(crate) fn vertex_grad_hess(
+    geom: &FaceGeom,
+    j: &[[f64; 2]; 2],
+    k: usize,
+    theta: f64,
+) -> Option<(f64, [f64; 2], [[f64; 2]; 2])> {
     let d = det2(j);
     if !(d > 0.0) {
         return None;
@@ -144,19 +155,33 @@ pub(crate) fn vertex_grad_hess(geom: &FaceGeom, j: &[[f64; 2]; 2], k: usize, the
     let q = 1.0 - 1.0 / (d * d);
     let b = pow_theta(p, theta);
     let a = fro / d;
-    let jg = [j[0][0] * g[0] + j[0][1] * g[1], j[1][0] * g[0] + j[1][1] * g[1]];
-    let cg = [j[1][1] * g[0] - j[1][0] * g[1], -j[0][1] * g[0] + j[0][0] * g[1]];
+    let jg = [
+        j[0][0] * g[0] + j[0][1] * g[1],
+        j[1][0] * g[0] + j[1][1] * g[1],
+    ];
+    let cg = [
+        j[1][1] * g[0] - j[1][0] * g[1],
+        -j[0][1] * g[0] + j[0][0] * g[1],
+    ];
     let gg = g[0] * g[0] + g[1] * g[1];
     // dA·g, dB·g (A = |J|²/det, B = P^θ).
-    let da = [2.0 * jg[0] / d - fro / (d * d) * cg[0], 2.0 * jg[1] / d - fro / (d * d) * cg[1]];
+    let da = [
+        2.0 * jg[0] / d - fro / (d * d) * cg[0],
+        2.0 * jg[1] / d - fro / (d * d) * cg[1],
+    ];
     let beta = if theta == 0.0 { 0.0 } else { theta * b / p * q };
     let db = [beta * cg[0], beta * cg[1]];
-    let gamma = if theta == 0.0 { 0.0 } else { theta * ((theta - 1.0) * b / (p * p) * q * q + 2.0 * b / p / (d * d * d)) };
+    let gamma = if theta == 0.0 {
+        0.0
+    } else {
+        theta * ((theta - 1.0) * b / (p * p) * q * q + 2.0 * b / p / (d * d * d))
+    };
     let mut h = [[0.0; 2]; 2];
     for r in 0..2 {
         for s in 0..2 {
             let id = if r == s { 1.0 } else { 0.0 };
-            let d2a = 2.0 * gg / d * id - 2.0 / (d * d) * (jg[r] * cg[s] + cg[r] * jg[s]) + 2.0 * fro / (d * d * d) * cg[r] * cg[s];
+            let d2a = 2.0 * gg / d * id - 2.0 / (d * d) * (jg[r] * cg[s] + cg[r] * jg[s])
+                + 2.0 * fro / (d * d * d) * cg[r] * cg[s];
             h[r][s] = b * d2a + da[r] * db[s] + db[r] * da[s] + a * gamma * cg[r] * cg[s];
         }
     }
@@ -168,7 +193,10 @@ pub(crate) fn vertex_grad_hess(geom: &FaceGeom, j: &[[f64; 2]; 2], k: usize, the
 pub(crate) fn det_slope(geom: &FaceGeom, j: &[[f64; 2]; 2], k: usize) -> [f64; 2] {
     let g = geom.grad[k];
     let cof = [[j[1][1], -j[1][0]], [-j[0][1], j[0][0]]];
-    [cof[0][0] * g[0] + cof[0][1] * g[1], cof[1][0] * g[0] + cof[1][1] * g[1]]
+    [
+        cof[0][0] * g[0] + cof[0][1] * g[1],
+        cof[1][0] * g[0] + cof[1][1] * g[1],
+    ]
 }
 
 #[cfg(test)]
@@ -179,7 +207,9 @@ mod tests {
     fn identity_map_has_minimal_energy() {
         let g = FaceGeom::new([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.5, 1.5, 0.0]);
         let j = g.jacobian([[0.0, 0.0], [2.0, 0.0], [0.5, 1.5]]);
-        assert!((j[0][0] - 1.0).abs() < 1e-12 && j[0][1].abs() < 1e-12 && (j[1][1] - 1.0).abs() < 1e-12);
+        assert!(
+            (j[0][0] - 1.0).abs() < 1e-12 && j[0][1].abs() < 1e-12 && (j[1][1] - 1.0).abs() < 1e-12
+        );
         for theta in [0.0, 1.0, 3.0] {
             let e = energy(&j, theta);
             assert!((e - 2.0 * 2f64.powf(theta)).abs() < 1e-9);
@@ -205,7 +235,11 @@ mod tests {
                     let mut jm = j;
                     jm[r][c] -= h;
                     let fd = (energy(&jp, theta) - energy(&jm, theta)) / (2.0 * h);
-                    assert!((fd - g[r][c]).abs() < 1e-5 * (1.0 + fd.abs()), "theta {theta} [{r}][{c}]: {fd} vs {}", g[r][c]);
+                    assert!(
+                        (fd - g[r][c]).abs() < 1e-5 * (1.0 + fd.abs()),
+                        "theta {theta} [{r}][{c}]: {fd} vs {}",
+                        g[r][c]
+                    );
                 }
             }
         }
@@ -233,10 +267,18 @@ mod tests {
                     let (ep, gp, _) = at(xp);
                     let (em, gm, _) = at(xm);
                     let fd = (ep - em) / (2.0 * eps);
-                    assert!((fd - g[s]).abs() < 1e-5 * (1.0 + fd.abs()), "theta {theta} k {k} grad {s}: {fd} vs {}", g[s]);
+                    assert!(
+                        (fd - g[s]).abs() < 1e-5 * (1.0 + fd.abs()),
+                        "theta {theta} k {k} grad {s}: {fd} vs {}",
+                        g[s]
+                    );
                     for r in 0..2 {
                         let fdh = (gp[r] - gm[r]) / (2.0 * eps);
-                        assert!((fdh - h[r][s]).abs() < 1e-4 * (1.0 + fdh.abs()), "theta {theta} k {k} H[{r}][{s}]: {fdh} vs {}", h[r][s]);
+                        assert!(
+                            (fdh - h[r][s]).abs() < 1e-4 * (1.0 + fdh.abs()),
+                            "theta {theta} k {k} H[{r}][{s}]: {fdh} vs {}",
+                            h[r][s]
+                        );
                     }
                 }
             }

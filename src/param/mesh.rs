@@ -40,7 +40,11 @@ pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -72,14 +76,20 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
     for (f, t) in mesh.triangles.iter().enumerate() {
         for &i in t {
             if i as usize >= nv {
-                return Err(bad(format!("triangle {f} refers to vertex {i}, but there are only {nv} vertices")));
+                return Err(bad(format!(
+                    "triangle {f} refers to vertex {i}, but there are only {nv} vertices"
+                )));
             }
             used[i as usize] = true;
         }
         if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
             return Err(bad(format!("triangle {f} {t:?} repeats a vertex")));
         }
-        let (a, b, c) = (mesh.positions[t[0] as usize], mesh.positions[t[1] as usize], mesh.positions[t[2] as usize]);
+        let (a, b, c) = (
+            mesh.positions[t[0] as usize],
+            mesh.positions[t[1] as usize],
+            mesh.positions[t[2] as usize],
+        );
         let e = [len3(sub3(b, a)), len3(sub3(c, b)), len3(sub3(a, c))];
         let emax = e[0].max(e[1]).max(e[2]);
         if !(area2_3d(a, b, c) > 1e-14 * emax * emax) {
@@ -98,7 +108,10 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
     sorted_tris.sort_unstable();
     for w in sorted_tris.windows(2) {
         if w[0].0 == w[1].0 {
-            return Err(bad(format!("triangles {} and {} use the same vertices {:?}", w[0].1, w[1].1, w[0].0)));
+            return Err(bad(format!(
+                "triangles {} and {} use the same vertices {:?}",
+                w[0].1, w[1].1, w[0].0
+            )));
         }
     }
     directed.sort_unstable();
@@ -113,7 +126,10 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
     // Undirected edges: each in one or two faces (two means opposite directions, by the
     // check above, so more than two is impossible once directed edges are unique... except
     // a->b, b->a, a->b which is caught above).
-    let mut undirected: Vec<(u32, u32)> = directed.iter().map(|&(a, b, _)| (a.min(b), a.max(b))).collect();
+    let mut undirected: Vec<(u32, u32)> = directed
+        .iter()
+        .map(|&(a, b, _)| (a.min(b), a.max(b)))
+        .collect();
     undirected.sort_unstable();
     let mut ne = 0usize;
     let mut i = 0;
@@ -123,7 +139,10 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
             j += 1;
         }
         if j - i > 2 {
-            return Err(bad(format!("edge {:?} is shared by more than two triangles", undirected[i])));
+            return Err(bad(format!(
+                "edge {:?} is shared by more than two triangles",
+                undirected[i]
+            )));
         }
         ne += 1;
         i = j;
@@ -143,11 +162,20 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
             .collect();
         link.sort_unstable();
         let has_in = |x: u32| link.iter().any(|&(_, c)| c == x);
-        let starts: Vec<u32> = link.iter().map(|&(b, _)| b).filter(|&b| !has_in(b)).collect();
+        let starts: Vec<u32> = link
+            .iter()
+            .map(|&(b, _)| b)
+            .filter(|&b| !has_in(b))
+            .collect();
         let (start, want) = match starts.len() {
             0 => (link[0].0, link.len()),
             1 => (starts[0], link.len()),
-            _ => return Err(bad(format!("vertex {v} is non-manifold (its triangles form {} separate fans)", starts.len()))),
+            _ => {
+                return Err(bad(format!(
+                    "vertex {v} is non-manifold (its triangles form {} separate fans)",
+                    starts.len()
+                )));
+            }
         };
         let mut cur = start;
         let mut walked = 0;
@@ -159,7 +187,9 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
             }
         }
         if walked != want {
-            return Err(bad(format!("vertex {v} is non-manifold (its triangles form more than one fan)")));
+            return Err(bad(format!(
+                "vertex {v} is non-manifold (its triangles form more than one fan)"
+            )));
         }
     }
     // Connected + Euler characteristic 1 => a disc.
@@ -179,11 +209,15 @@ pub(crate) fn validate(mesh: &ParamMesh) -> Result<()> {
         }
     }
     if count != nv {
-        return Err(bad(format!("mesh is not connected ({count} of {nv} vertices reachable from the first triangle)")));
+        return Err(bad(format!(
+            "mesh is not connected ({count} of {nv} vertices reachable from the first triangle)"
+        )));
     }
     let euler = nv as i64 - ne as i64 + nf as i64;
     if euler != 1 {
-        return Err(bad(format!("mesh is not a disc (Euler characteristic {euler}, a disc has 1)")));
+        return Err(bad(format!(
+            "mesh is not a disc (Euler characteristic {euler}, a disc has 1)"
+        )));
     }
     Ok(())
 }
@@ -226,7 +260,10 @@ impl Topo {
             alive_faces: mesh.triangles.len(),
         };
         for v in 0..nv {
-            let b = topo.neighbours(VertId(v as u32)).into_iter().any(|w| topo.edge_faces(VertId(v as u32), w).len() == 1);
+            let b = topo
+                .neighbours(VertId(v as u32))
+                .into_iter()
+                .any(|w| topo.edge_faces(VertId(v as u32), w).len() == 1);
             topo.boundary[v] = b;
         }
         topo
@@ -249,13 +286,22 @@ impl Topo {
 
     /// Alive faces containing both `a` and `b`.
     pub fn edge_faces(&self, a: VertId, b: VertId) -> Vec<FaceId> {
-        self.vert_faces[a.ix()].iter().copied().filter(|f| self.faces[f.ix()].contains(&b.0)).collect()
+        self.vert_faces[a.ix()]
+            .iter()
+            .copied()
+            .filter(|f| self.faces[f.ix()].contains(&b.0))
+            .collect()
     }
 
     /// The corner of face `f` opposite to edge {a, b}.
     pub fn opposite(&self, f: FaceId, a: VertId, b: VertId) -> VertId {
         let t = self.faces[f.ix()];
-        VertId(t.iter().copied().find(|&x| x != a.0 && x != b.0).unwrap_or(t[0]))
+        VertId(
+            t.iter()
+                .copied()
+                .find(|&x| x != a.0 && x != b.0)
+                .unwrap_or(t[0]),
+        )
     }
 
     /// The two other corners (in CCW order) of face `f` seen from its corner `v`.

@@ -66,22 +66,42 @@ impl ChartMetrics {
 /// Measures the chart `uvs` of the mesh (`positions`, `triangles`). `base_area` is the
 /// map area the chart stands for; `None` uses the area of the xy bounding rectangle of
 /// `positions` (right for a square cell patch). Errors if lengths or indices disagree.
-pub fn chart_metrics(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64; 2]], base_area: Option<f64>) -> Result<ChartMetrics> {
+pub fn chart_metrics(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    uvs: &[[f64; 2]],
+    base_area: Option<f64>,
+) -> Result<ChartMetrics> {
     if uvs.len() != positions.len() {
-        return Err(Error::BadOption(format!("chart metrics: {} UVs for {} vertices", uvs.len(), positions.len())));
+        return Err(Error::BadOption(format!(
+            "chart metrics: {} UVs for {} vertices",
+            uvs.len(),
+            positions.len()
+        )));
     }
     for (f, t) in triangles.iter().enumerate() {
         if t.iter().any(|&i| i as usize >= positions.len()) {
-            return Err(Error::BadOption(format!("chart metrics: triangle {f} {t:?} refers to a missing vertex")));
+            return Err(Error::BadOption(format!(
+                "chart metrics: triangle {f} {t:?} refers to a missing vertex"
+            )));
         }
     }
-    let mut m = ChartMetrics { triangles: triangles.len(), ..Default::default() };
+    let mut m = ChartMetrics {
+        triangles: triangles.len(),
+        ..Default::default()
+    };
     let mut geoms = Vec::with_capacity(triangles.len());
     let mut uv_area = 0.0;
     for t in triangles {
-        let g = FaceGeom::new(positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]);
+        let g = FaceGeom::new(
+            positions[t[0] as usize],
+            positions[t[1] as usize],
+            positions[t[2] as usize],
+        );
         let uv = [uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]];
-        let signed = 0.5 * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1]) - (uv[1][1] - uv[0][1]) * (uv[2][0] - uv[0][0]));
+        let signed = 0.5
+            * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
+                - (uv[1][1] - uv[0][1]) * (uv[2][0] - uv[0][0]));
         if !(signed > 0.0) {
             m.flipped += 1;
         }
@@ -90,7 +110,11 @@ pub fn chart_metrics(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64
         geoms.push((g, uv));
     }
     m.used_fraction = uv_area;
-    let k = if uv_area > 0.0 { (m.surface_area / uv_area).sqrt() } else { f64::INFINITY };
+    let k = if uv_area > 0.0 {
+        (m.surface_area / uv_area).sqrt()
+    } else {
+        f64::INFINITY
+    };
     let (mut a_sum, mut ang_sum, mut sd_sum, mut l2_sum) = (0.0, 0.0, 0.0, 0.0);
     for (g, uv) in &geoms {
         if !(g.area > 0.0) {
@@ -112,7 +136,9 @@ pub fn chart_metrics(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64
         sd_sum += g.area * sd;
         l2_sum += g.area * l2;
         m.area_distortion_max = m.area_distortion_max.max(area_d);
-        m.angle_distortion_max = m.angle_distortion_max.max(if ang.is_nan() { f64::INFINITY } else { ang });
+        m.angle_distortion_max =
+            m.angle_distortion_max
+                .max(if ang.is_nan() { f64::INFINITY } else { ang });
         m.stretch_linf = m.stretch_linf.max(1.0 / s2);
     }
     let w = m.surface_area;
@@ -132,7 +158,11 @@ pub fn chart_metrics(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64
                     hi[d] = hi[d].max(p[d]);
                 }
             }
-            if positions.is_empty() { 0.0 } else { (hi[0] - lo[0]) * (hi[1] - lo[1]) }
+            if positions.is_empty() {
+                0.0
+            } else {
+                (hi[0] - lo[0]) * (hi[1] - lo[1])
+            }
         }
     };
     m.rel_texel = (m.surface_area / m.base_area) / m.used_fraction;
@@ -142,16 +172,26 @@ pub fn chart_metrics(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64
 /// The Degener energy Σ A·E / Σ A of the chart (UVs normalised to the 3D area), with
 /// area/angle weight `theta`: 2·2^θ for an isometry, +∞ if any triangle is flipped or
 /// degenerate. Errors if lengths or indices disagree.
-pub fn degener_energy(positions: &[[f64; 3]], triangles: &[[u32; 3]], uvs: &[[f64; 2]], theta: f64) -> Result<f64> {
+pub fn degener_energy(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    uvs: &[[f64; 2]],
+    theta: f64,
+) -> Result<f64> {
     let m = chart_metrics(positions, triangles, uvs, None)?;
     let k = (m.surface_area / m.used_fraction).sqrt();
     let mut e = 0.0;
     for t in triangles {
-        let g = FaceGeom::new(positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]);
+        let g = FaceGeom::new(
+            positions[t[0] as usize],
+            positions[t[1] as usize],
+            positions[t[2] as usize],
+        );
         if !(g.area > 0.0) {
             continue;
         }
-        let uv = [uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]].map(|p| [p[0] * k, p[1] * k]);
+        let uv = [uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]]
+            .map(|p| [p[0] * k, p[1] * k]);
         e += g.area * super::energy::energy(&g.jacobian(uv), theta);
     }
     Ok(e / m.surface_area)
@@ -164,27 +204,45 @@ mod tests {
     #[test]
     fn orthographic_map_of_a_slope() {
         // A 45° ramp mapped orthographically: s1 = 1, s2 = cos 45° before normalisation.
-        let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0]];
+        let positions = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 1.0],
+        ];
         let tris = [[0, 1, 2], [0, 2, 3]];
         let uvs: Vec<[f64; 2]> = positions.iter().map(|p| [p[0], p[1]]).collect();
         let m = chart_metrics(&positions, &tris, &uvs, None).unwrap();
         assert_eq!(m.flipped, 0);
         let r = std::f64::consts::SQRT_2;
         assert!((m.angle_distortion_mean - r).abs() < 1e-12);
-        assert!(m.area_distortion_mean.abs() < 1e-12, "normalised: same area everywhere");
+        assert!(
+            m.area_distortion_mean.abs() < 1e-12,
+            "normalised: same area everywhere"
+        );
         assert!((m.surface_area - r).abs() < 1e-12);
         assert!((m.base_area - 1.0).abs() < 1e-12);
         assert!((m.rel_texel - r).abs() < 1e-12);
         // After normalisation s1 = 2^(1/4), s2 = 2^(-1/4).
         let (s1, s2) = (2f64.powf(0.25), 2f64.powf(-0.25));
-        assert!((m.symmetric_dirichlet_mean - (s1 * s1 + s2 * s2 + 1.0 / (s1 * s1) + 1.0 / (s2 * s2))).abs() < 1e-12);
+        assert!(
+            (m.symmetric_dirichlet_mean - (s1 * s1 + s2 * s2 + 1.0 / (s1 * s1) + 1.0 / (s2 * s2)))
+                .abs()
+                < 1e-12
+        );
         assert!((m.stretch_linf - 1.0 / s2).abs() < 1e-12);
     }
 
     #[test]
     fn flips_are_counted_and_errors_reported() {
         let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        let m = chart_metrics(&positions, &[[0, 1, 2]], &[[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]], None).unwrap();
+        let m = chart_metrics(
+            &positions,
+            &[[0, 1, 2]],
+            &[[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]],
+            None,
+        )
+        .unwrap();
         assert_eq!(m.flipped, 1);
         assert!(chart_metrics(&positions, &[[0, 1, 5]], &[[0.0; 2]; 3], None).is_err());
         assert!(chart_metrics(&positions, &[[0, 1, 2]], &[[0.0; 2]; 2], None).is_err());

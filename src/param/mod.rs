@@ -15,8 +15,10 @@
 //! E = (s1/s2 + s2/s1)·(s1·s2 + 1/(s1·s2))^θ (area-weighted, +∞ for flipped
 //! triangles), so no step can create a flip. The UV area is kept equal to the 3D area
 //! after every round. With θ = 1 (the symmetric Dirichlet energy) a global projected-Newton
-//! finish then converges all UVs at once (`newton.rs`). If the chart's boundary crosses
-//! itself it is rebuilt from a Tutte layout with crossing-free steps (`overlap.rs`).
+//! finish then converges all UVs at once (`newton.rs`; other θ: an all-vertex relaxation).
+//! If the chart's boundary crosses itself it is rebuilt from a Tutte layout with
+//! crossing-free steps (`overlap.rs`); a planar projection with a lower energy than the
+//! finished chart is finished too and kept if it stays lower (`planar.rs`).
 //! Finally the chart is rotated to its minimum-area bounding rectangle and scaled uniformly
 //! into the texture square. See docs/parameterization.md.
 
@@ -32,6 +34,7 @@ mod metrics;
 mod newton;
 mod overlap;
 mod pack;
+mod planar;
 mod relax;
 mod split;
 mod sym_dirichlet;
@@ -63,9 +66,9 @@ pub struct ParamOptions {
     /// VCGLib's default 3 trades more angle distortion for less area distortion.
     pub theta: f64,
     /// Relaxation after each refinement round stops when one sweep lowers the total
-    /// energy by less than this fraction (>= 0). Default 1e-2: the global finish does
-    /// the rest; with θ ≠ 1 (no global finish) 1e-4 with 32 sweeps is the measured
-    /// quality setting (docs/parameterization.md).
+    /// energy by less than this fraction (>= 0). Default 1e-2: the finish does the rest
+    /// (Newton for θ = 1; for θ ≠ 1 a relaxation of all vertices at min(this, 1e-4),
+    /// ≤ 32 sweeps; docs/parameterization.md).
     pub relax_tolerance: f64,
     /// At most this many relaxation sweeps per refinement round. Default 4.
     pub max_sweeps: u32,
@@ -74,9 +77,9 @@ pub struct ParamOptions {
     pub gutter_texels: f64,
     /// Texture edge length in texels the chart is packed for (>= 1). Default 256.
     pub texture_size: u32,
-    /// Global finish (θ = 1 only, where the energy is the symmetric Dirichlet energy):
-    /// at most this many projected-Newton iterations over all UVs after the hierarchy.
-    /// 0 disables it. Default 20.
+    /// Global finish (θ = 1, where the energy is the symmetric Dirichlet energy): at most
+    /// this many projected-Newton iterations over all UVs after the hierarchy. 0 disables
+    /// the finish (for θ ≠ 1 too, whose finish is the all-vertex relaxation). Default 20.
     pub newton_iterations: u32,
     /// The global finish stops when an iteration lowers the excess energy (E − 4) by less
     /// than this fraction, or the Newton decrement falls below it (relative to E − 4).
@@ -124,18 +127,32 @@ impl ParamOptions {
     /// Checks every field's range; errors name the option.
     pub fn validate(&self) -> Result<()> {
         if !(self.theta.is_finite() && self.theta >= 0.0) {
-            return Err(Error::BadOption(format!("theta must be finite and >= 0, got {}", self.theta)));
+            return Err(Error::BadOption(format!(
+                "theta must be finite and >= 0, got {}",
+                self.theta
+            )));
         }
         if !(self.relax_tolerance.is_finite() && self.relax_tolerance >= 0.0) {
-            return Err(Error::BadOption(format!("relax tolerance must be finite and >= 0, got {}", self.relax_tolerance)));
+            return Err(Error::BadOption(format!(
+                "relax tolerance must be finite and >= 0, got {}",
+                self.relax_tolerance
+            )));
         }
         if !(self.newton_tolerance.is_finite() && self.newton_tolerance >= 0.0) {
-            return Err(Error::BadOption(format!("newton tolerance must be finite and >= 0, got {}", self.newton_tolerance)));
+            return Err(Error::BadOption(format!(
+                "newton tolerance must be finite and >= 0, got {}",
+                self.newton_tolerance
+            )));
         }
         if self.texture_size == 0 {
-            return Err(Error::BadOption("texture size must be at least 1 texel".into()));
+            return Err(Error::BadOption(
+                "texture size must be at least 1 texel".into(),
+            ));
         }
-        if !(self.gutter_texels.is_finite() && self.gutter_texels >= 0.0 && 2.0 * self.gutter_texels < self.texture_size as f64) {
+        if !(self.gutter_texels.is_finite()
+            && self.gutter_texels >= 0.0
+            && 2.0 * self.gutter_texels < self.texture_size as f64)
+        {
             return Err(Error::BadOption(format!(
                 "gutter must be >= 0 texels and less than half the texture ({} texels), got {}",
                 self.texture_size, self.gutter_texels
@@ -172,6 +189,11 @@ pub struct Chart {
     /// global symmetric Dirichlet minimiser from a Tutte start, with every step kept free
     /// of boundary crossings (see docs/parameterization.md).
     pub overlap_repaired: bool,
+    /// True if the finish started from a planar projection (horizontal or mean-normal
+    /// plane) because that projection already had a lower energy than the hierarchy's
+    /// finished layout; the lower of the finished layouts is returned
+    /// ([`Objective::Distortion`] only).
+    pub projection_start: bool,
 }
 
 /// Computes a flip-free, area/angle-balanced chart of `mesh` packed into the unit square.
@@ -194,18 +216,29 @@ fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart
             c[k] += p[k] / n as f64;
         }
     }
-    let pos: Vec<[f64; 3]> = mesh.positions.iter().map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]]).collect();
+    let pos: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]])
+        .collect();
 
     let mut topo = Topo::new(mesh);
     let mut hier = collapse::simplify_capped(&mut topo, &pos, max_rounds);
     let mut uvs = vec![[0.0f64; 2]; n];
-    let mut rx = Relaxer { geom: Vec::new(), theta: opts.theta, guard: None };
+    let mut rx = Relaxer {
+        geom: Vec::new(),
+        theta: opts.theta,
+        guard: None,
+    };
     let tutte_base = topo.alive_faces > 1;
     if tutte_base {
         base::tutte(&topo, &pos, &mut uvs);
         rx.refresh(&topo, &pos);
         normalize_area(&topo, &rx, &mut uvs);
-        let all: Vec<VertId> = (0..n as u32).map(VertId).filter(|v| topo.vert_alive[v.ix()]).collect();
+        let all: Vec<VertId> = (0..n as u32)
+            .map(VertId)
+            .filter(|v| topo.vert_alive[v.ix()])
+            .collect();
         rx.relax(&topo, &mut uvs, all, opts.relax_tolerance, opts.max_sweeps);
     } else {
         base::triangle(&topo, &pos, &mut uvs);
@@ -215,7 +248,8 @@ fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart
         let mut inserted = Vec::with_capacity(round.len());
         for col in round.iter().rev() {
             split::undo(&mut topo, col);
-            let p = split::place(&topo, &pos, &uvs, col.u).unwrap_or_else(|| fallback_place(&topo, &uvs, col));
+            let p = split::place(&topo, &pos, &uvs, col.u)
+                .unwrap_or_else(|| fallback_place(&topo, &uvs, col));
             uvs[col.u.ix()] = p;
             inserted.push(col.u);
         }
@@ -228,30 +262,70 @@ fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart
         }
         start.sort_unstable();
         start.dedup();
-        rx.relax(&topo, &mut uvs, start, opts.relax_tolerance, opts.max_sweeps);
+        rx.relax(
+            &topo,
+            &mut uvs,
+            start,
+            opts.relax_tolerance,
+            opts.max_sweeps,
+        );
     }
     rx.refresh(&topo, &pos);
     normalize_area(&topo, &rx, &mut uvs);
     let boundary = overlap::BoundaryLoop::new(n, &mesh.triangles);
-    let mut newton_iterations = 0;
     let overlap_repaired = boundary.overlaps(&uvs);
     if overlap_repaired {
         // The hierarchy's layout folds over itself: restart from a layout whose boundary is
-        // a circle and let the global solve keep it simple.
-        // For θ = 1 the global solve does it; otherwise the local relaxation with moves
-        // of boundary vertices that would cross the boundary rejected.
+        // a circle and let the finish keep it simple.
         base::tutte(&topo, &pos, &mut uvs);
         normalize_area(&topo, &rx, &mut uvs);
-        if opts.theta == 1.0 {
-            let iters = opts.newton_iterations.max(REPAIR_ITERATIONS);
-            newton_iterations = finish(&pos, &mesh.triangles, &mut uvs, iters, opts, &boundary);
-        } else {
-            rx.guard = Some((boundary.clone(), boundary.index_of(n)));
-            let all: Vec<VertId> = (0..n as u32).map(VertId).collect();
-            rx.relax(&topo, &mut uvs, all, opts.relax_tolerance, REPAIR_SWEEPS);
+    }
+    rx.guard = Some((boundary.clone(), boundary.index_of(n)));
+    let geom: Vec<energy::FaceGeom> = mesh
+        .triangles
+        .iter()
+        .map(|t| energy::FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]))
+        .collect();
+    let mut newton_iterations = finish_layout(
+        &pos,
+        &mesh.triangles,
+        &topo,
+        &rx,
+        &mut uvs,
+        opts,
+        &boundary,
+        overlap_repaired,
+    );
+    // A planar projection that already beats the result is a better basin: finish from it
+    // too and keep the lower objective (jagged cells; never the case on the store's steep
+    // cells measured, where the hierarchy's layout wins by far).
+    let mut score = layout_energy(&geom, &mesh.triangles, &uvs, opts);
+    let mut projection_start = false;
+    let candidates = if opts.objective == Objective::Distortion {
+        planar::projections(&pos, &mesh.triangles)
+    } else {
+        Vec::new()
+    };
+    for mut cand in candidates {
+        normalize_area(&topo, &rx, &mut cand);
+        if boundary.overlaps(&cand) || !(layout_energy(&geom, &mesh.triangles, &cand, opts) < score)
+        {
+            continue;
         }
-    } else if opts.theta == 1.0 && opts.newton_iterations > 0 {
-        newton_iterations = finish(&pos, &mesh.triangles, &mut uvs, opts.newton_iterations, opts, &boundary);
+        let it = finish_layout(
+            &pos,
+            &mesh.triangles,
+            &topo,
+            &rx,
+            &mut cand,
+            opts,
+            &boundary,
+            false,
+        );
+        let sc = layout_energy(&geom, &mesh.triangles, &cand, opts);
+        if sc < score {
+            (uvs, score, newton_iterations, projection_start) = (cand, sc, it, true);
+        }
     }
     let fit = pack::fit(&mut uvs, opts.gutter_texels / opts.texture_size as f64);
     let mut metrics = chart_metrics(&mesh.positions, &mesh.triangles, &uvs, None)?;
@@ -266,14 +340,87 @@ fn run(mesh: &ParamMesh, opts: &ParamOptions, max_rounds: usize) -> Result<Chart
         tutte_base,
         newton_iterations,
         overlap_repaired,
+        projection_start,
     })
+}
+
+/// The finish from `uvs`: for θ = 1 the global Newton solve (at least
+/// [`REPAIR_ITERATIONS`] when `repair`), otherwise the boundary-guarded local relaxation
+/// over every vertex (`rx.guard` must be set). Returns the Newton iterations run.
+#[allow(clippy::too_many_arguments)]
+fn finish_layout(
+    pos: &[[f64; 3]],
+    tris: &[[u32; 3]],
+    topo: &Topo,
+    rx: &Relaxer,
+    uvs: &mut [[f64; 2]],
+    opts: &ParamOptions,
+    boundary: &overlap::BoundaryLoop,
+    repair: bool,
+) -> u32 {
+    let all = || (0..uvs.len() as u32).map(VertId).collect::<Vec<_>>();
+    if opts.theta == 1.0 {
+        let iters = if repair {
+            opts.newton_iterations.max(REPAIR_ITERATIONS)
+        } else {
+            opts.newton_iterations
+        };
+        if iters > 0 {
+            return finish(pos, tris, uvs, iters, opts, boundary);
+        }
+    } else if repair {
+        rx.relax(topo, uvs, all(), opts.relax_tolerance, REPAIR_SWEEPS);
+    } else if opts.newton_iterations > 0 {
+        // No global solve for θ ≠ 1: the relaxation at the quality setting (the
+        // hierarchy's rounds stop early at the default tolerance).
+        rx.relax(
+            topo,
+            uvs,
+            all(),
+            LOCAL_FINISH_TOLERANCE.min(opts.relax_tolerance),
+            LOCAL_FINISH_SWEEPS,
+        );
+    }
+    0
+}
+
+/// The area-weighted energy (θ) of a layout, for comparing layouts of one mesh; +∞ if a
+/// triangle is flipped.
+fn layout_energy(
+    geom: &[energy::FaceGeom],
+    tris: &[[u32; 3]],
+    uvs: &[[f64; 2]],
+    opts: &ParamOptions,
+) -> f64 {
+    let (mut e, mut a) = (0.0, 0.0);
+    for (g, t) in geom.iter().zip(tris) {
+        if !(g.area > 0.0) {
+            continue;
+        }
+        e += g.area
+            * energy::energy(
+                &g.jacobian([uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]]),
+                opts.theta,
+            );
+        a += g.area;
+    }
+    if a > 0.0 { e / a } else { f64::INFINITY }
 }
 
 /// The global finish: Newton iterations from `uvs`; with [`Objective::PackedStretch`] the
 /// iterate (or start) with the lowest packed L² stretch is kept. Returns the iterations run.
-fn finish(pos: &[[f64; 3]], tris: &[[u32; 3]], uvs: &mut [[f64; 2]], iters: u32, opts: &ParamOptions, boundary: &overlap::BoundaryLoop) -> u32 {
-    let geom: Vec<energy::FaceGeom> =
-        tris.iter().map(|t| energy::FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize])).collect();
+fn finish(
+    pos: &[[f64; 3]],
+    tris: &[[u32; 3]],
+    uvs: &mut [[f64; 2]],
+    iters: u32,
+    opts: &ParamOptions,
+    boundary: &overlap::BoundaryLoop,
+) -> u32 {
+    let geom: Vec<energy::FaceGeom> = tris
+        .iter()
+        .map(|t| energy::FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]))
+        .collect();
     let mut best: Option<(f64, Vec<[f64; 2]>)> = None;
     let mut observe = |x: &[[f64; 2]]| {
         if opts.objective == Objective::PackedStretch {
@@ -283,7 +430,16 @@ fn finish(pos: &[[f64; 3]], tris: &[[u32; 3]], uvs: &mut [[f64; 2]], iters: u32,
             }
         }
     };
-    let it = newton::minimize(pos, tris, uvs, iters, opts.newton_tolerance, Some(boundary), &mut observe).iterations;
+    let it = newton::minimize(
+        pos,
+        tris,
+        uvs,
+        iters,
+        opts.newton_tolerance,
+        Some(boundary),
+        &mut observe,
+    )
+    .iterations;
     if let Some((_, b)) = best {
         uvs.copy_from_slice(&b);
     }
@@ -307,6 +463,13 @@ fn packed_stretch(geom: &[energy::FaceGeom], tris: &[[u32; 3]], uvs: &[[f64; 2]]
     }
     pack::packed_side(uvs) * (s / a).sqrt()
 }
+
+/// Relative tolerance of the finishing relaxation over all vertices when θ ≠ 1 (the
+/// measured quality setting, docs/parameterization.md).
+const LOCAL_FINISH_TOLERANCE: f64 = 1e-4;
+
+/// Sweep budget of the finishing relaxation when θ ≠ 1.
+const LOCAL_FINISH_SWEEPS: u32 = 32;
 
 /// Iteration budget of the global solve when it repairs an overlapping chart from a Tutte
 /// start (far from the optimum, so more than the finishing default).
@@ -382,7 +545,10 @@ pub(crate) mod tests {
                 triangles.push([a, a + 1 + n as u32, a + n as u32]);
             }
         }
-        ParamMesh { positions, triangles }
+        ParamMesh {
+            positions,
+            triangles,
+        }
     }
 
     #[test]
@@ -392,7 +558,11 @@ pub(crate) mod tests {
             let ch = run(&m, &ParamOptions::default(), cap).unwrap();
             assert!(ch.tutte_base);
             assert_eq!(ch.metrics.flipped, 0, "cap {cap}");
-            assert!(ch.metrics.angle_distortion_mean < 2.0, "cap {cap}: {:?}", ch.metrics);
+            assert!(
+                ch.metrics.angle_distortion_mean < 2.0,
+                "cap {cap}: {:?}",
+                ch.metrics
+            );
         }
     }
 
@@ -400,13 +570,31 @@ pub(crate) mod tests {
     fn options_are_validated() {
         let m = grid(3, |_, _| 0.0);
         for o in [
-            ParamOptions { theta: -1.0, ..Default::default() },
-            ParamOptions { theta: f64::NAN, ..Default::default() },
-            ParamOptions { relax_tolerance: -1.0, ..Default::default() },
-            ParamOptions { texture_size: 0, ..Default::default() },
-            ParamOptions { gutter_texels: 200.0, ..Default::default() },
+            ParamOptions {
+                theta: -1.0,
+                ..Default::default()
+            },
+            ParamOptions {
+                theta: f64::NAN,
+                ..Default::default()
+            },
+            ParamOptions {
+                relax_tolerance: -1.0,
+                ..Default::default()
+            },
+            ParamOptions {
+                texture_size: 0,
+                ..Default::default()
+            },
+            ParamOptions {
+                gutter_texels: 200.0,
+                ..Default::default()
+            },
         ] {
-            assert!(matches!(parameterize(&m, &o), Err(Error::BadOption(_))), "{o:?}");
+            assert!(
+                matches!(parameterize(&m, &o), Err(Error::BadOption(_))),
+                "{o:?}"
+            );
         }
     }
 }

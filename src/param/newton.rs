@@ -51,11 +51,17 @@ pub(crate) fn minimize(
     observe: &mut dyn FnMut(&[[f64; 2]]),
 ) -> NewtonStats {
     let n = uvs.len();
-    let geom: Vec<FaceGeom> =
-        triangles.iter().map(|t| FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize])).collect();
+    let geom: Vec<FaceGeom> = triangles
+        .iter()
+        .map(|t| FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]))
+        .collect();
     let total_area: f64 = geom.iter().map(|g| g.area).sum();
     let e0 = mean_energy(&geom, triangles, uvs, total_area);
-    let mut stats = NewtonStats { iterations: 0, energy_before: e0, energy_after: e0 };
+    let mut stats = NewtonStats {
+        iterations: 0,
+        energy_before: e0,
+        energy_after: e0,
+    };
     observe(uvs);
     if max_iterations == 0 || n < 3 || !(total_area > 0.0) || !e0.is_finite() {
         return stats;
@@ -73,7 +79,11 @@ pub(crate) fn minimize(
         let mut trace = 0.0;
         for (t, tri) in triangles.iter().enumerate() {
             let g = &geom[t];
-            let uv = [uvs[tri[0] as usize], uvs[tri[1] as usize], uvs[tri[2] as usize]];
+            let uv = [
+                uvs[tri[0] as usize],
+                uvs[tri[1] as usize],
+                uvs[tri[2] as usize],
+            ];
             let Some((_, pg, ph)) = sym_dirichlet::eval(&g.jacobian(uv)) else {
                 return stats; // cannot happen from a flip-free start
             };
@@ -97,7 +107,10 @@ pub(crate) fn minimize(
                 let ga: f64 = (0..4).map(|i| d[a][i] * pg[i]).sum();
                 grad[2 * tri[a / 2] as usize + a % 2] += w * ga;
                 for b in 0..6 {
-                    let (ra, rb) = (2 * tri[a / 2] as usize + a % 2, 2 * tri[b / 2] as usize + b % 2);
+                    let (ra, rb) = (
+                        2 * tri[a / 2] as usize + a % 2,
+                        2 * tri[b / 2] as usize + b % 2,
+                    );
                     if ra < rb {
                         continue; // lower triangle only
                     }
@@ -174,7 +187,12 @@ pub(crate) fn minimize(
 const ABSOLUTE_FLOOR: f64 = 1e-7;
 
 /// Area-weighted mean Ψ (+∞ if any triangle is flipped or degenerate).
-fn mean_energy(geom: &[FaceGeom], triangles: &[[u32; 3]], uvs: &[[f64; 2]], total_area: f64) -> f64 {
+fn mean_energy(
+    geom: &[FaceGeom],
+    triangles: &[[u32; 3]],
+    uvs: &[[f64; 2]],
+    total_area: f64,
+) -> f64 {
     let mut s = 0.0;
     for (g, t) in geom.iter().zip(triangles) {
         let j = g.jacobian([uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]]);
@@ -218,7 +236,10 @@ fn smallest_positive_root(a: f64, b: f64, c: f64) -> Option<f64> {
     let q = -0.5 * (b + b.signum() * sq);
     let r1 = q / a;
     let r2 = if q != 0.0 { c / q } else { f64::INFINITY };
-    [r1, r2].into_iter().filter(|r| *r > 0.0).min_by(|x, y| x.total_cmp(y))
+    [r1, r2]
+        .into_iter()
+        .filter(|r| *r > 0.0)
+        .min_by(|x, y| x.total_cmp(y))
 }
 
 /// The lower-triangle CSC pattern of the 2n x 2n Hessian (dof 2v + r) and, per triangle,
@@ -276,7 +297,8 @@ impl Pattern {
                 let mut s = [[usize::MAX; 6]; 6];
                 for a in 0..6 {
                     for b in 0..6 {
-                        let (ra, rb) = (2 * t[a / 2] as usize + a % 2, 2 * t[b / 2] as usize + b % 2);
+                        let (ra, rb) =
+                            (2 * t[a / 2] as usize + a % 2, 2 * t[b / 2] as usize + b % 2);
                         if ra >= rb {
                             s[a][b] = find(ra, rb);
                         }
@@ -286,7 +308,11 @@ impl Pattern {
             })
             .collect();
         let symbolic = SymbolicSparseColMat::new_checked(2 * n, 2 * n, col_ptr, None, row_idx);
-        Pattern { symbolic, slots, diag }
+        Pattern {
+            symbolic,
+            slots,
+            diag,
+        }
     }
 
     fn nnz(&self) -> usize {
@@ -317,7 +343,15 @@ mod tests {
         let m = grid(9, |x, _| if x < 4.0 { x * 1.7 } else { (8.0 - x) * 1.7 });
         // Start: the orthographic layout (flip-free, distorted).
         let mut uvs: Vec<[f64; 2]> = m.positions.iter().map(|p| [p[0], p[1]]).collect();
-        let st = minimize(&m.positions, &m.triangles, &mut uvs, 50, 1e-9, None, &mut |_| {});
+        let st = minimize(
+            &m.positions,
+            &m.triangles,
+            &mut uvs,
+            50,
+            1e-9,
+            None,
+            &mut |_| {},
+        );
         assert!(st.energy_before > 4.5, "{st:?}");
         assert!(st.energy_after - 4.0 < 1e-6, "{st:?}");
         assert!(st.iterations < 30, "{st:?}");
@@ -325,11 +359,21 @@ mod tests {
 
     #[test]
     fn energy_never_rises_and_nothing_flips() {
-        let m = grid(12, |x, y| 3.0 * ((0.7 * x).sin() * (0.5 * y).cos()) + 0.2 * x * y);
+        let m = grid(12, |x, y| {
+            3.0 * ((0.7 * x).sin() * (0.5 * y).cos()) + 0.2 * x * y
+        });
         let mut uvs: Vec<[f64; 2]> = m.positions.iter().map(|p| [p[0], p[1]]).collect();
         let mut last = f64::INFINITY;
         for _ in 0..6 {
-            let st = minimize(&m.positions, &m.triangles, &mut uvs, 1, 0.0, None, &mut |_| {});
+            let st = minimize(
+                &m.positions,
+                &m.triangles,
+                &mut uvs,
+                1,
+                0.0,
+                None,
+                &mut |_| {},
+            );
             assert!(st.energy_after <= st.energy_before && st.energy_after <= last);
             last = st.energy_after;
             let met = crate::param::chart_metrics(&m.positions, &m.triangles, &uvs, None).unwrap();

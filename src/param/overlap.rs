@@ -75,7 +75,13 @@ impl BoundaryLoop {
         if n < 4 {
             return false;
         }
-        let at = |k: usize| if k == i { x } else { uvs[self.verts[k] as usize] };
+        let at = |k: usize| {
+            if k == i {
+                x
+            } else {
+                uvs[self.verts[k] as usize]
+            }
+        };
         let (prev, next) = ((i + n - 1) % n, (i + 1) % n);
         for (a, b) in [(prev, i), (i, next)] {
             let (pa, pb) = (at(a), at(b));
@@ -98,7 +104,12 @@ impl BoundaryLoop {
         if n < 4 {
             return 0;
         }
-        let seg = |i: usize| (uvs[self.verts[i] as usize], uvs[self.verts[(i + 1) % n] as usize]);
+        let seg = |i: usize| {
+            (
+                uvs[self.verts[i] as usize],
+                uvs[self.verts[(i + 1) % n] as usize],
+            )
+        };
         let mut order: Vec<(f64, f64, usize)> = (0..n)
             .map(|i| {
                 let (a, b) = seg(i);
@@ -135,14 +146,19 @@ fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 }
 
 fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
-    p[0] >= a[0].min(b[0]) && p[0] <= a[0].max(b[0]) && p[1] >= a[1].min(b[1]) && p[1] <= a[1].max(b[1])
+    p[0] >= a[0].min(b[0])
+        && p[0] <= a[0].max(b[0])
+        && p[1] >= a[1].min(b[1])
+        && p[1] <= a[1].max(b[1])
 }
 
 /// Closed segments ab and cd share a point.
 fn segments_meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let (d1, d2) = (orient(c, d, a), orient(c, d, b));
     let (d3, d4) = (orient(a, b, c), orient(a, b, d));
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0)) {
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
         return true;
     }
     (d1 == 0.0 && on_segment(c, d, a))

@@ -37,7 +37,11 @@ pub(crate) fn convex_hull(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 pub(crate) fn min_area_rect(h: &[[f64; 2]]) -> (f64, f64) {
     let m = h.len();
     if m < 3 {
-        let ang = if m == 2 { (h[1][1] - h[0][1]).atan2(h[1][0] - h[0][0]) } else { 0.0 };
+        let ang = if m == 2 {
+            (h[1][1] - h[0][1]).atan2(h[1][0] - h[0][0])
+        } else {
+            0.0
+        };
         return (ang, 0.0);
     }
     let dirs: Vec<[f64; 2]> = (0..m)
@@ -187,7 +191,11 @@ pub(crate) fn fit(uvs: &mut [[f64; 2]], gutter: f64) -> Fit {
             p[k] = (off[k] + scale * p[k]).clamp(0.0, 1.0);
         }
     }
-    Fit { rotation: rot, scale, offset: off }
+    Fit {
+        rotation: rot,
+        scale,
+        offset: off,
+    }
 }
 
 #[cfg(test)]
@@ -210,7 +218,10 @@ mod tests {
         let (ang, area) = min_area_rect(&h);
         assert!((area - 4.0 * 1.5).abs() < 1e-9, "{area}");
         let m = (ang - a).rem_euclid(std::f64::consts::FRAC_PI_2);
-        assert!(m < 1e-9 || (std::f64::consts::FRAC_PI_2 - m) < 1e-9, "{ang}");
+        assert!(
+            m < 1e-9 || (std::f64::consts::FRAC_PI_2 - m) < 1e-9,
+            "{ang}"
+        );
         let f = fit(&mut pts, 0.01);
         let mut lo = [1.0f64; 2];
         let mut hi = [0.0f64; 2];
@@ -225,31 +236,48 @@ mod tests {
         // A 4 x 1.5 rectangle fills a square best turned by 45°: its box is then
         // (4 + 1.5)/√2 = 3.89 on both sides, less than its length 4.
         let side = 5.5 / 2f64.sqrt();
-        assert!((f.scale - 0.98 / side).abs() < 1e-9, "scale {} rotation {}", f.scale, f.rotation);
+        assert!(
+            (f.scale - 0.98 / side).abs() < 1e-9,
+            "scale {} rotation {}",
+            f.scale,
+            f.rotation
+        );
     }
 
     #[test]
     fn min_square_matches_a_fine_brute_force_search() {
         let mut seed = 777u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..20 {
             // random skewed point clouds (parallelogram-like, as converged charts are)
             let (k, a) = (rnd() * 2.0 - 1.0, rnd() * 3.0);
-            let pts: Vec<[f64; 2]> = (0..40).map(|_| { let (x, y) = (rnd() * 3.0, rnd()); [x + k * y * 3.0, y + a * 0.2 * x] }).collect();
+            let pts: Vec<[f64; 2]> = (0..40)
+                .map(|_| {
+                    let (x, y) = (rnd() * 3.0, rnd());
+                    [x + k * y * 3.0, y + a * 0.2 * x]
+                })
+                .collect();
             let h = convex_hull(&pts);
             let (rot, side) = min_square_rotation(&h);
             let side_at = |r: f64| {
                 let (c, s) = (r.cos(), r.sin());
                 let xs: Vec<f64> = h.iter().map(|p| c * p[0] - s * p[1]).collect();
                 let ys: Vec<f64> = h.iter().map(|p| s * p[0] + c * p[1]).collect();
-                let ext = |v: &[f64]| v.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - v.iter().cloned().fold(f64::INFINITY, f64::min);
+                let ext = |v: &[f64]| {
+                    v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+                        - v.iter().cloned().fold(f64::INFINITY, f64::min)
+                };
                 ext(&xs).max(ext(&ys))
             };
             assert!((side_at(rot) - side).abs() < 1e-12);
-            let brute = (0..90_000).map(|i| side_at((i as f64 * 0.001).to_radians())).fold(f64::INFINITY, f64::min);
+            let brute = (0..90_000)
+                .map(|i| side_at((i as f64 * 0.001).to_radians()))
+                .fold(f64::INFINITY, f64::min);
             assert!(side <= brute * (1.0 + 1e-6), "{side} vs brute {brute}");
             // never worse than the minimum-area rectangle's orientation
             assert!(side <= side_at(-min_area_rect(&h).0) + 1e-12);
@@ -260,7 +288,9 @@ mod tests {
     fn calipers_match_brute_force_on_random_hulls() {
         let mut seed = 12345u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..50 {
@@ -273,7 +303,8 @@ mod tests {
                 let b = h[(i + 1) % h.len()];
                 let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
                 let d = [(b[0] - a[0]) / l, (b[1] - a[1]) / l];
-                let (mut lo, mut hi, mut top) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+                let (mut lo, mut hi, mut top) =
+                    (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
                 for p in &h {
                     let x = p[0] * d[0] + p[1] * d[1];
                     let y = -p[0] * d[1] + p[1] * d[0] - (-a[0] * d[1] + a[1] * d[0]);

@@ -6,7 +6,7 @@
 //! would reach det = 0 (det J is linear in one vertex's UV), and every trial point has
 //! finite energy, so a move can never flip a triangle.
 
-use super::energy::{FaceGeom, det2, det_slope, energy, vertex_grad_hess};
+use super::energy::{FaceGeom, det_slope, det2, energy, vertex_grad_hess};
 use super::mesh::{Topo, VertId};
 use super::overlap::BoundaryLoop;
 
@@ -36,12 +36,19 @@ impl Relaxer {
         self.geom.resize(topo.faces.len(), FaceGeom::default());
         for (f, t) in topo.faces.iter().enumerate() {
             if topo.face_alive[f] {
-                self.geom[f] = FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]);
+                self.geom[f] =
+                    FaceGeom::new(pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]);
             }
         }
     }
 
-    fn corners(topo: &Topo, uvs: &[[f64; 2]], f: usize, v: VertId, x: [f64; 2]) -> ([[f64; 2]; 3], usize) {
+    fn corners(
+        topo: &Topo,
+        uvs: &[[f64; 2]],
+        f: usize,
+        v: VertId,
+        x: [f64; 2],
+    ) -> ([[f64; 2]; 3], usize) {
         let t = topo.faces[f];
         let mut uv = [uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]];
         let k = t.iter().position(|&w| w == v.0).unwrap_or(0);
@@ -60,7 +67,13 @@ impl Relaxer {
         e
     }
 
-    fn local_grad_hess(&self, topo: &Topo, uvs: &[[f64; 2]], v: VertId, x: [f64; 2]) -> Option<(f64, [f64; 2], [[f64; 2]; 2])> {
+    fn local_grad_hess(
+        &self,
+        topo: &Topo,
+        uvs: &[[f64; 2]],
+        v: VertId,
+        x: [f64; 2],
+    ) -> Option<(f64, [f64; 2], [[f64; 2]; 2])> {
         let mut e = 0.0;
         let mut gr = [0.0, 0.0];
         let mut hs = [[0.0; 2]; 2];
@@ -85,7 +98,11 @@ impl Relaxer {
         for (f, t) in topo.faces.iter().enumerate() {
             if topo.face_alive[f] {
                 let g = &self.geom[f];
-                e += g.area * energy(&g.jacobian([uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]]), self.theta);
+                e += g.area
+                    * energy(
+                        &g.jacobian([uvs[t[0] as usize], uvs[t[1] as usize], uvs[t[2] as usize]]),
+                        self.theta,
+                    );
             }
         }
         e
@@ -95,11 +112,21 @@ impl Relaxer {
     /// local energy before the move.
     pub fn optimize_vertex(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId) -> (f64, f64) {
         let x0 = uvs[v.ix()];
-        let Some((e0, g0, h0)) = self.local_grad_hess(topo, uvs, v, x0) else { return (0.0, f64::INFINITY) };
+        let Some((e0, g0, h0)) = self.local_grad_hess(topo, uvs, v, x0) else {
+            return (0.0, f64::INFINITY);
+        };
         (self.optimize_from(topo, uvs, v, e0, g0, h0), e0)
     }
 
-    fn optimize_from(&self, topo: &Topo, uvs: &mut [[f64; 2]], v: VertId, e0: f64, g0: [f64; 2], h0: [[f64; 2]; 2]) -> f64 {
+    fn optimize_from(
+        &self,
+        topo: &Topo,
+        uvs: &mut [[f64; 2]],
+        v: VertId,
+        e0: f64,
+        g0: [f64; 2],
+        h0: [[f64; 2]; 2],
+    ) -> f64 {
         let x0 = uvs[v.ix()];
         let gn = (g0[0] * g0[0] + g0[1] * g0[1]).sqrt();
         if !(gn > 0.0) || !gn.is_finite() {
@@ -130,7 +157,10 @@ impl Relaxer {
             let b = 0.5 * (h0[0][1] + h0[1][0]);
             let det = a * d - b * b;
             if a > 0.0 && det > 0.0 {
-                let nd = [-(d * g0[0] - b * g0[1]) / det, -(-b * g0[0] + a * g0[1]) / det];
+                let nd = [
+                    -(d * g0[0] - b * g0[1]) / det,
+                    -(-b * g0[0] + a * g0[1]) / det,
+                ];
                 let len = (nd[0] * nd[0] + nd[1] * nd[1]).sqrt();
                 if len.is_finite() && nd[0] * g0[0] + nd[1] * g0[1] < 0.0 {
                     let cap = if len > scale { scale / len } else { 1.0 };
@@ -172,7 +202,14 @@ impl Relaxer {
     /// Relaxes starting from `start` (deterministic order); after each sweep the
     /// neighbours of the vertices that moved are queued for the next one. Stops when a
     /// sweep lowers the total energy by less than `tol` (relative) or after `max_sweeps`.
-    pub fn relax(&self, topo: &Topo, uvs: &mut [[f64; 2]], start: Vec<VertId>, tol: f64, max_sweeps: u32) -> RelaxStats {
+    pub fn relax(
+        &self,
+        topo: &Topo,
+        uvs: &mut [[f64; 2]],
+        start: Vec<VertId>,
+        tol: f64,
+        max_sweeps: u32,
+    ) -> RelaxStats {
         let mut st = RelaxStats::default();
         let mut total = self.total_energy(topo, uvs);
         if !total.is_finite() || total <= 0.0 {

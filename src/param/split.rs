@@ -57,7 +57,12 @@ fn valid(cons: &[([f64; 2], [f64; 2])], x: [f64; 2]) -> bool {
 /// area-weighted mean of the positions that make each incident triangle similar to its
 /// 3D shape; if that flips a triangle, moves to a point of the 1-ring's kernel
 /// (half-plane intersection). Returns `None` only if the kernel is numerically empty.
-pub(crate) fn place(topo: &Topo, pos: &[[f64; 3]], uvs: &[[f64; 2]], u: VertId) -> Option<[f64; 2]> {
+pub(crate) fn place(
+    topo: &Topo,
+    pos: &[[f64; 3]],
+    uvs: &[[f64; 2]],
+    u: VertId,
+) -> Option<[f64; 2]> {
     let pu = pos[u.ix()];
     let mut acc = [0.0, 0.0];
     let mut wsum = 0.0;
@@ -78,7 +83,11 @@ pub(crate) fn place(topo: &Topo, pos: &[[f64; 3]], uvs: &[[f64; 2]], u: VertId) 
         acc[1] += w * x[1];
         wsum += w;
     }
-    let cand = if wsum > 0.0 { [acc[0] / wsum, acc[1] / wsum] } else { uvs[u.ix()] };
+    let cand = if wsum > 0.0 {
+        [acc[0] / wsum, acc[1] / wsum]
+    } else {
+        uvs[u.ix()]
+    };
     let cons = constraints(topo, uvs, u);
     if cand[0].is_finite() && cand[1].is_finite() && valid(&cons, cand) {
         return Some(cand);
@@ -175,7 +184,9 @@ mod tests {
         // A star-shaped but non-convex ring around the origin (CCW); the constraints are
         // the ring edges. The kernel must contain a valid point.
         let ring = [[1.0, 0.0], [0.1, 0.1], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
-        let cons: Vec<_> = (0..ring.len()).map(|i| (ring[i], ring[(i + 1) % ring.len()])).collect();
+        let cons: Vec<_> = (0..ring.len())
+            .map(|i| (ring[i], ring[(i + 1) % ring.len()]))
+            .collect();
         let k = kernel_polygon(&cons).unwrap();
         let c = centroid(&k).unwrap();
         assert!(valid(&cons, c), "{c:?}");

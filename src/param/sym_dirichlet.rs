@@ -42,10 +42,22 @@ pub(crate) fn eval(f: &[[f64; 2]; 2]) -> Option<(f64, [f64; 4], [[f64; 4]; 4])> 
     let p3 = p * p * p;
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let pairs = [
-        (2.0 + 6.0 / (s1 * s1 * s1 * s1), uq([[1.0, 0.0], [0.0, 0.0]])),
-        (2.0 + 6.0 / (s2 * s2 * s2 * s2), uq([[0.0, 0.0], [0.0, 1.0]])),
-        (2.0 + 2.0 * (s1 * s1 + s1 * s2 + s2 * s2) / p3, uq([[0.0, h], [h, 0.0]])),
-        ((2.0 - 2.0 * (s1 * s1 - s1 * s2 + s2 * s2) / p3).max(0.0), uq([[0.0, -h], [h, 0.0]])),
+        (
+            2.0 + 6.0 / (s1 * s1 * s1 * s1),
+            uq([[1.0, 0.0], [0.0, 0.0]]),
+        ),
+        (
+            2.0 + 6.0 / (s2 * s2 * s2 * s2),
+            uq([[0.0, 0.0], [0.0, 1.0]]),
+        ),
+        (
+            2.0 + 2.0 * (s1 * s1 + s1 * s2 + s2 * s2) / p3,
+            uq([[0.0, h], [h, 0.0]]),
+        ),
+        (
+            (2.0 - 2.0 * (s1 * s1 - s1 * s2 + s2 * s2) / p3).max(0.0),
+            uq([[0.0, -h], [h, 0.0]]),
+        ),
     ];
     let mut hess = [[0.0; 4]; 4];
     for (lambda, q) in pairs {
@@ -104,7 +116,12 @@ mod tests {
 
     #[test]
     fn svd_reconstructs() {
-        for f in [[1.3, 0.4, -0.2, 0.7], [2.0, 0.0, 0.0, 0.5], [0.3, -1.1, 0.9, 0.2], [1.0, 0.0, 0.0, 1.0]] {
+        for f in [
+            [1.3, 0.4, -0.2, 0.7],
+            [2.0, 0.0, 0.0, 0.5],
+            [0.3, -1.1, 0.9, 0.2],
+            [1.0, 0.0, 0.0, 1.0],
+        ] {
             let (u, s1, s2, v) = svd2(&mat(f)).unwrap();
             assert!(s1 >= s2 && s2 > 0.0);
             for r in 0..2 {
@@ -120,7 +137,11 @@ mod tests {
     #[test]
     fn gradient_and_hessian_match_finite_differences_where_convex() {
         // det > ~1.3: every eigenvalue is positive, so the projection changes nothing.
-        for f in [[1.9, 0.3, -0.4, 1.2], [2.5, 0.0, 0.1, 1.0], [1.2, -0.9, 0.8, 1.5]] {
+        for f in [
+            [1.9, 0.3, -0.4, 1.2],
+            [2.5, 0.0, 0.1, 1.0],
+            [1.2, -0.9, 0.8, 1.5],
+        ] {
             let (e, g, hs) = eval(&mat(f)).unwrap();
             assert!((e - energy(&mat(f))).abs() < 1e-12);
             let step = 1e-5;
@@ -135,7 +156,11 @@ mod tests {
                 let (_, gm, _) = eval(&mat(fm)).unwrap();
                 for b in 0..4 {
                     let fdh = (gp[b] - gm[b]) / (2.0 * step);
-                    assert!((fdh - hs[a][b]).abs() < 1e-5, "hess {a}{b}: {fdh} vs {}", hs[a][b]);
+                    assert!(
+                        (fdh - hs[a][b]).abs() < 1e-5,
+                        "hess {a}{b}: {fdh} vs {}",
+                        hs[a][b]
+                    );
                 }
             }
         }

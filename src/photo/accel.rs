@@ -49,7 +49,10 @@ impl RayAccel {
             "grid" => {
                 let bin_px = match arg {
                     None => ViewGridParams::default().bin_px,
-                    Some(a) => a.parse::<f32>().ok().filter(|b| b.is_finite() && *b > 0.0 && *b <= 4096.0)?,
+                    Some(a) => a
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|b| b.is_finite() && *b > 0.0 && *b <= 4096.0)?,
                 };
                 Some(RayAccel::ViewGrid(ViewGridParams { bin_px }))
             }
@@ -94,12 +97,27 @@ mod tests {
 
     #[test]
     fn parse_round_trips() {
-        for s in ["grid", "grid:4", "grid:2.5", "bvh", "bvh:fast", "bvh:very-slow"] {
+        for s in [
+            "grid",
+            "grid:4",
+            "grid:2.5",
+            "bvh",
+            "bvh:fast",
+            "bvh:very-slow",
+        ] {
             let a = RayAccel::parse(s).unwrap();
             assert_eq!(RayAccel::parse(&a.name()), Some(a), "{s}");
         }
         assert_eq!(RayAccel::parse("grid"), Some(RayAccel::default()));
-        for bad in ["", "grid:0", "grid:-1", "grid:nan", "grid:x", "bvh:quick", "octree"] {
+        for bad in [
+            "",
+            "grid:0",
+            "grid:-1",
+            "grid:nan",
+            "grid:x",
+            "bvh:quick",
+            "octree",
+        ] {
             assert_eq!(RayAccel::parse(bad), None, "{bad}");
         }
     }

@@ -18,10 +18,10 @@
 
 use image::RgbImage;
 
+use super::PixelFootprint;
 use super::confidence::{BorderFeather, ConfidenceParams};
 use super::level::ColourTransform;
 use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
-use super::PixelFootprint;
 pub use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::colour::ColourSpace;
 
@@ -78,8 +78,17 @@ impl<'a> PhotoSamples<'a> {
             })
         });
         let f = (focal_px[0] * focal_px[1]).sqrt();
-        let pixel_angle = if f.is_finite() && f > 0.0 { (1.0 / f) as f32 } else { 0.0 };
-        PhotoSamples { image, lut, feather: params.border_feather(image.width(), image.height()), pixel_angle }
+        let pixel_angle = if f.is_finite() && f > 0.0 {
+            (1.0 / f) as f32
+        } else {
+            0.0
+        };
+        PhotoSamples {
+            image,
+            lut,
+            feather: params.border_feather(image.width(), image.height()),
+            pixel_angle,
+        }
     }
 }
 
@@ -107,14 +116,30 @@ impl PhotoAccum {
     /// texture `scale` times smaller (`scale` a power of two; corners are multiplied by it,
     /// exactly, and the size guard [`MAX_SPLAT_BBOX`] applies in the footprints' units).
     pub fn with_scale(texels: u32, scale: u32) -> PhotoAccum {
-        PhotoAccum { texels, scale: scale.max(1), sums: TexelTiles::new(texels), kinds: [0; 3] }
+        PhotoAccum {
+            texels,
+            scale: scale.max(1),
+            sums: TexelTiles::new(texels),
+            kinds: [0; 3],
+        }
     }
 
     /// Deposits a footprint of colour `rgb` (working space 0..1) with border feather
     /// `feather`, surface footprint `footprint_m` (metres) and `1 / cos_view` `grazing`.
-    pub fn add(&mut self, fp: &PixelFootprint, rgb: [f32; 3], feather: f32, footprint_m: f32, grazing: f32) {
+    pub fn add(
+        &mut self,
+        fp: &PixelFootprint,
+        rgb: [f32; 3],
+        feather: f32,
+        footprint_m: f32,
+        grazing: f32,
+    ) {
         let sc = self.scale as f32;
-        let corners = if self.scale == 1 { fp.corners } else { fp.corners.map(|c| [c[0] * sc, c[1] * sc]) };
+        let corners = if self.scale == 1 {
+            fp.corners
+        } else {
+            fp.corners.map(|c| [c[0] * sc, c[1] * sc])
+        };
         let shape = footprint_shape(&corners);
         let sums = &mut self.sums;
         let q = feather;
@@ -134,7 +159,10 @@ impl PhotoAccum {
         let bbox = MAX_SPLAT_BBOX * (self.scale as f64 * self.scale as f64);
         let s = match shape {
             Some((poly, area)) => splat_polygon_limited(&poly, area, self.texels, bbox, deposit),
-            None => Splat { area: 0.0, kind: SplatKind::Skipped },
+            None => Splat {
+                area: 0.0,
+                kind: SplatKind::Skipped,
+            },
         };
         self.kinds[match s.kind {
             SplatKind::Exact => 0,
@@ -156,11 +184,18 @@ impl PhotoAccum {
         transform: &ColourTransform,
         params: &ConfidenceParams,
     ) {
-        self.add_samples(footprints, &PhotoSamples::new(image, focal_px, transform, params, ColourSpace::Linear));
+        self.add_samples(
+            footprints,
+            &PhotoSamples::new(image, focal_px, transform, params, ColourSpace::Linear),
+        );
     }
 
     /// [`PhotoAccum::add_all`] with the photo's colours, border feather and pixel angle prepared.
-    pub fn add_samples<'f>(&mut self, footprints: impl IntoIterator<Item = &'f PixelFootprint>, photo: &PhotoSamples) {
+    pub fn add_samples<'f>(
+        &mut self,
+        footprints: impl IntoIterator<Item = &'f PixelFootprint>,
+        photo: &PhotoSamples,
+    ) {
         let (w, h) = photo.image.dimensions();
         let (raw, lut) = (photo.image.as_raw(), &photo.lut);
         for fp in footprints {
@@ -169,7 +204,11 @@ impl PhotoAccum {
                 continue;
             }
             let o = 3 * (r as usize * w as usize + c as usize);
-            let rgb = [lut[0][raw[o] as usize], lut[1][raw[o + 1] as usize], lut[2][raw[o + 2] as usize]];
+            let rgb = [
+                lut[0][raw[o] as usize],
+                lut[1][raw[o + 1] as usize],
+                lut[2][raw[o + 2] as usize],
+            ];
             let border = photo.feather.at(fp.pixel) as f32;
             let grazing = 1.0 / fp.cos_view.max(MIN_COS_VIEW);
             let footprint = fp.distance * photo.pixel_angle * grazing;
@@ -248,7 +287,13 @@ impl CellContext {
     /// A context for a flat cell (every cosine 1) of `base_texels` side.
     pub fn flat(base_texels: u32, max_error: f32, existing_ground: f32) -> CellContext {
         let n = base_texels as usize * base_texels as usize;
-        CellContext { base_texels, cos_slope: vec![1.0; n], max_error, existing_ground, texel_ground: existing_ground }
+        CellContext {
+            base_texels,
+            cos_slope: vec![1.0; n],
+            max_error,
+            existing_ground,
+            texel_ground: existing_ground,
+        }
     }
 
     /// The existing texel under texel `t` of a texture `scale` times finer.
@@ -311,7 +356,13 @@ pub struct CellAccum {
 
 impl CellAccum {
     /// An empty accumulator of `texels` side, `scale` times the existing texture's.
-    pub fn new(texels: u32, scale: u32, mode: BlendMode, context: CellContext, params: &ConfidenceParams) -> CellAccum {
+    pub fn new(
+        texels: u32,
+        scale: u32,
+        mode: BlendMode,
+        context: CellContext,
+        params: &ConfidenceParams,
+    ) -> CellAccum {
         let n = texels as usize * texels as usize;
         CellAccum {
             mode,
@@ -346,27 +397,59 @@ impl CellAccum {
                     written += 1;
                     best[t] = label;
                     *s = match mode {
-                        BlendMode::Confidence => TexelSums { coverage: conf, weight: w, colour: c.map(|v| w * v), footprint: w * res, grazing: w },
-                        BlendMode::Best => TexelSums { coverage: conf, weight: w, colour: c, footprint: res, grazing: w },
+                        BlendMode::Confidence => TexelSums {
+                            coverage: conf,
+                            weight: w,
+                            colour: c.map(|v| w * v),
+                            footprint: w * res,
+                            grazing: w,
+                        },
+                        BlendMode::Best => TexelSums {
+                            coverage: conf,
+                            weight: w,
+                            colour: c,
+                            footprint: res,
+                            grazing: w,
+                        },
                     };
                 }
                 None => *s = TexelSums::default(),
             }
         });
-        (CellAccum { mode, texels, scale, context, best, sharpness, merged }, written)
+        (
+            CellAccum {
+                mode,
+                texels,
+                scale,
+                context,
+                best,
+                sharpness,
+                merged,
+            },
+            written,
+        )
     }
 
     /// A photo's colour, coverage confidence, resolution and selection weight at texel `t`
     /// from its sums `s` (`None` without colour).
     #[inline]
-    fn photo_texel(s: &TexelSums, ctx: &CellContext, t: usize, texels: u32, scale: u32, sharpness: f32) -> Option<([f32; 3], f32, f32, f32)> {
+    fn photo_texel(
+        s: &TexelSums,
+        ctx: &CellContext,
+        t: usize,
+        texels: u32,
+        scale: u32,
+        sharpness: f32,
+    ) -> Option<([f32; 3], f32, f32, f32)> {
         if !(s.weight > 0.0) {
             return None;
         }
         let c = s.colour.map(|v| (v / s.weight).clamp(0.0, 1.0));
         let conf = (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0);
         let b = ctx.base_index(t, texels, scale);
-        let res = ctx.photo_resolution(b, [s.footprint / s.weight, s.grazing / s.weight]).max(1e-6);
+        let res = ctx
+            .photo_resolution(b, [s.footprint / s.weight, s.grazing / s.weight])
+            .max(1e-6);
         let w = conf * inverse_power(res, sharpness);
         Some((c, conf, res, if w.is_finite() { w } else { 0.0 }))
     }
@@ -377,13 +460,20 @@ impl CellAccum {
         let mut written = 0;
         let label = photo.saturating_add(1);
         let n = self.merged.len().min(p.sums.len());
-        let (ctx, texels, scale, sharpness, mode) = (&self.context, self.texels, self.scale, self.sharpness, self.mode);
+        let (ctx, texels, scale, sharpness, mode) = (
+            &self.context,
+            self.texels,
+            self.scale,
+            self.sharpness,
+            self.mode,
+        );
         let (merged, best) = (&mut self.merged, &mut self.best);
         p.sums.for_each(|t, ps| {
             if t >= n {
                 return;
             }
-            let Some((c, conf, res, w)) = Self::photo_texel(ps, ctx, t, texels, scale, sharpness) else {
+            let Some((c, conf, res, w)) = Self::photo_texel(ps, ctx, t, texels, scale, sharpness)
+            else {
                 return;
             };
             written += 1;
@@ -452,14 +542,26 @@ impl CellAccum {
     /// tiles footprints reached are visited.
     pub fn for_each_coloured(&self, mut f: impl FnMut(usize, [f32; 3], f32, f32, Option<u16>)) {
         self.merged.for_each(|t, s| {
-            let Some(&label) = self.best.get(t) else { return };
+            let Some(&label) = self.best.get(t) else {
+                return;
+            };
             if label == 0 {
                 return;
             }
             let (colour, res) = match self.mode {
-                BlendMode::Confidence if s.weight > 0.0 => (s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)), s.footprint / s.weight),
+                BlendMode::Confidence if s.weight > 0.0 => (
+                    s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
+                    s.footprint / s.weight,
+                ),
                 BlendMode::Confidence => ([0.0; 3], f32::INFINITY),
-                BlendMode::Best => (s.colour, if s.weight > 0.0 { s.footprint } else { f32::INFINITY }),
+                BlendMode::Best => (
+                    s.colour,
+                    if s.weight > 0.0 {
+                        s.footprint
+                    } else {
+                        f32::INFINITY
+                    },
+                ),
             };
             f(t, colour, s.coverage, res, Some(label - 1));
         });
@@ -472,7 +574,9 @@ impl CellAccum {
         }
         let s = self.merged.get(t);
         Some(match self.mode {
-            BlendMode::Confidence if s.weight > 0.0 => s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
+            BlendMode::Confidence if s.weight > 0.0 => {
+                s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0))
+            }
             BlendMode::Confidence => [0.0; 3],
             BlendMode::Best => s.colour,
         })
@@ -495,7 +599,14 @@ mod tests {
     use super::*;
 
     pub(crate) fn fp(pixel: [u32; 2], corners: [[f32; 2]; 4], cos_view: f32) -> PixelFootprint {
-        PixelFootprint { cell: 0, pixel, corners, cos_view, distance: 10.0, reconstructed: 0 }
+        PixelFootprint {
+            cell: 0,
+            pixel,
+            corners,
+            cos_view,
+            distance: 10.0,
+            reconstructed: 0,
+        }
     }
 
     fn square(x: f32, y: f32, s: f32) -> [[f32; 2]; 4] {
@@ -504,12 +615,21 @@ mod tests {
 
     /// No feather: every pixel of the small test images counts fully.
     fn params() -> ConfidenceParams {
-        ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() }
+        ConfidenceParams {
+            feather: 0.0,
+            ..ConfidenceParams::default()
+        }
     }
 
     /// Samples of `img` averaged as sRGB values, focal length 1000 px.
     fn srgb_samples<'a>(img: &'a RgbImage) -> PhotoSamples<'a> {
-        PhotoSamples::new(img, [1000.0; 2], &ColourTransform::IDENTITY, &params(), ColourSpace::Srgb)
+        PhotoSamples::new(
+            img,
+            [1000.0; 2],
+            &ColourTransform::IDENTITY,
+            &params(),
+            ColourSpace::Srgb,
+        )
     }
 
     #[test]
@@ -524,12 +644,30 @@ mod tests {
             .flat_map(|r| (0..40).map(move |c| (c, r)))
             .map(|(c, r)| {
                 let (cf, rf) = (c as f32, r as f32);
-                fp([c, r], [map(cf, rf), map(cf + 1.0, rf), map(cf + 1.0, rf + 1.0), map(cf, rf + 1.0)], 0.8)
+                fp(
+                    [c, r],
+                    [
+                        map(cf, rf),
+                        map(cf + 1.0, rf),
+                        map(cf + 1.0, rf + 1.0),
+                        map(cf, rf + 1.0),
+                    ],
+                    0.8,
+                )
             })
             .collect();
         for space in [ColourSpace::Linear, ColourSpace::Srgb] {
             let mut a = PhotoAccum::new(8);
-            a.add_samples(&fps, &PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params(), space));
+            a.add_samples(
+                &fps,
+                &PhotoSamples::new(
+                    &img,
+                    [1000.0; 2],
+                    &ColourTransform::IDENTITY,
+                    &params(),
+                    space,
+                ),
+            );
             let want = [200u8, 40, 90].map(|v| space.decode_u8(v));
             let mut n = 0;
             for t in 0..64 {
@@ -542,7 +680,10 @@ mod tests {
                     assert!((0.0..=1.0 + 1e-6).contains(&q), "{q}");
                     // every pixel is 10 m away, 1 mrad, seen at cos 0.8
                     let [r, g] = a.footprint_at(t);
-                    assert!((r - 0.01 / 0.8).abs() < 1e-6 && (g - 1.25).abs() < 1e-5, "{r} {g}");
+                    assert!(
+                        (r - 0.01 / 0.8).abs() < 1e-6 && (g - 1.25).abs() < 1e-5,
+                        "{r} {g}"
+                    );
                 }
             }
             assert!(n >= 49, "{n} texels coloured");
@@ -553,10 +694,13 @@ mod tests {
 
     #[test]
     fn texel_aligned_and_finer_footprints_reproduce_a_texture() {
-        let tex = RgbImage::from_fn(6, 6, |x, y| image::Rgb([(x * 40) as u8, (y * 40) as u8, ((x * y) * 7) as u8]));
+        let tex = RgbImage::from_fn(6, 6, |x, y| {
+            image::Rgb([(x * 40) as u8, (y * 40) as u8, ((x * y) * 7) as u8])
+        });
         // one photo pixel per texel, exactly covering it
-        let fps: Vec<PixelFootprint> =
-            (0..6).flat_map(|r| (0..6).map(move |c| fp([c, r], square(c as f32, r as f32, 1.0), 1.0))).collect();
+        let fps: Vec<PixelFootprint> = (0..6)
+            .flat_map(|r| (0..6).map(move |c| fp([c, r], square(c as f32, r as f32, 1.0), 1.0)))
+            .collect();
         let mut a = PhotoAccum::new(6);
         a.add_samples(&fps, &srgb_samples(&tex));
         for (x, y, p) in tex.enumerate_pixels() {
@@ -568,23 +712,42 @@ mod tests {
         }
         // 2x2 photo pixels per texel: each texel gets the box average of its four pixels,
         // of the sRGB values or of the linear intensities
-        let fine = RgbImage::from_fn(12, 12, |x, y| image::Rgb([(x * 20) as u8, (y * 20) as u8, ((x + y) % 3 * 50) as u8]));
+        let fine = RgbImage::from_fn(12, 12, |x, y| {
+            image::Rgb([(x * 20) as u8, (y * 20) as u8, ((x + y) % 3 * 50) as u8])
+        });
         let fps: Vec<PixelFootprint> = (0..12)
-            .flat_map(|r| (0..12).map(move |c| fp([c, r], square(c as f32 * 0.5, r as f32 * 0.5, 0.5), 1.0)))
+            .flat_map(|r| {
+                (0..12).map(move |c| fp([c, r], square(c as f32 * 0.5, r as f32 * 0.5, 0.5), 1.0))
+            })
             .collect();
         for space in [ColourSpace::Srgb, ColourSpace::Linear] {
             let mut a = PhotoAccum::new(6);
-            a.add_samples(&fps, &PhotoSamples::new(&fine, [1000.0; 2], &ColourTransform::IDENTITY, &params(), space));
+            a.add_samples(
+                &fps,
+                &PhotoSamples::new(
+                    &fine,
+                    [1000.0; 2],
+                    &ColourTransform::IDENTITY,
+                    &params(),
+                    space,
+                ),
+            );
             for j in 0..6u32 {
                 for i in 0..6u32 {
                     let c = a.colour_at((j * 6 + i) as usize).unwrap();
                     for k in 0..3 {
                         let mean: f32 = [(0, 0), (1, 0), (0, 1), (1, 1)]
                             .iter()
-                            .map(|(dx, dy)| space.decode_u8(fine.get_pixel(2 * i + dx, 2 * j + dy).0[k]))
+                            .map(|(dx, dy)| {
+                                space.decode_u8(fine.get_pixel(2 * i + dx, 2 * j + dy).0[k])
+                            })
                             .sum::<f32>()
                             / 4.0;
-                        assert!((c[k] - mean).abs() < 1e-5, "{space:?} texel {i},{j} ch {k}: {} vs {mean}", c[k]);
+                        assert!(
+                            (c[k] - mean).abs() < 1e-5,
+                            "{space:?} texel {i},{j} ch {k}: {} vs {mean}",
+                            c[k]
+                        );
                     }
                 }
             }
@@ -593,16 +756,32 @@ mod tests {
 
     #[test]
     fn a_finer_texture_gets_the_same_deposits_as_scaled_footprints() {
-        let img = RgbImage::from_fn(16, 16, |x, y| image::Rgb([(x * 13) as u8, (y * 11) as u8, ((x ^ y) * 9) as u8]));
+        let img = RgbImage::from_fn(16, 16, |x, y| {
+            image::Rgb([(x * 13) as u8, (y * 11) as u8, ((x ^ y) * 9) as u8])
+        });
         let fps: Vec<PixelFootprint> = (0..16)
             .flat_map(|r| (0..16).map(move |c| (c, r)))
             .map(|(c, r)| {
                 let (x, y) = (0.37 * c as f32 + 0.1, 0.29 * r as f32 + 0.05 * c as f32);
-                fp([c, r], [[x, y], [x + 0.37, y + 0.05], [x + 0.4, y + 0.33], [x, y + 0.29]], 0.6)
+                fp(
+                    [c, r],
+                    [
+                        [x, y],
+                        [x + 0.37, y + 0.05],
+                        [x + 0.4, y + 0.33],
+                        [x, y + 0.29],
+                    ],
+                    0.6,
+                )
             })
             .collect();
-        let doubled: Vec<PixelFootprint> =
-            fps.iter().map(|f| PixelFootprint { corners: f.corners.map(|c| [2.0 * c[0], 2.0 * c[1]]), ..*f }).collect();
+        let doubled: Vec<PixelFootprint> = fps
+            .iter()
+            .map(|f| PixelFootprint {
+                corners: f.corners.map(|c| [2.0 * c[0], 2.0 * c[1]]),
+                ..*f
+            })
+            .collect();
         let s = srgb_samples(&img);
         let mut scaled = PhotoAccum::with_scale(16, 2);
         scaled.add_samples(&fps, &s);
@@ -619,16 +798,39 @@ mod tests {
         let img = RgbImage::from_pixel(4, 1, image::Rgb([10, 20, 30]));
         let fps = [
             fp([0, 0], [[1.0, 1.0]; 4], 1.0),
-            fp([1, 0], [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]], 0.0),
-            fp([2, 0], [[f32::NAN, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]], f32::NAN),
-            fp([3, 0], [[0.5, 0.5], [3.5, 3.5], [3.5, 0.5], [0.5, 3.5]], 1.0),
+            fp(
+                [1, 0],
+                [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]],
+                0.0,
+            ),
+            fp(
+                [2, 0],
+                [[f32::NAN, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0]],
+                f32::NAN,
+            ),
+            fp(
+                [3, 0],
+                [[0.5, 0.5], [3.5, 3.5], [3.5, 0.5], [0.5, 3.5]],
+                1.0,
+            ),
         ];
         let mut a = PhotoAccum::new(4);
-        a.add_all(&fps, &img, [1000.0; 2], &ColourTransform::IDENTITY, &params());
+        a.add_all(
+            &fps,
+            &img,
+            [1000.0; 2],
+            &ColourTransform::IDENTITY,
+            &params(),
+        );
         for t in 0..16 {
             assert!(a.confidence(t).is_finite());
             let s = *a.sums.get(t);
-            assert!(s.colour.iter().chain([&s.weight, &s.coverage, &s.footprint, &s.grazing]).all(|v| v.is_finite()));
+            assert!(
+                s.colour
+                    .iter()
+                    .chain([&s.weight, &s.coverage, &s.footprint, &s.grazing])
+                    .all(|v| v.is_finite())
+            );
             if let Some(c) = a.colour_at(t) {
                 assert!(c.iter().all(|v| v.is_finite()));
                 assert!(a.footprint_at(t).iter().all(|v| v.is_finite()));
@@ -644,21 +846,35 @@ mod tests {
         let blue = RgbImage::from_pixel(1, 1, image::Rgb([0, 0, 255]));
         let one = |dist: f32, img: &RgbImage| {
             let mut a = PhotoAccum::new(1);
-            let f = PixelFootprint { distance: dist, ..fp([0, 0], square(0.0, 0.0, 1.0), 1.0) };
+            let f = PixelFootprint {
+                distance: dist,
+                ..fp([0, 0], square(0.0, 0.0, 1.0), 1.0)
+            };
             a.add_samples(&[f], &srgb_samples(img));
             a
         };
         let (a, b) = (one(10.0, &red), one(40.0, &blue));
         let ctx = CellContext::flat(1, 0.0, 1.0);
-        for (mode, first_red) in [(BlendMode::Confidence, true), (BlendMode::Confidence, false), (BlendMode::Best, true), (BlendMode::Best, false)] {
+        for (mode, first_red) in [
+            (BlendMode::Confidence, true),
+            (BlendMode::Confidence, false),
+            (BlendMode::Best, true),
+            (BlendMode::Best, false),
+        ] {
             let mut acc = CellAccum::new(1, 1, mode, ctx.clone(), &params());
-            let written = if first_red { acc.merge(&a, 0) + acc.merge(&b, 1) } else { acc.merge(&b, 1) + acc.merge(&a, 0) };
+            let written = if first_red {
+                acc.merge(&a, 0) + acc.merge(&b, 1)
+            } else {
+                acc.merge(&b, 1) + acc.merge(&a, 0)
+            };
             assert_eq!(written, 2);
             let c = acc.colour_at(0).unwrap();
             assert!((acc.confidence(0) - 1.0).abs() < 1e-6);
             match mode {
                 // weights 1 : 4^-4: red with 255/256 of the weight
-                BlendMode::Confidence => assert!((c[0] - 256.0 / 257.0).abs() < 1e-5 && c[2] < 0.004, "{c:?}"),
+                BlendMode::Confidence => {
+                    assert!((c[0] - 256.0 / 257.0).abs() < 1e-5 && c[2] < 0.004, "{c:?}")
+                }
                 BlendMode::Best => assert_eq!(c, [1.0, 0.0, 0.0]),
             }
             assert!(acc.resolution_at(0) < 0.0105, "{}", acc.resolution_at(0));
@@ -669,7 +885,8 @@ mod tests {
         for mode in [BlendMode::Confidence, BlendMode::Best] {
             let mut merged = CellAccum::new(1, 1, mode, ctx.clone(), &params());
             let n = merged.merge(&a, 0) + merged.merge(&b, 1);
-            let (mut adopted, m) = CellAccum::from_photo(a.clone(), 0, mode, ctx.clone(), &params());
+            let (mut adopted, m) =
+                CellAccum::from_photo(a.clone(), 0, mode, ctx.clone(), &params());
             assert_eq!(n, m + adopted.merge(&b, 1));
             assert_eq!(merged, adopted);
         }
@@ -681,12 +898,21 @@ mod tests {
     #[test]
     fn coloured_texels_visit_what_the_accessors_give() {
         // two photos over parts of a 40 x 40 texture (several tiles, some untouched)
-        let img = RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 30) as u8, (y * 30) as u8, 99]));
+        let img = RgbImage::from_fn(8, 8, |x, y| {
+            image::Rgb([(x * 30) as u8, (y * 30) as u8, 99])
+        });
         let photo = |x0: f32, y0: f32, dist: f32| {
             let mut a = PhotoAccum::new(40);
             let fps: Vec<PixelFootprint> = (0..8)
                 .flat_map(|r| (0..8).map(move |c| (c, r)))
-                .map(|(c, r)| PixelFootprint { distance: dist, ..fp([c, r], square(x0 + 1.7 * c as f32, y0 + 1.3 * r as f32, 1.6), 0.9) })
+                .map(|(c, r)| PixelFootprint {
+                    distance: dist,
+                    ..fp(
+                        [c, r],
+                        square(x0 + 1.7 * c as f32, y0 + 1.3 * r as f32, 1.6),
+                        0.9,
+                    )
+                })
                 .collect();
             a.add_samples(&fps, &srgb_samples(&img));
             a
@@ -700,7 +926,10 @@ mod tests {
             acc.for_each_coloured(|t, c, conf, res, best| {
                 seen[t] = true;
                 assert_eq!(Some(c), acc.colour_at(t));
-                assert_eq!((conf, res, best), (acc.confidence(t), acc.resolution_at(t), acc.best_photo(t)));
+                assert_eq!(
+                    (conf, res, best),
+                    (acc.confidence(t), acc.resolution_at(t), acc.best_photo(t))
+                );
             });
             for t in 0..1600 {
                 assert_eq!(seen[t], acc.has_colour(t), "texel {t}");
@@ -712,7 +941,13 @@ mod tests {
     #[test]
     fn resolution_rule_terms() {
         // a 2 x 2 existing texture: flat, 60°, vertical and 87°; ortho of 1 m, TIN error 0.5 m
-        let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.5, 0.0, 0.05], max_error: 0.5, existing_ground: 1.0, texel_ground: 0.25 };
+        let ctx = CellContext {
+            base_texels: 2,
+            cos_slope: vec![1.0, 0.5, 0.0, 0.05],
+            max_error: 0.5,
+            existing_ground: 1.0,
+            texel_ground: 0.25,
+        };
         assert_eq!(ctx.existing_resolution(0), 1.5);
         assert_eq!(ctx.existing_resolution(1), 2.5);
         assert_eq!(ctx.existing_resolution(2), 20.5);

@@ -61,24 +61,33 @@ pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
     };
     let (cols, rows) = (taps(w), taps(h));
     let src = existing.as_raw();
-    let lin: Vec<f32> = src.iter().enumerate().map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) }).collect();
+    let lin: Vec<f32> = src
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) })
+        .collect();
     let ow = (w * scale) as usize;
     let mut out = vec![0u8; ow * rows.len() * 4];
-    out.par_chunks_mut(ow * 4).zip(rows.par_iter()).for_each(|(row, &(y0, y1, fy))| {
-        let (r0, r1) = (&lin[y0 * w as usize * 4..][..w as usize * 4], &lin[y1 * w as usize * 4..][..w as usize * 4]);
-        for (px, &(x0, x1, fx)) in row.chunks_exact_mut(4).zip(&cols) {
-            let mut v = [0.0f32; 4];
-            for k in 0..4 {
-                let top = r0[4 * x0 + k] + (r0[4 * x1 + k] - r0[4 * x0 + k]) * fx;
-                let bottom = r1[4 * x0 + k] + (r1[4 * x1 + k] - r1[4 * x0 + k]) * fx;
-                v[k] = top + (bottom - top) * fy;
+    out.par_chunks_mut(ow * 4)
+        .zip(rows.par_iter())
+        .for_each(|(row, &(y0, y1, fy))| {
+            let (r0, r1) = (
+                &lin[y0 * w as usize * 4..][..w as usize * 4],
+                &lin[y1 * w as usize * 4..][..w as usize * 4],
+            );
+            for (px, &(x0, x1, fx)) in row.chunks_exact_mut(4).zip(&cols) {
+                let mut v = [0.0f32; 4];
+                for k in 0..4 {
+                    let top = r0[4 * x0 + k] + (r0[4 * x1 + k] - r0[4 * x0 + k]) * fx;
+                    let bottom = r1[4 * x0 + k] + (r1[4 * x1 + k] - r1[4 * x0 + k]) * fx;
+                    v[k] = top + (bottom - top) * fy;
+                }
+                px[0] = encode_u8(v[0]);
+                px[1] = encode_u8(v[1]);
+                px[2] = encode_u8(v[2]);
+                px[3] = (v[3] + 0.5) as u8;
             }
-            px[0] = encode_u8(v[0]);
-            px[1] = encode_u8(v[1]);
-            px[2] = encode_u8(v[2]);
-            px[3] = (v[3] + 0.5) as u8;
-        }
-    });
+        });
     RgbaImage::from_raw(w * scale, h * scale, out).unwrap_or_else(|| existing.clone())
 }
 
@@ -102,7 +111,12 @@ pub fn blend_cell(
     let (mut photo_texels, mut steep_photo_texels) = (0, 0);
     let mut supplied: Vec<u64> = Vec::new();
     let n = (w as usize * h as usize).min(acc.len());
-    let steep_texels = covered.iter().zip(steep).take(w as usize * h as usize).filter(|(c, s)| **c && **s).count() as u64;
+    let steep_texels = covered
+        .iter()
+        .zip(steep)
+        .take(w as usize * h as usize)
+        .filter(|(c, s)| **c && **s)
+        .count() as u64;
     let (px, cv) = (texture.as_mut(), conf.as_mut());
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
         if t >= n {
@@ -135,7 +149,14 @@ pub fn blend_cell(
             }
         }
     });
-    Blended { texture, confidence: conf, photo_texels, steep_texels, steep_photo_texels, supplied }
+    Blended {
+        texture,
+        confidence: conf,
+        photo_texels,
+        steep_texels,
+        steep_photo_texels,
+        supplied,
+    }
 }
 
 #[cfg(test)]
@@ -152,7 +173,11 @@ mod tests {
                     cell: 0,
                     pixel: [i, 0],
                     corners: [[x, 0.0], [x + 1.0, 0.0], [x + 1.0, 1.0], [x, 1.0]],
-                    cos_view: if scale_cos { 1.0 - i as f32 / n as f32 } else { 1.0 },
+                    cos_view: if scale_cos {
+                        1.0 - i as f32 / n as f32
+                    } else {
+                        1.0
+                    },
                     distance: 5.0,
                     reconstructed: 0,
                 }
@@ -166,9 +191,21 @@ mod tests {
         // resolution on the surface coarsens from 5 mm to 16 cm against 4 cm of the ortho
         let n = 32u32;
         let img = RgbImage::from_pixel(n, 1, image::Rgb([250, 250, 250]));
-        let params = ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() };
+        let params = ConfidenceParams {
+            feather: 0.0,
+            ..ConfidenceParams::default()
+        };
         let mut pa = PhotoAccum::new(n);
-        pa.add_samples(&footprints(n, true), &PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params, ColourSpace::Srgb));
+        pa.add_samples(
+            &footprints(n, true),
+            &PhotoSamples::new(
+                &img,
+                [1000.0; 2],
+                &ColourTransform::IDENTITY,
+                &params,
+                ColourSpace::Srgb,
+            ),
+        );
         let ctx = CellContext::flat(n, 0.0, 0.04);
         let mut acc = CellAccum::new(n, 1, BlendMode::Confidence, ctx, &params);
         acc.merge(&pa, 0);
@@ -177,7 +214,14 @@ mod tests {
         existing.put_pixel(30, 0, image::Rgba([0, 0, 0, 0]));
         let covered = vec![true; (n * n) as usize];
         let steep: Vec<bool> = (0..n * n).map(|t| t % 2 == 0).collect();
-        let b = blend_cell(&existing, &acc, &params, ColourSpace::Srgb, &covered, &steep);
+        let b = blend_cell(
+            &existing,
+            &acc,
+            &params,
+            ColourSpace::Srgb,
+            &covered,
+            &steep,
+        );
         let r: Vec<u8> = (0..n).map(|i| b.texture.get_pixel(i, 0).0[0]).collect();
         let s: Vec<u8> = (0..n).map(|i| b.confidence.get_pixel(i, 0).0[0]).collect();
         // where the photo is 4x finer: photo colour, share 255
@@ -199,7 +243,10 @@ mod tests {
         assert_eq!(b.steep_texels, (n * n / 2) as u64);
         let photo = s.iter().filter(|&&v| v > 127).count() as u64;
         assert_eq!(b.photo_texels, photo);
-        assert_eq!(b.steep_photo_texels, s.iter().step_by(2).filter(|&&v| v > 127).count() as u64);
+        assert_eq!(
+            b.steep_photo_texels,
+            s.iter().step_by(2).filter(|&&v| v > 127).count() as u64
+        );
         assert_eq!(b.supplied, vec![photo]);
     }
 
@@ -209,17 +256,30 @@ mod tests {
         // existing texture's size and into 2x and 4x finer textures: every fully covered
         // texel of the larger textures has exactly the share of the existing texel under it,
         // and the mean share over the surface does not fall
-        let params = ConfidenceParams { feather: 0.0, ..ConfidenceParams::default() };
+        let params = ConfidenceParams {
+            feather: 0.0,
+            ..ConfidenceParams::default()
+        };
         // (pixels half an existing texel wide: 2 and 4 texels wide in the finer textures)
-        let img = RgbImage::from_fn(12, 12, |x, y| image::Rgb([(x * 20) as u8, (y * 20) as u8, 90]));
+        let img = RgbImage::from_fn(12, 12, |x, y| {
+            image::Rgb([(x * 20) as u8, (y * 20) as u8, 90])
+        });
         let fps: Vec<PixelFootprint> = (0..12)
             .flat_map(|r| (0..12).map(move |c| (c, r)))
             .map(|(c, r)| {
-                let (x, y) = (1.0 + 0.5 * c as f32 + 0.04 * r as f32, 1.0 + 0.45 * r as f32);
+                let (x, y) = (
+                    1.0 + 0.5 * c as f32 + 0.04 * r as f32,
+                    1.0 + 0.45 * r as f32,
+                );
                 PixelFootprint {
                     cell: 0,
                     pixel: [c, r],
-                    corners: [[x, y], [x + 0.5, y], [x + 0.54, y + 0.45], [x + 0.04, y + 0.45]],
+                    corners: [
+                        [x, y],
+                        [x + 0.5, y],
+                        [x + 0.54, y + 0.45],
+                        [x + 0.04, y + 0.45],
+                    ],
                     cos_view: 0.5 + 0.3 * c as f32 / 12.0,
                     distance: 100.0,
                     reconstructed: 0,
@@ -228,8 +288,20 @@ mod tests {
             .collect();
         let base = 8u32;
         let existing = RgbaImage::from_pixel(base, base, image::Rgba([10, 60, 10, 255]));
-        let ctx = CellContext { base_texels: base, cos_slope: (0..64).map(|i| 0.3 + 0.7 * (i % 8) as f32 / 8.0).collect(), max_error: 0.02, existing_ground: 0.15, texel_ground: 0.15 };
-        let samples = PhotoSamples::new(&img, [1000.0; 2], &ColourTransform::IDENTITY, &params, ColourSpace::Linear);
+        let ctx = CellContext {
+            base_texels: base,
+            cos_slope: (0..64).map(|i| 0.3 + 0.7 * (i % 8) as f32 / 8.0).collect(),
+            max_error: 0.02,
+            existing_ground: 0.15,
+            texel_ground: 0.15,
+        };
+        let samples = PhotoSamples::new(
+            &img,
+            [1000.0; 2],
+            &ColourTransform::IDENTITY,
+            &params,
+            ColourSpace::Linear,
+        );
         let mut shares = Vec::new();
         for scale in [1u32, 2, 4] {
             let t = base * scale;
@@ -239,37 +311,64 @@ mod tests {
             acc.merge(&pa, 0);
             let b = blend_cell(&existing, &acc, &params, ColourSpace::Linear, &[], &[]);
             assert_eq!(b.texture.dimensions(), (t, t));
-            shares.push((scale, b.confidence.clone(), (0..t * t).map(|i| acc.confidence(i as usize)).collect::<Vec<f32>>()));
+            shares.push((
+                scale,
+                b.confidence.clone(),
+                (0..t * t)
+                    .map(|i| acc.confidence(i as usize))
+                    .collect::<Vec<f32>>(),
+            ));
         }
         // over the surface the photo covers fully at the existing size, the mean share of
         // the finer textures is no lower, and no texel's share falls by more than rounding
         // and the averaging of the view angle over a smaller texel
         let (_, c1, k1) = &shares[0];
-        let full: Vec<(u32, u32)> =
-            (0..base).flat_map(|y| (0..base).map(move |x| (x, y))).filter(|&(x, y)| k1[(y * base + x) as usize] > 0.999).collect();
+        let full: Vec<(u32, u32)> = (0..base)
+            .flat_map(|y| (0..base).map(move |x| (x, y)))
+            .filter(|&(x, y)| k1[(y * base + x) as usize] > 0.999)
+            .collect();
         assert!(full.len() >= 16, "{}", full.len());
         // (the photo and the existing texture resolve about equally: shares in between)
-        assert!(full.iter().any(|&(x, y)| (40..215).contains(&c1.get_pixel(x, y).0[0])), "no intermediate share");
-        let mean1 = full.iter().map(|&(x, y)| c1.get_pixel(x, y).0[0] as f64).sum::<f64>() / full.len() as f64;
+        assert!(
+            full.iter()
+                .any(|&(x, y)| (40..215).contains(&c1.get_pixel(x, y).0[0])),
+            "no intermediate share"
+        );
+        let mean1 = full
+            .iter()
+            .map(|&(x, y)| c1.get_pixel(x, y).0[0] as f64)
+            .sum::<f64>()
+            / full.len() as f64;
         for (scale, c, _) in &shares[1..] {
             let mut sum = 0.0;
             for &(bx, by) in &full {
                 for dy in 0..*scale {
                     for dx in 0..*scale {
-                        let (a, b) = (c.get_pixel(bx * scale + dx, by * scale + dy).0[0] as i32, c1.get_pixel(bx, by).0[0] as i32);
-                        assert!(b - a <= 12, "scale {scale} texel {bx},{by}+{dx},{dy}: {a} < {b}");
+                        let (a, b) = (
+                            c.get_pixel(bx * scale + dx, by * scale + dy).0[0] as i32,
+                            c1.get_pixel(bx, by).0[0] as i32,
+                        );
+                        assert!(
+                            b - a <= 12,
+                            "scale {scale} texel {bx},{by}+{dx},{dy}: {a} < {b}"
+                        );
                         sum += a as f64;
                     }
                 }
             }
             let mean = sum / (full.len() as f64 * (*scale as f64).powi(2));
-            assert!(mean >= mean1 - 0.5, "scale {scale}: mean share {mean} < {mean1}");
+            assert!(
+                mean >= mean1 - 0.5,
+                "scale {scale}: mean share {mean} < {mean1}"
+            );
         }
     }
 
     #[test]
     fn magnify_keeps_constants_and_centres() {
-        let img = RgbaImage::from_fn(4, 4, |x, y| image::Rgba([(x * 60) as u8, (y * 60) as u8, 7, 255]));
+        let img = RgbaImage::from_fn(4, 4, |x, y| {
+            image::Rgba([(x * 60) as u8, (y * 60) as u8, 7, 255])
+        });
         assert_eq!(magnify(&img, 1), img);
         let m = magnify(&img, 2);
         assert_eq!(m.dimensions(), (8, 8));
@@ -277,8 +376,14 @@ mod tests {
         assert_eq!(m.get_pixel(0, 0).0, [0, 0, 7, 255]);
         assert_eq!(m.get_pixel(7, 7).0, [180, 180, 7, 255]);
         let lin = |v: u8| decode_u8(v);
-        assert_eq!(m.get_pixel(1, 0).0[0], encode_u8(0.75 * lin(0) + 0.25 * lin(60)));
-        assert_eq!(m.get_pixel(2, 0).0[0], encode_u8(0.25 * lin(0) + 0.75 * lin(60)));
+        assert_eq!(
+            m.get_pixel(1, 0).0[0],
+            encode_u8(0.75 * lin(0) + 0.25 * lin(60))
+        );
+        assert_eq!(
+            m.get_pixel(2, 0).0[0],
+            encode_u8(0.25 * lin(0) + 0.75 * lin(60))
+        );
         assert!(m.pixels().all(|p| p.0[2] == 7 && p.0[3] == 255));
     }
 }

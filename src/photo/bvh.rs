@@ -6,11 +6,11 @@
 use std::time::Duration;
 
 use glam::{Vec3, Vec3A};
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
 
 use super::triangle::PreTri;
 
@@ -33,8 +33,13 @@ pub enum BvhQuality {
 
 impl BvhQuality {
     /// All presets, fastest build first.
-    pub const ALL: [BvhQuality; 5] =
-        [BvhQuality::Fastest, BvhQuality::Fast, BvhQuality::Medium, BvhQuality::Slow, BvhQuality::VerySlow];
+    pub const ALL: [BvhQuality; 5] = [
+        BvhQuality::Fastest,
+        BvhQuality::Fast,
+        BvhQuality::Medium,
+        BvhQuality::Slow,
+        BvhQuality::VerySlow,
+    ];
 
     /// Parses "fastest", "fast", "medium", "slow" or "very-slow".
     pub fn parse(s: &str) -> Option<BvhQuality> {
@@ -94,7 +99,11 @@ impl TriangleBvh {
     pub fn build(triangles: &[[Vec3; 3]], quality: BvhQuality) -> TriangleBvh {
         let tris: Vec<Triangle> = triangles
             .iter()
-            .map(|t| Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) })
+            .map(|t| Triangle {
+                v0: Vec3A::from(t[0]),
+                v1: Vec3A::from(t[1]),
+                v2: Vec3A::from(t[2]),
+            })
             .collect();
         let bvh = if tris.is_empty() {
             None
@@ -125,7 +134,9 @@ impl TriangleBvh {
         let ray = make_ray(origin, dir, t_min, t_max);
         let mut hit = RayHit::none();
         let tris = &self.tris;
-        if !bvh.ray_traverse(ray, &mut hit, |r, id| tris[bvh.primitive_indices[id] as usize].intersect(r)) {
+        if !bvh.ray_traverse(ray, &mut hit, |r, id| {
+            tris[bvh.primitive_indices[id] as usize].intersect(r)
+        }) {
             return None;
         }
         // `hit.primitive_id` indexes the BVH's primitive order; map it to the input order.
@@ -135,26 +146,45 @@ impl TriangleBvh {
 
     /// `true` if nothing lies on the ray for `t` in `[t_min, t_max]` (early exit).
     pub fn unoccluded(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
-        let Some(bvh) = self.bvh.as_ref() else { return true };
+        let Some(bvh) = self.bvh.as_ref() else {
+            return true;
+        };
         let ray = make_ray(origin, dir, t_min, t_max);
         let tris = &self.tris;
-        bvh.ray_traverse_miss(ray, |r, id| tris[bvh.primitive_indices[id] as usize].intersect(r))
+        bvh.ray_traverse_miss(ray, |r, id| {
+            tris[bvh.primitive_indices[id] as usize].intersect(r)
+        })
     }
 }
 
 /// An `obvhs` ray; negative zeros in the direction become positive zeros (the traversal's
 /// octant logic misses hits for axis-parallel rays with -0.0 components).
 pub(crate) fn make_ray(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Ray {
-    Ray::new(Vec3A::from(origin), Vec3A::from(dir + Vec3::ZERO), t_min, t_max)
+    Ray::new(
+        Vec3A::from(origin),
+        Vec3A::from(dir + Vec3::ZERO),
+        t_min,
+        t_max,
+    )
 }
 
 /// Brute-force reference for [`TriangleBvh::nearest`]: tests every triangle (for tests and
 /// benchmarks only).
-pub fn nearest_brute_force(triangles: &[[Vec3; 3]], origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<TriHit> {
+pub fn nearest_brute_force(
+    triangles: &[[Vec3; 3]],
+    origin: Vec3,
+    dir: Vec3,
+    t_min: f32,
+    t_max: f32,
+) -> Option<TriHit> {
     let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), t_min, t_max);
     let mut best: Option<(f32, usize)> = None;
     for (i, t) in triangles.iter().enumerate() {
-        let tri = Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) };
+        let tri = Triangle {
+            v0: Vec3A::from(t[0]),
+            v1: Vec3A::from(t[1]),
+            v2: Vec3A::from(t[2]),
+        };
         let d = tri.intersect(&ray);
         if d.is_finite() && best.is_none_or(|(bd, _)| d < bd) {
             best = Some((d, i));
@@ -162,16 +192,29 @@ pub fn nearest_brute_force(triangles: &[[Vec3; 3]], origin: Vec3, dir: Vec3, t_m
     }
     let (t, i) = best?;
     let tri = &triangles[i];
-    let tri = Triangle { v0: Vec3A::from(tri[0]), v1: Vec3A::from(tri[1]), v2: Vec3A::from(tri[2]) };
+    let tri = Triangle {
+        v0: Vec3A::from(tri[0]),
+        v1: Vec3A::from(tri[1]),
+        v2: Vec3A::from(tri[2]),
+    };
     Some(exact_hit(&tri, i as u32, origin, dir, t))
 }
 
 /// The hit of `tri` at distance `t` with barycentric weights from the same Möller–Trumbore
 /// test the view grid uses (so every acceleration reports the same weights for a hit).
 fn exact_hit(tri: &Triangle, index: u32, origin: Vec3, dir: Vec3, t: f32) -> TriHit {
-    let (t2, uv) = PreTri::new(tri, Vec3A::from(origin)).intersect(Vec3A::from(dir + Vec3::ZERO), f32::INFINITY);
-    let bary = if t2.is_finite() { PreTri::barycentric(uv) } else { barycentric(tri, origin + dir * t) };
-    TriHit { triangle: index, t, bary }
+    let (t2, uv) = PreTri::new(tri, Vec3A::from(origin))
+        .intersect(Vec3A::from(dir + Vec3::ZERO), f32::INFINITY);
+    let bary = if t2.is_finite() {
+        PreTri::barycentric(uv)
+    } else {
+        barycentric(tri, origin + dir * t)
+    };
+    TriHit {
+        triangle: index,
+        t,
+        bary,
+    }
 }
 
 /// Barycentric weights of `p` (a point on the triangle's plane) clamped to the triangle
@@ -210,7 +253,11 @@ mod tests {
         let bvh = TriangleBvh::build(&tris, BvhQuality::Medium);
         for k in 0..200 {
             let o = Vec3::new((k % 17) as f32 + 0.37, (k % 13) as f32 * 1.4 + 0.11, 10.0);
-            let d = Vec3::new(0.3 * ((k % 5) as f32 - 2.0), 0.2 * ((k % 3) as f32 - 1.0), -1.0);
+            let d = Vec3::new(
+                0.3 * ((k % 5) as f32 - 2.0),
+                0.2 * ((k % 3) as f32 - 1.0),
+                -1.0,
+            );
             let a = bvh.nearest(o, d, 0.0, f32::INFINITY);
             let b = nearest_brute_force(&tris, o, d, 0.0, f32::INFINITY);
             assert_eq!(a.map(|h| h.triangle), b.map(|h| h.triangle), "ray {k}");
@@ -219,14 +266,28 @@ mod tests {
                 // Barycentric weights reproduce the hit point.
                 let t = tris[a.triangle as usize];
                 let p = t[0] * a.bary[0] + t[1] * a.bary[1] + t[2] * a.bary[2];
-                assert!((p - (o + d * a.t)).length() < 1e-3, "{p} vs {}", o + d * a.t);
+                assert!(
+                    (p - (o + d * a.t)).length() < 1e-3,
+                    "{p} vs {}",
+                    o + d * a.t
+                );
             }
         }
-        assert!(bvh.nearest(Vec3::new(5.0, 5.0, 10.0), Vec3::Z, 0.0, f32::INFINITY).is_none());
+        assert!(
+            bvh.nearest(Vec3::new(5.0, 5.0, 10.0), Vec3::Z, 0.0, f32::INFINITY)
+                .is_none()
+        );
         let down = -Vec3::Z; // -0.0 components
-        assert!(bvh.nearest(Vec3::new(5.5, 5.5, 10.0), down, 0.0, f32::INFINITY).is_some());
+        assert!(
+            bvh.nearest(Vec3::new(5.5, 5.5, 10.0), down, 0.0, f32::INFINITY)
+                .is_some()
+        );
         assert!(!bvh.unoccluded(Vec3::new(5.5, 5.5, 10.0), down, 0.0, f32::INFINITY));
         assert!(bvh.unoccluded(Vec3::new(5.5, 5.5, 10.0), down, 0.0, 5.0));
-        assert!(TriangleBvh::build(&[], BvhQuality::Fast).nearest(Vec3::ZERO, Vec3::X, 0.0, 1.0).is_none());
+        assert!(
+            TriangleBvh::build(&[], BvhQuality::Fast)
+                .nearest(Vec3::ZERO, Vec3::X, 0.0, 1.0)
+                .is_none()
+        );
     }
 }

@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DQuat, DVec3};
 use serde::Deserialize;
 
-use super::input::{PhotoSpec, photo_spec};
 use super::PhotoInput;
+use super::input::{PhotoSpec, photo_spec};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 
@@ -31,7 +31,11 @@ pub struct Similarity {
 
 impl Default for Similarity {
     fn default() -> Self {
-        Similarity { scale: 1.0, rotation: DMat3::IDENTITY, translation: DVec3::ZERO }
+        Similarity {
+            scale: 1.0,
+            rotation: DMat3::IDENTITY,
+            translation: DVec3::ZERO,
+        }
     }
 }
 
@@ -50,26 +54,39 @@ struct TransformFile {
 /// "translation": [x, y, z]}`, each optional: 1, identity, zero).
 pub fn read_similarity(path: &Path) -> Result<Similarity> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let t: TransformFile =
-        serde_json::from_str(&text).map_err(|e| Error::bad_input(path, format!("invalid transform: {e}")))?;
+    let t: TransformFile = serde_json::from_str(&text)
+        .map_err(|e| Error::bad_input(path, format!("invalid transform: {e}")))?;
     let scale = t.scale.unwrap_or(1.0);
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(Error::bad_input(path, format!("\"scale\" must be a positive number, got {scale}")));
+        return Err(Error::bad_input(
+            path,
+            format!("\"scale\" must be a positive number, got {scale}"),
+        ));
     }
     let rotation = match t.rotation {
         Some(r) => DMat3::from_cols_array_2d(&r).transpose(),
         None => DMat3::IDENTITY,
     };
-    let err = (rotation * rotation.transpose() - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let err = (rotation * rotation.transpose() - DMat3::IDENTITY)
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
     if !rotation.is_finite() || err > 1e-6 || (rotation.determinant() - 1.0).abs() > 1e-6 {
-        return Err(Error::bad_input(path, "\"rotation\" must be an orthonormal 3x3 matrix with determinant +1"));
+        return Err(Error::bad_input(
+            path,
+            "\"rotation\" must be an orthonormal 3x3 matrix with determinant +1",
+        ));
     }
     let tr = t.translation.unwrap_or([0.0; 3]);
     let translation = DVec3::from_array(tr);
     if !translation.is_finite() {
         return Err(Error::bad_input(path, "\"translation\" must be finite"));
     }
-    Ok(Similarity { scale, rotation, translation })
+    Ok(Similarity {
+        scale,
+        rotation,
+        translation,
+    })
 }
 
 /// One COLMAP camera: model intrinsics without a pose.
@@ -88,7 +105,10 @@ struct Intrinsics {
 fn parse_f64(tok: &str, path: &Path, line: usize) -> Result<f64> {
     match tok.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(Error::bad_input(path, format!("line {line}: {tok:?} is not a finite number"))),
+        _ => Err(Error::bad_input(
+            path,
+            format!("line {line}: {tok:?} is not a finite number"),
+        )),
     }
 }
 
@@ -103,17 +123,27 @@ fn parse_cameras(path: &Path) -> Result<Vec<(u64, Intrinsics)>> {
         let n = i + 1;
         let tok: Vec<&str> = line.split_whitespace().collect();
         if tok.len() < 4 {
-            return Err(Error::bad_input(path, format!("line {n}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS...")));
+            return Err(Error::bad_input(
+                path,
+                format!("line {n}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..."),
+            ));
         }
-        let id: u64 = tok[0].parse().map_err(|_| Error::bad_input(path, format!("line {n}: bad camera id {:?}", tok[0])))?;
+        let id: u64 = tok[0]
+            .parse()
+            .map_err(|_| Error::bad_input(path, format!("line {n}: bad camera id {:?}", tok[0])))?;
         let dim = |s: &str| -> Result<u32> {
-            s.parse::<u32>()
-                .ok()
-                .filter(|&v| v > 0)
-                .ok_or_else(|| Error::bad_input(path, format!("line {n}: image size {s:?} must be a positive integer")))
+            s.parse::<u32>().ok().filter(|&v| v > 0).ok_or_else(|| {
+                Error::bad_input(
+                    path,
+                    format!("line {n}: image size {s:?} must be a positive integer"),
+                )
+            })
         };
         let (width, height) = (dim(tok[2])?, dim(tok[3])?);
-        let p: Vec<f64> = tok[4..].iter().map(|t| parse_f64(t, path, n)).collect::<Result<_>>()?;
+        let p: Vec<f64> = tok[4..]
+            .iter()
+            .map(|t| parse_f64(t, path, n))
+            .collect::<Result<_>>()?;
         let model = tok[1];
         let want = match model {
             "SIMPLE_PINHOLE" => 3,
@@ -130,7 +160,10 @@ fn parse_cameras(path: &Path) -> Result<Vec<(u64, Intrinsics)>> {
             }
         };
         if p.len() != want {
-            return Err(Error::bad_input(path, format!("line {n}: {model} needs {want} parameters, got {}", p.len())));
+            return Err(Error::bad_input(
+                path,
+                format!("line {n}: {model} needs {want} parameters, got {}", p.len()),
+            ));
         }
         // (fx, fy, cx, cy, k1, k2) with COLMAP's corner-origin principal point.
         let (fx, fy, cx, cy, k1, k2) = match model {
@@ -142,19 +175,40 @@ fn parse_cameras(path: &Path) -> Result<Vec<(u64, Intrinsics)>> {
                 if p[6] != 0.0 || p[7] != 0.0 {
                     return Err(Error::bad_input(
                         path,
-                        format!("line {n}: OPENCV tangential distortion (p1 {}, p2 {}) is not supported", p[6], p[7]),
+                        format!(
+                            "line {n}: OPENCV tangential distortion (p1 {}, p2 {}) is not supported",
+                            p[6], p[7]
+                        ),
                     ));
                 }
                 (p[0], p[1], p[2], p[3], p[4], p[5])
             }
         };
         if !(fx > 0.0 && fy > 0.0) {
-            return Err(Error::bad_input(path, format!("line {n}: focal lengths must be positive, got fx {fx} fy {fy}")));
+            return Err(Error::bad_input(
+                path,
+                format!("line {n}: focal lengths must be positive, got fx {fx} fy {fy}"),
+            ));
         }
         if out.iter().any(|(j, _)| *j == id) {
-            return Err(Error::bad_input(path, format!("line {n}: camera id {id} appears twice")));
+            return Err(Error::bad_input(
+                path,
+                format!("line {n}: camera id {id} appears twice"),
+            ));
         }
-        out.push((id, Intrinsics { width, height, fx, fy, cx: cx - 0.5, cy: cy - 0.5, k1, k2 }));
+        out.push((
+            id,
+            Intrinsics {
+                width,
+                height,
+                fx,
+                fy,
+                cx: cx - 0.5,
+                cy: cy - 0.5,
+                k1,
+                k2,
+            },
+        ));
     }
     Ok(out)
 }
@@ -172,8 +226,12 @@ fn parse_images(path: &Path) -> Result<Vec<ImageRecord>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     // Comment lines are dropped; every image is a header line followed by its (possibly
     // empty) POINTS2D line.
-    let lines: Vec<(usize, &str)> =
-        text.lines().enumerate().filter(|(_, l)| !l.trim_start().starts_with('#')).map(|(i, l)| (i + 1, l)).collect();
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim_start().starts_with('#'))
+        .map(|(i, l)| (i + 1, l))
+        .collect();
     let mut out = Vec::new();
     let mut k = 0;
     while k < lines.len() {
@@ -189,14 +247,21 @@ fn parse_images(path: &Path) -> Result<Vec<ImageRecord>> {
                 format!("line {n}: expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME"),
             ));
         }
-        let v: Vec<f64> = tok[1..8].iter().map(|t| parse_f64(t, path, n)).collect::<Result<_>>()?;
+        let v: Vec<f64> = tok[1..8]
+            .iter()
+            .map(|t| parse_f64(t, path, n))
+            .collect::<Result<_>>()?;
         let q = DQuat::from_xyzw(v[1], v[2], v[3], v[0]);
         let norm = q.length();
         if !(norm > 0.5 && norm < 2.0) {
-            return Err(Error::bad_input(path, format!("line {n}: quaternion norm {norm} is not ~1")));
+            return Err(Error::bad_input(
+                path,
+                format!("line {n}: quaternion norm {norm} is not ~1"),
+            ));
         }
-        let camera: u64 =
-            tok[8].parse().map_err(|_| Error::bad_input(path, format!("line {n}: bad camera id {:?}", tok[8])))?;
+        let camera: u64 = tok[8]
+            .parse()
+            .map_err(|_| Error::bad_input(path, format!("line {n}: bad camera id {:?}", tok[8])))?;
         out.push(ImageRecord {
             rotation: DMat3::from_quat(q / norm),
             translation: DVec3::new(v[4], v[5], v[6]),
@@ -211,7 +276,12 @@ fn parse_images(path: &Path) -> Result<Vec<ImageRecord>> {
 }
 
 /// The world-frame camera of a COLMAP image pose under the similarity `s`.
-fn world_camera(intr: &Intrinsics, rotation: DMat3, translation: DVec3, s: &Similarity) -> CameraModel {
+fn world_camera(
+    intr: &Intrinsics,
+    rotation: DMat3,
+    translation: DVec3,
+    s: &Similarity,
+) -> CameraModel {
     let centre = -(rotation.transpose() * translation);
     CameraModel {
         position: s.scale * (s.rotation * centre) + s.translation,
@@ -237,13 +307,31 @@ pub fn read_colmap_specs(dir: &Path) -> Result<Vec<PhotoSpec>> {
         return Err(Error::bad_input(&imgs_path, "no images"));
     }
     let tf_path = dir.join("transform.json");
-    let sim = if tf_path.exists() { read_similarity(&tf_path)? } else { Similarity::default() };
-    let image_dir = if dir.join("images").is_dir() { dir.join("images") } else { dir.to_path_buf() };
+    let sim = if tf_path.exists() {
+        read_similarity(&tf_path)?
+    } else {
+        Similarity::default()
+    };
+    let image_dir = if dir.join("images").is_dir() {
+        dir.join("images")
+    } else {
+        dir.to_path_buf()
+    };
     let mut out = Vec::with_capacity(images.len());
     for im in &images {
-        let intr = cameras.iter().find(|(id, _)| *id == im.camera).map(|(_, c)| c).ok_or_else(|| {
-            Error::bad_input(&imgs_path, format!("line {}: camera {} is not in cameras.txt", im.line, im.camera))
-        })?;
+        let intr = cameras
+            .iter()
+            .find(|(id, _)| *id == im.camera)
+            .map(|(_, c)| c)
+            .ok_or_else(|| {
+                Error::bad_input(
+                    &imgs_path,
+                    format!(
+                        "line {}: camera {} is not in cameras.txt",
+                        im.line, im.camera
+                    ),
+                )
+            })?;
         let cam = world_camera(intr, im.rotation, im.translation, &sim);
         let image: PathBuf = image_dir.join(&im.name);
         out.push(photo_spec(&image, cam, &cams_path)?);
@@ -257,5 +345,8 @@ pub fn read_colmap_specs(dir: &Path) -> Result<Vec<PhotoSpec>> {
 /// optional `DIR/transform.json` similarity to the world frame. Cameras are fitted to the
 /// images' real sizes and validated; errors name the file and line.
 pub fn read_colmap(dir: &Path) -> Result<Vec<PhotoInput>> {
-    read_colmap_specs(dir)?.iter().map(PhotoSpec::load).collect()
+    read_colmap_specs(dir)?
+        .iter()
+        .map(PhotoSpec::load)
+        .collect()
 }

@@ -45,7 +45,12 @@ pub struct ConfidenceParams {
 
 impl Default for ConfidenceParams {
     fn default() -> Self {
-        ConfidenceParams { feather: 0.01, ramp: [0.05, 0.35], resolution_ramp: [0.0, 2.0], sharpness_power: 4.0 }
+        ConfidenceParams {
+            feather: 0.01,
+            ramp: [0.05, 0.35],
+            resolution_ramp: [0.0, 2.0],
+            sharpness_power: 4.0,
+        }
     }
 }
 
@@ -63,18 +68,28 @@ impl ConfidenceParams {
     /// Rejects parameters outside their documented ranges.
     pub fn validate(&self) -> Result<()> {
         if !(0.0..=0.5).contains(&self.feather) {
-            return Err(Error::BadOption(format!("border feather must be in [0, 0.5], got {}", self.feather)));
+            return Err(Error::BadOption(format!(
+                "border feather must be in [0, 0.5], got {}",
+                self.feather
+            )));
         }
         let [lo, hi] = self.ramp;
         if !(lo >= 0.0 && lo < hi && hi <= 1.0) {
-            return Err(Error::BadOption(format!("confidence ramp must satisfy 0 <= lo < hi <= 1, got [{lo}, {hi}]")));
+            return Err(Error::BadOption(format!(
+                "confidence ramp must satisfy 0 <= lo < hi <= 1, got [{lo}, {hi}]"
+            )));
         }
         let [rlo, rhi] = self.resolution_ramp;
         if !(rlo.is_finite() && rhi.is_finite() && rlo < rhi) {
-            return Err(Error::BadOption(format!("resolution ramp must satisfy lo < hi, got [{rlo}, {rhi}]")));
+            return Err(Error::BadOption(format!(
+                "resolution ramp must satisfy lo < hi, got [{rlo}, {rhi}]"
+            )));
         }
         if !(0.0..=16.0).contains(&self.sharpness_power) {
-            return Err(Error::BadOption(format!("sharpness power must be in [0, 16], got {}", self.sharpness_power)));
+            return Err(Error::BadOption(format!(
+                "sharpness power must be in [0, 16], got {}",
+                self.sharpness_power
+            )));
         }
         Ok(())
     }
@@ -85,14 +100,24 @@ impl ConfidenceParams {
         // The feather is a non-decreasing function of the distance to the nearest edge, so
         // the smaller of the column and row terms is the term of the smaller distance.
         let band = self.feather * width.min(height) as f64;
-        let table = |n: u32| (0..n).map(|i| feather_at(edge_distance(i, n), band)).collect();
-        BorderFeather { cols: table(width), rows: table(height) }
+        let table = |n: u32| {
+            (0..n)
+                .map(|i| feather_at(edge_distance(i, n), band))
+                .collect()
+        };
+        BorderFeather {
+            cols: table(width),
+            rows: table(height),
+        }
     }
 
     /// The border feather of pixel `[col, row]` in a `width × height` image, in [0, 1].
     pub fn border_term(&self, pixel: [u32; 2], width: u32, height: u32) -> f64 {
         let band = self.feather * width.min(height) as f64;
-        feather_at(edge_distance(pixel[0], width).min(edge_distance(pixel[1], height)), band)
+        feather_at(
+            edge_distance(pixel[0], width).min(edge_distance(pixel[1], height)),
+            band,
+        )
     }
 
     /// Weight in [0, 1] of photo colour for a texel of photo confidence `conf`: smooth
@@ -134,7 +159,11 @@ fn edge_distance(i: u32, n: u32) -> f64 {
 /// pixels (1 everywhere without a band).
 #[inline]
 fn feather_at(d: f64, band: f64) -> f64 {
-    if band <= 0.0 { 1.0 } else { smoothstep(d / band) }
+    if band <= 0.0 {
+        1.0
+    } else {
+        smoothstep(d / band)
+    }
 }
 
 /// The border feather of every pixel of one image ([`ConfidenceParams::border_feather`]).
@@ -148,7 +177,10 @@ impl BorderFeather {
     /// The feather of pixel `[col, row]`, in [0, 1] (0 outside the image).
     #[inline]
     pub fn at(&self, pixel: [u32; 2]) -> f64 {
-        match (self.cols.get(pixel[0] as usize), self.rows.get(pixel[1] as usize)) {
+        match (
+            self.cols.get(pixel[0] as usize),
+            self.rows.get(pixel[1] as usize),
+        ) {
             (Some(c), Some(r)) => c.min(*r),
             _ => 0.0,
         }
@@ -165,13 +197,17 @@ mod tests {
         p.validate().unwrap();
         // the border pixel is (almost) untrusted, and the feather rises monotonically
         assert!(p.border_term([0, 400], 1000, 800) < 0.02);
-        let f: Vec<f64> = (0..50).map(|c| p.border_term([c, 400], 1000, 800)).collect();
+        let f: Vec<f64> = (0..50)
+            .map(|c| p.border_term([c, 400], 1000, 800))
+            .collect();
         assert!(f.windows(2).all(|w| w[0] <= w[1]) && f[49] == 1.0);
         // coverage ramp: 0 below, 1 above, smooth and monotone in between
         assert_eq!(p.blend_weight(0.0), 0.0);
         assert_eq!(p.blend_weight(0.9), 1.0);
         assert!((p.blend_weight(0.2) - 0.5).abs() < 1e-12);
-        let w: Vec<f64> = (0..=100).map(|k| p.blend_weight(k as f64 / 100.0)).collect();
+        let w: Vec<f64> = (0..=100)
+            .map(|k| p.blend_weight(k as f64 / 100.0))
+            .collect();
         assert!(w.windows(2).all(|x| x[1] >= x[0] && x[1] - x[0] < 0.06));
         // resolution ramp: none up to par, half when 2x finer, full when 4x finer
         assert_eq!(p.resolution_weight(0.5), 0.0);
@@ -181,25 +217,56 @@ mod tests {
         assert_eq!(p.resolution_weight(f64::INFINITY), 1.0);
         assert_eq!(p.resolution_weight(f64::NAN), 0.0);
         assert_eq!(p.resolution_weight(0.0), 0.0);
-        let r: Vec<f64> = (0..=200).map(|k| p.resolution_weight(2f64.powf(k as f64 / 50.0 - 2.0))).collect();
+        let r: Vec<f64> = (0..=200)
+            .map(|k| p.resolution_weight(2f64.powf(k as f64 / 50.0 - 2.0)))
+            .collect();
         assert!(r.windows(2).all(|x| x[1] >= x[0]));
         assert_eq!(p.photo_weight(0.9, 4.0), 1.0);
         assert!((p.photo_weight(0.2, 2.0) - 0.25).abs() < 1e-12);
-        assert!(ConfidenceParams { ramp: [0.5, 0.5], ..p }.validate().is_err());
+        assert!(
+            ConfidenceParams {
+                ramp: [0.5, 0.5],
+                ..p
+            }
+            .validate()
+            .is_err()
+        );
         assert!(ConfidenceParams { feather: -1.0, ..p }.validate().is_err());
-        assert!(ConfidenceParams { resolution_ramp: [1.0, 1.0], ..p }.validate().is_err());
-        assert!(ConfidenceParams { sharpness_power: f64::NAN, ..p }.validate().is_err());
+        assert!(
+            ConfidenceParams {
+                resolution_ramp: [1.0, 1.0],
+                ..p
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(
+            ConfidenceParams {
+                sharpness_power: f64::NAN,
+                ..p
+            }
+            .validate()
+            .is_err()
+        );
     }
 
     #[test]
     fn feather_tables_equal_the_direct_term() {
         let d = ConfidenceParams::default();
-        for p in [d, ConfidenceParams { feather: 0.0, ..d }, ConfidenceParams { feather: 0.5, ..d }] {
+        for p in [
+            d,
+            ConfidenceParams { feather: 0.0, ..d },
+            ConfidenceParams { feather: 0.5, ..d },
+        ] {
             for (w, h) in [(1000u32, 800u32), (7, 300), (1, 1)] {
                 let t = p.border_feather(w, h);
                 for r in (0..h).step_by(3) {
                     for c in (0..w).step_by(5) {
-                        assert_eq!(t.at([c, r]).to_bits(), p.border_term([c, r], w, h).to_bits(), "{w}x{h} {c},{r}");
+                        assert_eq!(
+                            t.at([c, r]).to_bits(),
+                            p.border_term([c, r], w, h).to_bits(),
+                            "{w}x{h} {c},{r}"
+                        );
                     }
                 }
                 assert_eq!(t.at([w, 0]), 0.0);

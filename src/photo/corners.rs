@@ -7,10 +7,10 @@
 
 use glam::Vec3;
 
-use super::accel::Caster;
-use super::viewgrid::ViewGrid;
 use super::TriHit;
+use super::accel::Caster;
 use super::scene::{LevelScene, NO_TRI};
+use super::viewgrid::ViewGrid;
 use crate::camera::{PlaneRay, RayCaster};
 
 /// The compact result of one corner ray (24 bytes).
@@ -30,7 +30,13 @@ pub(crate) struct CornerHit {
 
 impl CornerHit {
     /// No front-face hit.
-    pub const MISS: CornerHit = CornerHit { tri: NO_TRI, cell: u32::MAX, tex: [0.0; 2], t: 0.0, cos: 0.0 };
+    pub const MISS: CornerHit = CornerHit {
+        tri: NO_TRI,
+        cell: u32::MAX,
+        tex: [0.0; 2],
+        t: 0.0,
+        cos: 0.0,
+    };
 
     /// `true` if the ray hit a front face.
     #[inline]
@@ -42,7 +48,14 @@ impl CornerHit {
 /// Casts the corner rays of corner row `j` (all `out.len()` = W + 1 columns) from `origin`
 /// (camera centre in the scene's frame). With the view grid, consecutive rays of one bin
 /// are cast together ([`ViewGrid::nearest_packet`], the same hits as one by one).
-pub(crate) fn cast_corner_row(scene: &LevelScene, caster: &Caster, rays: &RayCaster, origin: Vec3, j: u32, out: &mut [CornerHit]) {
+pub(crate) fn cast_corner_row(
+    scene: &LevelScene,
+    caster: &Caster,
+    rays: &RayCaster,
+    origin: Vec3,
+    j: u32,
+    out: &mut [CornerHit],
+) {
     let Caster::Grid(grid) = caster else {
         rays.row_with(-0.5, j as f64 - 0.5, out.len(), |i, ray| {
             out[i] = ray.map_or(CornerHit::MISS, |r| cast_corner(scene, caster, origin, &r));
@@ -53,14 +66,25 @@ pub(crate) fn cast_corner_row(scene: &LevelScene, caster: &Caster, rays: &RayCas
         out.fill(CornerHit::MISS);
         return;
     }
-    let mut pk = Packet { scene, grid, bin: usize::MAX, n: 0, first: 0, dirs: [Vec3::ZERO; 4] };
+    let mut pk = Packet {
+        scene,
+        grid,
+        bin: usize::MAX,
+        n: 0,
+        first: 0,
+        dirs: [Vec3::ZERO; 4],
+    };
     rays.row_with(-0.5, j as f64 - 0.5, out.len(), |i, ray| {
         let Some(r) = ray else {
             out[i] = CornerHit::MISS;
             return;
         };
         let dir = r.dir.as_vec3();
-        let bin = if dir.is_finite() && dir != Vec3::ZERO { grid.bin_at(r.xy) } else { None };
+        let bin = if dir.is_finite() && dir != Vec3::ZERO {
+            grid.bin_at(r.xy)
+        } else {
+            None
+        };
         match bin {
             Some(b) => {
                 if pk.n == 4 || (pk.n > 0 && (pk.bin != b || pk.first + pk.n != i)) {
@@ -80,7 +104,14 @@ pub(crate) fn cast_corner_row(scene: &LevelScene, caster: &Caster, rays: &RayCas
 
 /// The corner ray `(i, j)` alone: the hit [`cast_corner_row`] gives it when the caster's
 /// rays are independent of their row (`RayCaster::rays_independent`).
-pub(crate) fn cast_corner_alone(scene: &LevelScene, caster: &Caster, rays: &RayCaster, origin: Vec3, i: u32, j: u32) -> CornerHit {
+pub(crate) fn cast_corner_alone(
+    scene: &LevelScene,
+    caster: &Caster,
+    rays: &RayCaster,
+    origin: Vec3,
+    i: u32,
+    j: u32,
+) -> CornerHit {
     let mut hit = CornerHit::MISS;
     rays.row_with(i as f64 - 0.5, j as f64 - 0.5, 1, |_, ray| {
         hit = ray.map_or(CornerHit::MISS, |r| cast_corner(scene, caster, origin, &r));
@@ -106,7 +137,8 @@ impl Packet<'_> {
             return;
         }
         let mut hits = [None; 4];
-        self.grid.nearest_packet(self.bin, &self.dirs[..self.n], &mut hits[..self.n]);
+        self.grid
+            .nearest_packet(self.bin, &self.dirs[..self.n], &mut hits[..self.n]);
         for k in 0..self.n {
             out[self.first + k] = finish_hit(self.scene, self.dirs[k], hits[k]);
         }
@@ -122,7 +154,9 @@ fn cast_corner(scene: &LevelScene, caster: &Caster, origin: Vec3, ray: &PlaneRay
 /// The corner record of the nearest hit `hit` of the ray along `dir` (front faces only).
 #[inline]
 fn finish_hit(scene: &LevelScene, dir: Vec3, hit: Option<TriHit>) -> CornerHit {
-    let Some(hit) = hit else { return CornerHit::MISS };
+    let Some(hit) = hit else {
+        return CornerHit::MISS;
+    };
     let p = scene.plane(hit.triangle);
     let cos = p[0] * dir.x + p[1] * dir.y + p[2] * dir.z;
     // Back face (or an edge-on / degenerate triangle): the surface is seen from below.
@@ -138,13 +172,19 @@ fn finish_hit(scene: &LevelScene, dir: Vec3, hit: Option<TriHit>) -> CornerHit {
     if !(tex[0].is_finite() && tex[1].is_finite()) {
         return CornerHit::MISS;
     }
-    CornerHit { tri: hit.triangle, cell: scene.cell_of(hit.triangle), tex, t: hit.t, cos: -cos }
+    CornerHit {
+        tri: hit.triangle,
+        cell: scene.cell_of(hit.triangle),
+        tex,
+        t: hit.t,
+        cos: -cos,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{rotation_look_at, CameraModel};
+    use crate::camera::{CameraModel, rotation_look_at};
     use crate::photo::{RayAccel, SceneCell, ViewGridParams};
     use glam::DVec3;
 
@@ -156,7 +196,8 @@ mod tests {
         for j in 0..=n {
             for i in 0..=n {
                 let (x, y) = (i as f64, j as f64);
-                let z = 2.0 * (0.3 * x).sin() * (0.2 * y).cos() + 12.0 / (1.0 + ((y - 35.0) / 2.0).powi(2));
+                let z = 2.0 * (0.3 * x).sin() * (0.2 * y).cos()
+                    + 12.0 / (1.0 + ((y - 35.0) / 2.0).powi(2));
                 positions.push([x as f32, y as f32, z as f32]);
                 texcoords.push([x as f32, (n as f64 - y) as f32]);
             }
@@ -169,7 +210,14 @@ mod tests {
                 triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
             }
         }
-        SceneCell { cell: 0, origin: DVec3::new(431_000.0, 6_878_000.0, 500.0), positions, triangles, texcoords, texels: 64 }
+        SceneCell {
+            cell: 0,
+            origin: DVec3::new(431_000.0, 6_878_000.0, 500.0),
+            positions,
+            triangles,
+            texcoords,
+            texels: 64,
+        }
     }
 
     #[test]
@@ -177,28 +225,68 @@ mod tests {
         let cell = terrain();
         let o = cell.origin;
         let pos = o + DVec3::new(30.3, -8.0, 6.0);
-        let mut cam = CameraModel::with_fov(pos, rotation_look_at(pos, o + DVec3::new(30.0, 40.0, 2.0)).unwrap(), 160, 120, 1.2);
+        let mut cam = CameraModel::with_fov(
+            pos,
+            rotation_look_at(pos, o + DVec3::new(30.0, 40.0, 2.0)).unwrap(),
+            160,
+            120,
+            1.2,
+        );
         cam.k1 = -0.05;
         for bin_px in [8.0, 2.0, 33.0] {
-            let scene = LevelScene::new(vec![cell.clone()], pos, RayAccel::ViewGrid(ViewGridParams { bin_px }));
+            let scene = LevelScene::new(
+                vec![cell.clone()],
+                pos,
+                RayAccel::ViewGrid(ViewGridParams { bin_px }),
+            );
             let origin = (cam.position - scene.frame_origin).as_vec3();
             let rays = cam.ray_caster().with_table();
-            let caster = Caster::Grid(ViewGrid::build(scene.triangles(), &cam, &rays, origin, ViewGridParams { bin_px }));
+            let caster = Caster::Grid(ViewGrid::build(
+                scene.triangles(),
+                &cam,
+                &rays,
+                origin,
+                ViewGridParams { bin_px },
+            ));
             let (mut hits, mut packets) = (0, vec![CornerHit::MISS; 161]);
             for j in 0..=120 {
                 cast_corner_row(&scene, &caster, &rays, origin, j, &mut packets);
                 let mut single = vec![CornerHit::MISS; 161];
                 rays.row_with(-0.5, j as f64 - 0.5, 161, |i, r| {
-                    single[i] = r.map_or(CornerHit::MISS, |r| cast_corner(&scene, &caster, origin, &r));
+                    single[i] = r.map_or(CornerHit::MISS, |r| {
+                        cast_corner(&scene, &caster, origin, &r)
+                    });
                 });
                 for (a, b) in packets.iter().zip(&single) {
-                    assert_eq!((a.tri, a.cell, a.tex.map(f32::to_bits), a.t.to_bits(), a.cos.to_bits()), (b.tri, b.cell, b.tex.map(f32::to_bits), b.t.to_bits(), b.cos.to_bits()), "row {j}");
+                    assert_eq!(
+                        (
+                            a.tri,
+                            a.cell,
+                            a.tex.map(f32::to_bits),
+                            a.t.to_bits(),
+                            a.cos.to_bits()
+                        ),
+                        (
+                            b.tri,
+                            b.cell,
+                            b.tex.map(f32::to_bits),
+                            b.t.to_bits(),
+                            b.cos.to_bits()
+                        ),
+                        "row {j}"
+                    );
                 }
                 hits += single.iter().filter(|h| h.is_hit()).count();
                 // a corner cast alone (the halo rows of a band) gets the same hit
                 for i in (0..=160u32).step_by(9) {
-                    let (a, b) = (cast_corner_alone(&scene, &caster, &rays, origin, i, j), packets[i as usize]);
-                    assert_eq!((a.tri, a.tex.map(f32::to_bits), a.t.to_bits()), (b.tri, b.tex.map(f32::to_bits), b.t.to_bits()));
+                    let (a, b) = (
+                        cast_corner_alone(&scene, &caster, &rays, origin, i, j),
+                        packets[i as usize],
+                    );
+                    assert_eq!(
+                        (a.tri, a.tex.map(f32::to_bits), a.t.to_bits()),
+                        (b.tri, b.tex.map(f32::to_bits), b.t.to_bits())
+                    );
                 }
             }
             assert!(hits > 5000, "the camera sees the terrain: {hits} hits");

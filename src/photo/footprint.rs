@@ -38,13 +38,13 @@ use std::sync::Mutex;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::accel::Caster;
-use super::corners::{cast_corner_alone, cast_corner_row, CornerHit};
-use super::viewgrid::ViewGrid;
 use super::RayAccel;
+use super::accel::Caster;
+use super::corners::{CornerHit, cast_corner_alone, cast_corner_row};
 use super::reconstruct::reconstruct;
 use super::scene::LevelScene;
 use super::silhouette::crosses_silhouette;
+use super::viewgrid::ViewGrid;
 use super::{CellFootprints, FootprintSet, PixelFootprint};
 use crate::camera::{CameraModel, RayCaster};
 
@@ -71,13 +71,23 @@ pub struct FootprintOptions {
 
 impl Default for FootprintOptions {
     fn default() -> Self {
-        FootprintOptions { reconstruct: true, reject_silhouettes: true, max_area: 256.0, max_extent: 64.0, max_depth_jump: 0.1 }
+        FootprintOptions {
+            reconstruct: true,
+            reject_silhouettes: true,
+            max_area: 256.0,
+            max_extent: 64.0,
+            max_depth_jump: 0.1,
+        }
     }
 }
 
 /// Casts rays through every pixel corner of `camera`'s image (undistorted) against `scene`
 /// and returns every pixel's footprint in the texture of the cell it belongs to.
-pub fn photo_footprints(scene: &LevelScene, camera: &CameraModel, opts: &FootprintOptions) -> FootprintSet {
+pub fn photo_footprints(
+    scene: &LevelScene,
+    camera: &CameraModel,
+    opts: &FootprintOptions,
+) -> FootprintSet {
     photo_footprints_in(&FootprintBuffers::default(), scene, camera, opts)
 }
 
@@ -127,7 +137,9 @@ pub fn for_each_footprint_batch_in(
     let rays = camera.ray_caster().with_table();
     let caster = match (scene.accel, scene.bvh()) {
         (RayAccel::Bvh(_), Some(bvh)) => Caster::Bvh(bvh),
-        (RayAccel::ViewGrid(p), _) => Caster::Grid(ViewGrid::build(scene.triangles(), camera, &rays, origin, p)),
+        (RayAccel::ViewGrid(p), _) => {
+            Caster::Grid(ViewGrid::build(scene.triangles(), camera, &rays, origin, p))
+        }
         (RayAccel::Bvh(_), None) => return,
     };
     // Output buckets: scene cells ordered by manifest index (then scene order).
@@ -137,7 +149,17 @@ pub fn for_each_footprint_batch_in(
     for (b, &i) in order.iter().enumerate() {
         bucket[i] = b as u32;
     }
-    let ctx = Ctx { scene, caster: &caster, rays, origin, w, h, opts: *opts, bucket: &bucket, buffers };
+    let ctx = Ctx {
+        scene,
+        caster: &caster,
+        rays,
+        origin,
+        w,
+        h,
+        opts: *opts,
+        bucket: &bucket,
+        buffers,
+    };
     let bands = h.div_ceil(BAND_ROWS);
     let mut pending: Option<FootprintSet> = None;
     let mut b0 = 0;
@@ -180,7 +202,12 @@ const CHUNK_SIZES: [usize; 3] = [1 << 12, 1 << 14, 1 << 16];
 
 impl FootprintBuffers {
     fn take_hits(&self) -> Vec<CornerHit> {
-        self.hits.lock().map(|mut p| p.pop()).ok().flatten().unwrap_or_default()
+        self.hits
+            .lock()
+            .map(|mut p| p.pop())
+            .ok()
+            .flatten()
+            .unwrap_or_default()
     }
 
     fn put_hits(&self, v: Vec<CornerHit>) {
@@ -192,7 +219,12 @@ impl FootprintBuffers {
     /// An empty chunk of at least the capacity of size class `class`.
     fn take_chunk(&self, class: usize) -> Vec<PixelFootprint> {
         let class = class.min(CHUNK_SIZES.len() - 1);
-        let pooled = self.chunks.lock().map(|mut p| p[class].pop()).ok().flatten();
+        let pooled = self
+            .chunks
+            .lock()
+            .map(|mut p| p[class].pop())
+            .ok()
+            .flatten();
         pooled.unwrap_or_else(|| Vec::with_capacity(CHUNK_SIZES[class]))
     }
 
@@ -244,7 +276,11 @@ struct EdgeCache {
 
 impl EdgeCache {
     fn new(w: usize) -> EdgeCache {
-        EdgeCache { right: None, above: vec![None; w], below: vec![None; w] }
+        EdgeCache {
+            right: None,
+            above: vec![None; w],
+            below: vec![None; w],
+        }
     }
 
     /// Starts a row: the last row's bottom edges become the top edges.
@@ -308,12 +344,19 @@ impl Ctx<'_> {
         let outs: Vec<BandOut> = bands.into_par_iter().map(|b| self.band(b)).collect();
         // Every bucket's chunks in band (= row) order: no footprint is copied.
         let mut set = FootprintSet::default();
-        let mut cells: Vec<CellFootprints> =
-            order.iter().map(|&i| CellFootprints { cell: self.scene.cells[i].cell, chunks: Vec::new() }).collect();
+        let mut cells: Vec<CellFootprints> = order
+            .iter()
+            .map(|&i| CellFootprints {
+                cell: self.scene.cells[i].cell,
+                chunks: Vec::new(),
+            })
+            .collect();
         for b in outs {
             set.add_counts(&b.counts);
             for (k, chunks) in b.buckets.into_iter().enumerate() {
-                cells[k].chunks.extend(chunks.into_iter().filter(|c| !c.is_empty()));
+                cells[k]
+                    .chunks
+                    .extend(chunks.into_iter().filter(|c| !c.is_empty()));
             }
         }
         set.cells = cells.into_iter().filter(|c| !c.chunks.is_empty()).collect();
@@ -337,8 +380,16 @@ impl Ctx<'_> {
         for (row, j) in hits.chunks_exact_mut(stride).zip(j_lo..=j_hi) {
             cast_corner_row(self.scene, self.caster, &self.rays, self.origin, j, row);
         }
-        let rows = CornerRows { hits, j_lo: j_lo as i64, j_hi: j_hi as i64, stride: stride as i64 };
-        let mut out = BandOut { buckets: vec![Vec::new(); self.scene.cells.len()], ..BandOut::default() };
+        let rows = CornerRows {
+            hits,
+            j_lo: j_lo as i64,
+            j_hi: j_hi as i64,
+            stride: stride as i64,
+        };
+        let mut out = BandOut {
+            buckets: vec![Vec::new(); self.scene.cells.len()],
+            ..BandOut::default()
+        };
         // Silhouette crossings of pixel edges shared with the next pixel (its left edge) and
         // the next row (its top edges), walked in one direction (see `EdgeCache`).
         let mut edges = EdgeCache::new(self.w as usize);
@@ -376,7 +427,16 @@ impl Ctx<'_> {
             return Some(*h);
         }
         let inside = (0..rows.stride).contains(&i) && (0..=self.h as i64).contains(&j);
-        inside.then(|| cast_corner_alone(self.scene, self.caster, &self.rays, self.origin, i as u32, j as u32))
+        inside.then(|| {
+            cast_corner_alone(
+                self.scene,
+                self.caster,
+                &self.rays,
+                self.origin,
+                i as u32,
+                j as u32,
+            )
+        })
     }
 
     /// The common case: all four corners hit the same cell.
@@ -384,7 +444,9 @@ impl Ctx<'_> {
     fn full_pixel(&self, q: &[&CornerHit; 4], c: u32, r: u32, edges: &mut EdgeCache) -> Outcome {
         let scene = self.scene;
         let ci = c as usize;
-        if self.opts.reject_silhouettes && !(q[0].tri == q[1].tri && q[0].tri == q[2].tri && q[0].tri == q[3].tri) {
+        if self.opts.reject_silhouettes
+            && !(q[0].tri == q[1].tri && q[0].tri == q[2].tri && q[0].tri == q[3].tri)
+        {
             // Edges left to right and top to bottom: top TL→TR, left TL→BL, right TR→BR,
             // bottom BL→BR; the top and left ones may be known from the neighbours.
             let walk = |a: &CornerHit, b: &CornerHit| {
@@ -417,7 +479,8 @@ impl Ctx<'_> {
             cell: scene.cells[q[0].cell as usize].cell,
             pixel: [c, r],
             corners,
-            cos_view: (0.25 * (q[0].cos + q[1].cos + q[2].cos + q[3].cos)).clamp(f32::MIN_POSITIVE, 1.0),
+            cos_view: (0.25 * (q[0].cos + q[1].cos + q[2].cos + q[3].cos))
+                .clamp(f32::MIN_POSITIVE, 1.0),
             distance: 0.25 * (q[0].t + q[1].t + q[2].t + q[3].t),
             reconstructed: 0,
         };
@@ -443,16 +506,22 @@ impl Ctx<'_> {
             let votes = cells.iter().filter(|&&x| x == ck).count();
             let better = match best {
                 None => true,
-                Some((bv, bc)) => votes > bv || (votes == bv && self.bucket[ck as usize] < self.bucket[bc as usize]),
+                Some((bv, bc)) => {
+                    votes > bv
+                        || (votes == bv && self.bucket[ck as usize] < self.bucket[bc as usize])
+                }
             };
             if better {
                 best = Some((votes, ck));
             }
         }
-        let Some((_, cell)) = best else { return Outcome::Miss };
+        let Some((_, cell)) = best else {
+            return Outcome::Miss;
+        };
         let present: [bool; 4] = cells.map(|x| x == cell);
 
-        let (mut d_min, mut d_max, mut d_sum, mut cos_sum, mut n) = (f32::INFINITY, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        let (mut d_min, mut d_max, mut d_sum, mut cos_sum, mut n) =
+            (f32::INFINITY, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for k in (0..4).filter(|&k| present[k]) {
             d_min = d_min.min(q[k].t);
             d_max = d_max.max(q[k].t);
@@ -483,28 +552,47 @@ impl Ctx<'_> {
                 let pairs = if m == 2 { 1 } else { m };
                 for e in 0..pairs {
                     let (a, b) = (q[ring[e]], q[ring[(e + 1) % m]]);
-                    if a.tri != b.tri && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex) {
+                    if a.tri != b.tri
+                        && crosses_silhouette(scene, self.origin, a.tri, a.tex, b.tri, b.tex)
+                    {
                         return Outcome::Silhouette;
                     }
                 }
             }
         }
         // 4. Reconstruction.
-        let mut corners: [Option<[f32; 2]>; 4] = [0, 1, 2, 3].map(|k| present[k].then_some(q[k].tex));
+        let mut corners: [Option<[f32; 2]>; 4] =
+            [0, 1, 2, 3].map(|k| present[k].then_some(q[k].tex));
         let mut made = 0u8;
         if !present.iter().all(|&p| p) {
             if !self.opts.reconstruct {
                 return Outcome::Dropped;
             }
-            let grid = |i: i64, j: i64| self.corner(rows, i, j).filter(|h| h.is_hit() && scene.cell_of(h.tri) == cell).map(|h| h.tex);
-            let Some(m) = reconstruct(&mut corners, i0, j0, grid) else { return Outcome::Dropped };
+            let grid = |i: i64, j: i64| {
+                self.corner(rows, i, j)
+                    .filter(|h| h.is_hit() && scene.cell_of(h.tri) == cell)
+                    .map(|h| h.tex)
+            };
+            let Some(m) = reconstruct(&mut corners, i0, j0, grid) else {
+                return Outcome::Dropped;
+            };
             made = m;
             if self.opts.reject_silhouettes {
                 for k in (0..4).filter(|&k| !present[k]) {
                     // Walk from a present neighbour along the footprint (else any present corner).
-                    let from = [(k + 1) % 4, (k + 3) % 4, (k + 2) % 4].into_iter().find(|&a| present[a]).unwrap_or(first_present(&present));
+                    let from = [(k + 1) % 4, (k + 3) % 4, (k + 2) % 4]
+                        .into_iter()
+                        .find(|&a| present[a])
+                        .unwrap_or(first_present(&present));
                     let target = corners[k].unwrap_or(q[from].tex);
-                    if crosses_silhouette(scene, self.origin, q[from].tri, q[from].tex, super::scene::NO_TRI, target) {
+                    if crosses_silhouette(
+                        scene,
+                        self.origin,
+                        q[from].tri,
+                        q[from].tex,
+                        super::scene::NO_TRI,
+                        target,
+                    ) {
                         return Outcome::Silhouette;
                     }
                 }
@@ -549,7 +637,8 @@ pub(crate) fn footprint_ok(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) ->
         hi - lo
     };
     let (w, h) = (side(0), side(1));
-    if sum.is_finite() && w <= 0.5 * max_extent && h <= 0.5 * max_extent && w * h <= 0.5 * max_area {
+    if sum.is_finite() && w <= 0.5 * max_extent && h <= 0.5 * max_extent && w * h <= 0.5 * max_area
+    {
         return true;
     }
     footprint_ok_exact(c, max_area, max_extent)
@@ -571,7 +660,9 @@ fn footprint_ok_exact(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool
     }
     let len2 = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
     let m2 = max_extent * max_extent;
-    (0..4).all(|k| len2(c[k], c[(k + 1) % 4]) <= m2) && len2(c[0], c[2]) <= m2 && len2(c[1], c[3]) <= m2
+    (0..4).all(|k| len2(c[k], c[(k + 1) % 4]) <= m2)
+        && len2(c[0], c[2]) <= m2
+        && len2(c[1], c[3]) <= m2
 }
 
 #[cfg(test)]
@@ -595,7 +686,9 @@ mod tests {
     #[test]
     fn fast_accept_agrees_with_the_full_size_test() {
         fn full(c: &[[f32; 2]; 4], max_area: f32, max_extent: f32) -> bool {
-            let a2: f32 = (0..4).map(|k| c[k][0] * c[(k + 1) % 4][1] - c[(k + 1) % 4][0] * c[k][1]).sum();
+            let a2: f32 = (0..4)
+                .map(|k| c[k][0] * c[(k + 1) % 4][1] - c[(k + 1) % 4][0] * c[k][1])
+                .sum();
             let len2 = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
             c.iter().flatten().all(|v| v.is_finite())
                 && 0.5 * a2.abs() <= max_area
@@ -605,7 +698,9 @@ mod tests {
         }
         let mut seed = 99u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 40) as f32 / (1u64 << 24) as f32
         };
         for _ in 0..20000 {

@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::PhotoInput;
-use crate::camera::{CameraModel, camera_from_json_file, rotation_from_yaw_pitch_roll, yaw_pitch_roll_from_rotation};
+use crate::camera::{
+    CameraModel, camera_from_json_file, rotation_from_yaw_pitch_roll, yaw_pitch_roll_from_rotation,
+};
 use crate::error::{Error, Result};
 
 /// A photo's image file and its camera, fitted to the image's real size (pixels not decoded
@@ -42,7 +44,12 @@ impl PhotoSpec {
                 ),
             ));
         }
-        Ok(PhotoInput { name: self.name.clone(), image_path: self.image_path.clone(), image, camera: self.camera })
+        Ok(PhotoInput {
+            name: self.name.clone(),
+            image_path: self.image_path.clone(),
+            image,
+            camera: self.camera,
+        })
     }
 }
 
@@ -68,7 +75,10 @@ pub fn apply_rotation_delta(cam: &CameraModel, delta_deg: [f64; 3]) -> CameraMod
         pitch + delta_deg[1].to_radians(),
         roll + delta_deg[2].to_radians(),
     );
-    CameraModel { world_to_camera: r, ..*cam }
+    CameraModel {
+        world_to_camera: r,
+        ..*cam
+    }
 }
 
 /// The real pixel size of an image file (header only). Errors name the file.
@@ -85,7 +95,12 @@ pub fn image_size(path: &Path) -> Result<(u32, u32)> {
 /// `cam` (read from `source`) for an image of `size`: unchanged if the sizes agree, else
 /// [`CameraModel::resized`] when the aspect ratios agree within 1 %, else an error naming
 /// both files.
-pub fn fit_camera_to_image(cam: CameraModel, size: (u32, u32), source: &Path, image: &Path) -> Result<CameraModel> {
+pub fn fit_camera_to_image(
+    cam: CameraModel,
+    size: (u32, u32),
+    source: &Path,
+    image: &Path,
+) -> Result<CameraModel> {
     if (cam.width, cam.height) == size {
         return Ok(cam);
     }
@@ -108,15 +123,31 @@ pub fn fit_camera_to_image(cam: CameraModel, size: (u32, u32), source: &Path, im
 }
 
 /// A validated [`PhotoSpec`] from an image file and the camera read for it.
-pub fn photo_spec(image_path: &Path, camera: CameraModel, camera_source: &Path) -> Result<PhotoSpec> {
+pub fn photo_spec(
+    image_path: &Path,
+    camera: CameraModel,
+    camera_source: &Path,
+) -> Result<PhotoSpec> {
     spec_for_size(image_path, image_size(image_path)?, camera, camera_source)
 }
 
-fn spec_for_size(image_path: &Path, size: (u32, u32), camera: CameraModel, camera_source: &Path) -> Result<PhotoSpec> {
+fn spec_for_size(
+    image_path: &Path,
+    size: (u32, u32),
+    camera: CameraModel,
+    camera_source: &Path,
+) -> Result<PhotoSpec> {
     let camera = fit_camera_to_image(camera, size, camera_source, image_path)?;
     validate_camera(&camera, camera_source)?;
-    let name = image_path.file_name().map_or_else(|| image_path.display().to_string(), |n| n.to_string_lossy().into());
-    Ok(PhotoSpec { name, image_path: image_path.to_path_buf(), camera })
+    let name = image_path.file_name().map_or_else(
+        || image_path.display().to_string(),
+        |n| n.to_string_lossy().into(),
+    );
+    Ok(PhotoSpec {
+        name,
+        image_path: image_path.to_path_buf(),
+        camera,
+    })
 }
 
 #[derive(Deserialize)]
@@ -159,7 +190,10 @@ pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
             _ => {
                 return Err(Error::bad_input(
                     path,
-                    format!("photo {i} ({}): give exactly one of \"camera\" and \"imgraft\"", e.image.display()),
+                    format!(
+                        "photo {i} ({}): give exactly one of \"camera\" and \"imgraft\"",
+                        e.image.display()
+                    ),
                 ));
             }
         };
@@ -167,7 +201,9 @@ pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
             if d.iter().any(|v| !v.is_finite() || v.abs() > 180.0) {
                 return Err(Error::bad_input(
                     path,
-                    format!("photo {i}: \"rotation_delta_deg\" must be three finite angles in [-180, 180], got {d:?}"),
+                    format!(
+                        "photo {i}: \"rotation_delta_deg\" must be three finite angles in [-180, 180], got {d:?}"
+                    ),
                 ));
             }
         }
@@ -187,5 +223,8 @@ pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
 /// resolve against the list's folder. Cameras are fitted to the image's real size and
 /// validated; a missing or unreadable file is an error naming it.
 pub fn read_photo_list(path: &Path) -> Result<Vec<PhotoInput>> {
-    read_photo_specs(path)?.iter().map(PhotoSpec::load).collect()
+    read_photo_specs(path)?
+        .iter()
+        .map(PhotoSpec::load)
+        .collect()
 }

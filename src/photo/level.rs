@@ -31,12 +31,17 @@ pub struct ColourTransform {
 
 impl ColourTransform {
     /// The identity map.
-    pub const IDENTITY: ColourTransform = ColourTransform { gain: [1.0; 3], offset: [0.0; 3] };
+    pub const IDENTITY: ColourTransform = ColourTransform {
+        gain: [1.0; 3],
+        offset: [0.0; 3],
+    };
 
     /// `gain · rgb + offset`, clamped to [0, 1].
     #[inline]
     pub fn apply(&self, rgb: [f32; 3]) -> [f32; 3] {
-        std::array::from_fn(|k| (self.gain[k] as f32 * rgb[k] + self.offset[k] as f32).clamp(0.0, 1.0))
+        std::array::from_fn(|k| {
+            (self.gain[k] as f32 * rgb[k] + self.offset[k] as f32).clamp(0.0, 1.0)
+        })
     }
 }
 
@@ -152,7 +157,9 @@ pub fn collect_pairs(
             let (mut sp, mut se) = ([0.0f32; 3], [0.0f32; 3]);
             for y in by..by + k {
                 for x in bx..bx + k {
-                    let Some((p, e)) = qualifies((y * t + x) as usize) else { continue 'block };
+                    let Some((p, e)) = qualifies((y * t + x) as usize) else {
+                        continue 'block;
+                    };
                     for c in 0..3 {
                         sp[c] += p[c];
                         se[c] += e[c];
@@ -161,7 +168,10 @@ pub fn collect_pairs(
             }
             let n = (k * k) as f32;
             let (p, e) = (sp.map(|v| v / n), se.map(|v| v / n));
-            if [luminance(p), luminance(e)].iter().all(|&l| l >= lum[0] && l <= lum[1]) {
+            if [luminance(p), luminance(e)]
+                .iter()
+                .all(|&l| l >= lum[0] && l <= lum[1])
+            {
                 out.photo.push(p);
                 out.existing.push(e);
             }
@@ -210,7 +220,9 @@ fn fit_channel(x: &[f64], y: &[f64], params: &LevelingParams) -> (f64, f64) {
         return (1.0, median(&mut d));
     }
     let mut w = vec![1.0; x.len()];
-    let Some(mut line) = weighted_line(x, y, &w) else { return (1.0, 0.0) };
+    let Some(mut line) = weighted_line(x, y, &w) else {
+        return (1.0, 0.0);
+    };
     let mut r = vec![0.0; x.len()];
     for _ in 0..20 {
         for k in 0..x.len() {
@@ -227,14 +239,20 @@ fn fit_channel(x: &[f64], y: &[f64], params: &LevelingParams) -> (f64, f64) {
             let a = r[k].abs();
             w[k] = if a <= c { 1.0 } else { c / a };
         }
-        let Some(next) = weighted_line(x, y, &w) else { break };
+        let Some(next) = weighted_line(x, y, &w) else {
+            break;
+        };
         let done = (next.0 - line.0).abs() < 1e-7 && (next.1 - line.1).abs() < 1e-7;
         line = next;
         if done {
             break;
         }
     }
-    if line.0.is_finite() && line.1.is_finite() && line.0 >= params.gain_range[0] && line.0 <= params.gain_range[1] {
+    if line.0.is_finite()
+        && line.1.is_finite()
+        && line.0 >= params.gain_range[0]
+        && line.0 <= params.gain_range[1]
+    {
         line
     } else {
         (1.0, 0.0)
@@ -243,7 +261,10 @@ fn fit_channel(x: &[f64], y: &[f64], params: &LevelingParams) -> (f64, f64) {
 
 /// Fits the photo → existing colour map from `pairs`; returns it and the number of samples
 /// used (0 and the identity when there are fewer than `min_samples`). Deterministic.
-pub fn fit_colour_transform(pairs: &ColourPairs, params: &LevelingParams) -> (ColourTransform, usize) {
+pub fn fit_colour_transform(
+    pairs: &ColourPairs,
+    params: &LevelingParams,
+) -> (ColourTransform, usize) {
     let n = pairs.photo.len().min(pairs.existing.len());
     if n < params.min_samples.max(2) {
         return (ColourTransform::IDENTITY, 0);
@@ -276,10 +297,14 @@ mod tests {
 
     #[test]
     fn recovers_gain_and_offset_despite_outliers() {
-        let truth = ColourTransform { gain: [0.8, 1.1, 1.3], offset: [0.05, -0.02, 0.01] };
+        let truth = ColourTransform {
+            gain: [0.8, 1.1, 1.3],
+            offset: [0.05, -0.02, 0.01],
+        };
         let mut pairs = ColourPairs::default();
         for i in 0..5000u64 {
-            let p: [f32; 3] = std::array::from_fn(|k| (0.1 + 0.6 * hash01(3 * i + k as u64)) as f32);
+            let p: [f32; 3] =
+                std::array::from_fn(|k| (0.1 + 0.6 * hash01(3 * i + k as u64)) as f32);
             let mut e = truth.apply(p);
             // small noise everywhere, gross outliers on 15 % of the samples
             for (k, v) in e.iter_mut().enumerate() {
@@ -294,12 +319,26 @@ mod tests {
         let (t, used) = fit_colour_transform(&pairs, &LevelingParams::default());
         assert_eq!(used, 5000);
         for k in 0..3 {
-            assert!((t.gain[k] - truth.gain[k]).abs() < 0.02, "gain {k}: {:?}", t);
-            assert!((t.offset[k] - truth.offset[k]).abs() < 0.01, "offset {k}: {:?}", t);
+            assert!(
+                (t.gain[k] - truth.gain[k]).abs() < 0.02,
+                "gain {k}: {:?}",
+                t
+            );
+            assert!(
+                (t.offset[k] - truth.offset[k]).abs() < 0.01,
+                "offset {k}: {:?}",
+                t
+            );
         }
         // too few samples: identity
-        let few = ColourPairs { photo: pairs.photo[..100].to_vec(), existing: pairs.existing[..100].to_vec() };
-        assert_eq!(fit_colour_transform(&few, &LevelingParams::default()), (ColourTransform::IDENTITY, 0));
+        let few = ColourPairs {
+            photo: pairs.photo[..100].to_vec(),
+            existing: pairs.existing[..100].to_vec(),
+        };
+        assert_eq!(
+            fit_colour_transform(&few, &LevelingParams::default()),
+            (ColourTransform::IDENTITY, 0)
+        );
     }
 
     #[test]
@@ -321,30 +360,71 @@ mod tests {
         let mut acc = PhotoAccum::new(2);
         // texel 0: confident and sharp; texel 1: steep; texel 2: dark; texel 3: smeared (a
         // pixel of 5 m on ground the ortho resolves to 1 m)
-        for (t, c, r) in [(0usize, 0.5f32, 0.1f32), (1, 0.5, 0.1), (2, 0.01, 0.1), (3, 0.5, 5.0)] {
-            *acc.sums.get_mut(t).unwrap() = TexelSums { coverage: 1.0, weight: 1.0, colour: [c; 3], footprint: r, grazing: 1.2 };
+        for (t, c, r) in [
+            (0usize, 0.5f32, 0.1f32),
+            (1, 0.5, 0.1),
+            (2, 0.01, 0.1),
+            (3, 0.5, 5.0),
+        ] {
+            *acc.sums.get_mut(t).unwrap() = TexelSums {
+                coverage: 1.0,
+                weight: 1.0,
+                colour: [c; 3],
+                footprint: r,
+                grazing: 1.2,
+            };
         }
         let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
-        let ctx = CellContext { base_texels: 2, cos_slope: vec![1.0, 0.0, 1.0, 1.0], max_error: 0.0, existing_ground: 1.0, texel_ground: 1.0 };
+        let ctx = CellContext {
+            base_texels: 2,
+            cos_slope: vec![1.0, 0.0, 1.0, 1.0],
+            max_error: 0.0,
+            existing_ground: 1.0,
+            texel_ground: 1.0,
+        };
         let lp = LevelingParams::default();
         let mut pairs = ColourPairs::default();
         assert_eq!(collect_pairs(&acc, &existing, &ctx, &lp, &mut pairs), 1);
         assert_eq!(pairs.photo, vec![[0.5; 3]]);
-        assert_eq!(collect_pairs(&PhotoAccum::new(3), &existing, &ctx, &lp, &mut pairs), 0);
+        assert_eq!(
+            collect_pairs(&PhotoAccum::new(3), &existing, &ctx, &lp, &mut pairs),
+            0
+        );
         // seen too obliquely, or displaced too far by the TIN's error: no sample
         let mut oblique = acc.clone();
         oblique.sums.get_mut(0).unwrap().grazing = 2.5;
-        assert_eq!(collect_pairs(&oblique, &existing, &ctx, &lp, &mut ColourPairs::default()), 0);
-        let rough = CellContext { max_error: 0.9, ..ctx.clone() };
-        assert_eq!(collect_pairs(&acc, &existing, &rough, &lp, &mut ColourPairs::default()), 0);
+        assert_eq!(
+            collect_pairs(&oblique, &existing, &ctx, &lp, &mut ColourPairs::default()),
+            0
+        );
+        let rough = CellContext {
+            max_error: 0.9,
+            ..ctx.clone()
+        };
+        assert_eq!(
+            collect_pairs(&acc, &existing, &rough, &lp, &mut ColourPairs::default()),
+            0
+        );
         // texels of half the ortho's spacing: 2 x 2 blocks, which texel 1 spoils here
-        let half = CellContext { texel_ground: 0.5, ..ctx.clone() };
+        let half = CellContext {
+            texel_ground: 0.5,
+            ..ctx.clone()
+        };
         assert_eq!(collect_pairs(&acc, &existing, &half, &lp, &mut pairs), 0);
         let mut flat = acc.clone();
         for t in 0..4 {
-            *flat.sums.get_mut(t).unwrap() = TexelSums { coverage: 1.0, weight: 1.0, colour: [0.2 + 0.1 * t as f32; 3], footprint: 0.1, grazing: 1.2 };
+            *flat.sums.get_mut(t).unwrap() = TexelSums {
+                coverage: 1.0,
+                weight: 1.0,
+                colour: [0.2 + 0.1 * t as f32; 3],
+                footprint: 0.1,
+                grazing: 1.2,
+            };
         }
-        let ok = CellContext { cos_slope: vec![1.0; 4], ..half };
+        let ok = CellContext {
+            cos_slope: vec![1.0; 4],
+            ..half
+        };
         let mut pairs = ColourPairs::default();
         assert_eq!(collect_pairs(&flat, &existing, &ok, &lp, &mut pairs), 1);
         assert!((pairs.photo[0][0] - 0.35).abs() < 1e-6);

@@ -48,22 +48,32 @@ mod triangle;
 mod viewgrid;
 
 pub use accel::RayAccel;
-pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
-pub use bvh::{nearest_brute_force, BvhQuality, TriHit, TriangleBvh};
-pub use colmap::{read_colmap, read_colmap_specs, read_similarity, Similarity};
-pub use footprint::{for_each_footprint_batch, for_each_footprint_batch_in, photo_footprints, photo_footprints_in, FootprintBuffers, FootprintOptions};
-pub use input::{
-    apply_rotation_delta, fit_camera_to_image, image_size, photo_spec, read_photo_list, read_photo_specs,
-    validate_camera, PhotoSpec,
+pub use accumulate::{
+    BlendMode, CellAccum, CellContext, MIN_COS_SLOPE, PhotoAccum, PhotoSamples, TexelSums,
 };
-pub use scene::{LevelScene, SceneCell};
-pub use accumulate::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE, PhotoAccum, PhotoSamples, TexelSums};
 pub use blend::{Blended, blend_cell, magnify};
+pub use bvh::{BvhQuality, TriHit, TriangleBvh, nearest_brute_force};
+pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
-pub use level::{ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform, normal_cos_slope};
+pub use footprint::{
+    FootprintBuffers, FootprintOptions, for_each_footprint_batch, for_each_footprint_batch_in,
+    photo_footprints, photo_footprints_in,
+};
+pub use input::{
+    PhotoSpec, apply_rotation_delta, fit_camera_to_image, image_size, photo_spec, read_photo_list,
+    read_photo_specs, validate_camera,
+};
+pub use level::{
+    ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
+    normal_cos_slope,
+};
 pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
+pub use scene::{LevelScene, SceneCell};
 pub use sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
-pub use splat::{MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint};
+pub use splat::{
+    MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint,
+};
+pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
 
 use std::path::PathBuf;
 
@@ -146,7 +156,10 @@ impl FootprintSet {
     pub fn append(&mut self, later: &mut FootprintSet) {
         self.add_counts(later);
         let mut merged = Vec::with_capacity(self.cells.len().max(later.cells.len()));
-        let (mut a, mut b) = (std::mem::take(&mut self.cells).into_iter().peekable(), later.cells.drain(..).peekable());
+        let (mut a, mut b) = (
+            std::mem::take(&mut self.cells).into_iter().peekable(),
+            later.cells.drain(..).peekable(),
+        );
         loop {
             let next = match (a.peek(), b.peek()) {
                 (Some(x), Some(y)) if x.cell == y.cell => {
@@ -174,9 +187,17 @@ impl FootprintSet {
 /// Equal footprints in the same order and equal counts (however they are chunked).
 impl PartialEq for FootprintSet {
     fn eq(&self, o: &Self) -> bool {
-        (self.pixels_hit, self.rejected_silhouette, self.reconstructed, self.dropped)
-            == (o.pixels_hit, o.rejected_silhouette, o.reconstructed, o.dropped)
-            && self.len() == o.len()
+        (
+            self.pixels_hit,
+            self.rejected_silhouette,
+            self.reconstructed,
+            self.dropped,
+        ) == (
+            o.pixels_hit,
+            o.rejected_silhouette,
+            o.reconstructed,
+            o.dropped,
+        ) && self.len() == o.len()
             && self.iter().eq(o.iter())
     }
 }
@@ -213,12 +234,25 @@ mod tests {
     use super::*;
 
     fn fp(cell: u32, row: u32) -> PixelFootprint {
-        PixelFootprint { cell, pixel: [0, row], corners: [[0.0; 2]; 4], cos_view: 1.0, distance: 1.0, reconstructed: 0 }
+        PixelFootprint {
+            cell,
+            pixel: [0, row],
+            corners: [[0.0; 2]; 4],
+            cos_view: 1.0,
+            distance: 1.0,
+            reconstructed: 0,
+        }
     }
 
     fn set(cells: &[(u32, &[u32])], hit: u64) -> FootprintSet {
         FootprintSet {
-            cells: cells.iter().map(|&(c, rows)| CellFootprints { cell: c, chunks: vec![rows.iter().map(|&r| fp(c, r)).collect()] }).collect(),
+            cells: cells
+                .iter()
+                .map(|&(c, rows)| CellFootprints {
+                    cell: c,
+                    chunks: vec![rows.iter().map(|&r| fp(c, r)).collect()],
+                })
+                .collect(),
             pixels_hit: hit,
             rejected_silhouette: 1,
             reconstructed: 2,
@@ -232,9 +266,23 @@ mod tests {
         let mut b = set(&[(0, &[2]), (4, &[2, 3]), (7, &[3])], 5);
         a.append(&mut b);
         assert!(b.is_empty());
-        assert_eq!(a.cells.iter().map(|c| c.cell).collect::<Vec<_>>(), vec![0, 1, 4, 7]);
+        assert_eq!(
+            a.cells.iter().map(|c| c.cell).collect::<Vec<_>>(),
+            vec![0, 1, 4, 7]
+        );
         let rows: Vec<[u32; 2]> = a.iter().map(|f| [f.cell, f.pixel[1]]).collect();
-        assert_eq!(rows, vec![[0, 2], [1, 0], [1, 1], [4, 0], [4, 2], [4, 3], [7, 3]]);
-        assert_eq!((a.pixels_hit, a.rejected_silhouette, a.reconstructed, a.dropped), (15, 2, 4, 6));
+        assert_eq!(
+            rows,
+            vec![[0, 2], [1, 0], [1, 1], [4, 0], [4, 2], [4, 3], [7, 3]]
+        );
+        assert_eq!(
+            (
+                a.pixels_hit,
+                a.rejected_silhouette,
+                a.reconstructed,
+                a.dropped
+            ),
+            (15, 2, 4, 6)
+        );
     }
 }

@@ -24,24 +24,35 @@ pub fn downsample2_in(img: &RgbImage, space: ColourSpace) -> Option<RgbImage> {
     let src = img.as_raw();
     let sw = img.width() as usize;
     let mut out = vec![0u8; w as usize * h as usize * 3];
-    out.par_chunks_exact_mut(w as usize * 3).enumerate().for_each(|(j, row)| {
-        // the two source rows, cropped to an even width
-        let (a, b) = (&src[2 * j * sw * 3..][..6 * w as usize], &src[(2 * j + 1) * sw * 3..][..6 * w as usize]);
-        for ((o, a), b) in row.chunks_exact_mut(3).zip(a.chunks_exact(6)).zip(b.chunks_exact(6)) {
-            for k in 0..3 {
-                o[k] = match space {
-                    ColourSpace::Srgb => {
-                        let s = a[k] as u32 + a[k + 3] as u32 + b[k] as u32 + b[k + 3] as u32;
-                        ((s + 2) / 4) as u8
-                    }
-                    ColourSpace::Linear => {
-                        let d = crate::colour::decode_u8;
-                        crate::colour::encode_u8(0.25 * (d(a[k]) + d(a[k + 3]) + d(b[k]) + d(b[k + 3])))
-                    }
-                };
+    out.par_chunks_exact_mut(w as usize * 3)
+        .enumerate()
+        .for_each(|(j, row)| {
+            // the two source rows, cropped to an even width
+            let (a, b) = (
+                &src[2 * j * sw * 3..][..6 * w as usize],
+                &src[(2 * j + 1) * sw * 3..][..6 * w as usize],
+            );
+            for ((o, a), b) in row
+                .chunks_exact_mut(3)
+                .zip(a.chunks_exact(6))
+                .zip(b.chunks_exact(6))
+            {
+                for k in 0..3 {
+                    o[k] = match space {
+                        ColourSpace::Srgb => {
+                            let s = a[k] as u32 + a[k + 3] as u32 + b[k] as u32 + b[k + 3] as u32;
+                            ((s + 2) / 4) as u8
+                        }
+                        ColourSpace::Linear => {
+                            let d = crate::colour::decode_u8;
+                            crate::colour::encode_u8(
+                                0.25 * (d(a[k]) + d(a[k + 3]) + d(b[k]) + d(b[k + 3])),
+                            )
+                        }
+                    };
+                }
             }
-        }
-    });
+        });
     RgbImage::from_raw(w, h, out)
 }
 
@@ -49,7 +60,12 @@ pub fn downsample2_in(img: &RgbImage, space: ColourSpace) -> Option<RgbImage> {
 /// (same intrinsics, the crop removes the last column/row), resized by exactly 1/2.
 pub fn half_camera(camera: &CameraModel) -> CameraModel {
     let (w, h) = (camera.width / 2, camera.height / 2);
-    CameraModel { width: 2 * w, height: 2 * h, ..*camera }.resized(w, h)
+    CameraModel {
+        width: 2 * w,
+        height: 2 * h,
+        ..*camera
+    }
+    .resized(w, h)
 }
 
 /// A photo and its successive halvings with their cameras; step 0 is the photo itself.
@@ -69,15 +85,26 @@ impl<'a> PhotoPyramid<'a> {
     }
 
     /// [`PhotoPyramid::new`] averaging in `space`.
-    pub fn new_in(image: &'a RgbImage, camera: CameraModel, steps: usize, space: ColourSpace) -> PhotoPyramid<'a> {
+    pub fn new_in(
+        image: &'a RgbImage,
+        camera: CameraModel,
+        steps: usize,
+        space: ColourSpace,
+    ) -> PhotoPyramid<'a> {
         let mut coarser: Vec<(RgbImage, CameraModel)> = Vec::new();
         for _ in 0..steps {
             let (img, cam) = coarser.last().map_or((image, &camera), |(i, c)| (i, c));
-            let Some(next) = downsample2_in(img, space) else { break };
+            let Some(next) = downsample2_in(img, space) else {
+                break;
+            };
             let cam = half_camera(cam);
             coarser.push((next, cam));
         }
-        PhotoPyramid { full: image, camera, coarser }
+        PhotoPyramid {
+            full: image,
+            camera,
+            coarser,
+        }
     }
 
     /// Halvings available (images after step 0).

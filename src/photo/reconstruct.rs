@@ -31,7 +31,11 @@ pub(crate) fn reconstruct(
             if corners[k].is_some() {
                 continue;
             }
-            let (a, b, o) = (corners[(k + 3) % 4], corners[(k + 1) % 4], corners[(k + 2) % 4]);
+            let (a, b, o) = (
+                corners[(k + 3) % 4],
+                corners[(k + 1) % 4],
+                corners[(k + 2) % 4],
+            );
             let value = if let (Some(a), Some(b), Some(o)) = (a, b, o) {
                 Some([a[0] + b[0] - o[0], a[1] + b[1] - o[1]])
             } else {
@@ -45,11 +49,17 @@ pub(crate) fn reconstruct(
                 let mut sum = [0.0f32; 2];
                 let mut n = 0;
                 if let (Some(near), Some(far)) = (along_x, grid(i + 2 * dx, j)) {
-                    sum = [sum[0] + 2.0 * near[0] - far[0], sum[1] + 2.0 * near[1] - far[1]];
+                    sum = [
+                        sum[0] + 2.0 * near[0] - far[0],
+                        sum[1] + 2.0 * near[1] - far[1],
+                    ];
                     n += 1;
                 }
                 if let (Some(near), Some(far)) = (along_y, grid(i, j + 2 * dy)) {
-                    sum = [sum[0] + 2.0 * near[0] - far[0], sum[1] + 2.0 * near[1] - far[1]];
+                    sum = [
+                        sum[0] + 2.0 * near[0] - far[0],
+                        sum[1] + 2.0 * near[1] - far[1],
+                    ];
                     n += 1;
                 }
                 (n > 0).then(|| [sum[0] / n as f32, sum[1] / n as f32])
@@ -76,7 +86,10 @@ mod tests {
 
     /// An affine texture map of the corner grid.
     fn affine(i: i64, j: i64) -> [f32; 2] {
-        [3.0 + 0.5 * i as f32 - 0.1 * j as f32, 7.0 + 0.2 * i as f32 + 0.4 * j as f32]
+        [
+            3.0 + 0.5 * i as f32 - 0.1 * j as f32,
+            7.0 + 0.2 * i as f32 + 0.4 * j as f32,
+        ]
     }
 
     fn close(a: [f32; 2], b: [f32; 2]) -> bool {
@@ -96,7 +109,9 @@ mod tests {
                 }
             }
             let missing = mask.count_ones() as u8;
-            let got = reconstruct(&mut c, i0, j0, |i, j| (!(i0..=i0 + 1).contains(&i) || !(j0..=j0 + 1).contains(&j)).then(|| affine(i, j)));
+            let got = reconstruct(&mut c, i0, j0, |i, j| {
+                (!(i0..=i0 + 1).contains(&i) || !(j0..=j0 + 1).contains(&j)).then(|| affine(i, j))
+            });
             assert_eq!(got, Some(missing), "mask {mask:b}");
             for k in 0..4 {
                 assert!(close(c[k].unwrap(), truth[k]), "mask {mask:b} corner {k}");

@@ -66,31 +66,61 @@ pub struct LevelScene {
 
 impl LevelScene {
     /// Builds the scene from in-memory cells (a BVH is built now with [`RayAccel::Bvh`]).
-    pub fn new(cells: Vec<SceneCell>, frame_origin: DVec3, accel: impl Into<RayAccel>) -> LevelScene {
+    pub fn new(
+        cells: Vec<SceneCell>,
+        frame_origin: DVec3,
+        accel: impl Into<RayAccel>,
+    ) -> LevelScene {
         let accel = accel.into();
         // Cells in parallel, concatenated in order.
-        let parts: Vec<CellPart> = cells.par_iter().enumerate().map(|(ci, c)| cell_part(ci as u32, c, frame_origin)).collect();
+        let parts: Vec<CellPart> = cells
+            .par_iter()
+            .enumerate()
+            .map(|(ci, c)| cell_part(ci as u32, c, frame_origin))
+            .collect();
         let total: usize = parts.iter().map(|p| p.tris.len()).sum();
-        let (mut tris, mut tri_ref, mut info, mut adjacency) =
-            (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
+        let (mut tris, mut tri_ref, mut info, mut adjacency) = (
+            Vec::with_capacity(total),
+            Vec::with_capacity(total),
+            Vec::with_capacity(total),
+            Vec::with_capacity(total),
+        );
         for p in parts {
             let first = tris.len() as u32;
             tris.extend(p.tris);
             tri_ref.extend(p.tri_ref);
             info.extend(p.info);
-            adjacency.extend(p.adjacency.into_iter().map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })));
+            adjacency.extend(
+                p.adjacency
+                    .into_iter()
+                    .map(|a| a.map(|n| if n == NO_TRI { NO_TRI } else { n + first })),
+            );
         }
         let bvh = match accel {
             RayAccel::Bvh(q) => Some(TriangleBvh::build(&tris, q)),
             RayAccel::ViewGrid(_) => None,
         };
         let tris = to_triangles(&tris);
-        LevelScene { frame_origin, cells, accel, tris, bvh, tri_ref, info, adjacency }
+        LevelScene {
+            frame_origin,
+            cells,
+            accel,
+            tris,
+            bvh,
+            tri_ref,
+            info,
+            adjacency,
+        }
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of
     /// `level` in the store.
-    pub fn from_store(store: &Store, level: u8, frame_origin: DVec3, accel: impl Into<RayAccel>) -> Result<LevelScene> {
+    pub fn from_store(
+        store: &Store,
+        level: u8,
+        frame_origin: DVec3,
+        accel: impl Into<RayAccel>,
+    ) -> Result<LevelScene> {
         let levels = store.manifest.quadtree.levels;
         if u32::from(level) >= u32::from(levels) {
             return Err(Error::BadOption(format!(
@@ -100,12 +130,22 @@ impl LevelScene {
             )));
         }
         if !frame_origin.is_finite() {
-            return Err(Error::BadOption(format!("frame origin {frame_origin} is not finite")));
+            return Err(Error::BadOption(format!(
+                "frame origin {frame_origin} is not finite"
+            )));
         }
         // Meshes are read and checked in parallel, collected in manifest order.
-        let recs: Vec<(usize, &crate::store::CellRecord)> =
-            store.manifest.cells.iter().enumerate().filter(|(_, r)| r.level == level).collect();
-        let cells = recs.into_par_iter().map(|(index, rec)| scene_cell(store, index, rec)).collect::<Result<Vec<_>>>()?;
+        let recs: Vec<(usize, &crate::store::CellRecord)> = store
+            .manifest
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.level == level)
+            .collect();
+        let cells = recs
+            .into_par_iter()
+            .map(|(index, rec)| scene_cell(store, index, rec))
+            .collect::<Result<Vec<_>>>()?;
         Ok(LevelScene::new(cells, frame_origin, accel))
     }
 
@@ -126,7 +166,9 @@ impl LevelScene {
 
     /// `(index into cells, local triangle index)` of BVH triangle `tri`.
     pub fn triangle_source(&self, tri: u32) -> Option<(usize, usize)> {
-        self.tri_ref.get(tri as usize).map(|r| (r[0] as usize, r[1] as usize))
+        self.tri_ref
+            .get(tri as usize)
+            .map(|r| (r[0] as usize, r[1] as usize))
     }
 
     /// Index into `cells` of BVH triangle `tri` (in range).
@@ -169,7 +211,12 @@ fn cell_part(ci: u32, c: &SceneCell, frame_origin: DVec3) -> CellPart {
         let p = c.positions[i as usize];
         offset + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
     };
-    let mut part = CellPart { tris: Vec::new(), tri_ref: Vec::new(), info: Vec::new(), adjacency: Vec::new() };
+    let mut part = CellPart {
+        tris: Vec::new(),
+        tri_ref: Vec::new(),
+        info: Vec::new(),
+        adjacency: Vec::new(),
+    };
     let mut kept: Vec<[u32; 3]> = Vec::new();
     for ti in morton_order(c) {
         let t = &c.triangles[ti];
@@ -179,7 +226,12 @@ fn cell_part(ci: u32, c: &SceneCell, frame_origin: DVec3) -> CellPart {
         }
         let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
         part.info.push(TriInfo {
-            plane: [normal.x as f32, normal.y as f32, normal.z as f32, normal.dot(p[0]) as f32],
+            plane: [
+                normal.x as f32,
+                normal.y as f32,
+                normal.z as f32,
+                normal.dot(p[0]) as f32,
+            ],
             tex: t.map(|i| c.texcoords[i as usize]),
             cell: ci,
         });
@@ -240,7 +292,13 @@ fn morton_order(c: &SceneCell) -> Vec<usize> {
             }
         }
     }
-    let scale = [0, 1].map(|k| if hi[k] > lo[k] { 65535.0 / (hi[k] - lo[k]) } else { 0.0 });
+    let scale = [0, 1].map(|k| {
+        if hi[k] > lo[k] {
+            65535.0 / (hi[k] - lo[k])
+        } else {
+            0.0
+        }
+    });
     let mut keyed: Vec<(u64, usize)> = c
         .triangles
         .iter()
@@ -320,18 +378,31 @@ mod tests {
         let cell = SceneCell {
             cell: 7,
             origin: DVec3::new(431_000.25, 6_878_000.5, 600.0),
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.0],
+            ],
             triangles: vec![[0, 1, 2], [2, 1, 3], [0, 1, 9]],
             texcoords: vec![[0.0, 8.0], [8.0, 8.0], [0.0, 0.0], [8.0, 0.0]],
             texels: 8,
         };
-        let s = LevelScene::new(vec![cell], DVec3::new(431_000.0, 6_878_000.0, 600.0), super::super::BvhQuality::Fast);
+        let s = LevelScene::new(
+            vec![cell],
+            DVec3::new(431_000.0, 6_878_000.0, 600.0),
+            super::super::BvhQuality::Fast,
+        );
         assert_eq!(s.triangle_count(), 2);
         // Triangles are stored in Morton order of their centroids: (0, 1, 2) first.
         assert_eq!(s.triangle_source(0), Some((0, 0)));
         assert_eq!(s.triangle_source(1), Some((0, 1)));
         assert_eq!(s.neighbours(0)[1], 1);
-        let h = s.bvh().unwrap().nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY).unwrap();
+        let h = s
+            .bvh()
+            .unwrap()
+            .nearest(Vec3::new(0.5, 0.75, 10.0), -Vec3::Z, 0.0, f32::INFINITY)
+            .unwrap();
         assert_eq!(h.triangle, 0);
         assert!((h.t - 10.0).abs() < 1e-5);
         let p = s.plane(0);

@@ -33,7 +33,14 @@ fn f64x2(p: [f32; 2]) -> [f64; 2] {
 /// Walks from BVH triangle `from` (containing texture point `p`) towards texture point `q`
 /// (in triangle `target`, or [`NO_TRI`] if unknown) and returns `true` if it crosses an
 /// edge between triangles of different facing seen from `cam`.
-pub(crate) fn crosses_silhouette(scene: &LevelScene, cam: Vec3, from: u32, p: [f32; 2], target: u32, q: [f32; 2]) -> bool {
+pub(crate) fn crosses_silhouette(
+    scene: &LevelScene,
+    cam: Vec3,
+    from: u32,
+    p: [f32; 2],
+    target: u32,
+    q: [f32; 2],
+) -> bool {
     let (p, q) = (f64x2(p), f64x2(q));
     let mut cur = from;
     let mut prev = NO_TRI;

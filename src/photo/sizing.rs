@@ -45,7 +45,10 @@ pub struct SizingBins {
 
 impl Default for SizingBins {
     fn default() -> Self {
-        SizingBins { side: vec![f32::INFINITY; SIZING_BINS * SIZING_BINS], pixels: 0.0 }
+        SizingBins {
+            side: vec![f32::INFINITY; SIZING_BINS * SIZING_BINS],
+            pixels: 0.0,
+        }
     }
 }
 
@@ -60,7 +63,10 @@ impl SizingBins {
         if !(area > 0.0) {
             return;
         }
-        let c = fp.corners.iter().fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
+        let c = fp
+            .corners
+            .iter()
+            .fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
         let n = SIZING_BINS as f32 / base_texels.max(1) as f32;
         let (bx, by) = ((c[0] * n).floor(), (c[1] * n).floor());
         if !(bx >= 0.0 && by >= 0.0 && bx < SIZING_BINS as f32 && by < SIZING_BINS as f32) {
@@ -86,8 +92,19 @@ impl SizingBins {
     /// `texels_per_pixel` texels per photo pixel side (1 in the [module docs](self)), and no
     /// more than `texels_per_delivered` texels (at the existing texture's side `base_texels`
     /// times the scale) per photo pixel the cell receives; 1 without covered bins.
-    pub fn wanted_scale(&self, max_scale: u32, texels_per_pixel: f64, base_texels: u32, texels_per_delivered: f64) -> u32 {
-        let mut v: Vec<f32> = self.side.iter().copied().filter(|s| s.is_finite()).collect();
+    pub fn wanted_scale(
+        &self,
+        max_scale: u32,
+        texels_per_pixel: f64,
+        base_texels: u32,
+        texels_per_delivered: f64,
+    ) -> u32 {
+        let mut v: Vec<f32> = self
+            .side
+            .iter()
+            .copied()
+            .filter(|s| s.is_finite())
+            .collect();
         if v.is_empty() {
             return 1;
         }
@@ -97,7 +114,9 @@ impl SizingBins {
         let m = want.ceil().clamp(0.0, 16.0) as u32;
         let mut scale = 1u32 << m;
         let allowed = texels_per_delivered * self.pixels;
-        while scale > max_scale.max(1) || (scale > 1 && (base_texels as f64 * scale as f64).powi(2) > allowed) {
+        while scale > max_scale.max(1)
+            || (scale > 1 && (base_texels as f64 * scale as f64).powi(2) > allowed)
+        {
             scale /= 2;
         }
         scale
@@ -121,17 +140,29 @@ pub struct SizeRequest {
 /// the [module docs](self).
 pub fn choose_scales(requests: &[SizeRequest], budget_bytes: u64) -> Vec<u32> {
     let mut scales: Vec<u32> = requests.iter().map(|r| r.scale.max(1)).collect();
-    let bytes = |i: usize, s: u32| if s > 1 { texture_bytes(requests[i].base_texels * s) } else { 0 };
+    let bytes = |i: usize, s: u32| {
+        if s > 1 {
+            texture_bytes(requests[i].base_texels * s)
+        } else {
+            0
+        }
+    };
     let mut total: u64 = (0..requests.len()).map(|i| bytes(i, scales[i])).sum();
     while total > budget_bytes {
         // the upsized cell photos cover least, then the larger texture, then the lower index
-        let Some(i) = (0..requests.len()).filter(|&i| scales[i] > 1).min_by(|&a, &b| {
-            requests[a]
-                .covered
-                .total_cmp(&requests[b].covered)
-                .then((requests[b].base_texels * scales[b]).cmp(&(requests[a].base_texels * scales[a])))
-                .then(a.cmp(&b))
-        }) else {
+        let Some(i) = (0..requests.len())
+            .filter(|&i| scales[i] > 1)
+            .min_by(|&a, &b| {
+                requests[a]
+                    .covered
+                    .total_cmp(&requests[b].covered)
+                    .then(
+                        (requests[b].base_texels * scales[b])
+                            .cmp(&(requests[a].base_texels * scales[a])),
+                    )
+                    .then(a.cmp(&b))
+            })
+        else {
             break;
         };
         total -= bytes(i, scales[i]);
@@ -146,7 +177,14 @@ mod tests {
     use super::*;
 
     fn fp(x: f32, y: f32, s: f32) -> PixelFootprint {
-        PixelFootprint { cell: 0, pixel: [0, 0], corners: [[x, y], [x + s, y], [x + s, y + s], [x, y + s]], cos_view: 1.0, distance: 1.0, reconstructed: 0 }
+        PixelFootprint {
+            cell: 0,
+            pixel: [0, 0],
+            corners: [[x, y], [x + s, y], [x + s, y + s], [x, y + s]],
+            cos_view: 1.0,
+            distance: 1.0,
+            reconstructed: 0,
+        }
     }
 
     #[test]
@@ -180,12 +218,20 @@ mod tests {
         let mut e = SizingBins::default();
         e.add(&fp(10.0, 10.0, 0.5), 256, 1.0, true);
         assert_eq!(e.wanted_scale(64, 1.0, 256, f64::INFINITY), 2);
-        assert_eq!(SizingBins::default().wanted_scale(64, 1.0, 256, f64::INFINITY), 1);
+        assert_eq!(
+            SizingBins::default().wanted_scale(64, 1.0, 256, f64::INFINITY),
+            1
+        );
         // 2048 footprints of a tenth of a texel: at 4 texels per delivered pixel, at most
         // 8192 texels, i.e. no enlargement of a 256-texel texture (65 536 texels)
         let mut few = SizingBins::default();
         for i in 0..2048 {
-            few.add(&fp((i % 64) as f32 * 4.0, (i / 64) as f32 * 4.0, 0.1), 256, 1.0, true);
+            few.add(
+                &fp((i % 64) as f32 * 4.0, (i / 64) as f32 * 4.0, 0.1),
+                256,
+                1.0,
+                true,
+            );
         }
         assert_eq!(few.pixels, 2048.0);
         assert_eq!(few.wanted_scale(64, 1.0, 256, f64::INFINITY), 16);
@@ -204,10 +250,17 @@ mod tests {
 
     #[test]
     fn budget_goes_to_the_best_covered_cells() {
-        let r = |scale, covered| SizeRequest { base_texels: 256, scale, covered };
+        let r = |scale, covered| SizeRequest {
+            base_texels: 256,
+            scale,
+            covered,
+        };
         let reqs = [r(8, 0.9), r(8, 0.1), r(4, 0.5), r(1, 1.0)];
         // everything fits
-        let all: u64 = [2048u32, 2048, 1024].iter().map(|&t| texture_bytes(t)).sum();
+        let all: u64 = [2048u32, 2048, 1024]
+            .iter()
+            .map(|&t| texture_bytes(t))
+            .sum();
         assert_eq!(choose_scales(&reqs, all), vec![8, 8, 4, 1]);
         // a little less: the least covered cell halves first
         assert_eq!(choose_scales(&reqs, all - 1), vec![8, 4, 4, 1]);
@@ -216,7 +269,11 @@ mod tests {
         // the granted bytes never exceed the budget
         for budget in [1u64 << 20, 5 << 20, 20 << 20, 40 << 20] {
             let s = choose_scales(&reqs, budget);
-            let used: u64 = s.iter().filter(|&&x| x > 1).map(|&x| texture_bytes(256 * x)).sum();
+            let used: u64 = s
+                .iter()
+                .filter(|&&x| x > 1)
+                .map(|&x| texture_bytes(256 * x))
+                .sum();
             assert!(used <= budget, "{budget}: {s:?}");
         }
     }

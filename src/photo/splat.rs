@@ -103,28 +103,43 @@ pub fn footprint_area(corners: &[[f32; 2]; 4]) -> f64 {
 /// `j * texels + i`, weight in texels², > 0) for every texel it covers, as described in the
 /// [module docs](self). The weights sum to the footprint's area minus what falls outside
 /// the texture.
-pub fn splat_footprint(corners: &[[f32; 2]; 4], texels: u32, deposit: impl FnMut(usize, f64)) -> Splat {
+pub fn splat_footprint(
+    corners: &[[f32; 2]; 4],
+    texels: u32,
+    deposit: impl FnMut(usize, f64),
+) -> Splat {
     match footprint_shape(corners) {
         Some((poly, area)) => splat_polygon(&poly, area, texels, deposit),
         None => SKIP,
     }
 }
 
-const SKIP: Splat = Splat { area: 0.0, kind: SplatKind::Skipped };
+const SKIP: Splat = Splat {
+    area: 0.0,
+    kind: SplatKind::Skipped,
+};
 
 /// The polygon [`splat_footprint`] deposits and its area ([`footprint_polygon`] of the
 /// corners in f64), or `None` for non-finite corners.
 #[inline(always)]
 pub(crate) fn footprint_shape(corners: &[[f32; 2]; 4]) -> Option<([[f64; 2]; 4], f64)> {
     let q = corners.map(|c| [c[0] as f64, c[1] as f64]);
-    q.iter().flatten().all(|v| v.is_finite()).then(|| footprint_polygon(&q))
+    q.iter()
+        .flatten()
+        .all(|v| v.is_finite())
+        .then(|| footprint_polygon(&q))
 }
 
 /// [`splat_footprint`] of the polygon `poly` of area `area` (from [`footprint_shape`]).
 /// The common cases (footprints within 2 × 2 texels) are inlined into the caller; the rest
 /// is [`splat_collapsed`] and [`splat_large`].
 #[inline(always)]
-pub(crate) fn splat_polygon(poly: &[[f64; 2]; 4], area: f64, texels: u32, deposit: impl FnMut(usize, f64)) -> Splat {
+pub(crate) fn splat_polygon(
+    poly: &[[f64; 2]; 4],
+    area: f64,
+    texels: u32,
+    deposit: impl FnMut(usize, f64),
+) -> Splat {
     splat_polygon_limited(poly, area, texels, MAX_SPLAT_BBOX, deposit)
 }
 
@@ -170,13 +185,26 @@ pub(crate) fn splat_polygon_limited(
         // wholly inside one texel: no clipping needed
         // (in [0, t): signed conversions, one instruction each on x86-64)
         deposit(cj0 as i64 as usize * n + ci0 as i64 as usize, area);
-        return Splat { area, kind: SplatKind::Exact };
+        return Splat {
+            area,
+            kind: SplatKind::Exact,
+        };
     }
     if nx <= 2.0 && ny <= 2.0 {
         // One or two texels each way (nearly all footprints of a photo sharper than the
         // texture): half-plane and quadrant areas in the box's own frame.
-        small_splat(poly, area, [ci0, cj0], nx == 2.0, ny == 2.0, texel_pieces(area, texels, inside, deposit));
-        return Splat { area, kind: SplatKind::Exact };
+        small_splat(
+            poly,
+            area,
+            [ci0, cj0],
+            nx == 2.0,
+            ny == 2.0,
+            texel_pieces(area, texels, inside, deposit),
+        );
+        return Splat {
+            area,
+            kind: SplatKind::Exact,
+        };
     }
     splat_large(poly, area, texels, [ci0, ci1, cj0, cj1], deposit)
 }
@@ -186,7 +214,12 @@ pub(crate) fn splat_polygon_limited(
 /// billionth of the footprint (rounding noise of the subtractions) and texels outside the
 /// texture are dropped; `inside` says the footprint's box lies in the texture.
 #[inline(always)]
-fn texel_pieces(area: f64, texels: u32, inside: bool, mut deposit: impl FnMut(usize, f64)) -> impl FnMut(f64, f64, f64) {
+fn texel_pieces(
+    area: f64,
+    texels: u32,
+    inside: bool,
+    mut deposit: impl FnMut(usize, f64),
+) -> impl FnMut(f64, f64, f64) {
     let (t, n) = (texels as f64, texels as usize);
     let min_piece = 1e-9 * area;
     move |i, j, w| {
@@ -200,41 +233,73 @@ fn texel_pieces(area: f64, texels: u32, inside: bool, mut deposit: impl FnMut(us
 /// [`splat_polygon`] of a collapsed footprint (area below [`MIN_SPLAT_AREA`]): its area at
 /// its centre, with bilinear weights.
 #[inline(never)]
-fn splat_collapsed(q: &[[f64; 2]; 4], area: f64, texels: u32, mut deposit: impl FnMut(usize, f64)) -> Splat {
+fn splat_collapsed(
+    q: &[[f64; 2]; 4],
+    area: f64,
+    texels: u32,
+    mut deposit: impl FnMut(usize, f64),
+) -> Splat {
     let (t, n) = (texels as f64, texels as usize);
     if area > 0.0 {
-        let c = [0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5, 0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5];
+        let c = [
+            0.25 * q.iter().map(|p| p[0]).sum::<f64>() - 0.5,
+            0.25 * q.iter().map(|p| p[1]).sum::<f64>() - 0.5,
+        ];
         let (i0, j0) = (floor_f(c[0]), floor_f(c[1]));
         let (fx, fy) = (c[0] - i0, c[1] - j0);
-        for (di, dj, w) in
-            [(0.0, 0.0, (1.0 - fx) * (1.0 - fy)), (1.0, 0.0, fx * (1.0 - fy)), (0.0, 1.0, (1.0 - fx) * fy), (1.0, 1.0, fx * fy)]
-        {
+        for (di, dj, w) in [
+            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+            (1.0, 0.0, fx * (1.0 - fy)),
+            (0.0, 1.0, (1.0 - fx) * fy),
+            (1.0, 1.0, fx * fy),
+        ] {
             let (i, j) = (i0 + di, j0 + dj);
             if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
                 deposit(j as usize * n + i as usize, w * area);
             }
         }
     }
-    Splat { area, kind: SplatKind::Bilinear }
+    Splat {
+        area,
+        kind: SplatKind::Bilinear,
+    }
 }
 
 /// [`splat_polygon`] of a footprint whose bounding box (texel lines `[ci0, ci1] × [cj0, cj1]`)
 /// spans more than two texels one way.
 #[inline(never)]
-fn splat_large(poly: &[[f64; 2]; 4], area: f64, texels: u32, lines: [f64; 4], mut deposit: impl FnMut(usize, f64)) -> Splat {
+fn splat_large(
+    poly: &[[f64; 2]; 4],
+    area: f64,
+    texels: u32,
+    lines: [f64; 4],
+    mut deposit: impl FnMut(usize, f64),
+) -> Splat {
     let [ci0, ci1, cj0, cj1] = lines;
     let (t, n) = (texels as f64, texels as usize);
     // The texture's texels among the lines.
     let (i0, i1) = (ci0.max(0.0), ci1.min(t));
     let (j0, j1) = (cj0.max(0.0), cj1.min(t));
     if i1 <= i0 || j1 <= j0 {
-        return Splat { area, kind: SplatKind::Exact };
+        return Splat {
+            area,
+            kind: SplatKind::Exact,
+        };
     }
     let (nx, ny) = (ci1 - ci0, cj1 - cj0);
     if nx <= GRID_MAX as f64 && ny <= GRID_MAX as f64 {
         // At most GRID_MAX × GRID_MAX texels: boundary integrals give every piece.
-        grid_splat(poly, [ci0, cj0], nx as i64 as usize, ny as i64 as usize, texel_pieces(area, texels, false, deposit));
-        return Splat { area, kind: SplatKind::Exact };
+        grid_splat(
+            poly,
+            [ci0, cj0],
+            nx as i64 as usize,
+            ny as i64 as usize,
+            texel_pieces(area, texels, false, deposit),
+        );
+        return Splat {
+            area,
+            kind: SplatKind::Exact,
+        };
     }
     // Cut the polygon into column strips at the integer x lines of its bounding box, and
     // each strip into texel pieces at the integer y lines: about 2 half-plane splits per
@@ -279,7 +344,10 @@ fn splat_large(poly: &[[f64; 2]; 4], area: f64, texels: u32, lines: [f64; 4], mu
         }
         i += 1.0;
     }
-    Splat { area, kind: SplatKind::Exact }
+    Splat {
+        area,
+        kind: SplatKind::Exact,
+    }
 }
 
 /// Pieces of a polygon of area `area` whose bounding box spans one or two texels each way
@@ -292,7 +360,14 @@ fn splat_large(poly: &[[f64; 2]; 4], area: f64, texels: u32, lines: [f64; 4], mu
 /// likewise; the upper-left quadrant needs each edge clipped to `y <= 1` first. The other
 /// pieces follow from these and the total.
 #[inline(always)]
-fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], wide: bool, tall: bool, mut put: impl FnMut(f64, f64, f64)) {
+fn small_splat(
+    poly: &[[f64; 2]; 4],
+    area: f64,
+    c: [f64; 2],
+    wide: bool,
+    tall: bool,
+    mut put: impl FnMut(f64, f64, f64),
+) {
     let p = poly.map(|v| [v[0] - c[0], v[1] - c[1]]);
     match (wide, tall) {
         (true, false) => {
@@ -306,7 +381,11 @@ fn small_splat(poly: &[[f64; 2]; 4], area: f64, c: [f64; 2], wide: bool, tall: b
             put(c[0], c[1] + 1.0, (area - top).max(0.0));
         }
         _ => {
-            let (left, top, q) = (below_line_area(&p, 0, 1.0), below_line_area(&p, 1, 1.0), quadrant_area(&p));
+            let (left, top, q) = (
+                below_line_area(&p, 0, 1.0),
+                below_line_area(&p, 1, 1.0),
+                quadrant_area(&p),
+            );
             put(c[0], c[1], q);
             put(c[0] + 1.0, c[1], (top - q).max(0.0));
             put(c[0], c[1] + 1.0, (left - q).max(0.0));
@@ -368,7 +447,13 @@ const GRID_MAX: usize = 4;
 /// `Q(i+1, j+1) − Q(i, j+1) − Q(i+1, j) + Q(i, j)` (clamped at 0 against rounding), with
 /// the last line of each axis unconstrained.
 #[inline(always)]
-fn grid_splat(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, put: impl FnMut(f64, f64, f64)) {
+fn grid_splat(
+    poly: &[[f64; 2]; 4],
+    c: [f64; 2],
+    nx: usize,
+    ny: usize,
+    put: impl FnMut(f64, f64, f64),
+) {
     // The common shapes (those within 2 × 2 texels go to `small_splat`) with constant bounds
     // (unrolled, sums in registers).
     match (nx, ny) {
@@ -383,7 +468,13 @@ fn grid_splat(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, put: impl
 
 /// [`grid_splat`] for `nx × ny` texels (inlined, so constant sizes unroll).
 #[inline(always)]
-fn grid_splat_n(poly: &[[f64; 2]; 4], c: [f64; 2], nx: usize, ny: usize, mut put: impl FnMut(f64, f64, f64)) {
+fn grid_splat_n(
+    poly: &[[f64; 2]; 4],
+    c: [f64; 2],
+    nx: usize,
+    ny: usize,
+    mut put: impl FnMut(f64, f64, f64),
+) {
     let (nx, ny) = (nx.clamp(1, GRID_MAX), ny.clamp(1, GRID_MAX));
     // q[j][i] = |Q(i, j)|; row and column 0 stay 0.
     let mut q = [[0.0f64; GRID_MAX + 1]; GRID_MAX + 1];
@@ -440,7 +531,11 @@ fn below_interval(da: f64, db: f64) -> [f64; 2] {
 #[inline]
 fn src_dst(pair: &mut [SPoly; 2], cur: usize) -> (&SPoly, &mut SPoly) {
     let (a, b) = pair.split_at_mut(1);
-    if cur == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) }
+    if cur == 0 {
+        (&a[0], &mut b[0])
+    } else {
+        (&b[0], &mut a[0])
+    }
 }
 
 /// Vertex capacity of a polygon piece (a simple quad cut by axis-parallel lines; see
@@ -455,7 +550,10 @@ struct SPoly {
 }
 
 impl SPoly {
-    const EMPTY: SPoly = SPoly { v: [[0.0; 2]; SCAP], n: 0 };
+    const EMPTY: SPoly = SPoly {
+        v: [[0.0; 2]; SCAP],
+        n: 0,
+    };
 
     fn from(p: &[[f64; 2]; 4]) -> SPoly {
         let mut s = SPoly::EMPTY;
@@ -555,10 +653,16 @@ mod tests {
     #[test]
     fn non_convex_and_bowtie_quads() {
         // dart: reflex corner at (1, 1) inside the triangle (0,0),(2,0),(1,2)... order 0,1,2,3
-        let dart = [[0.0, 0.0], [2.0, 0.0], [1.0, 2.0], [1.0, 0.5]].map(|p: [f32; 2]| [p[0] + 0.3, p[1] + 0.2]);
+        let dart = [[0.0, 0.0], [2.0, 0.0], [1.0, 2.0], [1.0, 0.5]]
+            .map(|p: [f32; 2]| [p[0] + 0.3, p[1] + 0.2]);
         let (s, v) = collect(dart, 8);
         // area = triangle (0,0),(2,0),(1,2) = 2 minus triangle (0,0),(1,0.5),(1,2)... via shoelace
-        let expect = 0.5 * ((0.0f64 * 0.0 - 2.0 * 0.0) + (2.0 * 2.0 - 1.0 * 0.0) + (1.0 * 0.5 - 1.0 * 2.0) + (1.0 * 0.0 - 0.0 * 0.5)).abs();
+        let expect = 0.5
+            * ((0.0f64 * 0.0 - 2.0 * 0.0)
+                + (2.0 * 2.0 - 1.0 * 0.0)
+                + (1.0 * 0.5 - 1.0 * 2.0)
+                + (1.0 * 0.0 - 0.0 * 0.5))
+                .abs();
         assert!((s.area - expect).abs() < 1e-6, "{} {expect}", s.area);
         let total: f64 = v.iter().map(|x| x.1).sum();
         assert!((total - expect).abs() < 1e-6);
@@ -593,7 +697,15 @@ mod tests {
         // 2^-11 x 2^-11 square (exact in f32) centred on (2.0, 1.5): halfway between texel
         // centres 1.5 and 2.5 in x, on the centre row in y
         let h = 1.0 / 4096.0;
-        let (s, v) = collect([[2.0 - h, 1.5 - h], [2.0 + h, 1.5 - h], [2.0 + h, 1.5 + h], [2.0 - h, 1.5 + h]], 4);
+        let (s, v) = collect(
+            [
+                [2.0 - h, 1.5 - h],
+                [2.0 + h, 1.5 - h],
+                [2.0 + h, 1.5 + h],
+                [2.0 - h, 1.5 + h],
+            ],
+            4,
+        );
         assert_eq!(s.kind, SplatKind::Bilinear);
         let a = s.area;
         assert_eq!(a, 4.0 * h as f64 * h as f64);
@@ -614,7 +726,10 @@ mod tests {
         let (s, v) = collect([[1.95, 1.3], [2.15, 1.3], [2.15, 1.5], [1.95, 1.5]], 4);
         assert_eq!(s.kind, SplatKind::Exact);
         let get = |i: usize| v.iter().find(|x| x.0 == i).map_or(0.0, |x| x.1);
-        assert!((get(4 + 1) - 0.01).abs() < 1e-7 && (get(4 + 2) - 0.03).abs() < 1e-7, "{v:?}");
+        assert!(
+            (get(4 + 1) - 0.01).abs() < 1e-7 && (get(4 + 2) - 0.03).abs() < 1e-7,
+            "{v:?}"
+        );
     }
 
     #[test]
@@ -622,14 +737,17 @@ mod tests {
         // pseudo-random convex, concave and self-intersecting quads, partly outside
         let mut seed = 12345u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         // sides up to 8.3 texels: the boundary-integral grid (up to 4 × 4) and the strips
         for _ in 0..1000 {
             let c = [rnd() * 14.0 - 1.0, rnd() * 14.0 - 1.0];
             let s = 0.3 + rnd() * 8.0;
-            let q: [[f32; 2]; 4] = std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);
+            let q: [[f32; 2]; 4] =
+                std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);
             let (sp, v) = collect(q, 16);
             let (poly, area) = footprint_polygon(&q.map(|p| [p[0] as f64, p[1] as f64]));
             assert!((sp.area - area).abs() < 1e-12);
@@ -638,9 +756,15 @@ mod tests {
             }
             for j in 0..16 {
                 for i in 0..16 {
-                    let want = polygon_box_area(&poly, [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0]);
+                    let want = polygon_box_area(
+                        &poly,
+                        [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0],
+                    );
                     let got = v.iter().find(|x| x.0 == j * 16 + i).map_or(0.0, |x| x.1);
-                    assert!((got - want).abs() < 1e-9, "{q:?} texel {i},{j}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() < 1e-9,
+                        "{q:?} texel {i},{j}: {got} vs {want}"
+                    );
                 }
             }
         }
@@ -652,14 +776,17 @@ mod tests {
         // convex, concave and self-intersecting, also across the texture border
         let mut seed = 777u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         let mut exact = 0;
         for _ in 0..4000 {
             let c = [rnd() * 5.0 - 0.5, rnd() * 5.0 - 0.5];
             let s = 0.3 + rnd() * 1.2;
-            let q: [[f32; 2]; 4] = std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);
+            let q: [[f32; 2]; 4] =
+                std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);
             let (sp, v) = collect(q, 4);
             if sp.kind != SplatKind::Exact {
                 continue;
@@ -668,9 +795,15 @@ mod tests {
             let (poly, _) = footprint_polygon(&q.map(|p| [p[0] as f64, p[1] as f64]));
             for j in 0..4 {
                 for i in 0..4 {
-                    let want = polygon_box_area(&poly, [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0]);
+                    let want = polygon_box_area(
+                        &poly,
+                        [i as f64, j as f64, i as f64 + 1.0, j as f64 + 1.0],
+                    );
                     let got = v.iter().find(|x| x.0 == j * 4 + i).map_or(0.0, |x| x.1);
-                    assert!((got - want).abs() < 1e-9, "{q:?} texel {i},{j}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() < 1e-9,
+                        "{q:?} texel {i},{j}: {got} vs {want}"
+                    );
                 }
             }
         }

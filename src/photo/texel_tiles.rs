@@ -40,7 +40,13 @@ pub struct TexelTiles {
     data: Vec<TexelSums>,
 }
 
-const ZERO: TexelSums = TexelSums { coverage: 0.0, weight: 0.0, colour: [0.0; 3], footprint: 0.0, grazing: 0.0 };
+const ZERO: TexelSums = TexelSums {
+    coverage: 0.0,
+    weight: 0.0,
+    colour: [0.0; 3],
+    footprint: 0.0,
+    grazing: 0.0,
+};
 
 impl TexelTiles {
     /// An empty grid of `side × side` texels.
@@ -83,7 +89,10 @@ impl TexelTiles {
             None => (t % self.side as usize, t / self.side as usize),
         };
         let tile = (y / TILE as usize) * self.tiles_x as usize + x / TILE as usize;
-        (tile, (y % TILE as usize) * TILE as usize + x % TILE as usize)
+        (
+            tile,
+            (y % TILE as usize) * TILE as usize + x % TILE as usize,
+        )
     }
 
     /// The sums of texel `t` (zero if never written or outside the grid).
@@ -123,7 +132,10 @@ impl TexelTiles {
     /// last partial tiles skipped), tiles in row-major tile order, texels row-major within
     /// a tile.
     pub fn for_each_mut(&mut self, mut f: impl FnMut(usize, &mut TexelSums)) {
-        let walk = TileWalk { side: self.side as usize, tiles_x: self.tiles_x as usize };
+        let walk = TileWalk {
+            side: self.side as usize,
+            tiles_x: self.tiles_x as usize,
+        };
         for (tile, &k) in self.index.iter().enumerate() {
             if k != NONE {
                 let block = &mut self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
@@ -134,7 +146,10 @@ impl TexelTiles {
 
     /// [`TexelTiles::for_each_mut`] without writing.
     pub fn for_each(&self, mut f: impl FnMut(usize, &TexelSums)) {
-        let walk = TileWalk { side: self.side as usize, tiles_x: self.tiles_x as usize };
+        let walk = TileWalk {
+            side: self.side as usize,
+            tiles_x: self.tiles_x as usize,
+        };
         for (tile, &k) in self.index.iter().enumerate() {
             if k != NONE {
                 let block = &self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
@@ -155,7 +170,10 @@ impl TileWalk {
     /// row-major texel index `t`.
     #[inline]
     fn texels(&self, tile: usize, mut f: impl FnMut(usize, usize)) {
-        let (x0, y0) = ((tile % self.tiles_x) * TILE as usize, (tile / self.tiles_x) * TILE as usize);
+        let (x0, y0) = (
+            (tile % self.tiles_x) * TILE as usize,
+            (tile / self.tiles_x) * TILE as usize,
+        );
         for w in 0..TILE_TEXELS {
             let (x, y) = (x0 + w % TILE as usize, y0 + w / TILE as usize);
             if x < self.side && y < self.side {

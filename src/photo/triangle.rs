@@ -26,7 +26,13 @@ impl PreTri {
         let e2 = t.v2 - t.v0;
         let n = e1.cross(e2);
         let c = t.v0 - origin;
-        PreTri { c, e1, e2, n, nc: n.dot(c) }
+        PreTri {
+            c,
+            e1,
+            e2,
+            n,
+            nc: n.dot(c),
+        }
     }
 
     /// Distance along `d` to the hit in `[0, tmax]` and its barycentric `(u, v)` (weights of
@@ -62,4 +68,3 @@ impl PreTri {
         [(1.0 - uv[0] - uv[1]).max(0.0), uv[0], uv[1]]
     }
 }
-

@@ -21,8 +21,8 @@ use glam::{BVec4A, DMat3, DVec3, Vec3, Vec3A, Vec4};
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use super::triangle::PreTri;
 use super::TriHit;
+use super::triangle::PreTri;
 use crate::camera::{CameraModel, RayCaster};
 
 /// Triangle parts closer than this camera depth (metres) are not entered into the grid.
@@ -90,22 +90,57 @@ pub struct ViewGridStats {
 impl ViewGrid {
     /// Bins the triangles of `scene` for the pixel-corner rays of `camera` (its centre must
     /// be where the rays start; the scene's frame origin is usually at it).
-    pub fn for_camera(scene: &super::LevelScene, camera: &CameraModel, params: ViewGridParams) -> ViewGrid {
+    pub fn for_camera(
+        scene: &super::LevelScene,
+        camera: &CameraModel,
+        params: ViewGridParams,
+    ) -> ViewGrid {
         let origin = (camera.position - scene.frame_origin).as_vec3();
-        ViewGrid::build(scene.triangles(), camera, &camera.ray_caster(), origin, params)
+        ViewGrid::build(
+            scene.triangles(),
+            camera,
+            &camera.ray_caster(),
+            origin,
+            params,
+        )
     }
 
     /// Bins `tris` (scene frame, camera centre at `origin`) for the rays of `camera`'s pixel
     /// corners.
-    pub(crate) fn build(tris: &[Triangle], camera: &CameraModel, rays: &RayCaster, origin: Vec3, params: ViewGridParams) -> ViewGrid {
+    pub(crate) fn build(
+        tris: &[Triangle],
+        camera: &CameraModel,
+        rays: &RayCaster,
+        origin: Vec3,
+        params: ViewGridParams,
+    ) -> ViewGrid {
         let rot = camera.world_to_camera;
         let o = Vec3A::from(origin);
         let pre = tris.par_iter().map(|t| PreTri::new(t, o)).collect();
         let fwd = Vec3A::from((rot.row(2) * (1.0 + 1e-5)).as_vec3());
-        let mut grid = ViewGrid { pre, rot, fwd, x0: 0.0, y0: 0.0, scale: 0.0, nx: 0, ny: 0, nx_f: 0.0, ny_f: 0.0, starts: vec![0], entries: Vec::new() };
-        let Some([xmin, ymin, xmax, ymax]) = ray_bounds(camera, rays) else { return grid };
+        let mut grid = ViewGrid {
+            pre,
+            rot,
+            fwd,
+            x0: 0.0,
+            y0: 0.0,
+            scale: 0.0,
+            nx: 0,
+            ny: 0,
+            nx_f: 0.0,
+            ny_f: 0.0,
+            starts: vec![0],
+            entries: Vec::new(),
+        };
+        let Some([xmin, ymin, xmax, ymax]) = ray_bounds(camera, rays) else {
+            return grid;
+        };
         let f = camera.fx.abs().max(camera.fy.abs());
-        let bin_px = if params.bin_px.is_finite() && params.bin_px > 0.0 { params.bin_px as f64 } else { 8.0 };
+        let bin_px = if params.bin_px.is_finite() && params.bin_px > 0.0 {
+            params.bin_px as f64
+        } else {
+            8.0
+        };
         let mut scale = f / bin_px; // bins per unit of the undistorted plane
         // One bin of margin on every side.
         let (w, h) = (xmax - xmin, ymax - ymin);
@@ -127,13 +162,20 @@ impl ViewGrid {
         let rects: Vec<Option<([u32; 4], f32)>> = tris
             .par_iter()
             .map(|t| {
-                let v = [t.v0, t.v1, t.v2].map(|p| rot * (Vec3::from(p).as_dvec3() - origin.as_dvec3()));
+                let v = [t.v0, t.v1, t.v2]
+                    .map(|p| rot * (Vec3::from(p).as_dvec3() - origin.as_dvec3()));
                 let (bb, z_min) = projected_bounds(&v)?;
-                let to_bin = |x: f64, o: f64, n: usize| ((x - o) * scale).floor().clamp(0.0, n as f64 - 1.0) as u32;
+                let to_bin = |x: f64, o: f64, n: usize| {
+                    ((x - o) * scale).floor().clamp(0.0, n as f64 - 1.0) as u32
+                };
                 let (bx0, bx1) = (to_bin(bb[0], gx, nx), to_bin(bb[2], gx, nx));
                 let (by0, by1) = (to_bin(bb[1], gy, ny), to_bin(bb[3], gy, ny));
                 // Entirely outside the grid: no pixel-corner ray can hit it.
-                if bb[2] < gx || bb[0] > gx + nx as f64 / scale || bb[3] < gy || bb[1] > gy + ny as f64 / scale {
+                if bb[2] < gx
+                    || bb[0] > gx + nx as f64 / scale
+                    || bb[3] < gy
+                    || bb[1] > gy + ny as f64 / scale
+                {
                     return None;
                 }
                 // Round z_min down so f32 storage never exceeds the true bound.
@@ -142,9 +184,14 @@ impl ViewGrid {
             })
             .collect();
         // Insert in increasing (z_min, triangle) order, so every bin is sorted.
-        let mut order: Vec<u32> = (0..tris.len() as u32).filter(|&i| rects[i as usize].is_some()).collect();
+        let mut order: Vec<u32> = (0..tris.len() as u32)
+            .filter(|&i| rects[i as usize].is_some())
+            .collect();
         order.par_sort_unstable_by(|&a, &b| {
-            let (za, zb) = (rects[a as usize].map_or(0.0, |r| r.1), rects[b as usize].map_or(0.0, |r| r.1));
+            let (za, zb) = (
+                rects[a as usize].map_or(0.0, |r| r.1),
+                rects[b as usize].map_or(0.0, |r| r.1),
+            );
             za.total_cmp(&zb).then(a.cmp(&b))
         });
         let mut counts = vec![0u32; nx * ny + 1];
@@ -164,7 +211,9 @@ impl ViewGrid {
         let mut entries = vec![Entry { z_min: 0.0, tri: 0 }; total];
         let mut fill = counts.clone();
         for &i in &order {
-            let Some(([x0, y0, x1, y1], z)) = rects[i as usize] else { continue };
+            let Some(([x0, y0, x1, y1], z)) = rects[i as usize] else {
+                continue;
+            };
             for y in y0..=y1 {
                 let row = y as usize * nx;
                 for x in x0..=x1 {
@@ -185,14 +234,22 @@ impl ViewGrid {
         for e in &self.entries {
             seen[e.tri as usize] = true;
         }
-        ViewGridStats { bins: [self.nx, self.ny], entries: self.entries.len(), triangles_binned: seen.iter().filter(|&&s| s).count() }
+        ViewGridStats {
+            bins: [self.nx, self.ny],
+            entries: self.entries.len(),
+            triangles_binned: seen.iter().filter(|&&s| s).count(),
+        }
     }
 
     /// The nearest hit of the ray `origin + t·dir` (`origin` = the camera centre the grid was
     /// built for, `dir` a unit vector, scene frame), both faces, `t ≥ 0`.
     pub fn nearest(&self, origin: Vec3, dir: Vec3) -> Option<TriHit> {
         let c = self.rot * dir.as_dvec3();
-        let xy = if c.z > 0.0 { [c.x / c.z, c.y / c.z] } else { [f64::NAN; 2] };
+        let xy = if c.z > 0.0 {
+            [c.x / c.z, c.y / c.z]
+        } else {
+            [f64::NAN; 2]
+        };
         self.nearest_at(origin, dir, xy)
     }
 
@@ -234,7 +291,11 @@ impl ViewGrid {
         if !best_t.is_finite() {
             return None;
         }
-        Some(TriHit { triangle: best, t: best_t, bary: PreTri::barycentric(best_uv) })
+        Some(TriHit {
+            triangle: best,
+            t: best_t,
+            bary: PreTri::barycentric(best_uv),
+        })
     }
 
     /// The bin of the undistorted-plane point `xy`, if inside the grid.
@@ -287,7 +348,8 @@ impl ViewGrid {
             let inv = Vec4::ONE / det;
             let (u, v) = (a * inv, b * inv);
             let w = (Vec4::ONE - u) - v;
-            let inside = !(u.is_negative_mask() | v.is_negative_mask() | w.is_negative_mask()) & inv.cmpne(Vec4::ZERO);
+            let inside = !(u.is_negative_mask() | v.is_negative_mask() | w.is_negative_mask())
+                & inv.cmpne(Vec4::ZERO);
             let t = sp(p.nc) * inv;
             let take = cand & inside & t.cmpge(Vec4::ZERO) & t.cmplt(best_t);
             if take.any() {
@@ -303,7 +365,11 @@ impl ViewGrid {
         }
         let (t, u, v) = (best_t.to_array(), best_u.to_array(), best_v.to_array());
         for k in 0..n {
-            out[k] = t[k].is_finite().then(|| TriHit { triangle: best[k], t: t[k], bary: PreTri::barycentric([u[k], v[k]]) });
+            out[k] = t[k].is_finite().then(|| TriHit {
+                triangle: best[k],
+                t: t[k],
+                bary: PreTri::barycentric([u[k], v[k]]),
+            });
         }
     }
 
@@ -325,7 +391,12 @@ impl ViewGrid {
 fn ray_bounds(camera: &CameraModel, rays: &RayCaster) -> Option<[f64; 4]> {
     let (w, h) = (camera.width as i64, camera.height as i64);
     let rot = camera.world_to_camera;
-    let mut bb = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bb = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let mut add = |i: i64, j: i64| {
         if let Some(d) = rays.ray(i as f64 - 0.5, j as f64 - 0.5) {
             let c = rot * d;
@@ -349,8 +420,15 @@ fn ray_bounds(camera: &CameraModel, rays: &RayCaster) -> Option<[f64; 4]> {
         }
     }
     // A margin for the rays' f32 rounding.
-    let m = 1e-6 * (1.0 + bb[0].abs().max(bb[2].abs()).max(bb[1].abs()).max(bb[3].abs()));
-    (bb[0] <= bb[2] && bb[1] <= bb[3] && bb.iter().all(|v| v.is_finite())).then(|| [bb[0] - m, bb[1] - m, bb[2] + m, bb[3] + m])
+    let m = 1e-6
+        * (1.0
+            + bb[0]
+                .abs()
+                .max(bb[2].abs())
+                .max(bb[1].abs())
+                .max(bb[3].abs()));
+    (bb[0] <= bb[2] && bb[1] <= bb[3] && bb.iter().all(|v| v.is_finite()))
+        .then(|| [bb[0] - m, bb[1] - m, bb[2] + m, bb[3] + m])
 }
 
 /// The projected bounding box (widened by a margin for the f32 hit test) and smallest
@@ -380,7 +458,12 @@ fn projected_bounds(v: &[DVec3; 3]) -> Option<([f64; 4], f64)> {
     if n < 3 {
         return None;
     }
-    let mut bb = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    let mut bb = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let mut z_min = f64::INFINITY;
     for p in &poly[..n] {
         let (x, y) = (p.x / p.z, p.y / p.z);
@@ -388,11 +471,23 @@ fn projected_bounds(v: &[DVec3; 3]) -> Option<([f64; 4], f64)> {
         z_min = z_min.min(p.z);
     }
     // The f32 intersection test accepts rays a few ulps outside the triangle.
-    let m = 1e-5 * (1.0 + bb[0].abs().max(bb[2].abs()).max(bb[1].abs()).max(bb[3].abs()));
+    let m = 1e-5
+        * (1.0
+            + bb[0]
+                .abs()
+                .max(bb[2].abs())
+                .max(bb[1].abs())
+                .max(bb[3].abs()));
     Some(([bb[0] - m, bb[1] - m, bb[2] + m, bb[3] + m], z_min))
 }
 
 /// `Vec3A` triangles from plain arrays (the BVH's and the grid's representation).
 pub(crate) fn to_triangles(tris: &[[Vec3; 3]]) -> Vec<Triangle> {
-    tris.iter().map(|t| Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) }).collect()
+    tris.iter()
+        .map(|t| Triangle {
+            v0: Vec3A::from(t[0]),
+            v1: Vec3A::from(t[1]),
+            v2: Vec3A::from(t[2]),
+        })
+        .collect()
 }

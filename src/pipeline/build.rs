@@ -13,8 +13,8 @@ use crate::fsutil::{encode_png, write_atomic};
 use crate::ortho::Ortho;
 use crate::stats;
 use crate::store::{
-    self, CellFiles, CellRecord, DemInfo, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION, cell_stem,
-    write_file,
+    self, CellFiles, CellRecord, DemInfo, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION,
+    cell_stem, write_file,
 };
 
 /// Options of a build. Defaults: 0.5 m finest error, 64-interval finest cells, 256² textures.
@@ -36,7 +36,13 @@ pub struct BuildOptions {
 
 impl Default for BuildOptions {
     fn default() -> Self {
-        BuildOptions { max_error: 0.5, cell_intervals: 64, cell_texels: 256, quiet: false, force: false }
+        BuildOptions {
+            max_error: 0.5,
+            cell_intervals: 64,
+            cell_texels: 256,
+            quiet: false,
+            force: false,
+        }
     }
 }
 
@@ -44,7 +50,10 @@ impl BuildOptions {
     /// Rejects out-of-range options with a message naming the flag.
     pub fn validate(&self) -> Result<()> {
         if !(self.max_error.is_finite() && self.max_error > 0.0) {
-            return Err(Error::BadOption(format!("--max-error must be a positive number, got {}", self.max_error)));
+            return Err(Error::BadOption(format!(
+                "--max-error must be a positive number, got {}",
+                self.max_error
+            )));
         }
         if !self.cell_intervals.is_power_of_two() || !(2..=4096).contains(&self.cell_intervals) {
             return Err(Error::BadOption(format!(
@@ -102,10 +111,23 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
     if !out.exists() {
         std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     }
-    let ours = out.is_dir() && (is_empty_dir(out)? || out.join("manifest.json").exists() || out.join("build.json").exists());
-    let _lock = if ours { Some(store::StoreLock::acquire(out, "cliffmap build")?) } else { None };
+    let ours = out.is_dir()
+        && (is_empty_dir(out)?
+            || out.join("manifest.json").exists()
+            || out.join("build.json").exists());
+    let _lock = if ours {
+        Some(store::StoreLock::acquire(out, "cliffmap build")?)
+    } else {
+        None
+    };
     prepare_dir(out, &build_key, opts.force)?;
-    write_atomic(&out.join("build.json"), &serde_json::to_vec(&BuildMarker { build_key: build_key.clone() }).unwrap_or_default())?;
+    write_atomic(
+        &out.join("build.json"),
+        &serde_json::to_vec(&BuildMarker {
+            build_key: build_key.clone(),
+        })
+        .unwrap_or_default(),
+    )?;
 
     let derived;
     let ortho = match inp.ortho {
@@ -155,7 +177,9 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
             void_fraction: dem.void_fraction(),
         },
         ortho: inp.ortho_source.clone(),
-        ortho_spacing: inp.ortho.map(|o| o.georef.spacing_x.max(o.georef.spacing_y)),
+        ortho_spacing: inp
+            .ortho
+            .map(|o| o.georef.spacing_x.max(o.georef.spacing_y)),
         quadtree: tree,
         max_error: opts.max_error,
         cell_texels: opts.cell_texels,
@@ -207,7 +231,10 @@ fn add_parameterization(json: &mut serde_json::Value, manifest: &Manifest) {
         for (c, v) in manifest.cells.iter().zip(cells.iter_mut()) {
             v["parameterization"] = json!(c.parameterization);
             v["rel_texel_ortho"] = json!(c.stats.rel_texel);
-            let eff = c.reparam.as_ref().map_or(c.stats.rel_texel, |r| r.rel_texel);
+            let eff = c
+                .reparam
+                .as_ref()
+                .map_or(c.stats.rel_texel, |r| r.rel_texel);
             v["rel_texel_effective"] = json!(eff);
             after.push(eff);
             if let Some(r) = &c.reparam {
@@ -245,7 +272,11 @@ fn add_parameterization(json: &mut serde_json::Value, manifest: &Manifest) {
 /// the cells of symD − 4, mean |ln(s1 s2)| and mean s1/s2 − 1, and the worst flips and
 /// boundary crossings.
 fn chart_distortion(manifest: &crate::store::Manifest) -> serde_json::Value {
-    let metrics: Vec<&crate::param::ChartMetrics> = manifest.cells.iter().filter_map(|c| c.reparam.as_ref().map(|r| &r.metrics)).collect();
+    let metrics: Vec<&crate::param::ChartMetrics> = manifest
+        .cells
+        .iter()
+        .filter_map(|c| c.reparam.as_ref().map(|r| &r.metrics))
+        .collect();
     let pct = |f: &dyn Fn(&crate::param::ChartMetrics) -> f64| {
         let mut v: Vec<f64> = metrics.iter().map(|m| f(m)).collect();
         serde_json::to_value(stats::Percentiles::of(&mut v)).unwrap_or_default()
@@ -278,7 +309,10 @@ fn prepare_dir(out: &Path, build_key: &str, force: bool) -> Result<()> {
         return std::fs::create_dir_all(out).map_err(|e| Error::io(out, e));
     }
     if !out.is_dir() {
-        return Err(Error::BadOption(format!("output {} exists and is not a directory", out.display())));
+        return Err(Error::BadOption(format!(
+            "output {} exists and is not a directory",
+            out.display()
+        )));
     }
     if is_empty_dir(out)? {
         return Ok(());
@@ -291,9 +325,19 @@ fn prepare_dir(out: &Path, build_key: &str, force: bool) -> Result<()> {
     match previous_key {
         Some(k) if k == build_key => Ok(()),
         Some(_) if force => {
-            for name in ["cells", "manifest.json", "stats.json", "stats_histogram.png", "build.json"] {
+            for name in [
+                "cells",
+                "manifest.json",
+                "stats.json",
+                "stats_histogram.png",
+                "build.json",
+            ] {
                 let p = out.join(name);
-                let _ = if p.is_dir() { std::fs::remove_dir_all(&p) } else { std::fs::remove_file(&p) };
+                let _ = if p.is_dir() {
+                    std::fs::remove_dir_all(&p)
+                } else {
+                    std::fs::remove_file(&p)
+                };
             }
             Ok(())
         }
@@ -313,7 +357,11 @@ fn resume_record(out: &Path, key: CellKey) -> Option<CellRecord> {
     let path = out.join(format!("{}.json", cell_stem(key.level, key.x, key.y)));
     let rec: CellRecord = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
     let f = &rec.files;
-    (rec.key() == key && [&f.mesh, &f.texture, &f.normal].iter().all(|r| store::is_intact(out, r))).then_some(rec)
+    (rec.key() == key
+        && [&f.mesh, &f.texture, &f.normal]
+            .iter()
+            .all(|r| store::is_intact(out, r)))
+    .then_some(rec)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -327,8 +375,16 @@ fn build_cell(
     opts: &BuildOptions,
     out: &Path,
 ) -> Result<CellRecord> {
-    let rect = tree.clipped(key).ok_or_else(|| Error::BadOption(format!("cell {} lies outside the DEM", key.id())))?;
-    let tin = cells::build_tin(dem, rect, tree.stride(key.level), eps, &borders.cell_border(key))?;
+    let rect = tree
+        .clipped(key)
+        .ok_or_else(|| Error::BadOption(format!("cell {} lies outside the DEM", key.id())))?;
+    let tin = cells::build_tin(
+        dem,
+        rect,
+        tree.stride(key.level),
+        eps,
+        &borders.cell_border(key),
+    )?;
     let skirt_depth = 2.0 * eps.max(tin.max_error);
     let lm = local_mesh(dem, rect, &tin, skirt_depth);
     let extent = cells::nominal_extent(tree, &dem.georef, key);
@@ -357,7 +413,11 @@ fn build_cell(
         skirt_depth,
         parameterization: Parameterization::Ortho,
         texels: opts.cell_texels,
-        files: CellFiles { mesh: mesh_ref, texture: tex_ref, normal: nrm_ref },
+        files: CellFiles {
+            mesh: mesh_ref,
+            texture: tex_ref,
+            normal: nrm_ref,
+        },
         stats: cell_stats,
         reparam: None,
         photo: None,
@@ -369,7 +429,11 @@ fn build_cell(
     Ok(rec)
 }
 
-pub(crate) fn write_png<P, C>(out: &Path, rel: &str, img: &image::ImageBuffer<P, C>) -> Result<store::FileRef>
+pub(crate) fn write_png<P, C>(
+    out: &Path,
+    rel: &str,
+    img: &image::ImageBuffer<P, C>,
+) -> Result<store::FileRef>
 where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,

@@ -34,13 +34,20 @@ pub fn derived_ortho(dem: &Dem) -> Ortho {
         .collect();
     let image = image::RgbaImage::from_raw(w as u32, h as u32, px.into_flattened())
         .unwrap_or_else(|| image::RgbaImage::new(w as u32, h as u32));
-    Ortho { image, georef: dem.georef }
+    Ortho {
+        image,
+        georef: dem.georef,
+    }
 }
 
 /// Hypsometric colour ramp for t in [0, 1].
 fn ramp(t: f64) -> [f64; 3] {
-    const STOPS: [(f64, [f64; 3]); 4] =
-        [(0.0, [0.33, 0.52, 0.30]), (0.4, [0.62, 0.60, 0.45]), (0.75, [0.55, 0.52, 0.50]), (1.0, [0.95, 0.95, 0.97])];
+    const STOPS: [(f64, [f64; 3]); 4] = [
+        (0.0, [0.33, 0.52, 0.30]),
+        (0.4, [0.62, 0.60, 0.45]),
+        (0.75, [0.55, 0.52, 0.50]),
+        (1.0, [0.95, 0.95, 0.97]),
+    ];
     let t = t.clamp(0.0, 1.0);
     for w in STOPS.windows(2) {
         let ((t0, c0), (t1, c1)) = (w[0], w[1]);

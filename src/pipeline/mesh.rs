@@ -39,11 +39,20 @@ pub fn local_mesh(dem: &Dem, rect: SampleRect, tin: &Tin, skirt_depth: f64) -> L
             bmax[k] = bmax[k].max(p[k]);
         }
     }
-    let (cx, cy) = g.world((rect.r0 + rect.r1) as f64 / 2.0, (rect.c0 + rect.c1) as f64 / 2.0);
+    let (cx, cy) = g.world(
+        (rect.r0 + rect.r1) as f64 / 2.0,
+        (rect.c0 + rect.c1) as f64 / 2.0,
+    );
     let origin = [cx, cy, ((bmin[2] + bmax[2]) / 2.0).round()];
     let mut positions: Vec<[f32; 3]> = world
         .iter()
-        .map(|p| [(p[0] - origin[0]) as f32, (p[1] - origin[1]) as f32, (p[2] - origin[2]) as f32])
+        .map(|p| {
+            [
+                (p[0] - origin[0]) as f32,
+                (p[1] - origin[1]) as f32,
+                (p[2] - origin[2]) as f32,
+            ]
+        })
         .collect();
     let mut triangles = tin.triangles.clone();
     let n_surface = positions.len() as u32;
@@ -54,7 +63,8 @@ pub fn local_mesh(dem: &Dem, rect: SampleRect, tin: &Tin, skirt_depth: f64) -> L
         .iter()
         .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
         .collect();
-    let mut undirected: Vec<(u32, u32)> = edges.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
+    let mut undirected: Vec<(u32, u32)> =
+        edges.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
     undirected.sort_unstable();
     edges.retain(|&(a, b)| {
         let k = (a.min(b), a.max(b));
@@ -78,7 +88,13 @@ pub fn local_mesh(dem: &Dem, rect: SampleRect, tin: &Tin, skirt_depth: f64) -> L
         triangles.push([b, la, lb]);
     }
     LocalMesh {
-        mesh: CellMesh { positions, uvs: None, triangles, surface_vertices: n_surface, surface_triangles: n_surface_tris },
+        mesh: CellMesh {
+            positions,
+            uvs: None,
+            triangles,
+            surface_vertices: n_surface,
+            surface_triangles: n_surface_tris,
+        },
         origin,
         bbox_min: bmin,
         bbox_max: bmax,
@@ -95,7 +111,12 @@ mod tests {
         // A 3x3 DEM at UTM coordinates, two triangles over the corners (CCW seen from above).
         let g = GridGeoref::new(512_345.678, 7_012_345.678, 0.5);
         let dem = Dem::from_heights(3, 3, vec![2000.25; 9], g).unwrap();
-        let rect = SampleRect { c0: 0, r0: 0, c1: 2, r1: 2 };
+        let rect = SampleRect {
+            c0: 0,
+            r0: 0,
+            c1: 2,
+            r1: 2,
+        };
         // vertices: 0 = NW (0,0), 1 = NE (2,0), 2 = SW (0,2), 3 = SE (2,2)
         let tin = Tin {
             vertices: vec![[0, 0], [2, 0], [0, 2], [2, 2]],
@@ -120,7 +141,10 @@ mod tests {
             let [a, b, c] = t.map(|i| glam::Vec3::from(m.positions[i as usize]));
             let n = (b - a).cross(c - a);
             let centre = (a + b + c) / 3.0;
-            assert!(n.z.abs() < 1e-6 && n.x * centre.x + n.y * centre.y > 0.0, "{t:?} normal {n}");
+            assert!(
+                n.z.abs() < 1e-6 && n.x * centre.x + n.y * centre.y > 0.0,
+                "{t:?} normal {n}"
+            );
         }
     }
 }

@@ -21,9 +21,14 @@ pub use build::{BuildInputs, BuildOptions, build_store, write_stats};
 pub use derived_ortho::derived_ortho;
 pub use mesh::{LocalMesh, local_mesh};
 pub use progress::progress_bar;
-pub use project::{PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store};
+pub use project::{
+    PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store,
+};
 pub use register::{PhotoRegistration, register_photos};
-pub use reparam::{ReparamOptions, TextureMemory, recorded_reparam_options, redo_reparam_cells, reparam_store, texture_memory};
+pub use reparam::{
+    ReparamOptions, TextureMemory, recorded_reparam_options, redo_reparam_cells, reparam_store,
+    texture_memory,
+};
 
 #[allow(unused_imports)]
 use crate::{dem::Dem, ortho::Ortho, store::Manifest};

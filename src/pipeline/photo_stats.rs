@@ -19,12 +19,25 @@ use crate::store::Manifest;
 ///
 /// and to each cell with a photo texture a `photo` object (texel counts).
 pub(crate) fn add_photos(json: &mut serde_json::Value, manifest: &Manifest) {
-    let frac = |steep: u64, photo: u64| if steep > 0 { photo as f64 / steep as f64 } else { 0.0 };
-    let (levels, photos) =
-        manifest.photos.as_ref().map_or((Vec::new(), Vec::new()), |p| (p.levels.clone(), p.photos.clone()));
+    let frac = |steep: u64, photo: u64| {
+        if steep > 0 {
+            photo as f64 / steep as f64
+        } else {
+            0.0
+        }
+    };
+    let (levels, photos) = manifest
+        .photos
+        .as_ref()
+        .map_or((Vec::new(), Vec::new()), |p| {
+            (p.levels.clone(), p.photos.clone())
+        });
     let finest = levels.iter().max_by_key(|l| l.level);
     let finest_fraction = finest.map_or(0.0, |l| frac(l.steep_texels, l.steep_photo_texels));
-    let all = frac(levels.iter().map(|l| l.steep_texels).sum(), levels.iter().map(|l| l.steep_photo_texels).sum());
+    let all = frac(
+        levels.iter().map(|l| l.steep_texels).sum(),
+        levels.iter().map(|l| l.steep_photo_texels).sum(),
+    );
     let s = &mut json["summary"];
     s["photo_improved_steep_fraction"] = json!(finest_fraction);
     s["photo_improved_steep_fraction_all_levels"] = json!(all);

@@ -23,19 +23,20 @@ use indicatif::{MultiProgress, ProgressBar};
 use rayon::prelude::*;
 
 use super::{progress_bar, write_stats};
+use crate::colour::ColourSpace;
 use crate::error::{Error, Result};
 use crate::fsutil::encode_png;
-use crate::colour::ColourSpace;
 use crate::photo::{
-    SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes,
-    BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform, ConfidenceParams, FootprintOptions, FootprintSet,
-    LevelScene, LevelingParams, PhotoAccum, PhotoInput, PhotoSamples, PhotoPyramid, RayAccel, blend_cell, collect_pairs,
-    fit_colour_transform, for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, FootprintBuffers,
+    BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform,
+    ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
+    PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS, SizeRequest,
+    SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
+    for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
 };
 use crate::stats::texel_stretch;
 use crate::store::{
-    BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, Store,
-    active_texels, cell_stem, texcoord,
+    BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
+    PhotoSettings, Store, active_texels, cell_stem, texcoord,
 };
 
 /// Texels steeper than this (degrees from horizontal) count as steep.
@@ -105,7 +106,13 @@ pub struct PhotoTextureOptions {
 
 impl Default for PhotoTextureOptions {
     fn default() -> Self {
-        PhotoTextureOptions { photo_driven: true, max_texels: 2048, budget_bytes: 1 << 30, texels_per_pixel: 1.0, texels_per_delivered: f64::INFINITY }
+        PhotoTextureOptions {
+            photo_driven: true,
+            max_texels: 2048,
+            budget_bytes: 1 << 30,
+            texels_per_pixel: 1.0,
+            texels_per_delivered: f64::INFINITY,
+        }
     }
 }
 
@@ -113,13 +120,22 @@ impl PhotoTextureOptions {
     /// Rejects a cap that is not a power of two in 64..=8192.
     pub fn validate(&self) -> Result<()> {
         if !(self.max_texels.is_power_of_two() && (64..=8192).contains(&self.max_texels)) {
-            return Err(Error::BadOption(format!("--max-photo-texels must be a power of two in 64..=8192, got {}", self.max_texels)));
+            return Err(Error::BadOption(format!(
+                "--max-photo-texels must be a power of two in 64..=8192, got {}",
+                self.max_texels
+            )));
         }
         if !(self.texels_per_delivered > 0.0) {
-            return Err(Error::BadOption(format!("texels per delivered pixel must be positive, got {}", self.texels_per_delivered)));
+            return Err(Error::BadOption(format!(
+                "texels per delivered pixel must be positive, got {}",
+                self.texels_per_delivered
+            )));
         }
         if !(0.25..=4.0).contains(&self.texels_per_pixel) {
-            return Err(Error::BadOption(format!("--texels-per-pixel must be in [0.25, 4], got {}", self.texels_per_pixel)));
+            return Err(Error::BadOption(format!(
+                "--texels-per-pixel must be in [0.25, 4], got {}",
+                self.texels_per_pixel
+            )));
         }
         Ok(())
     }
@@ -146,7 +162,10 @@ struct StageTimer {
 
 impl StageTimer {
     fn new() -> StageTimer {
-        StageTimer { last: std::time::Instant::now(), laps: Vec::new() }
+        StageTimer {
+            last: std::time::Instant::now(),
+            laps: Vec::new(),
+        }
     }
 
     fn lap(&mut self, stage: &str) {
@@ -166,11 +185,19 @@ impl StageTimer {
 /// Runs `project` on the store in `dir` with `photos` (see the [module docs](self)).
 /// Errors on an unreadable store, a photo whose image size differs from its camera's, or a
 /// failed write; a photo that sees no terrain only logs a warning.
-pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -> Result<ProjectReport> {
+pub fn project_store(
+    dir: &Path,
+    photos: &[PhotoInput],
+    opts: &ProjectOptions,
+) -> Result<ProjectReport> {
     opts.confidence.validate()?;
     opts.texture.validate()?;
     if photos.len() >= u16::MAX as usize {
-        return Err(Error::BadOption(format!("at most {} photos per run, got {}", u16::MAX - 1, photos.len())));
+        return Err(Error::BadOption(format!(
+            "at most {} photos per run, got {}",
+            u16::MAX - 1,
+            photos.len()
+        )));
     }
     let mut timer = StageTimer::new();
     let _lock = crate::store::StoreLock::acquire(dir, "cliffmap project")?;
@@ -193,8 +220,10 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     let levels = store.manifest.quadtree.levels as usize;
     let finest = levels.saturating_sub(1);
     timer.lap("open store");
-    let pyramids: Vec<PhotoPyramid> =
-        photos.iter().map(|p| PhotoPyramid::new_in(&p.image, p.camera, finest + SIZING_STEPS, opts.colour_space)).collect();
+    let pyramids: Vec<PhotoPyramid> = photos
+        .iter()
+        .map(|p| PhotoPyramid::new_in(&p.image, p.camera, finest + SIZING_STEPS, opts.colour_space))
+        .collect();
     timer.lap("photo pyramids");
 
     let multi = MultiProgress::new();
@@ -232,17 +261,25 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     // The first photo's finest scene is built alongside the leveling (which leaves cores
     // idle in its smaller steps); it is the first scene the level loop needs, unless the
     // leveling casts the finest level itself (a photo of at most `leveling_max_pixels`).
-    let prebuild = !opts.level_colours || pyramids.first().is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
+    let prebuild = !opts.level_colours
+        || pyramids
+            .first()
+            .is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
     let (leveled, first_scene) = rayon::join(
         || -> Result<Vec<(ColourTransform, usize, Option<(usize, FootprintSet)>)>> {
             if !opts.level_colours {
                 return Ok(Vec::new());
             }
-            pyramids.iter().map(|pyr| estimate_leveling(&store, pyr, finest, opts, &buffers)).collect()
+            pyramids
+                .iter()
+                .map(|pyr| estimate_leveling(&store, pyr, finest, opts, &buffers))
+                .collect()
         },
         || {
             let first = photos.first().filter(|_| prebuild);
-            first.map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray)).transpose()
+            first
+                .map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray))
+                .transpose()
         },
     );
     for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
@@ -259,14 +296,26 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
         bars[i].inc(1);
     }
     let mut first_scene = first_scene?;
-    timer.lap(if opts.level_colours { "colour leveling (alongside the first finest scene)" } else { "first finest scene" });
+    timer.lap(if opts.level_colours {
+        "colour leveling (alongside the first finest scene)"
+    } else {
+        "first finest scene"
+    });
 
     let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
     let mut level_reports = Vec::with_capacity(levels);
     // Finest level first; the cells of each level are blended and written while the next
     // coarser level is cast and splatted (levels are independent, so the output is the same
     // as level by level).
-    let run = LevelRun { store: &store, pyramids: &pyramids, transforms: &transforms, opts, buffers: &buffers, bars: &bars, finest };
+    let run = LevelRun {
+        store: &store,
+        pyramids: &pyramids,
+        transforms: &transforms,
+        opts,
+        buffers: &buffers,
+        bars: &bars,
+        finest,
+    };
     let mut pending: Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))> = None;
     // The photo textures are written on a thread of their own (the fsyncs do not hold up
     // the workers); all are on disk before the manifest refers to them.
@@ -276,12 +325,25 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
             || {
                 pending.take().map(|(l, (accs, sizing))| {
                     let t = std::time::Instant::now();
-                    (l, finish_level(&store, l, &accs, &sizing, opts, &writer), t.elapsed().as_secs_f64())
+                    (
+                        l,
+                        finish_level(&store, l, &accs, &sizing, opts, &writer),
+                        t.elapsed().as_secs_f64(),
+                    )
                 })
             },
             || -> Result<Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))>> {
                 let Some(level) = level else { return Ok(None) };
-                Ok(Some((level, run.project_level(level, &mut cached, &mut first_scene, &mut reports, &mut timer)?)))
+                Ok(Some((
+                    level,
+                    run.project_level(
+                        level,
+                        &mut cached,
+                        &mut first_scene,
+                        &mut reports,
+                        &mut timer,
+                    )?,
+                )))
             },
         );
         if let Some((l, result, secs)) = finished {
@@ -293,7 +355,10 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
                 r.texels_supplied += n;
             }
             level_reports.push(lr);
-            timer.note(&format!("level {l}: cells written (alongside the next level)"), secs);
+            timer.note(
+                &format!("level {l}: cells written (alongside the next level)"),
+                secs,
+            );
             // The time after the next level's casts until these writes were done.
             timer.lap(&format!("level {l}: rest of its cell writes"));
         }
@@ -307,7 +372,10 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     }
     for r in &reports {
         if r.texels_written == 0 {
-            tracing::warn!("photo {}: it sees no terrain of the store (no texels written)", r.name);
+            tracing::warn!(
+                "photo {}: it sees no terrain of the store (no texels written)",
+                r.name
+            );
         }
     }
 
@@ -333,21 +401,30 @@ pub fn project_store(dir: &Path, photos: &[PhotoInput], opts: &ProjectOptions) -
     store.manifest.write(dir)?;
     remove_stale_photo_files(dir, &store.manifest.cells);
     timer.lap("manifest and stats");
-    Ok(ProjectReport { settings, cells_written, stage_seconds: timer.laps })
+    Ok(ProjectReport {
+        settings,
+        cells_written,
+        stage_seconds: timer.laps,
+    })
 }
 
 /// Removes the photo textures of cells without a photo record (left by an earlier run).
 pub(crate) fn remove_stale_photo_files(dir: &Path, cells: &[CellRecord]) {
     for c in cells.iter().filter(|c| c.photo.is_none()) {
         for ext in ["photo.png", "photo.conf.png"] {
-            let _ = std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
+            let _ =
+                std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
         }
     }
 }
 
 /// Per manifest cell, its footprints in `fs`; cells not on `level` (a footprint set from a
 /// foreign scene) get none.
-fn group_by_cell<'a>(fs: &'a FootprintSet, cells: &[CellRecord], level: u8) -> Vec<Option<&'a CellFootprints>> {
+fn group_by_cell<'a>(
+    fs: &'a FootprintSet,
+    cells: &[CellRecord],
+    level: u8,
+) -> Vec<Option<&'a CellFootprints>> {
     let mut out = vec![None; cells.len()];
     for cf in &fs.cells {
         let cell = cf.cell as usize;
@@ -371,12 +448,18 @@ fn splat_batch(
     samples: &PhotoSamples,
 ) {
     let groups = group_by_cell(batch, cells, level);
-    pas.par_iter_mut().zip(groups).enumerate().for_each(|(ci, (pa, cf))| {
-        if let Some(cf) = cf {
-            let scale = scales.get(ci).copied().unwrap_or(1).max(1);
-            pa.get_or_insert_with(|| PhotoAccum::with_scale(active_texels(&cells[ci]) * scale, scale)).add_samples(cf.iter(), samples);
-        }
-    });
+    pas.par_iter_mut()
+        .zip(groups)
+        .enumerate()
+        .for_each(|(ci, (pa, cf))| {
+            if let Some(cf) = cf {
+                let scale = scales.get(ci).copied().unwrap_or(1).max(1);
+                pa.get_or_insert_with(|| {
+                    PhotoAccum::with_scale(active_texels(&cells[ci]) * scale, scale)
+                })
+                .add_samples(cf.iter(), samples);
+            }
+        });
 }
 
 /// The resolution rule's view of cell `rec` ([`CellContext`]): slopes from its active normal
@@ -386,13 +469,22 @@ fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContext> {
     let normals = store.read_active_normal_map(rec)?;
     let t = active_texels(rec);
     if normals.dimensions() != (t, t) {
-        return Err(Error::store(store.dir.join(&active_normal_path(rec)), format!("normal map {:?} is not the cell's {t}x{t} texels", normals.dimensions())));
+        return Err(Error::store(
+            store.dir.join(&active_normal_path(rec)),
+            format!(
+                "normal map {:?} is not the cell's {t}x{t} texels",
+                normals.dimensions()
+            ),
+        ));
     }
     let texel = rec.extent.width().max(rec.extent.height()) / rec.texels.max(1) as f64;
     let ground = store.manifest.ortho_spacing.unwrap_or(0.0).max(texel);
     Ok(CellContext {
         base_texels: t,
-        cos_slope: normals.pixels().map(|p| normal_cos_slope(p.0).abs() as f32).collect(),
+        cos_slope: normals
+            .pixels()
+            .map(|p| normal_cos_slope(p.0).abs() as f32)
+            .collect(),
         max_error: rec.max_error.max(0.0) as f32,
         existing_ground: ground as f32,
         texel_ground: texel as f32,
@@ -401,7 +493,11 @@ fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContext> {
 
 /// Path of the cell's active normal map (for messages).
 fn active_normal_path(rec: &CellRecord) -> String {
-    rec.reparam.as_ref().map_or(&rec.files.normal, |r| &r.files.normal).path.clone()
+    rec.reparam
+        .as_ref()
+        .map_or(&rec.files.normal, |r| &r.files.normal)
+        .path
+        .clone()
 }
 
 /// What every level's projection of a run shares.
@@ -446,8 +542,13 @@ impl LevelRun<'_> {
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
             let cells = &self.store.manifest.cells;
-            let samples =
-                PhotoSamples::new(img, [cam.fx, cam.fy], &self.transforms[pi], &self.opts.confidence, self.opts.colour_space);
+            let samples = PhotoSamples::new(
+                img,
+                [cam.fx, cam.fy],
+                &self.transforms[pi],
+                &self.opts.confidence,
+                self.opts.colour_space,
+            );
             // This photo's deposits per manifest cell, filled batch by batch in row order.
             let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
             let counts = match cached[pi].take() {
@@ -462,13 +563,31 @@ impl LevelRun<'_> {
                     cached[pi] = other;
                     let scene = match scenes[pi].take() {
                         Some(scene) => scene,
-                        None => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
+                        None => LevelScene::from_store(
+                            self.store,
+                            level as u8,
+                            cam.position,
+                            self.opts.ray,
+                        )?,
                     };
                     let mut counts = FootprintSet::default();
-                    for_each_footprint_batch_in(self.buffers, &scene, &cam, &self.opts.footprint, |batch| {
-                        splat_batch(batch, &mut pas, cells, &sizing.scales, level as u8, &samples);
-                        counts.add_counts(batch);
-                    });
+                    for_each_footprint_batch_in(
+                        self.buffers,
+                        &scene,
+                        &cam,
+                        &self.opts.footprint,
+                        |batch| {
+                            splat_batch(
+                                batch,
+                                &mut pas,
+                                cells,
+                                &sizing.scales,
+                                level as u8,
+                                &samples,
+                            );
+                            counts.add_counts(batch);
+                        },
+                    );
                     counts
                 }
             };
@@ -492,7 +611,13 @@ impl LevelRun<'_> {
                             Some(c) => c,
                             None => cell_context(self.store, &cells[ci])?,
                         };
-                        let (first, n) = CellAccum::from_photo(pa, pi as u16, self.opts.blend, ctx, &self.opts.confidence);
+                        let (first, n) = CellAccum::from_photo(
+                            pa,
+                            pi as u16,
+                            self.opts.blend,
+                            ctx,
+                            &self.opts.confidence,
+                        );
                         *acc = Some(first);
                         Ok(n)
                     }
@@ -520,7 +645,11 @@ impl LevelRun<'_> {
     ) -> Result<LevelSizing> {
         let cells = &self.store.manifest.cells;
         let topt = &self.opts.texture;
-        let mut out = LevelSizing { scales: vec![1; cells.len()], contexts: vec![None; cells.len()], ..LevelSizing::default() };
+        let mut out = LevelSizing {
+            scales: vec![1; cells.len()],
+            contexts: vec![None; cells.len()],
+            ..LevelSizing::default()
+        };
         if !topt.photo_driven {
             return Ok(out);
         }
@@ -539,12 +668,18 @@ impl LevelRun<'_> {
             }
             let scene = match scenes[pi].take() {
                 Some(s) => s,
-                None => LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?,
+                None => {
+                    LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?
+                }
             };
             let coarse = (step + SIZING_STEPS).min(pyr.steps());
             let (_, ccam) = pyr.level(coarse);
             let fs = photo_footprints_in(self.buffers, &scene, &ccam, &self.opts.footprint);
-            sets.push((std::borrow::Cow::Owned(fs), 0.5f32.powi((coarse - step) as i32), focal));
+            sets.push((
+                std::borrow::Cow::Owned(fs),
+                0.5f32.powi((coarse - step) as i32),
+                focal,
+            ));
             scenes[pi] = Some(scene);
         }
         // the resolution rule's view of every cell the photos reach
@@ -558,7 +693,13 @@ impl LevelRun<'_> {
         }
         let contexts: Vec<Option<CellContext>> = (0..cells.len())
             .into_par_iter()
-            .map(|ci| if seen[ci] { cell_context(self.store, &cells[ci]).map(Some) } else { Ok(None) })
+            .map(|ci| {
+                if seen[ci] {
+                    cell_context(self.store, &cells[ci]).map(Some)
+                } else {
+                    Ok(None)
+                }
+            })
             .collect::<Result<_>>()?;
         // every footprint counts as a delivered pixel; only those the blend lets dominate
         // size the texture
@@ -567,10 +708,17 @@ impl LevelRun<'_> {
         for (fs, side_scale, focal) in &sets {
             for cf in &fs.cells {
                 let ci = cf.cell as usize;
-                let Some(ctx) = contexts.get(ci).and_then(Option::as_ref) else { continue };
+                let Some(ctx) = contexts.get(ci).and_then(Option::as_ref) else {
+                    continue;
+                };
                 let b = bins[ci].get_or_insert_with(SizingBins::default);
                 for fp in cf.iter() {
-                    b.add(fp, ctx.base_texels, *side_scale, resolves_more(ctx, fp, *focal, weights));
+                    b.add(
+                        fp,
+                        ctx.base_texels,
+                        *side_scale,
+                        resolves_more(ctx, fp, *focal, weights),
+                    );
                 }
             }
         }
@@ -580,7 +728,9 @@ impl LevelRun<'_> {
             }
         }
         out.contexts = contexts;
-        let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
+        let level_cells: Vec<usize> = (0..cells.len())
+            .filter(|&i| cells[i].level as usize == level)
+            .collect();
         let requests: Vec<SizeRequest> = level_cells
             .iter()
             .map(|&ci| {
@@ -589,10 +739,19 @@ impl LevelRun<'_> {
                 match &bins[ci] {
                     Some(b) => SizeRequest {
                         base_texels: base,
-                        scale: b.wanted_scale(max_scale, topt.texels_per_pixel, base, topt.texels_per_delivered),
+                        scale: b.wanted_scale(
+                            max_scale,
+                            topt.texels_per_pixel,
+                            base,
+                            topt.texels_per_delivered,
+                        ),
                         covered: b.covered() as f64 / (SIZING_BINS * SIZING_BINS) as f64,
                     },
-                    None => SizeRequest { base_texels: base, scale: 1, covered: 0.0 },
+                    None => SizeRequest {
+                        base_texels: base,
+                        scale: 1,
+                        covered: 0.0,
+                    },
                 }
             })
             .collect();
@@ -631,8 +790,16 @@ struct LevelSizing {
 /// pixels) would get weight against cell `ctx`'s existing texture by the resolution rule
 /// (the texel under its centre; [`ConfidenceParams::resolution_weight`] at least 1/2: the
 /// photo dominates there).
-fn resolves_more(ctx: &CellContext, fp: &crate::photo::PixelFootprint, focal: f64, weights: &ConfidenceParams) -> bool {
-    let c = fp.corners.iter().fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
+fn resolves_more(
+    ctx: &CellContext,
+    fp: &crate::photo::PixelFootprint,
+    focal: f64,
+    weights: &ConfidenceParams,
+) -> bool {
+    let c = fp
+        .corners
+        .iter()
+        .fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
     let n = ctx.base_texels as f32;
     if !(c[0] >= 0.0 && c[1] >= 0.0 && c[0] < n && c[1] < n) {
         return false;
@@ -655,9 +822,21 @@ fn finish_level(
     writer: &BackgroundWriter,
 ) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>, Vec<u64>)> {
     let cells = &store.manifest.cells;
-    let level_cells: Vec<usize> = (0..cells.len()).filter(|&i| cells[i].level as usize == level).collect();
-    let results: Vec<Result<CellOutcome>> =
-        level_cells.par_iter().map(|&ci| finish_cell(store, &cells[ci], accs.get(ci).and_then(Option::as_ref), opts, writer)).collect();
+    let level_cells: Vec<usize> = (0..cells.len())
+        .filter(|&i| cells[i].level as usize == level)
+        .collect();
+    let results: Vec<Result<CellOutcome>> = level_cells
+        .par_iter()
+        .map(|&ci| {
+            finish_cell(
+                store,
+                &cells[ci],
+                accs.get(ci).and_then(Option::as_ref),
+                opts,
+                writer,
+            )
+        })
+        .collect();
     let mut lr = PhotoLevelReport {
         level: level as u8,
         wanted_larger: sizing.wanted,
@@ -710,7 +889,13 @@ fn estimate_leveling(
         drop(scene);
         let cells = &store.manifest.cells;
         // (the leveling compares sRGB values at the existing texture's size)
-        let samples = PhotoSamples::new(img, [cam.fx, cam.fy], &ColourTransform::IDENTITY, &opts.confidence, ColourSpace::Srgb);
+        let samples = PhotoSamples::new(
+            img,
+            [cam.fx, cam.fy],
+            &ColourTransform::IDENTITY,
+            &opts.confidence,
+            ColourSpace::Srgb,
+        );
         let mut pas: Vec<Option<PhotoAccum>> = vec![None; cells.len()];
         splat_batch(&fs, &mut pas, cells, &[], level as u8, &samples);
         let parts: Vec<Result<ColourPairs>> = pas
@@ -720,7 +905,12 @@ fn estimate_leveling(
             .map(|(rec, pa)| {
                 let existing = store.read_active_texture(rec)?;
                 let ctx = cell_context(store, rec)?;
-                check_size(store, rec, existing.dimensions(), (ctx.base_texels, ctx.base_texels))?;
+                check_size(
+                    store,
+                    rec,
+                    existing.dimensions(),
+                    (ctx.base_texels, ctx.base_texels),
+                )?;
                 let mut pairs = ColourPairs::default();
                 collect_pairs(pa, &existing, &ctx, &opts.leveling, &mut pairs);
                 Ok(pairs)
@@ -733,7 +923,10 @@ fn estimate_leveling(
             all.existing.extend(p.existing);
         }
         let (t, n) = fit_colour_transform(&all, &opts.leveling);
-        tracing::debug!("project: leveling on level {level} (pyramid step {step}): {} samples, {n} used", all.photo.len());
+        tracing::debug!(
+            "project: leveling on level {level} (pyramid step {step}): {} samples, {n} used",
+            all.photo.len()
+        );
         if n > 0 {
             return Ok((t, n, Some((level, fs))));
         }
@@ -757,7 +950,10 @@ fn leveling_step(pyr: &PhotoPyramid, finest: usize, opts: &ProjectOptions) -> us
 fn check_size(store: &Store, rec: &CellRecord, tex: (u32, u32), nrm: (u32, u32)) -> Result<()> {
     let t = active_texels(rec);
     if tex != (t, t) || nrm != (t, t) {
-        let f = rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture);
+        let f = rec
+            .reparam
+            .as_ref()
+            .map_or(&rec.files.texture, |r| &r.files.texture);
         return Err(Error::store(
             store.dir.join(&f.path),
             format!("texture {tex:?} or normal map {nrm:?} is not the cell's {t}x{t} texels"),
@@ -786,15 +982,32 @@ struct CellOutcome {
 fn covered_mask(store: &Store, rec: &CellRecord, texels: u32) -> Result<Vec<bool>> {
     let mesh = store.read_active_mesh(rec)?;
     let ns = (mesh.surface_vertices as usize).min(mesh.positions.len());
-    let positions: Vec<[f64; 3]> = mesh.positions[..ns].iter().map(|p| p.map(f64::from)).collect();
-    let uvs: Vec<[f64; 2]> = (0..ns).map(|i| texcoord(rec, &mesh, i).map(f64::from)).collect();
-    let triangles: Vec<[u32; 3]> =
-        mesh.surface().iter().copied().filter(|t| t.iter().all(|&k| (k as usize) < ns)).collect();
-    Ok(texel_stretch(&positions, &triangles, &uvs, texels, 1.0).iter().map(|s| !s.is_nan()).collect())
+    let positions: Vec<[f64; 3]> = mesh.positions[..ns]
+        .iter()
+        .map(|p| p.map(f64::from))
+        .collect();
+    let uvs: Vec<[f64; 2]> = (0..ns)
+        .map(|i| texcoord(rec, &mesh, i).map(f64::from))
+        .collect();
+    let triangles: Vec<[u32; 3]> = mesh
+        .surface()
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&k| (k as usize) < ns))
+        .collect();
+    Ok(texel_stretch(&positions, &triangles, &uvs, texels, 1.0)
+        .iter()
+        .map(|s| !s.is_nan())
+        .collect())
 }
 
 /// Encodes `img` as PNG and queues it for `dir/rel` on `writer`.
-fn submit_png<P, C>(writer: &BackgroundWriter, dir: &Path, rel: &str, img: &image::ImageBuffer<P, C>) -> Result<FileRef>
+fn submit_png<P, C>(
+    writer: &BackgroundWriter,
+    dir: &Path,
+    rel: &str,
+    img: &image::ImageBuffer<P, C>,
+) -> Result<FileRef>
 where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,
@@ -814,13 +1027,27 @@ fn finish_cell(
     let Some(acc) = acc else {
         let normals = store.read_active_normal_map(rec)?;
         let covered = covered_mask(store, rec, active_texels(rec))?;
-        let steep_texels =
-            covered.iter().zip(normals.pixels()).filter(|(c, n)| **c && (normal_cos_slope(n.0) as f32) < cos_steep).count() as u64;
-        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0, supplied_base: Vec::new() });
+        let steep_texels = covered
+            .iter()
+            .zip(normals.pixels())
+            .filter(|(c, n)| **c && (normal_cos_slope(n.0) as f32) < cos_steep)
+            .count() as u64;
+        return Ok(CellOutcome {
+            record: None,
+            steep_texels,
+            steep_photo_base: 0,
+            photo_base: 0,
+            supplied_base: Vec::new(),
+        });
     };
     let existing = store.read_active_texture(rec)?;
     let ctx = &acc.context;
-    check_size(store, rec, existing.dimensions(), (ctx.base_texels, ctx.base_texels))?;
+    check_size(
+        store,
+        rec,
+        existing.dimensions(),
+        (ctx.base_texels, ctx.base_texels),
+    )?;
     // (the active texture's masks looked up for the photo texture's texels: these masks only
     // feed the texel counts)
     let base_covered = covered_mask(store, rec, ctx.base_texels)?;
@@ -831,17 +1058,35 @@ fn finish_cell(
         covered[t] = base_covered.get(b).copied().unwrap_or(false);
         steep[t] = covered[t] && ctx.cos_at(b) < cos_steep;
     }
-    let b = blend_cell(&existing, acc, &opts.confidence, opts.colour_space, &covered, &steep);
+    let b = blend_cell(
+        &existing,
+        acc,
+        &opts.confidence,
+        opts.colour_space,
+        &covered,
+        &steep,
+    );
     let area = (acc.scale as u64).pow(2);
     let steep_texels = b.steep_texels / area;
     if b.confidence.pixels().all(|p| p.0[0] == 0) {
-        return Ok(CellOutcome { record: None, steep_texels, steep_photo_base: 0, photo_base: 0, supplied_base: Vec::new() });
+        return Ok(CellOutcome {
+            record: None,
+            steep_texels,
+            steep_photo_base: 0,
+            photo_base: 0,
+            supplied_base: Vec::new(),
+        });
     }
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {
         texels: acc.texels,
         texture: submit_png(writer, &store.dir, &format!("{stem}.photo.png"), &b.texture)?,
-        confidence: submit_png(writer, &store.dir, &format!("{stem}.photo.conf.png"), &b.confidence)?,
+        confidence: submit_png(
+            writer,
+            &store.dir,
+            &format!("{stem}.photo.conf.png"),
+            &b.confidence,
+        )?,
         photo_texels: b.photo_texels,
         steep_texels: b.steep_texels,
         steep_photo_texels: b.steep_photo_texels,

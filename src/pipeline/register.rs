@@ -14,7 +14,9 @@ use crate::camera::{CameraModel, camera_to_json};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::PhotoSpec;
-use crate::register::{CameraParams, Param, TerrainFit, TerrainOptions, TerrainScene, register_to_terrain};
+use crate::register::{
+    CameraParams, Param, TerrainFit, TerrainOptions, TerrainScene, register_to_terrain,
+};
 use crate::store::Store;
 
 /// One photo's registration.
@@ -43,8 +45,15 @@ pub fn register_photos(
     warn: &mut dyn FnMut(&str),
 ) -> Result<Vec<PhotoRegistration>> {
     let store = Store::open(store_dir)?;
-    let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
-    let stem = out.file_stem().map_or_else(|| "registered".to_string(), |s| s.to_string_lossy().into_owned());
+    let dir = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
+    let stem = out.file_stem().map_or_else(
+        || "registered".to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    );
     let mut results = Vec::with_capacity(specs.len());
     for spec in specs {
         let photo = spec.load()?;
@@ -52,23 +61,52 @@ pub fn register_photos(
         let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         if let Some(why) = &fit.reason {
-            warn(&format!("{}: not registered, keeping its given camera: {why}", spec.name));
+            warn(&format!(
+                "{}: not registered, keeping its given camera: {why}",
+                spec.name
+            ));
         }
-        let safe: String = spec.name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
+        let safe: String = spec
+            .name
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
         let camera_file = dir.join(format!("{stem}.{safe}.camera.json"));
-        let text = serde_json::to_string_pretty(&camera_to_json(&fit.camera)).map_err(|e| Error::BadOption(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&camera_to_json(&fit.camera))
+            .map_err(|e| Error::BadOption(e.to_string()))?;
         write_atomic(&camera_file, text.as_bytes())?;
-        results.push(PhotoRegistration { name: spec.name.clone(), rough: spec.camera, fit, camera_file });
+        results.push(PhotoRegistration {
+            name: spec.name.clone(),
+            rough: spec.camera,
+            fit,
+            camera_file,
+        });
     }
     let report = json!({ "photos": results.iter().map(report_entry).collect::<Vec<Value>>() });
     let report_path = dir.join(format!("{stem}.report.json"));
-    write_atomic(&report_path, serde_json::to_string_pretty(&report).map_err(|e| Error::BadOption(e.to_string()))?.as_bytes())?;
+    write_atomic(
+        &report_path,
+        serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::BadOption(e.to_string()))?
+            .as_bytes(),
+    )?;
     let entries: Vec<Value> = specs
         .iter()
         .zip(&results)
         .map(|(s, r)| json!({ "image": relative_or_absolute(&s.image_path, &dir), "camera": file_name(&r.camera_file) }))
         .collect();
-    write_atomic(out, serde_json::to_string_pretty(&json!({ "photos": entries })).map_err(|e| Error::BadOption(e.to_string()))?.as_bytes())?;
+    write_atomic(
+        out,
+        serde_json::to_string_pretty(&json!({ "photos": entries }))
+            .map_err(|e| Error::BadOption(e.to_string()))?
+            .as_bytes(),
+    )?;
     Ok(results)
 }
 
@@ -100,7 +138,10 @@ fn report_entry(r: &PhotoRegistration) -> Value {
 }
 
 fn file_name(p: &Path) -> String {
-    p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+    p.file_name().map_or_else(
+        || p.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
 }
 
 /// `p` relative to `dir` when `p` lies under it, else `p` made absolute.

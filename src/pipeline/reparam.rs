@@ -15,7 +15,8 @@ use crate::param::{ParamMesh, ParamOptions, chart_metrics, parameterize};
 use crate::resample::{ChartMesh, Mode, PixelMap, ResampleOptions, Source, resample};
 use crate::stats::{self, texel_stretch};
 use crate::store::{
-    CellFiles, CellMesh, CellRecord, Parameterization, ReparamRecord, ReparamSettings, Store, cell_stem, write_file,
+    CellFiles, CellMesh, CellRecord, Parameterization, ReparamRecord, ReparamSettings, Store,
+    cell_stem, write_file,
 };
 
 /// Options of `reparam`.
@@ -93,15 +94,19 @@ pub fn texture_memory(cells: &[CellRecord], cell_texels: u32) -> TextureMemory {
 /// follows the old texture coordinates; run `project` again.
 pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     if !(opts.threshold.is_finite() && opts.threshold > 0.0) {
-        return Err(Error::BadOption(format!("--threshold must be a positive number, got {}", opts.threshold)));
+        return Err(Error::BadOption(format!(
+            "--threshold must be a positive number, got {}",
+            opts.threshold
+        )));
     }
     opts.param.validate()?;
     let _lock = crate::store::StoreLock::acquire(dir, "cliffmap reparam")?;
     let mut store = Store::open(dir)?;
     let t = store.manifest.cell_texels;
     let texels = if opts.mixed_resolution { 2 * t } else { t };
-    let chosen: Vec<usize> =
-        (0..store.manifest.cells.len()).filter(|&i| store.manifest.cells[i].stats.rel_texel > opts.threshold).collect();
+    let chosen: Vec<usize> = (0..store.manifest.cells.len())
+        .filter(|&i| store.manifest.cells[i].stats.rel_texel > opts.threshold)
+        .collect();
     let pb = progress_bar(chosen.len() as u64, "reparam", opts.quiet);
     let results: Vec<(usize, Result<ReparamRecord>)> = chosen
         .par_iter()
@@ -128,7 +133,10 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
                 c.parameterization = Parameterization::Reparam;
             }
             Err(e) => {
-                tracing::warn!("cell {}: parameterization failed, keeping the ortho map: {e}", c.id);
+                tracing::warn!(
+                    "cell {}: parameterization failed, keeping the ortho map: {e}",
+                    c.id
+                );
                 failed.push(c.id.clone());
             }
         }
@@ -136,7 +144,11 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     store.manifest.reparam = Some(ReparamSettings {
         threshold: opts.threshold,
         theta: opts.param.theta,
-        newton_iterations: if opts.param.theta == 1.0 { opts.param.newton_iterations } else { 0 },
+        newton_iterations: if opts.param.theta == 1.0 {
+            opts.param.newton_iterations
+        } else {
+            0
+        },
         mixed_resolution: opts.mixed_resolution,
         resample: match opts.resample.mode {
             Mode::Subtexel(n) => format!("subtexel:{n}"),
@@ -155,7 +167,8 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     // Reparameterized files of cells that no longer use them are stale: remove them.
     for c in store.manifest.cells.iter().filter(|c| c.reparam.is_none()) {
         for ext in ["reparam.mesh", "reparam.png", "reparam.normal.png"] {
-            let _ = std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
+            let _ =
+                std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
         }
     }
     super::project::remove_stale_photo_files(dir, &store.manifest.cells);
@@ -178,7 +191,11 @@ pub fn recorded_reparam_options(settings: &ReparamSettings) -> Option<ReparamOpt
         threshold: settings.threshold,
         param: settings.param?,
         mixed_resolution: settings.mixed_resolution,
-        resample: ResampleOptions { mode, fill, ..ResampleOptions::default() },
+        resample: ResampleOptions {
+            mode,
+            fill,
+            ..ResampleOptions::default()
+        },
         quiet: true,
     })
 }
@@ -194,42 +211,75 @@ pub fn redo_reparam_cells(store: &mut Store, ids: &[String], opts: &ReparamOptio
             .iter()
             .position(|c| &c.id == id)
             .ok_or_else(|| Error::BadOption(format!("cell {id} is not in the store")))?;
-        let texels = store.manifest.cells[i].reparam.as_ref().map(|r| r.texels).ok_or_else(|| {
-            Error::BadOption(format!("cell {id} has no reparameterized variant to redo"))
-        })?;
+        let texels = store.manifest.cells[i]
+            .reparam
+            .as_ref()
+            .map(|r| r.texels)
+            .ok_or_else(|| {
+                Error::BadOption(format!("cell {id} has no reparameterized variant to redo"))
+            })?;
         let rec = reparam_cell(store, &store.manifest.cells[i], texels, opts)?;
         store.manifest.cells[i].reparam = Some(rec);
     }
     Ok(())
 }
 
-fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOptions) -> Result<ReparamRecord> {
+fn reparam_cell(
+    store: &Store,
+    rec: &CellRecord,
+    texels: u32,
+    opts: &ReparamOptions,
+) -> Result<ReparamRecord> {
     let mesh = store.read_mesh(rec)?;
     let ns = mesh.surface_vertices as usize;
-    let positions: Vec<[f64; 3]> = mesh.positions[..ns].iter().map(|p| p.map(f64::from)).collect();
+    let positions: Vec<[f64; 3]> = mesh.positions[..ns]
+        .iter()
+        .map(|p| p.map(f64::from))
+        .collect();
     let triangles = mesh.surface().to_vec();
-    let popts = ParamOptions { texture_size: texels, ..opts.param };
-    let chart = parameterize(&ParamMesh { positions: positions.clone(), triangles: triangles.clone() }, &popts)?;
+    let popts = ParamOptions {
+        texture_size: texels,
+        ..opts.param
+    };
+    let chart = parameterize(
+        &ParamMesh {
+            positions: positions.clone(),
+            triangles: triangles.clone(),
+        },
+        &popts,
+    )?;
     let base_area = rec.stats.base_area;
     let metrics = chart_metrics(&positions, &triangles, &chart.uvs, Some(base_area))?;
     // The chart's v axis points up; the store's texture coordinates run down the image rows.
     let tex_uvs: Vec<[f64; 2]> = chart.uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect();
     if metrics.flipped > 0 {
-        return Err(Error::BadOption(format!("chart of cell {} has {} flipped triangles", rec.id, metrics.flipped)));
+        return Err(Error::BadOption(format!(
+            "chart of cell {} has {} flipped triangles",
+            rec.id, metrics.flipped
+        )));
     }
 
     // Texture coordinates for every vertex: skirt vertices copy their border vertex's.
     let key = |p: &[f32; 3]| (p[0].to_bits(), p[1].to_bits());
-    let border: HashMap<(u32, u32), usize> =
-        mesh.positions[..ns].iter().enumerate().map(|(i, p)| (key(p), i)).collect();
+    let border: HashMap<(u32, u32), usize> = mesh.positions[..ns]
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (key(p), i))
+        .collect();
     let mut uvs: Vec<[f32; 2]> = tex_uvs.iter().map(|u| [u[0] as f32, u[1] as f32]).collect();
     for p in &mesh.positions[ns..] {
         let src = border.get(&key(p)).copied().ok_or_else(|| {
-            Error::store(store.dir.join(&rec.files.mesh.path), "skirt vertex without a border vertex")
+            Error::store(
+                store.dir.join(&rec.files.mesh.path),
+                "skirt vertex without a border vertex",
+            )
         })?;
         uvs.push(uvs[src]);
     }
-    let new_mesh = CellMesh { uvs: Some(uvs), ..mesh };
+    let new_mesh = CellMesh {
+        uvs: Some(uvs),
+        ..mesh
+    };
 
     // Resample the cell's ortho texture and normal map (both over the nominal square).
     let e = &rec.extent;
@@ -241,24 +291,55 @@ fn reparam_cell(store: &Store, rec: &CellRecord, texels: u32, opts: &ReparamOpti
         spacing_y: e.height() / t_old,
     };
     let to_pixel = PixelMap::from_georef(&tex_georef, [rec.origin[0], rec.origin[1]]);
-    let chart_mesh = ChartMesh { positions: &positions, triangles: &triangles, uvs: &tex_uvs };
-    let ropts = ResampleOptions { texels, ..opts.resample };
+    let chart_mesh = ChartMesh {
+        positions: &positions,
+        triangles: &triangles,
+        uvs: &tex_uvs,
+    };
+    let ropts = ResampleOptions {
+        texels,
+        ..opts.resample
+    };
     let colour = store.read_texture(rec)?;
-    let col = resample(&chart_mesh, &Source { image: &colour, to_pixel }, &ropts)?;
+    let col = resample(
+        &chart_mesh,
+        &Source {
+            image: &colour,
+            to_pixel,
+        },
+        &ropts,
+    )?;
     let normal = store.read_normal_map(rec)?;
     let normal_rgba = image::DynamicImage::ImageRgb8(normal).to_rgba8();
-    let nrm = resample(&chart_mesh, &Source { image: &normal_rgba, to_pixel }, &ropts)?;
+    let nrm = resample(
+        &chart_mesh,
+        &Source {
+            image: &normal_rgba,
+            to_pixel,
+        },
+        &ropts,
+    )?;
     let nrm_rgb = image::DynamicImage::ImageRgba8(nrm.image).to_rgb8();
 
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let files = CellFiles {
-        mesh: write_file(&store.dir, &format!("{stem}.reparam.mesh"), &new_mesh.to_bytes())?,
+        mesh: write_file(
+            &store.dir,
+            &format!("{stem}.reparam.mesh"),
+            &new_mesh.to_bytes(),
+        )?,
         texture: write_png(&store.dir, &format!("{stem}.reparam.png"), &col.image)?,
         normal: write_png(&store.dir, &format!("{stem}.reparam.normal.png"), &nrm_rgb)?,
     };
     // Per-texel stretch relative to an ortho texel (base area / cell_texels²).
     let ratio = texels as f64 / t_old;
-    let stretch = texel_stretch(&positions, &triangles, &tex_uvs, texels, base_area * ratio * ratio);
+    let stretch = texel_stretch(
+        &positions,
+        &triangles,
+        &tex_uvs,
+        texels,
+        base_area * ratio * ratio,
+    );
     Ok(ReparamRecord {
         texels,
         files,

@@ -24,14 +24,22 @@ pub struct ExifFocal {
 
 fn rational(f: &exif::Field) -> Option<f64> {
     match &f.value {
-        Value::Rational(v) => v.first().filter(|r| r.denom != 0).map(|r| r.num as f64 / r.denom as f64),
+        Value::Rational(v) => v
+            .first()
+            .filter(|r| r.denom != 0)
+            .map(|r| r.num as f64 / r.denom as f64),
         _ => f.value.get_uint(0).map(f64::from),
     }
 }
 
 /// The focal length in pixels of the `width × height` image at `path` (see the
 /// [module docs](self)); `sensor_width_mm` is used when EXIF gives the focal length alone.
-pub fn exif_focal_px(path: &Path, width: u32, height: u32, sensor_width_mm: Option<f64>) -> Result<Option<ExifFocal>> {
+pub fn exif_focal_px(
+    path: &Path,
+    width: u32,
+    height: u32,
+    sensor_width_mm: Option<f64>,
+) -> Result<Option<ExifFocal>> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let data = match exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file)) {
         Ok(d) => d,
@@ -39,25 +47,47 @@ pub fn exif_focal_px(path: &Path, width: u32, height: u32, sensor_width_mm: Opti
         Err(exif::Error::Io(e)) => return Err(Error::io(path, e)),
         Err(e) => return Err(Error::bad_input(path, format!("malformed EXIF data: {e}"))),
     };
-    let get = |t: Tag| data.get_field(t, In::PRIMARY).and_then(rational).filter(|v| v.is_finite() && *v > 0.0);
+    let get = |t: Tag| {
+        data.get_field(t, In::PRIMARY)
+            .and_then(rational)
+            .filter(|v| v.is_finite() && *v > 0.0)
+    };
     let focal_mm = get(Tag::FocalLength);
     let (w, h) = (width as f64, height as f64);
     if let (Some(f), Some(res)) = (focal_mm, get(Tag::FocalPlaneXResolution)) {
-        let unit_mm = match data.get_field(Tag::FocalPlaneResolutionUnit, In::PRIMARY).and_then(|u| u.value.get_uint(0)) {
+        let unit_mm = match data
+            .get_field(Tag::FocalPlaneResolutionUnit, In::PRIMARY)
+            .and_then(|u| u.value.get_uint(0))
+        {
             Some(3) => 10.0,
             Some(4) => 1.0,
             Some(5) => 1e-3,
             _ => 25.4, // 2 = inch, the default
         };
-        let exif_w = data.get_field(Tag::PixelXDimension, In::PRIMARY).and_then(|v| v.value.get_uint(0)).map(f64::from);
+        let exif_w = data
+            .get_field(Tag::PixelXDimension, In::PRIMARY)
+            .and_then(|v| v.value.get_uint(0))
+            .map(f64::from);
         let scale = exif_w.filter(|&ew| ew > 0.0).map_or(1.0, |ew| w / ew);
-        return Ok(Some(ExifFocal { focal_px: f * res / unit_mm * scale, source: "FocalLength x FocalPlaneXResolution" }));
+        return Ok(Some(ExifFocal {
+            focal_px: f * res / unit_mm * scale,
+            source: "FocalLength x FocalPlaneXResolution",
+        }));
     }
     if let Some(f35) = get(Tag::FocalLengthIn35mmFilm) {
-        return Ok(Some(ExifFocal { focal_px: f35 * w.hypot(h) / 36f64.hypot(24.0), source: "FocalLengthIn35mmFilm" }));
+        return Ok(Some(ExifFocal {
+            focal_px: f35 * w.hypot(h) / 36f64.hypot(24.0),
+            source: "FocalLengthIn35mmFilm",
+        }));
     }
-    if let (Some(f), Some(s)) = (focal_mm, sensor_width_mm.filter(|s| s.is_finite() && *s > 0.0)) {
-        return Ok(Some(ExifFocal { focal_px: f * w / s, source: "FocalLength and the given sensor width" }));
+    if let (Some(f), Some(s)) = (
+        focal_mm,
+        sensor_width_mm.filter(|s| s.is_finite() && *s > 0.0),
+    ) {
+        return Ok(Some(ExifFocal {
+            focal_px: f * w / s,
+            source: "FocalLength and the given sensor width",
+        }));
     }
     Ok(None)
 }
@@ -72,7 +102,9 @@ mod tests {
         let p = dir.path().join("plain.png");
         image::RgbImage::new(4, 3).save(&p).unwrap();
         assert_eq!(exif_focal_px(&p, 4, 3, Some(22.0)).unwrap(), None);
-        let e = exif_focal_px(&dir.path().join("missing.jpg"), 4, 3, None).unwrap_err().to_string();
+        let e = exif_focal_px(&dir.path().join("missing.jpg"), 4, 3, None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("missing.jpg"), "{e}");
     }
 }

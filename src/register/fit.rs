@@ -213,16 +213,40 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
     // repeated from the GCPs' own pose (DLT + RANSAC, with the start's intrinsics) and the
     // better of the two kept: lower sum of squared residual norms capped at 3 × the smaller
     // robust scale (at least 1 px).
-    let position_free = opts.free.iter().any(|p| matches!(p, Param::X | Param::Y | Param::Z));
+    let position_free = opts
+        .free
+        .iter()
+        .any(|p| matches!(p, Param::X | Param::Y | Param::Z));
     if !position_free || gcps.len() < 6 {
         return Ok(fit);
     }
-    let Ok(dlt) = super::start::start_from_gcps(start.width, start.height, gcps) else { return Ok(fit) };
-    let other_start = CameraModel { position: dlt.position, world_to_camera: dlt.world_to_camera, ..*start };
-    let Ok(other) = fit_from(&other_start, gcps, opts) else { return Ok(fit) };
+    let Ok(dlt) = super::start::start_from_gcps(start.width, start.height, gcps) else {
+        return Ok(fit);
+    };
+    let other_start = CameraModel {
+        position: dlt.position,
+        world_to_camera: dlt.world_to_camera,
+        ..*start
+    };
+    let Ok(other) = fit_from(&other_start, gcps, opts) else {
+        return Ok(fit);
+    };
     let cap = (3.0 * fit.sigma_px.min(other.sigma_px)).max(1.0);
-    let cost = |f: &CameraFit| -> f64 { f.gcps.iter().map(|g| g.residual.map_or(cap, |r| r[0].hypot(r[1]).min(cap)).powi(2)).sum() };
-    Ok(if cost(&other) < cost(&fit) { other } else { fit })
+    let cost = |f: &CameraFit| -> f64 {
+        f.gcps
+            .iter()
+            .map(|g| {
+                g.residual
+                    .map_or(cap, |r| r[0].hypot(r[1]).min(cap))
+                    .powi(2)
+            })
+            .sum()
+    };
+    Ok(if cost(&other) < cost(&fit) {
+        other
+    } else {
+        fit
+    })
 }
 
 fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<CameraFit> {
@@ -265,20 +289,35 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     let solver = LevenbergMarquardt::new().with_patience(200);
     // per fitted GCP: world point, observed pixel, √(w ρ)
     let points_of = |rho: &[f64]| -> Vec<(glam::DVec3, [f64; 2], f64)> {
-        used.iter().zip(rho).map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt())).collect()
+        used.iter()
+            .zip(rho)
+            .map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt()))
+            .collect()
     };
     let norms_at = |x: &DVector<f64>, pr: &Problem| -> Vec<f64> {
         let cam = pr.params_at(x).camera();
         used.iter()
-            .map(|&i| cam.project(gcps[i].world).map_or(BEHIND_PX, |p| (p[0] - gcps[i].pixel[0]).hypot(p[1] - gcps[i].pixel[1])))
+            .map(|&i| {
+                cam.project(gcps[i].world).map_or(BEHIND_PX, |p| {
+                    (p[0] - gcps[i].pixel[0]).hypot(p[1] - gcps[i].pixel[1])
+                })
+            })
             .collect()
     };
     loop {
         rounds += 1;
-        let problem = Problem { base, free: &opts.free, points: points_of(&rho), x: x.clone() };
+        let problem = Problem {
+            base,
+            free: &opts.free,
+            points: points_of(&rho),
+            x: x.clone(),
+        };
         let (solved, report) = solver.minimize(problem);
         if report.termination.was_usage_issue() || !solved.x.iter().all(|v| v.is_finite()) {
-            return Err(Error::BadOption(format!("fit-camera: the solver failed ({:?})", report.termination)));
+            return Err(Error::BadOption(format!(
+                "fit-camera: the solver failed ({:?})",
+                report.termination
+            )));
         }
         x = solved.x.clone();
         let e = norms_at(&x, &solved);
@@ -287,22 +326,38 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             break;
         }
         let delta = opts.huber_px.unwrap_or_else(|| (2.45 * sigma_px).max(0.5));
-        let new: Vec<f64> = e.iter().map(|&ei| if ei <= delta { 1.0 } else { delta / ei }).collect();
-        let change = new.iter().zip(&rho).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let new: Vec<f64> = e
+            .iter()
+            .map(|&ei| if ei <= delta { 1.0 } else { delta / ei })
+            .collect();
+        let change = new
+            .iter()
+            .zip(&rho)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         rho = new;
         if change < 1e-4 {
             break;
         }
     }
     // final statistics at x
-    let problem = Problem { base, free: &opts.free, points: points_of(&rho), x: x.clone() };
+    let problem = Problem {
+        base,
+        free: &opts.free,
+        points: points_of(&rho),
+        x: x.clone(),
+    };
     let fitted = problem.params_at(&x);
     let camera = fitted.camera();
     let e = norms_at(&x, &problem);
     let n = 2 * used.len();
     let rss: f64 = e.iter().map(|v| v * v).sum();
     let wr = problem.residuals_at(&x);
-    let s2 = if n > k { wr.norm_squared() / (n - k) as f64 } else { f64::NAN };
+    let s2 = if n > k {
+        wr.norm_squared() / (n - k) as f64
+    } else {
+        f64::NAN
+    };
     let jac = problem.jacobian();
     if let Some(j) = &jac {
         // the free parameters must be determined: columns scaled to unit norm, the smallest
@@ -335,12 +390,18 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             param,
             start: x0[i],
             value: x0[i] + x[i],
-            sigma: cov.as_ref().map_or(f64::NAN, |c| (s2 * c[(i, i)]).max(0.0).sqrt()),
+            sigma: cov
+                .as_ref()
+                .map_or(f64::NAN, |c| (s2 * c[(i, i)]).max(0.0).sqrt()),
         })
         .collect();
     let bound = 3.03 * sigma_px;
     for (j, &i) in used.iter().enumerate() {
-        status[i] = Some(if e[j] > bound && e[j] > 0.5 { GcpStatus::Outlier } else { GcpStatus::Inlier });
+        status[i] = Some(if e[j] > bound && e[j] > 0.5 {
+            GcpStatus::Outlier
+        } else {
+            GcpStatus::Inlier
+        });
     }
     let mut rho_of = vec![0.0; gcps.len()];
     for (j, &i) in used.iter().enumerate() {
@@ -361,8 +422,19 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             }
         })
         .collect();
-    let inl: Vec<f64> = used.iter().zip(&e).filter(|(i, _)| status[**i] == Some(GcpStatus::Inlier)).map(|(_, v)| *v).collect();
-    let rmse = |v: &[f64]| if v.is_empty() { f64::NAN } else { (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt() };
+    let inl: Vec<f64> = used
+        .iter()
+        .zip(&e)
+        .filter(|(i, _)| status[**i] == Some(GcpStatus::Inlier))
+        .map(|(_, v)| *v)
+        .collect();
+    let rmse = |v: &[f64]| {
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+        }
+    };
     Ok(CameraFit {
         camera,
         gcps: report,
@@ -382,7 +454,11 @@ fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
     let m = s.len() / 2;
-    if s.len() % 2 == 1 { s[m] } else { 0.5 * (s[m - 1] + s[m]) }
+    if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    }
 }
 
 #[cfg(test)]
@@ -411,7 +487,9 @@ mod tests {
     fn gcps(cam: &CameraModel, n: usize, noise: f64) -> Vec<Gcp> {
         let mut s = 12345u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64) / ((1u64 << 53) as f64)
         };
         let inv = cam.world_to_camera.transpose();
@@ -422,7 +500,12 @@ mod tests {
                 let p = cam.project(world).unwrap();
                 let a = rnd() * std::f64::consts::TAU;
                 let r = noise * (-2.0 * rnd().max(1e-12).ln()).sqrt();
-                Gcp { name: format!("p{i}"), world, pixel: [p[0] + r * a.cos(), p[1] + r * a.sin()], weight: 1.0 }
+                Gcp {
+                    name: format!("p{i}"),
+                    world,
+                    pixel: [p[0] + r * a.cos(), p[1] + r * a.sin()],
+                    weight: 1.0,
+                }
             })
             .collect()
     }
@@ -446,7 +529,12 @@ mod tests {
         let p = CameraParams::from_camera(&fit.camera);
         let t = CameraParams::from_camera(&cam);
         for k in 0..3 {
-            assert!((p.angles[k] - t.angles[k]).abs() < 1e-7, "{k}: {} vs {}", p.angles[k], t.angles[k]);
+            assert!(
+                (p.angles[k] - t.angles[k]).abs() < 1e-7,
+                "{k}: {} vs {}",
+                p.angles[k],
+                t.angles[k]
+            );
         }
         assert!((p.focal[0] - 3500.0).abs() < 1e-3 && (p.k[0] + 0.08).abs() < 1e-6);
         // 1 px of noise: within a few sigma of the truth, RMSE near the noise (√2 px norm)
@@ -454,9 +542,19 @@ mod tests {
         let fit = fit_camera(&perturbed(&cam), &noisy, &FitOptions::default()).unwrap();
         assert!(fit.rmse_px > 0.8 && fit.rmse_px < 2.0, "{}", fit.rmse_px);
         let p = CameraParams::from_camera(&fit.camera);
-        for (f, (k, want)) in fit.params.iter().zip([(0, t.angles[0]), (1, t.angles[1]), (2, t.angles[2])]) {
+        for (f, (k, want)) in
+            fit.params
+                .iter()
+                .zip([(0, t.angles[0]), (1, t.angles[1]), (2, t.angles[2])])
+        {
             assert!(f.sigma > 0.0 && f.sigma < 1e-3, "{:?}", f);
-            assert!((p.angles[k] - want).abs() < 5.0 * f.sigma, "{:?}: {} vs {}", f.param, p.angles[k], want);
+            assert!(
+                (p.angles[k] - want).abs() < 5.0 * f.sigma,
+                "{:?}: {} vs {}",
+                f.param,
+                p.angles[k],
+                want
+            );
         }
         assert!(fit.aic.is_finite());
     }
@@ -466,13 +564,32 @@ mod tests {
         let cam = truth();
         let g = gcps(&cam, 20, 0.3);
         let free = crate::register::parse_free("angles,position,f").unwrap();
-        for (k, d) in [DVec3::new(5.0, -5.0, 3.0), DVec3::new(-5.0, 4.0, -3.0), DVec3::new(4.0, 5.0, 2.0)].into_iter().enumerate() {
+        for (k, d) in [
+            DVec3::new(5.0, -5.0, 3.0),
+            DVec3::new(-5.0, 4.0, -3.0),
+            DVec3::new(4.0, 5.0, 2.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
             let mut start = perturbed(&cam);
             start.position += d;
             start.k1 = cam.k1;
-            let fit = fit_camera(&start, &g, &FitOptions { free: free.clone(), ..FitOptions::default() }).unwrap();
+            let fit = fit_camera(
+                &start,
+                &g,
+                &FitOptions {
+                    free: free.clone(),
+                    ..FitOptions::default()
+                },
+            )
+            .unwrap();
             let off = (fit.camera.position - cam.position).length();
-            assert!(off < 0.5 && fit.rmse_px < 0.6, "start {k}: {off} m, {} px", fit.rmse_px);
+            assert!(
+                off < 0.5 && fit.rmse_px < 0.6,
+                "start {k}: {off} m, {} px",
+                fit.rmse_px
+            );
         }
     }
 
@@ -485,12 +602,27 @@ mod tests {
             g[k].pixel[1] -= 40.0;
         }
         let robust = fit_camera(&perturbed(&cam), &g, &FitOptions::default()).unwrap();
-        let plain = fit_camera(&perturbed(&cam), &g, &FitOptions { robust: false, ..FitOptions::default() }).unwrap();
-        let flagged: Vec<usize> = (0..g.len()).filter(|&i| robust.gcps[i].status == GcpStatus::Outlier).collect();
+        let plain = fit_camera(
+            &perturbed(&cam),
+            &g,
+            &FitOptions {
+                robust: false,
+                ..FitOptions::default()
+            },
+        )
+        .unwrap();
+        let flagged: Vec<usize> = (0..g.len())
+            .filter(|&i| robust.gcps[i].status == GcpStatus::Outlier)
+            .collect();
         assert_eq!(flagged, vec![3, 11, 17]);
         assert!(robust.rmse_inliers_px < 1.2, "{}", robust.rmse_inliers_px);
         let yaw_err = |f: &CameraFit| (CameraParams::from_camera(&f.camera).angles[0] - 0.7).abs();
-        assert!(yaw_err(&robust) < 0.3 * yaw_err(&plain), "{} vs {}", yaw_err(&robust), yaw_err(&plain));
+        assert!(
+            yaw_err(&robust) < 0.3 * yaw_err(&plain),
+            "{} vs {}",
+            yaw_err(&robust),
+            yaw_err(&plain)
+        );
     }
 
     #[test]
@@ -505,11 +637,15 @@ mod tests {
         assert!(fit.gcps[1].residual.is_none());
         assert!(fit.rmse_px < 1e-4);
         // too few equations is an error, not a panic
-        let e = fit_camera(&cam, &g[..3], &FitOptions::default()).unwrap_err().to_string();
+        let e = fit_camera(&cam, &g[..3], &FitOptions::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("usable GCPs"), "{e}");
         // so are GCPs that do not determine the parameters (one point repeated)
         let same = vec![g[5].clone(); 4];
-        let e = fit_camera(&cam, &same, &FitOptions::default()).unwrap_err().to_string();
+        let e = fit_camera(&cam, &same, &FitOptions::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("do not determine"), "{e}");
     }
 }

@@ -57,12 +57,24 @@ pub fn parse_gcps(text: &str, path: &Path, origin: PixelOrigin) -> Result<Vec<Gc
         .filter(|(_, l)| !l.is_empty())
         .collect();
     let Some(&(_, first)) = lines.first() else {
-        return Err(Error::bad_input(path, "no ground control points in the file"));
+        return Err(Error::bad_input(
+            path,
+            "no ground control points in the file",
+        ));
     };
-    let header = first.chars().any(|c| c.is_ascii_alphabetic()) && first.contains(',') && !looks_numeric(first);
-    let gcps = if header { parse_csv(&lines, path, origin)? } else { parse_imgraft(&lines, path, origin)? };
+    let header = first.chars().any(|c| c.is_ascii_alphabetic())
+        && first.contains(',')
+        && !looks_numeric(first);
+    let gcps = if header {
+        parse_csv(&lines, path, origin)?
+    } else {
+        parse_imgraft(&lines, path, origin)?
+    };
     if gcps.is_empty() {
-        return Err(Error::bad_input(path, "no ground control points in the file"));
+        return Err(Error::bad_input(
+            path,
+            "no ground control points in the file",
+        ));
     }
     Ok(gcps)
 }
@@ -74,7 +86,9 @@ fn strip_comment(line: &str) -> &str {
 
 /// Whether every field of a line parses as a number (a data line, not a header).
 fn looks_numeric(line: &str) -> bool {
-    line.split([',', ' ', '\t', ';']).filter(|t| !t.is_empty()).all(|t| number(t).is_some())
+    line.split([',', ' ', '\t', ';'])
+        .filter(|t| !t.is_empty())
+        .all(|t| number(t).is_some())
 }
 
 /// A number, or a sum / difference of numbers such as `1951+9` or `12.5-0.5` (signs of
@@ -88,7 +102,8 @@ fn number(token: &str) -> Option<f64> {
     let mut total = 0.0;
     let mut start = 0;
     for i in 1..=b.len() {
-        let split = i == b.len() || ((b[i] == b'+' || b[i] == b'-') && !matches!(b[i - 1], b'e' | b'E' | b'+' | b'-'));
+        let split = i == b.len()
+            || ((b[i] == b'+' || b[i] == b'-') && !matches!(b[i - 1], b'e' | b'E' | b'+' | b'-'));
         if split {
             let part = &t[start..i];
             let v: f64 = part.parse().ok()?;
@@ -103,20 +118,32 @@ fn number(token: &str) -> Option<f64> {
 }
 
 fn to_zero_based(p: [f64; 2], one_based: bool) -> [f64; 2] {
-    if one_based { [p[0] - 1.0, p[1] - 1.0] } else { p }
+    if one_based {
+        [p[0] - 1.0, p[1] - 1.0]
+    } else {
+        p
+    }
 }
 
 fn parse_imgraft(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
     let one = origin != PixelOrigin::Zero;
     let mut out = Vec::new();
     for &(n, line) in lines {
-        let tokens: Vec<&str> = line.split([',', ' ', '\t', ';']).filter(|t| !t.is_empty()).collect();
+        let tokens: Vec<&str> = line
+            .split([',', ' ', '\t', ';'])
+            .filter(|t| !t.is_empty())
+            .collect();
         if tokens.len() < 5 {
-            return Err(Error::bad_input(path, format!("line {n}: expected X Y Z U V, got {} fields", tokens.len())));
+            return Err(Error::bad_input(
+                path,
+                format!("line {n}: expected X Y Z U V, got {} fields", tokens.len()),
+            ));
         }
         let mut v = [0.0; 5];
         for (k, t) in tokens[..5].iter().enumerate() {
-            v[k] = number(t).ok_or_else(|| Error::bad_input(path, format!("line {n}: \"{t}\" is not a number")))?;
+            v[k] = number(t).ok_or_else(|| {
+                Error::bad_input(path, format!("line {n}: \"{t}\" is not a number"))
+            })?;
         }
         out.push(Gcp {
             name: format!("line {n}"),
@@ -131,12 +158,18 @@ fn parse_imgraft(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> R
 fn parse_csv(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
     let one = origin == PixelOrigin::One;
     let (hn, header) = lines[0];
-    let names: Vec<String> = header.split(',').map(|s| s.trim().to_ascii_lowercase()).collect();
+    let names: Vec<String> = header
+        .split(',')
+        .map(|s| s.trim().to_ascii_lowercase())
+        .collect();
     let col = |want: &str| names.iter().position(|n| n == want);
     let mut idx = [0usize; 5];
     for (k, want) in ["x", "y", "z", "u", "v"].iter().enumerate() {
         idx[k] = col(want).ok_or_else(|| {
-            Error::bad_input(path, format!("line {hn}: the CSV header needs columns x,y,z,u,v (got \"{header}\")"))
+            Error::bad_input(
+                path,
+                format!("line {hn}: the CSV header needs columns x,y,z,u,v (got \"{header}\")"),
+            )
         })?;
     }
     let (name_col, weight_col) = (col("name"), col("weight"));
@@ -147,17 +180,38 @@ fn parse_csv(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> Resul
         let mut v = [0.0; 5];
         for (k, &c) in idx.iter().enumerate() {
             let t = field(c);
-            v[k] = number(t).ok_or_else(|| Error::bad_input(path, format!("line {n}: column {} \"{t}\" is not a number", names[c])))?;
+            v[k] = number(t).ok_or_else(|| {
+                Error::bad_input(
+                    path,
+                    format!("line {n}: column {} \"{t}\" is not a number", names[c]),
+                )
+            })?;
         }
         let weight = match weight_col {
             Some(c) if !field(c).is_empty() => {
                 let w = number(field(c)).filter(|w| *w > 0.0);
-                w.ok_or_else(|| Error::bad_input(path, format!("line {n}: weight \"{}\" must be a positive number", field(c))))?
+                w.ok_or_else(|| {
+                    Error::bad_input(
+                        path,
+                        format!(
+                            "line {n}: weight \"{}\" must be a positive number",
+                            field(c)
+                        ),
+                    )
+                })?
             }
             _ => 1.0,
         };
-        let name = name_col.map(field).filter(|s| !s.is_empty()).map_or_else(|| format!("line {n}"), str::to_string);
-        out.push(Gcp { name, world: DVec3::new(v[0], v[1], v[2]), pixel: to_zero_based([v[3], v[4]], one), weight });
+        let name = name_col
+            .map(field)
+            .filter(|s| !s.is_empty())
+            .map_or_else(|| format!("line {n}"), str::to_string);
+        out.push(Gcp {
+            name,
+            world: DVec3::new(v[0], v[1], v[2]),
+            pixel: to_zero_based([v[3], v[4]], one),
+            weight,
+        });
     }
     Ok(out)
 }
@@ -184,8 +238,14 @@ mod tests {
         let text = "name,x,y,z,u,v,weight\nrock,1,2,3,10.5,20,2\n,4,5,6,7,8,\n";
         let g = parse_gcps(text, Path::new("g.csv"), PixelOrigin::Format).unwrap();
         assert_eq!(g.len(), 2);
-        assert_eq!((g[0].name.as_str(), g[0].pixel, g[0].weight), ("rock", [10.5, 20.0], 2.0));
-        assert_eq!((g[1].name.as_str(), g[1].world, g[1].weight), ("line 3", DVec3::new(4.0, 5.0, 6.0), 1.0));
+        assert_eq!(
+            (g[0].name.as_str(), g[0].pixel, g[0].weight),
+            ("rock", [10.5, 20.0], 2.0)
+        );
+        assert_eq!(
+            (g[1].name.as_str(), g[1].world, g[1].weight),
+            ("line 3", DVec3::new(4.0, 5.0, 6.0), 1.0)
+        );
         let one = parse_gcps(text, Path::new("g.csv"), PixelOrigin::One).unwrap();
         assert_eq!(one[0].pixel, [9.5, 19.0]);
     }
@@ -213,7 +273,9 @@ mod tests {
             ("x,y,z,u,v\n1,2,3,4,oops\n", "line 2: column v"),
             ("x,y,z,u,v,weight\n1,2,3,4,5,-1\n", "line 2: weight"),
         ] {
-            let e = parse_gcps(text, Path::new("bad.txt"), PixelOrigin::Format).unwrap_err().to_string();
+            let e = parse_gcps(text, Path::new("bad.txt"), PixelOrigin::Format)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("bad.txt") && e.contains(want), "{text:?}: {e}");
         }
     }

@@ -44,7 +44,12 @@ pub struct MatchOptions {
 
 impl Default for MatchOptions {
     fn default() -> Self {
-        MatchOptions { half: 15, radius: 64, spacing: 96, min_ncc: 0.8 }
+        MatchOptions {
+            half: 15,
+            radius: 64,
+            spacing: 96,
+            min_ncc: 0.8,
+        }
     }
 }
 
@@ -68,8 +73,15 @@ struct Grey {
 
 impl Grey {
     fn of(img: &RgbImage) -> Grey {
-        let v = img.pixels().map(|p| 0.2126 * p.0[0] as f32 + 0.7152 * p.0[1] as f32 + 0.0722 * p.0[2] as f32).collect();
-        Grey { w: img.width() as usize, h: img.height() as usize, v }
+        let v = img
+            .pixels()
+            .map(|p| 0.2126 * p.0[0] as f32 + 0.7152 * p.0[1] as f32 + 0.0722 * p.0[2] as f32)
+            .collect();
+        Grey {
+            w: img.width() as usize,
+            h: img.height() as usize,
+            v,
+        }
     }
 
     /// Box-filtered by `k` (the last partial blocks dropped).
@@ -111,7 +123,12 @@ impl Grey {
     /// read straight from the image rows (no patch copy: this is the search's inner loop).
     /// As `Σ t = 0`, `Σ t·(p − p̄) = Σ t·p` and `‖p − p̄‖² = Σ p² − (Σ p)² / n`.
     fn ncc(&self, t: &[f32], tn: f32, cx: i64, cy: i64, r: i64) -> Option<f64> {
-        if cx - r < 0 || cy - r < 0 || cx + r >= self.w as i64 || cy + r >= self.h as i64 || !(tn > 0.0) {
+        if cx - r < 0
+            || cy - r < 0
+            || cx + r >= self.w as i64
+            || cy + r >= self.h as i64
+            || !(tn > 0.0)
+        {
             return None;
         }
         let n = (2 * r + 1) as usize;
@@ -132,7 +149,14 @@ impl Grey {
 
     /// The best NCC of template `t` over centres within `rad` of `(cx, cy)`: (x, y, ncc),
     /// and whether the best lies on the search border.
-    fn search(&self, t: &[f32], tn: f32, c: (i64, i64), rad: i64, r: i64) -> Option<(i64, i64, f64, bool)> {
+    fn search(
+        &self,
+        t: &[f32],
+        tn: f32,
+        c: (i64, i64),
+        rad: i64,
+        r: i64,
+    ) -> Option<(i64, i64, f64, bool)> {
         let mut best: Option<(i64, i64, f64)> = None;
         for y in c.1 - rad..=c.1 + rad {
             for x in c.0 - rad..=c.0 + rad {
@@ -157,7 +181,12 @@ impl Grey {
         }
         let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
         let i = y0 as usize * self.w + x0 as usize;
-        let (a, b, c, d) = (self.v[i], self.v[i + 1], self.v[i + self.w], self.v[i + self.w + 1]);
+        let (a, b, c, d) = (
+            self.v[i],
+            self.v[i + 1],
+            self.v[i + self.w],
+            self.v[i + self.w + 1],
+        );
         Some(a + (b - a) * fx + (c - a) * fy + (a - b - c + d) * fx * fy)
     }
 
@@ -183,7 +212,11 @@ impl Grey {
                 }
             }
             let mean = s.iter().sum::<f64>() / s.len() as f64;
-            let norm = s.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>().sqrt();
+            let norm = s
+                .iter()
+                .map(|v| (v - mean) * (v - mean))
+                .sum::<f64>()
+                .sqrt();
             if !(norm > 0.0) {
                 return None;
             }
@@ -201,7 +234,10 @@ impl Grey {
             if !(det.abs() > 1e-12) {
                 return None;
             }
-            let step = [-(a[2] * b[0] - a[1] * b[1]) / det, -(a[0] * b[1] - a[1] * b[0]) / det];
+            let step = [
+                -(a[2] * b[0] - a[1] * b[1]) / det,
+                -(a[0] * b[1] - a[1] * b[0]) / det,
+            ];
             q = [q[0] + step[0], q[1] + step[1]];
             if (q[0] - p[0]).abs() > 1.0 || (q[1] - p[1]).abs() > 1.0 {
                 return None;
@@ -217,14 +253,22 @@ impl Grey {
 /// Sub-pixel offset of a parabola's vertex through `(−1, a)`, `(0, b)`, `(1, c)`, in [−0.5, 0.5].
 fn parabola(a: f64, b: f64, c: f64) -> f64 {
     let d = a - 2.0 * b + c;
-    if d < 0.0 { (0.5 * (a - c) / d).clamp(-0.5, 0.5) } else { 0.0 }
+    if d < 0.0 {
+        (0.5 * (a - c) / d).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    }
 }
 
 /// Matches patches of photo `a` in photo `b` (same size; see the [module docs](self)), in
 /// grid order.
 pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<Vec<PatchMatch>> {
     if a.dimensions() != b.dimensions() {
-        return Err(Error::BadOption(format!("photos of different sizes: {:?} and {:?}", a.dimensions(), b.dimensions())));
+        return Err(Error::BadOption(format!(
+            "photos of different sizes: {:?} and {:?}",
+            a.dimensions(),
+            b.dimensions()
+        )));
     }
     let (ga, gb) = (Grey::of(a), Grey::of(b));
     let k = 4usize;
@@ -253,8 +297,20 @@ pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<V
                 return None; // std below 2 grey levels: no texture to match
             }
             let (ct, ctn) = ca.patch(x / k as i64, y / k as i64, coarse_half)?;
-            let (cx, cy, _, _) = cb.search(&ct, ctn, (x / k as i64, y / k as i64), coarse_rad, coarse_half)?;
-            let (fx, fy, s, edge) = gb.search(&t, tn, (cx * k as i64 + k as i64 / 2, cy * k as i64 + k as i64 / 2), 4 + k as i64, half)?;
+            let (cx, cy, _, _) = cb.search(
+                &ct,
+                ctn,
+                (x / k as i64, y / k as i64),
+                coarse_rad,
+                coarse_half,
+            )?;
+            let (fx, fy, s, edge) = gb.search(
+                &t,
+                tn,
+                (cx * k as i64 + k as i64 / 2, cy * k as i64 + k as i64 / 2),
+                4 + k as i64,
+                half,
+            )?;
             if edge || s < opts.min_ncc {
                 return None;
             }
@@ -262,7 +318,11 @@ pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<V
             let (l, r, u, d) = (at(-1, 0)?, at(1, 0)?, at(0, -1)?, at(0, 1)?);
             let start = [fx as f64 + parabola(l, s, r), fy as f64 + parabola(u, s, d)];
             let b = gb.refine(&t, tn, start, half)?;
-            Some(PatchMatch { a: [x as f64, y as f64], b, ncc: s })
+            Some(PatchMatch {
+                a: [x as f64, y as f64],
+                b,
+                ncc: s,
+            })
         })
         .collect();
     Ok(found.into_iter().flatten().collect())
@@ -281,7 +341,11 @@ pub fn stable_matches(
     matches
         .iter()
         .copied()
-        .filter(|m| a.pixel_ray(m.a[0], m.a[1]).and_then(|d| surface(a.position, d)).is_some_and(&stable))
+        .filter(|m| {
+            a.pixel_ray(m.a[0], m.a[1])
+                .and_then(|d| surface(a.position, d))
+                .is_some_and(&stable)
+        })
         .collect()
 }
 
@@ -293,10 +357,22 @@ pub fn fit_rotation(a: &CameraModel, matches: &[PatchMatch]) -> Result<CameraFit
         .enumerate()
         .filter_map(|(i, m)| {
             let dir: DVec3 = a.pixel_ray(m.a[0], m.a[1])?;
-            Some(Gcp { name: format!("match {i}"), world: a.position + dir * 1e4, pixel: m.b, weight: 1.0 })
+            Some(Gcp {
+                name: format!("match {i}"),
+                world: a.position + dir * 1e4,
+                pixel: m.b,
+                weight: 1.0,
+            })
         })
         .collect();
-    fit_camera(a, &gcps, &FitOptions { free: vec![Param::Yaw, Param::Pitch, Param::Roll], ..FitOptions::default() })
+    fit_camera(
+        a,
+        &gcps,
+        &FitOptions {
+            free: vec![Param::Yaw, Param::Pitch, Param::Roll],
+            ..FitOptions::default()
+        },
+    )
 }
 
 #[cfg(test)]
@@ -307,7 +383,9 @@ mod tests {
     fn finds_a_known_subpixel_shift() {
         // a smooth random texture, and the same shifted by (7.3, -2.6) px
         let tex = |x: f64, y: f64| {
-            let v = (x * 0.21).sin() * (y * 0.17).cos() + (x * 0.05 + y * 0.11).sin() + ((x * 0.13 - y * 0.07).cos() * 0.5);
+            let v = (x * 0.21).sin() * (y * 0.17).cos()
+                + (x * 0.05 + y * 0.11).sin()
+                + ((x * 0.13 - y * 0.07).cos() * 0.5);
             (128.0 + 50.0 * v).clamp(0.0, 255.0) as u8
         };
         let a = RgbImage::from_fn(400, 300, |x, y| {
@@ -318,7 +396,16 @@ mod tests {
             let v = tex(x as f64 - 7.3, y as f64 + 2.6);
             image::Rgb([v, v, v])
         });
-        let m = match_photos(&a, &b, &MatchOptions { radius: 16, spacing: 40, ..MatchOptions::default() }).unwrap();
+        let m = match_photos(
+            &a,
+            &b,
+            &MatchOptions {
+                radius: 16,
+                spacing: 40,
+                ..MatchOptions::default()
+            },
+        )
+        .unwrap();
         assert!(m.len() >= 10, "{} matches", m.len());
         for p in &m {
             let (du, dv) = (p.b[0] - p.a[0], p.b[1] - p.a[1]);

@@ -80,7 +80,11 @@ impl Param {
 /// `cx,cy`, `angles` = `yaw,pitch,roll`); sorted, without repeats. `f` excludes `fx`/`fy`.
 pub fn parse_free(list: &str) -> Result<Vec<Param>> {
     let mut out = Vec::new();
-    for t in list.split(',').map(|t| t.trim().to_ascii_lowercase()).filter(|t| !t.is_empty()) {
+    for t in list
+        .split(',')
+        .map(|t| t.trim().to_ascii_lowercase())
+        .filter(|t| !t.is_empty())
+    {
         let add: &[Param] = match t.as_str() {
             "yaw" => &[Param::Yaw],
             "pitch" => &[Param::Pitch],
@@ -112,7 +116,9 @@ pub fn parse_free(list: &str) -> Result<Vec<Param>> {
         return Err(Error::BadOption("--free: no parameters given".into()));
     }
     if out.contains(&Param::F) && (out.contains(&Param::Fx) || out.contains(&Param::Fy)) {
-        return Err(Error::BadOption("--free: f (common focal length) cannot be combined with fx or fy".into()));
+        return Err(Error::BadOption(
+            "--free: f (common focal length) cannot be combined with fx or fy".into(),
+        ));
     }
     Ok(out)
 }
@@ -152,7 +158,11 @@ impl CameraParams {
     pub fn camera(&self) -> CameraModel {
         CameraModel {
             position: self.position,
-            world_to_camera: rotation_from_yaw_pitch_roll(self.angles[0], self.angles[1], self.angles[2]),
+            world_to_camera: rotation_from_yaw_pitch_roll(
+                self.angles[0],
+                self.angles[1],
+                self.angles[2],
+            ),
             width: self.size.0,
             height: self.size.1,
             fx: self.focal[0],
@@ -192,7 +202,11 @@ impl CameraParams {
             Param::Y => self.position.y = v,
             Param::Z => self.position.z = v,
             Param::F => {
-                let ratio = if self.focal[0] != 0.0 { self.focal[1] / self.focal[0] } else { 1.0 };
+                let ratio = if self.focal[0] != 0.0 {
+                    self.focal[1] / self.focal[0]
+                } else {
+                    1.0
+                };
                 self.focal = [v, v * ratio];
             }
             Param::Fx => self.focal[0] = v,
@@ -211,8 +225,14 @@ mod tests {
 
     #[test]
     fn free_lists() {
-        assert_eq!(parse_free("yaw,pitch,roll,f,k1").unwrap(), vec![Param::Yaw, Param::Pitch, Param::Roll, Param::F, Param::K1]);
-        assert_eq!(parse_free("position, yaw,yaw").unwrap(), vec![Param::Yaw, Param::X, Param::Y, Param::Z]);
+        assert_eq!(
+            parse_free("yaw,pitch,roll,f,k1").unwrap(),
+            vec![Param::Yaw, Param::Pitch, Param::Roll, Param::F, Param::K1]
+        );
+        assert_eq!(
+            parse_free("position, yaw,yaw").unwrap(),
+            vec![Param::Yaw, Param::X, Param::Y, Param::Z]
+        );
         assert!(parse_free("f,fx").is_err());
         assert!(parse_free("zoom").unwrap_err().to_string().contains("zoom"));
         assert!(parse_free(" , ").is_err());

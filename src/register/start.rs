@@ -24,7 +24,18 @@ use crate::error::{Error, Result};
 pub fn rotation_from_bearings(cam: &[DVec3], world: &[DVec3], w: &[f64]) -> Option<DMat3> {
     let mut b = Matrix3::<f64>::zeros();
     for ((c, v), &wi) in cam.iter().zip(world).zip(w) {
-        b += wi * Matrix3::new(c.x * v.x, c.x * v.y, c.x * v.z, c.y * v.x, c.y * v.y, c.y * v.z, c.z * v.x, c.z * v.y, c.z * v.z);
+        b += wi
+            * Matrix3::new(
+                c.x * v.x,
+                c.x * v.y,
+                c.x * v.z,
+                c.y * v.x,
+                c.y * v.y,
+                c.y * v.z,
+                c.z * v.x,
+                c.z * v.y,
+                c.z * v.z,
+            );
     }
     let svd = b.svd(true, true);
     let (u, vt) = (svd.u?, svd.v_t?);
@@ -45,11 +56,22 @@ pub fn rotation_from_bearings(cam: &[DVec3], world: &[DVec3], w: &[f64]) -> Opti
 /// A start camera at `position` for a `width × height` photo from `gcps` (see the
 /// [module docs](self)); `focal_px` fixes the focal length. Errors with fewer than 2 GCPs
 /// inside the image (3 without a focal length) or when no rotation fits.
-pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp], focal_px: Option<f64>) -> Result<CameraModel> {
+pub fn start_from_position(
+    position: DVec3,
+    width: u32,
+    height: u32,
+    gcps: &[Gcp],
+    focal_px: Option<f64>,
+) -> Result<CameraModel> {
     let (w, h) = (width as f64, height as f64);
     let inside: Vec<&Gcp> = gcps
         .iter()
-        .filter(|g| g.pixel[0] >= -0.5 && g.pixel[1] >= -0.5 && g.pixel[0] <= w - 0.5 && g.pixel[1] <= h - 0.5)
+        .filter(|g| {
+            g.pixel[0] >= -0.5
+                && g.pixel[1] >= -0.5
+                && g.pixel[0] <= w - 0.5
+                && g.pixel[1] <= h - 0.5
+        })
         .filter(|g| (g.world - position).length() > 0.0)
         .collect();
     let need = if focal_px.is_some() { 2 } else { 3 };
@@ -60,22 +82,47 @@ pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp
         )));
     }
     let (cx, cy) = ((w - 1.0) / 2.0, (h - 1.0) / 2.0);
-    let world: Vec<DVec3> = inside.iter().map(|g| (g.world - position).normalize()).collect();
+    let world: Vec<DVec3> = inside
+        .iter()
+        .map(|g| (g.world - position).normalize())
+        .collect();
     let weights: Vec<f64> = inside.iter().map(|g| g.weight).collect();
     let camera_at = |f: f64| -> Option<(CameraModel, f64)> {
-        let cam: Vec<DVec3> = inside.iter().map(|g| DVec3::new((g.pixel[0] - cx) / f, (g.pixel[1] - cy) / f, 1.0).normalize()).collect();
+        let cam: Vec<DVec3> = inside
+            .iter()
+            .map(|g| DVec3::new((g.pixel[0] - cx) / f, (g.pixel[1] - cy) / f, 1.0).normalize())
+            .collect();
         let r = rotation_from_bearings(&cam, &world, &weights)?;
-        let model = CameraModel { position, world_to_camera: r, width, height, fx: f, fy: f, cx, cy, k1: 0.0, k2: 0.0 };
+        let model = CameraModel {
+            position,
+            world_to_camera: r,
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx,
+            cy,
+            k1: 0.0,
+            k2: 0.0,
+        };
         let mut e: Vec<f64> = inside
             .iter()
-            .map(|g| model.project(g.world).map_or(f64::INFINITY, |p| (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1])))
+            .map(|g| {
+                model.project(g.world).map_or(f64::INFINITY, |p| {
+                    (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1])
+                })
+            })
             .collect();
         e.sort_by(f64::total_cmp);
         Some((model, e[e.len() / 2]))
     };
     let best = match focal_px {
         Some(f) if f.is_finite() && f > 0.0 => camera_at(f),
-        Some(f) => return Err(Error::BadOption(format!("fit-camera: focal length must be positive pixels, got {f}"))),
+        Some(f) => {
+            return Err(Error::BadOption(format!(
+                "fit-camera: focal length must be positive pixels, got {f}"
+            )));
+        }
         None => {
             let f_of = |fov_deg: f64| w / 2.0 / (fov_deg.to_radians() / 2.0).tan();
             let (lo, hi) = (3f64.ln(), 140f64.ln());
@@ -91,7 +138,10 @@ pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp
                 }
             }
             // golden section between the neighbouring steps
-            let (mut a, mut b) = ((k_best as f64 - 1.0).max(0.0), (k_best as f64 + 1.0).min(steps as f64));
+            let (mut a, mut b) = (
+                (k_best as f64 - 1.0).max(0.0),
+                (k_best as f64 + 1.0).min(steps as f64),
+            );
             let g = 0.5 * (5f64.sqrt() - 1.0);
             for _ in 0..40 {
                 let (c, d) = (b - g * (b - a), a + g * (b - a));
@@ -104,7 +154,11 @@ pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp
             camera_at(f_of(fov(0.5 * (a + b))))
         }
     };
-    best.map(|(m, _)| m).ok_or_else(|| Error::BadOption("fit-camera: the GCPs' bearings give no rotation (all on one line?)".into()))
+    best.map(|(m, _)| m).ok_or_else(|| {
+        Error::BadOption(
+            "fit-camera: the GCPs' bearings give no rotation (all on one line?)".into(),
+        )
+    })
 }
 
 /// A start camera for a `width × height` photo from GCPs alone (position unknown): the
@@ -115,11 +169,20 @@ pub fn start_from_position(position: DVec3, width: u32, height: u32, gcps: &[Gcp
 /// than 6 GCPs or when no sample gives a camera with the GCPs in front.
 pub fn start_from_gcps(width: u32, height: u32, gcps: &[Gcp]) -> Result<CameraModel> {
     if gcps.len() < 6 {
-        return Err(Error::BadOption(format!("fit-camera: a start without a camera or position needs at least 6 GCPs, got {}", gcps.len())));
+        return Err(Error::BadOption(format!(
+            "fit-camera: a start without a camera or position needs at least 6 GCPs, got {}",
+            gcps.len()
+        )));
     }
     let tol = 0.02 * (width as f64).hypot(height as f64);
     let errs = |cam: &CameraModel| -> Vec<f64> {
-        gcps.iter().map(|g| cam.project(g.world).map_or(f64::INFINITY, |p| (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1]))).collect()
+        gcps.iter()
+            .map(|g| {
+                cam.project(g.world).map_or(f64::INFINITY, |p| {
+                    (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1])
+                })
+            })
+            .collect()
     };
     let mut seed = 0x2545_F491_4F6C_DD1Du64;
     let mut next = |n: usize| {
@@ -138,18 +201,36 @@ pub fn start_from_gcps(width: u32, height: u32, gcps: &[Gcp]) -> Result<CameraMo
             }
         }
         let sample: Vec<&Gcp> = idx.iter().map(|&i| &gcps[i]).collect();
-        let Some(cam) = dlt_camera(&sample, width, height) else { continue };
+        let Some(cam) = dlt_camera(&sample, width, height) else {
+            continue;
+        };
         let e = errs(&cam);
         let n = e.iter().filter(|v| **v <= tol).count();
         let score: f64 = e.iter().map(|v| v.min(tol)).sum();
-        if best.as_ref().is_none_or(|b| n > b.0 || (n == b.0 && score < b.1)) {
+        if best
+            .as_ref()
+            .is_none_or(|b| n > b.0 || (n == b.0 && score < b.1))
+        {
             best = Some((n, score, cam));
         }
     }
-    let (_, _, cam) = best.ok_or_else(|| Error::BadOption("fit-camera: no GCP sample gives a camera (are the GCPs on one plane or line?)".into()))?;
+    let (_, _, cam) = best.ok_or_else(|| {
+        Error::BadOption(
+            "fit-camera: no GCP sample gives a camera (are the GCPs on one plane or line?)".into(),
+        )
+    })?;
     let e = errs(&cam);
-    let inliers: Vec<&Gcp> = gcps.iter().zip(&e).filter(|(_, v)| **v <= tol).map(|(g, _)| g).collect();
-    Ok(if inliers.len() >= 6 { dlt_camera(&inliers, width, height).unwrap_or(cam) } else { cam })
+    let inliers: Vec<&Gcp> = gcps
+        .iter()
+        .zip(&e)
+        .filter(|(_, v)| **v <= tol)
+        .map(|(g, _)| g)
+        .collect();
+    Ok(if inliers.len() >= 6 {
+        dlt_camera(&inliers, width, height).unwrap_or(cam)
+    } else {
+        cam
+    })
 }
 
 /// The DLT camera of `gcps` (≥ 6, not coplanar), or `None`.
@@ -157,9 +238,19 @@ fn dlt_camera(gcps: &[&Gcp], width: u32, height: u32) -> Option<CameraModel> {
     let n = gcps.len() as f64;
     // normalisation (Hartley): centroids at 0, mean distances √3 and √2
     let cw = gcps.iter().fold(DVec3::ZERO, |s, g| s + g.world) / n;
-    let sw = 3f64.sqrt() / (gcps.iter().map(|g| (g.world - cw).length()).sum::<f64>() / n).max(1e-12);
-    let cp = gcps.iter().fold([0.0, 0.0], |s, g| [s[0] + g.pixel[0], s[1] + g.pixel[1]]).map(|v| v / n);
-    let sp = 2f64.sqrt() / (gcps.iter().map(|g| (g.pixel[0] - cp[0]).hypot(g.pixel[1] - cp[1])).sum::<f64>() / n).max(1e-12);
+    let sw =
+        3f64.sqrt() / (gcps.iter().map(|g| (g.world - cw).length()).sum::<f64>() / n).max(1e-12);
+    let cp = gcps
+        .iter()
+        .fold([0.0, 0.0], |s, g| [s[0] + g.pixel[0], s[1] + g.pixel[1]])
+        .map(|v| v / n);
+    let sp = 2f64.sqrt()
+        / (gcps
+            .iter()
+            .map(|g| (g.pixel[0] - cp[0]).hypot(g.pixel[1] - cp[1]))
+            .sum::<f64>()
+            / n)
+            .max(1e-12);
     let mut a = DMatrix::<f64>::zeros(2 * gcps.len(), 12);
     for (i, g) in gcps.iter().enumerate() {
         let x = (g.world - cw) * sw;
@@ -173,12 +264,33 @@ fn dlt_camera(gcps: &[&Gcp], width: u32, height: u32) -> Option<CameraModel> {
         }
     }
     let svd = (a.transpose() * &a).symmetric_eigen();
-    let (imin, _) = svd.eigenvalues.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
+    let (imin, _) = svd
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))?;
     let pv = svd.eigenvectors.column(imin);
     // P = T_p⁻¹ · P̂ · T_w
     let ph = nalgebra::Matrix3x4::from_fn(|r, c| pv[4 * r + c]);
     let tp_inv = Matrix3::new(1.0 / sp, 0.0, cp[0], 0.0, 1.0 / sp, cp[1], 0.0, 0.0, 1.0);
-    let tw = nalgebra::Matrix4::new(sw, 0.0, 0.0, -sw * cw.x, 0.0, sw, 0.0, -sw * cw.y, 0.0, 0.0, sw, -sw * cw.z, 0.0, 0.0, 0.0, 1.0);
+    let tw = nalgebra::Matrix4::new(
+        sw,
+        0.0,
+        0.0,
+        -sw * cw.x,
+        0.0,
+        sw,
+        0.0,
+        -sw * cw.y,
+        0.0,
+        0.0,
+        sw,
+        -sw * cw.z,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+    );
     let mut p = tp_inv * ph * tw;
     let mut m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into();
     if m.determinant() < 0.0 {
@@ -227,7 +339,10 @@ fn dlt_camera(gcps: &[&Gcp], width: u32, height: u32) -> Option<CameraModel> {
         k1: 0.0,
         k2: 0.0,
     };
-    let in_front = gcps.iter().filter(|g| cam.to_camera(g.world).z > 0.0).count();
+    let in_front = gcps
+        .iter()
+        .filter(|g| cam.to_camera(g.world).z > 0.0)
+        .count();
     (cam.problem().is_none() && 2 * in_front > gcps.len()).then_some(cam)
 }
 
@@ -253,9 +368,18 @@ mod tests {
         let inv = truth.world_to_camera.transpose();
         let gcps: Vec<Gcp> = (0..12)
             .map(|i| {
-                let (x, y, d) = ((i % 4) as f64 * 0.1 - 0.15, (i / 4) as f64 * 0.1 - 0.1, 500.0 + 97.0 * i as f64);
+                let (x, y, d) = (
+                    (i % 4) as f64 * 0.1 - 0.15,
+                    (i / 4) as f64 * 0.1 - 0.1,
+                    500.0 + 97.0 * i as f64,
+                );
                 let world = truth.position + inv * DVec3::new(x * d, y * d, d);
-                Gcp { name: format!("{i}"), world, pixel: truth.project(world).unwrap(), weight: 1.0 }
+                Gcp {
+                    name: format!("{i}"),
+                    world,
+                    pixel: truth.project(world).unwrap(),
+                    weight: 1.0,
+                }
             })
             .collect();
         let start = start_from_position(truth.position, 4290, 2856, &gcps, None).unwrap();
@@ -263,12 +387,25 @@ mod tests {
         let dot = start.forward().dot(truth.forward());
         assert!(dot > (1e-4f64).cos(), "{dot}");
         let given = start_from_position(truth.position, 4290, 2856, &gcps, Some(6014.0)).unwrap();
-        assert!((given.world_to_camera - truth.world_to_camera).to_cols_array().iter().all(|v| v.abs() < 1e-9));
+        assert!(
+            (given.world_to_camera - truth.world_to_camera)
+                .to_cols_array()
+                .iter()
+                .all(|v| v.abs() < 1e-9)
+        );
         assert!(start_from_position(truth.position, 4290, 2856, &gcps[..2], None).is_err());
         // from the GCPs alone (DLT): position within centimetres, focal within 0.1 %
         let dlt = start_from_gcps(4290, 2856, &gcps).unwrap();
-        assert!((dlt.position - truth.position).length() < 0.05, "{:?}", dlt.position - truth.position);
-        assert!((dlt.fx / 6014.0 - 1.0).abs() < 1e-3 && dlt.forward().dot(truth.forward()) > (1e-4f64).cos(), "{dlt:?}");
+        assert!(
+            (dlt.position - truth.position).length() < 0.05,
+            "{:?}",
+            dlt.position - truth.position
+        );
+        assert!(
+            (dlt.fx / 6014.0 - 1.0).abs() < 1e-3
+                && dlt.forward().dot(truth.forward()) > (1e-4f64).cos(),
+            "{dlt:?}"
+        );
         assert!(start_from_gcps(4290, 2856, &gcps[..5]).is_err());
     }
 }

@@ -158,7 +158,12 @@ fn closest_on_samples(
     let mut best: Option<(f64, DVec3)> = None;
     for y in qy.saturating_sub(r)..(qy + r).min(h - 1) {
         for x in qx.saturating_sub(r)..(qx + r).min(w - 1) {
-            let k = [y * w + x, y * w + x + 1, (y + 1) * w + x, (y + 1) * w + x + 1];
+            let k = [
+                y * w + x,
+                y * w + x + 1,
+                (y + 1) * w + x,
+                (y + 1) * w + x + 1,
+            ];
             let d = k.map(|i| depth[i]);
             let ok = continuous(d[0], d[1])
                 && continuous(d[0], d[2])
@@ -220,8 +225,8 @@ fn one_way(
                     row.push((window as f64 + 1.0, false, true, cos2, [x, y]));
                     continue;
                 };
-                let point_px = ((qx as f64 - x as f64).powi(2) + (qy as f64 - y as f64).powi(2))
-                    .sqrt();
+                let point_px =
+                    ((qx as f64 - x as f64).powi(2) + (qy as f64 - y as f64).powi(2)).sqrt();
                 // Sub-pixel counterpart on the sample surface around the best sample.
                 let refined = closest_on_samples(p, b, b_depth, w, h, qx, qy, 2)
                     .and_then(|c| cam.project_relative(c))
@@ -361,14 +366,23 @@ mod tests {
         let m = &c.model;
         let want_max = (0..m.width)
             .map(|u| {
-                let x = c.unproject_relative(u as f64, (m.height - 1) as f64, a[((m.height - 1) * m.width + u) as usize]).unwrap();
+                let x = c
+                    .unproject_relative(
+                        u as f64,
+                        (m.height - 1) as f64,
+                        a[((m.height - 1) * m.width + u) as usize],
+                    )
+                    .unwrap();
                 let foot = x + DVec3::Z; // nearest point of the raised plane
                 let s = c.project_relative(foot).unwrap();
                 (s[0] - u as f64).hypot(s[1] - (m.height - 1) as f64)
             })
             .fold(0.0, f64::max);
         assert!(r.unmatched == 0, "{r:?}");
-        assert!(r.max_px > 0.5 * want_max && r.max_px < want_max + 0.75, "{r:?} vs {want_max}");
+        assert!(
+            r.max_px > 0.5 * want_max && r.max_px < want_max + 0.75,
+            "{r:?} vs {want_max}"
+        );
         assert!(r.mean_px > 0.1, "{r:?}");
     }
 

@@ -126,7 +126,10 @@ mod tests {
         let world = origin + local.as_dvec3();
         let p = cam.project_relative(world - pos).unwrap();
         let back = cam.unproject_relative(p[0], p[1], ndc.z).unwrap() + pos;
-        assert!((back - world).length() < 1e-3 * (world - pos).length(), "{back} vs {world}");
+        assert!(
+            (back - world).length() < 1e-3 * (world - pos).length(),
+            "{back} vs {world}"
+        );
         assert!(cam.unproject_relative(1.0, 1.0, 0.0).is_none());
     }
 }

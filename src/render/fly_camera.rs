@@ -51,7 +51,11 @@ impl FlyCamera {
             position,
             yaw,
             pitch: pitch.clamp(-MAX_PITCH, MAX_PITCH),
-            speed: if speed.is_finite() && speed > 0.0 { speed } else { 1.0 },
+            speed: if speed.is_finite() && speed > 0.0 {
+                speed
+            } else {
+                1.0
+            },
         }
     }
 
@@ -77,7 +81,11 @@ impl FlyCamera {
         }
         let mut yaw = self.yaw - dx * rad_per_px;
         yaw = (yaw + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
-        self.yaw = if yaw <= -std::f64::consts::PI { yaw + std::f64::consts::TAU } else { yaw };
+        self.yaw = if yaw <= -std::f64::consts::PI {
+            yaw + std::f64::consts::TAU
+        } else {
+            yaw
+        };
         self.pitch = (self.pitch - dy * rad_per_px).clamp(-MAX_PITCH, MAX_PITCH);
     }
 
@@ -88,10 +96,17 @@ impl FlyCamera {
         if !(dt.is_finite() && dt > 0.0) {
             return DVec3::ZERO;
         }
-        let c = |v: f64| if v.is_finite() { v.clamp(-1.0, 1.0) } else { 0.0 };
+        let c = |v: f64| {
+            if v.is_finite() {
+                v.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            }
+        };
         let (sy, cy) = self.yaw.sin_cos();
         let heading = DVec3::new(cy, sy, 0.0);
-        let dir = heading * c(input.forward) + self.right() * c(input.right) + DVec3::Z * c(input.up);
+        let dir =
+            heading * c(input.forward) + self.right() * c(input.right) + DVec3::Z * c(input.up);
         let len = dir.length();
         if len < 1e-12 {
             return DVec3::ZERO;
@@ -120,7 +135,11 @@ impl FlyCamera {
 /// The next screen-space error threshold after `steps` presses of +/− (each a factor of √2,
 /// + coarser), clamped to [1/16, 64] pixels.
 pub fn adjust_sse(sse_px: f64, steps: i32) -> f64 {
-    let base = if sse_px.is_finite() && sse_px > 0.0 { sse_px } else { 0.5 };
+    let base = if sse_px.is_finite() && sse_px > 0.0 {
+        sse_px
+    } else {
+        0.5
+    };
     (base * std::f64::consts::SQRT_2.powi(steps)).clamp(1.0 / 16.0, 64.0)
 }
 
@@ -137,28 +156,76 @@ mod tests {
         assert!((cam.forward() - (t - p).normalize()).length() < 1e-12);
         let want = rotation_look_at(p, t).unwrap();
         let got = cam.world_to_camera();
-        for (a, b) in [(got.x_axis, want.x_axis), (got.y_axis, want.y_axis), (got.z_axis, want.z_axis)] {
+        for (a, b) in [
+            (got.x_axis, want.x_axis),
+            (got.y_axis, want.y_axis),
+            (got.z_axis, want.z_axis),
+        ] {
             assert!((a - b).length() < 1e-9, "{got} vs {want}");
         }
         // A target projects to the image centre.
         let m = cam.model(640, 480, 1.0);
         let px = m.project(t).unwrap();
-        assert!((px[0] - m.cx).abs() < 1e-6 && (px[1] - m.cy).abs() < 1e-6, "{px:?}");
+        assert!(
+            (px[0] - m.cx).abs() < 1e-6 && (px[1] - m.cy).abs() < 1e-6,
+            "{px:?}"
+        );
     }
 
     #[test]
     fn moves_relative_to_heading_and_normalizes_diagonals() {
         let mut cam = FlyCamera::look_at(DVec3::ZERO, DVec3::new(0.0, 1.0, -1.0), 2.0);
-        let d = cam.step(FlyInput { forward: 1.0, ..Default::default() }, 0.5);
+        let d = cam.step(
+            FlyInput {
+                forward: 1.0,
+                ..Default::default()
+            },
+            0.5,
+        );
         // Forward is horizontal (+y here) even when looking down.
         assert!((d - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-12, "{d}");
-        let d = cam.step(FlyInput { right: 1.0, ..Default::default() }, 1.0);
+        let d = cam.step(
+            FlyInput {
+                right: 1.0,
+                ..Default::default()
+            },
+            1.0,
+        );
         assert!((d - DVec3::new(2.0, 0.0, 0.0)).length() < 1e-12, "{d}");
-        let d = cam.step(FlyInput { forward: 1.0, right: 1.0, up: 1.0, fast: true }, 1.0);
-        assert!((d.length() - 2.0 * FAST_FACTOR).abs() < 1e-9 && d.z > 0.0, "{d}");
+        let d = cam.step(
+            FlyInput {
+                forward: 1.0,
+                right: 1.0,
+                up: 1.0,
+                fast: true,
+            },
+            1.0,
+        );
+        assert!(
+            (d.length() - 2.0 * FAST_FACTOR).abs() < 1e-9 && d.z > 0.0,
+            "{d}"
+        );
         assert_eq!(cam.step(FlyInput::default(), 1.0), DVec3::ZERO);
-        assert_eq!(cam.step(FlyInput { forward: 1.0, ..Default::default() }, f64::NAN), DVec3::ZERO);
-        assert!((cam.position - DVec3::new(2.0 + 2.0 * FAST_FACTOR / 3f64.sqrt(), 1.0 + 2.0 * FAST_FACTOR / 3f64.sqrt(), 2.0 * FAST_FACTOR / 3f64.sqrt())).length() < 1e-9);
+        assert_eq!(
+            cam.step(
+                FlyInput {
+                    forward: 1.0,
+                    ..Default::default()
+                },
+                f64::NAN
+            ),
+            DVec3::ZERO
+        );
+        assert!(
+            (cam.position
+                - DVec3::new(
+                    2.0 + 2.0 * FAST_FACTOR / 3f64.sqrt(),
+                    1.0 + 2.0 * FAST_FACTOR / 3f64.sqrt(),
+                    2.0 * FAST_FACTOR / 3f64.sqrt()
+                ))
+            .length()
+                < 1e-9
+        );
     }
 
     #[test]

@@ -7,8 +7,8 @@ use wgpu::util::DeviceExt;
 use super::camera::RenderCamera;
 use super::distort_pass::DistortPass;
 use super::distortion::DistortedView;
-use super::target::{OPAQUE_TARGET, RenderTarget};
 pub use super::target::{COLOR_FORMAT, DEPTH_FORMAT};
+use super::target::{OPAQUE_TARGET, RenderTarget};
 use crate::error::{Error, Result};
 use crate::store::{CellMesh, CellRecord, texcoord};
 
@@ -143,7 +143,11 @@ impl CellData {
         let uvs = match mode {
             UvMode::Ortho => None,
             UvMode::Mixed | UvMode::Photo => mesh.uvs.clone(),
-            UvMode::Reparam => Some((0..mesh.positions.len()).map(|k| texcoord(rec, &mesh, k)).collect()),
+            UvMode::Reparam => Some(
+                (0..mesh.positions.len())
+                    .map(|k| texcoord(rec, &mesh, k))
+                    .collect(),
+            ),
         };
         let normal = image::DynamicImage::ImageRgb8(normal).to_rgba8();
         CellData {
@@ -190,7 +194,11 @@ fn halve(img: &image::RgbaImage, space: crate::colour::ColourSpace) -> image::Rg
     let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
     let span = |i: u32, n: u32, len: u32| -> std::ops::Range<u32> {
         let a = (2 * i).min(len - 1);
-        let b = if i + 1 == n { len } else { (2 * i + 2).min(len) };
+        let b = if i + 1 == n {
+            len
+        } else {
+            (2 * i + 2).min(len)
+        };
         a..b
     };
     image::RgbaImage::from_fn(nw, nh, |i, j| {
@@ -407,7 +415,11 @@ impl TerrainRenderer {
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("terrain"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&cell_layout), Some(&parent_layout)],
+            bind_group_layouts: &[
+                Some(&frame_layout),
+                Some(&cell_layout),
+                Some(&parent_layout),
+            ],
             immediate_size: 0,
         });
         let pos_layout = wgpu::VertexBufferLayout {
@@ -809,7 +821,10 @@ impl TerrainRenderer {
         let bytes = pos.len() as u64 * 4
             + idx.len() as u64
             + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
-            + data.morph.as_ref().map_or(0, |m| m.targets.len() as u64 * 12)
+            + data
+                .morph
+                .as_ref()
+                .map_or(0, |m| m.targets.len() as u64 * 12)
             + cb
             + nb;
         Ok(GpuCell {
@@ -938,9 +953,7 @@ impl TerrainRenderer {
                 bytes[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
                     .copy_from_slice(&b);
             }
-            self.ctx
-                .queue
-                .write_buffer(&self.draw_buf, 0, &bytes);
+            self.ctx.queue.write_buffer(&self.draw_buf, 0, &bytes);
         }
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
@@ -1028,7 +1041,8 @@ impl TerrainRenderer {
             }
         }
         if let Some((view, out)) = distort {
-            self.distort.encode(&self.ctx, &mut enc, target, out, view, sky);
+            self.distort
+                .encode(&self.ctx, &mut enc, target, out, view, sky);
         }
         self.ctx.queue.submit([enc.finish()]);
         device
@@ -1040,7 +1054,13 @@ impl TerrainRenderer {
     /// Copies the last rendered frame back (sRGB RGBA8, row 0 at the top).
     pub fn read_rgba(&self) -> Result<image::RgbaImage> {
         let t = &self.target;
-        let out = t.read(&self.ctx.device, &self.ctx.queue, &t.colour, wgpu::TextureAspect::All, 4)?;
+        let out = t.read(
+            &self.ctx.device,
+            &self.ctx.queue,
+            &t.colour,
+            wgpu::TextureAspect::All,
+            4,
+        )?;
         image::RgbaImage::from_raw(t.width, t.height, out)
             .ok_or_else(|| Error::Gpu("readback size mismatch".into()))
     }
@@ -1057,7 +1077,13 @@ impl TerrainRenderer {
             ));
         }
         let t = &self.target;
-        let out = t.read(&self.ctx.device, &self.ctx.queue, &t.depth, wgpu::TextureAspect::DepthOnly, 4)?;
+        let out = t.read(
+            &self.ctx.device,
+            &self.ctx.queue,
+            &t.depth,
+            wgpu::TextureAspect::DepthOnly,
+            4,
+        )?;
         Ok(out
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))

@@ -21,15 +21,15 @@ mod supersample;
 mod target;
 
 pub use cache::LruCache;
-pub use overlay::{Overlay, heat_colour, stretch_heatmap};
 pub use camera::RenderCamera;
+pub use distortion::{DistortedView, DistortionMode};
 pub use frustum::Frustum;
+pub use geomorph::GeomorphOptions;
 pub use lod::{
     CellIndex, LodSelection, cell_error, distance_to_bbox, geometric_error, screen_space_error,
     select_cells, select_cells_with_margin,
 };
-pub use distortion::{DistortedView, DistortionMode};
-pub use geomorph::GeomorphOptions;
+pub use overlay::{Overlay, heat_colour, stretch_heatmap};
 pub use stream::{DrawList, Streamer, resolve_draw_list};
 pub use supersample::downsample_rgba;
 

@@ -31,7 +31,11 @@ pub fn heat_colour(stretch: f32) -> [u8; 4] {
         (4.0, [0.85, 0.05, 0.05]),
     ];
     let s = stretch.clamp(STOPS[0].0, STOPS[STOPS.len() - 1].0);
-    let k = STOPS.iter().position(|st| st.0 >= s).unwrap_or(STOPS.len() - 1).max(1);
+    let k = STOPS
+        .iter()
+        .position(|st| st.0 >= s)
+        .unwrap_or(STOPS.len() - 1)
+        .max(1);
     let (a, b) = (STOPS[k - 1], STOPS[k]);
     let t = ((s - a.0) / (b.0 - a.0)).clamp(0.0, 1.0);
     let c = [0, 1, 2].map(|i| ((a.1[i] + t * (b.1[i] - a.1[i])) * 255.0).round() as u8);
@@ -59,7 +63,9 @@ pub fn stretch_heatmap(rec: &CellRecord, mesh: &CellMesh, texels: u32) -> image:
     let base_area = (rec.extent.width() * rec.extent.height()).abs();
     let t = texels.max(1);
     let s = texel_stretch(&positions, &tris, &uvs, t, base_area);
-    image::RgbaImage::from_fn(t, t, |x, y| image::Rgba(heat_colour(s[(y * t + x) as usize])))
+    image::RgbaImage::from_fn(t, t, |x, y| {
+        image::Rgba(heat_colour(s[(y * t + x) as usize]))
+    })
 }
 
 #[cfg(test)]

@@ -27,7 +27,12 @@ pub fn downsample_rgba(img: &RgbaImage, factor: u32) -> RgbaImage {
                 acc[3] += p[3] as f32;
             }
         }
-        image::Rgba([encode_u8(acc[0] / n), encode_u8(acc[1] / n), encode_u8(acc[2] / n), (acc[3] / n).round() as u8])
+        image::Rgba([
+            encode_u8(acc[0] / n),
+            encode_u8(acc[1] / n),
+            encode_u8(acc[2] / n),
+            (acc[3] / n).round() as u8,
+        ])
     })
 }
 
@@ -37,13 +42,23 @@ mod tests {
 
     #[test]
     fn averages_blocks_in_linear_light() {
-        let img = RgbaImage::from_fn(4, 2, |x, _| if x % 2 == 0 { image::Rgba([0, 0, 0, 255]) } else { image::Rgba([255, 255, 255, 255]) });
+        let img = RgbaImage::from_fn(4, 2, |x, _| {
+            if x % 2 == 0 {
+                image::Rgba([0, 0, 0, 255])
+            } else {
+                image::Rgba([255, 255, 255, 255])
+            }
+        });
         let d = downsample_rgba(&img, 2);
         assert_eq!(d.dimensions(), (2, 1));
         // half black, half white: 50 % intensity = sRGB 188
         assert_eq!(d.get_pixel(0, 0).0, [188, 188, 188, 255]);
         assert_eq!(downsample_rgba(&img, 1), img);
         let c = RgbaImage::from_pixel(6, 6, image::Rgba([17, 99, 201, 128]));
-        assert!(downsample_rgba(&c, 3).pixels().all(|p| p.0 == [17, 99, 201, 128]));
+        assert!(
+            downsample_rgba(&c, 3)
+                .pixels()
+                .all(|p| p.0 == [17, 99, 201, 128])
+        );
     }
 }

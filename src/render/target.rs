@@ -7,7 +7,11 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrg
 
 /// The colour target of every pipeline: [`COLOR_FORMAT`], no blending, all channels.
 pub(crate) const OPAQUE_TARGET: [Option<wgpu::ColorTargetState>; 1] =
-    [Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+    [Some(wgpu::ColorTargetState {
+        format: COLOR_FORMAT,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
 /// Depth format (reverse-Z: cleared to 0, closer = larger).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 

@@ -57,7 +57,10 @@ pub(crate) fn area(fp: &Footprint, col: f64, row: f64) -> f64 {
 /// for non-convex subject polygons since the clip region is convex; the spurious edges it
 /// adds along the box enclose no area). 0 for degenerate input; never NaN for finite input.
 pub(crate) fn polygon_box_area(poly: &[[f64; 2]], bx: [f64; 4]) -> f64 {
-    let mut p = Poly { v: [[0.0; 2]; CAP], n: poly.len().min(8) };
+    let mut p = Poly {
+        v: [[0.0; 2]; CAP],
+        n: poly.len().min(8),
+    };
     p.v[..p.n].copy_from_slice(&poly[..p.n]);
     p = clip(&p, 0, bx[0], -1.0);
     p = clip(&p, 0, bx[2], 1.0);

@@ -2,8 +2,8 @@
 //! pull-push. All functions write only the RGB of texels whose `assigned` flag is false
 //! and never change alpha.
 
-use image::RgbaImage;
 use crate::fastmath::to_u8;
+use image::RgbaImage;
 
 const N8: [(i64, i64); 8] = [
     (-1, -1),

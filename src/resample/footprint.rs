@@ -158,7 +158,6 @@ impl Footprint {
     }
 }
 
-
 /// One of the two constraints `-eps <= g <= 1 + eps` of a footprint (`g` = alpha or beta,
 /// see [`Footprint::param`]) solved for one coordinate: relative to the footprint origin
 /// `p0`, the solved coordinate lies in `[lo + slope * o, hi + slope * o]` where `o` is the

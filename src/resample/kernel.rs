@@ -48,7 +48,11 @@ impl AreaSum {
             return None;
         }
         Some(if self.known > 0.0 {
-            TexelColour { rgb: self.rgb.map(|v| v / self.known), known: true, fallback: false }
+            TexelColour {
+                rgb: self.rgb.map(|v| v / self.known),
+                known: true,
+                fallback: false,
+            }
         } else {
             TexelColour::default()
         })

@@ -45,9 +45,9 @@ use rayon::prelude::*;
 use crate::error::{Error, Result};
 use crate::georef::GridGeoref;
 
-pub use kernel::MIN_FOOTPRINT_AREA;
 #[cfg(test)]
 pub(crate) use exact::polygon_box_area;
+pub use kernel::MIN_FOOTPRINT_AREA;
 pub use subtexel::MAX_SUBTEXELS;
 
 /// Largest accepted texture size (texels per side).

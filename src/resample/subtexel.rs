@@ -10,8 +10,8 @@
 
 use super::SrcView;
 use super::footprint::{Affine2, Param, Shape, inside};
-use crate::fastmath::{ceil_f, floor_f, floor_i};
 use super::kernel::{AreaSum, Scratch, TexelColour, bilinear_at};
+use crate::fastmath::{ceil_f, floor_f, floor_i};
 
 /// Largest accepted subtexel count per axis.
 pub const MAX_SUBTEXELS: u32 = 64;
@@ -176,7 +176,8 @@ pub(crate) fn texel_colour(
             }
         }
     }
-    sum.colour().unwrap_or_else(|| bilinear_at(src, &map.texel_footprint(i, j), true))
+    sum.colour()
+        .unwrap_or_else(|| bilinear_at(src, &map.texel_footprint(i, j), true))
 }
 
 #[cfg(test)]

@@ -21,9 +21,12 @@ mod tracer;
 mod truth;
 
 pub use photos::{DemoPhotoOptions, PhotoShot, SKY_COLOUR};
-pub use tracer::{DemHit, DemTracer};
 pub(crate) use tracer::sees_with;
-pub use truth::{FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_covered, texel_truth_with};
+pub use tracer::{DemHit, DemTracer};
+pub use truth::{
+    FLAT_DEG, STEEP_DEG, TextureChoice, TruthReport, texel_truth, texel_truth_covered,
+    texel_truth_with,
+};
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use rayon::prelude::*;
@@ -67,7 +70,11 @@ pub struct Relief {
 
 impl Default for Relief {
     fn default() -> Self {
-        Relief { plateau: 70.0, canyon: 90.0, escarpment: 45.0 }
+        Relief {
+            plateau: 70.0,
+            canyon: 90.0,
+            escarpment: 45.0,
+        }
     }
 }
 
@@ -94,7 +101,11 @@ impl DemoScene {
             seed: 23,
             samples: 1025,
             spacing: 1.0,
-            relief: Relief { plateau: 110.0, canyon: 120.0, escarpment: 65.0 },
+            relief: Relief {
+                plateau: 110.0,
+                canyon: 120.0,
+                escarpment: 65.0,
+            },
             photo_distance: 0.7,
             ..DemoScene::default()
         }
@@ -119,8 +130,12 @@ impl DemoScene {
 
     fn noises(&self) -> Noises {
         Noises {
-            hills: Fbm::<Perlin>::new(self.seed).set_octaves(5).set_frequency(1.0 / 350.0),
-            detail: Fbm::<Perlin>::new(self.seed.wrapping_add(1)).set_octaves(3).set_frequency(1.0 / 40.0),
+            hills: Fbm::<Perlin>::new(self.seed)
+                .set_octaves(5)
+                .set_frequency(1.0 / 350.0),
+            detail: Fbm::<Perlin>::new(self.seed.wrapping_add(1))
+                .set_octaves(3)
+                .set_frequency(1.0 / 40.0),
             colour: Perlin::new(self.seed.wrapping_add(2)),
         }
     }
@@ -204,16 +219,29 @@ impl DemoScene {
                         let e = (col - 0.5 + (sx as f64 + 0.5) / SS as f64) * sp;
                         let s = (row - 0.5 + (sy as f64 + 0.5) / SS as f64) * sp;
                         let z = self.height_local(&n, e, s);
-                        let gx = self.height_local(&n, e + 0.25, s) - self.height_local(&n, e - 0.25, s);
-                        let gy = self.height_local(&n, e, s + 0.25) - self.height_local(&n, e, s - 0.25);
+                        let gx =
+                            self.height_local(&n, e + 0.25, s) - self.height_local(&n, e - 0.25, s);
+                        let gy =
+                            self.height_local(&n, e, s + 0.25) - self.height_local(&n, e, s - 0.25);
                         let slope = (gx.hypot(gy) / 0.5).atan().to_degrees();
-                        let c = surface_colour(&n, self, self.origin_x + e, self.origin_y - s, z, slope);
+                        let c = surface_colour(
+                            &n,
+                            self,
+                            self.origin_x + e,
+                            self.origin_y - s,
+                            z,
+                            slope,
+                        );
                         for k in 0..3 {
                             acc[k] += srgb_to_linear(c[k]);
                         }
                     }
                 }
-                let q = |v: f64| (linear_to_srgb(v / (SS * SS) as f64) * 255.0).round().clamp(0.0, 255.0) as u8;
+                let q = |v: f64| {
+                    (linear_to_srgb(v / (SS * SS) as f64) * 255.0)
+                        .round()
+                        .clamp(0.0, 255.0) as u8
+                };
                 [q(acc[0]), q(acc[1]), q(acc[2]), 255]
             })
             .collect();
@@ -238,7 +266,11 @@ fn surface_colour(n: &Noises, sc: &DemoScene, x: f64, y: f64, z: f64, slope_deg:
     // Vegetation on gentle slopes, patchy.
     let patch = n.colour.get([e / 60.0, s / 60.0, 0.5]);
     let veg = smoothstep(38.0, 25.0, slope_deg) * smoothstep(-0.4, 0.1, patch);
-    let green = [0.22 + 0.05 * grain, 0.36 + 0.08 * grain, 0.16 + 0.03 * grain];
+    let green = [
+        0.22 + 0.05 * grain,
+        0.36 + 0.08 * grain,
+        0.16 + 0.03 * grain,
+    ];
     let mut c = [0.0; 3];
     for k in 0..3 {
         c[k] = (rock[k] * (1.0 - veg) + green[k] * veg).clamp(0.0, 1.0);
@@ -258,7 +290,11 @@ mod tests {
 
     #[test]
     fn deterministic_and_has_cliffs() {
-        let sc = DemoScene { samples: 129, spacing: 8.0, ..Default::default() };
+        let sc = DemoScene {
+            samples: 129,
+            spacing: 8.0,
+            ..Default::default()
+        };
         let (a, oa) = sc.generate().unwrap();
         let (b, ob) = sc.generate().unwrap();
         assert_eq!(a.heights, b.heights);

@@ -7,13 +7,13 @@ use glam::DVec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
+use super::tracer::DemTracer;
 use super::{DemoScene, Noises, PLATEAU_ROUNDING, surface_colour};
 use crate::camera::{CameraModel, camera_to_json, rotation_look_at};
+use crate::colour::{linear_to_srgb, srgb_to_linear};
 use crate::dem::Dem;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use super::tracer::DemTracer;
-use crate::colour::{linear_to_srgb, srgb_to_linear};
 
 /// Colour (sRGB 8-bit) of rays that miss the terrain in [`DemoScene::render_truth_photo`].
 pub const SKY_COLOUR: [u8; 3] = [170, 200, 235];
@@ -52,7 +52,11 @@ pub struct DemoPhotoOptions {
 impl Default for DemoPhotoOptions {
     /// 1600 x 1200 pixels, 2 x 2 rays per pixel.
     fn default() -> Self {
-        DemoPhotoOptions { width: PHOTO_SIZE.0, height: PHOTO_SIZE.1, supersample: 2 }
+        DemoPhotoOptions {
+            width: PHOTO_SIZE.0,
+            height: PHOTO_SIZE.1,
+            supersample: 2,
+        }
     }
 }
 
@@ -136,7 +140,11 @@ impl DemoScene {
         let e1 = self.canyon_axis(s1);
         aims.push(Aim {
             name: "canyon",
-            target: [e1, s1, self.height_local(n, e1, s1) + 0.4 * self.relief.canyon],
+            target: [
+                e1,
+                s1,
+                self.height_local(n, e1, s1) + 0.4 * self.relief.canyon,
+            ],
             outward: [0.0, -1.0],
             distances: &[160.0, 130.0, 100.0],
             k1: 0.0,
@@ -173,11 +181,21 @@ impl DemoScene {
                 }
                 let pos = self.world(eye[0], eye[1], eye[2]);
                 let target = self.world(aim.target[0], aim.target[1], aim.target[2]);
-                let Some(rot) = rotation_look_at(pos, target) else { continue };
-                let mut camera =
-                    CameraModel::with_fov(pos, rot, PHOTO_SIZE.0, PHOTO_SIZE.1, PHOTO_FOV_Y_DEG.to_radians());
+                let Some(rot) = rotation_look_at(pos, target) else {
+                    continue;
+                };
+                let mut camera = CameraModel::with_fov(
+                    pos,
+                    rot,
+                    PHOTO_SIZE.0,
+                    PHOTO_SIZE.1,
+                    PHOTO_FOV_Y_DEG.to_radians(),
+                );
                 camera.k1 = aim.k1;
-                shots.push(PhotoShot { name: aim.name.to_string(), camera });
+                shots.push(PhotoShot {
+                    name: aim.name.to_string(),
+                    camera,
+                });
                 break;
             }
         }
@@ -193,11 +211,15 @@ impl DemoScene {
         let n = self.noises();
         let l = self.size_m();
         let margin = 0.02 * l;
-        let inside = |e: f64, s: f64| (margin..=l - margin).contains(&e) && (margin..=l - margin).contains(&s);
+        let inside = |e: f64, s: f64| {
+            (margin..=l - margin).contains(&e) && (margin..=l - margin).contains(&s)
+        };
         let photos = self.photo_shots();
         let mut views = Vec::new();
         for aim in self.aims(&n) {
-            let Some(photo) = photos.iter().find(|p| p.name == aim.name) else { continue };
+            let Some(photo) = photos.iter().find(|p| p.name == aim.name) else {
+                continue;
+            };
             let t = self.world(aim.target[0], aim.target[1], aim.target[2]);
             let d = (photo.camera.position - t).truncate().length();
             let mut candidates = Vec::new();
@@ -211,7 +233,10 @@ impl DemoScene {
                 for k in [0.8, 1.0, 0.6] {
                     for deg in [25.0f64, -25.0, 40.0, -40.0] {
                         let (sn, cs) = deg.to_radians().sin_cos();
-                        let o = [cs * aim.outward[0] - sn * aim.outward[1], sn * aim.outward[0] + cs * aim.outward[1]];
+                        let o = [
+                            cs * aim.outward[0] - sn * aim.outward[1],
+                            sn * aim.outward[0] + cs * aim.outward[1],
+                        ];
                         let (e, s) = (aim.target[0] + k * d * o[0], aim.target[1] + k * d * o[1]);
                         if inside(e, s) {
                             candidates.push([e, s, self.height_local(&n, e, s) + 12.0]);
@@ -224,9 +249,15 @@ impl DemoScene {
                     continue;
                 }
                 let pos = self.world(eye[0], eye[1], eye[2]);
-                let Some(rot) = rotation_look_at(pos, t) else { continue };
-                let camera = CameraModel::with_fov(pos, rot, width, height, VIEW_FOV_Y_DEG.to_radians());
-                views.push(PhotoShot { name: format!("view_{}", aim.name), camera });
+                let Some(rot) = rotation_look_at(pos, t) else {
+                    continue;
+                };
+                let camera =
+                    CameraModel::with_fov(pos, rot, width, height, VIEW_FOV_Y_DEG.to_radians());
+                views.push(PhotoShot {
+                    name: format!("view_{}", aim.name),
+                    camera,
+                });
                 break;
             }
         }
@@ -244,19 +275,30 @@ impl DemoScene {
     /// [`SKY_COLOUR`] for misses. `supersample` (1..=8) rays per pixel side, stratified,
     /// averaged in linear light (like the demo ortho). Radial distortion is applied (rays through
     /// undistorted pixel positions). Deterministic whatever the thread count.
-    pub fn render_truth_photo(&self, dem: &Dem, camera: &CameraModel, supersample: u32) -> Result<RgbImage> {
+    pub fn render_truth_photo(
+        &self,
+        dem: &Dem,
+        camera: &CameraModel,
+        supersample: u32,
+    ) -> Result<RgbImage> {
         if !(1..=8).contains(&supersample) {
-            return Err(Error::BadOption(format!("supersample must be in 1..=8, got {supersample}")));
+            return Err(Error::BadOption(format!(
+                "supersample must be in 1..=8, got {supersample}"
+            )));
         }
         if let Some(p) = camera.problem() {
             return Err(Error::BadOption(format!("truth photo camera: {p}")));
         }
         if dem.width < 2 || dem.height < 2 {
-            return Err(Error::BadOption("truth photo needs a DEM of at least 2 x 2 samples".into()));
+            return Err(Error::BadOption(
+                "truth photo needs a DEM of at least 2 x 2 samples".into(),
+            ));
         }
         let pixels = camera.width as u64 * camera.height as u64 * (supersample as u64).pow(2);
         if pixels > 400_000_000 {
-            return Err(Error::BadOption(format!("truth photo of {pixels} rays is too large")));
+            return Err(Error::BadOption(format!(
+                "truth photo of {pixels} rays is too large"
+            )));
         }
         let tracer = DemTracer::new(dem, camera.position)?;
         let n = self.noises();
@@ -279,7 +321,11 @@ impl DemoScene {
                         }
                     }
                     for a in acc {
-                        out.push((linear_to_srgb(a / (ss * ss) as f64) * 255.0).round().clamp(0.0, 255.0) as u8);
+                        out.push(
+                            (linear_to_srgb(a / (ss * ss) as f64) * 255.0)
+                                .round()
+                                .clamp(0.0, 255.0) as u8,
+                        );
                     }
                 }
                 out
@@ -290,20 +336,46 @@ impl DemoScene {
     }
 
     /// Colour (sRGB 0..1) seen along the ray through pixel position (u, v).
-    fn trace(&self, n: &Noises, tracer: &DemTracer, camera: &CameraModel, u: f64, v: f64) -> [f64; 3] {
+    fn trace(
+        &self,
+        n: &Noises,
+        tracer: &DemTracer,
+        camera: &CameraModel,
+        u: f64,
+        v: f64,
+    ) -> [f64; 3] {
         let sky = SKY_COLOUR.map(|c| c as f64 / 255.0);
-        let Some(dir) = camera.pixel_ray(u, v) else { return sky };
-        let Some(hit) = tracer.nearest(camera.position, dir, f64::INFINITY) else { return sky };
-        surface_colour(n, self, hit.point.x, hit.point.y, hit.point.z, hit.slope_deg)
+        let Some(dir) = camera.pixel_ray(u, v) else {
+            return sky;
+        };
+        let Some(hit) = tracer.nearest(camera.position, dir, f64::INFINITY) else {
+            return sky;
+        };
+        surface_colour(
+            n,
+            self,
+            hit.point.x,
+            hit.point.y,
+            hit.point.z,
+            hit.slope_deg,
+        )
     }
 
     /// Renders every [`DemoScene::photo_shots`] photo (resized to `opts`' size) with
     /// [`DemoScene::render_truth_photo`] into `dir` as `NAME.jpg` (JPEG quality 95) with its
     /// cliffmap Camera JSON `NAME.json`, then writes `dir/photos.json` listing them (relative
     /// paths) and returns its path. Every file is written atomically; `photos.json` last.
-    pub fn write_demo_photos(&self, dem: &Dem, dir: &Path, opts: &DemoPhotoOptions) -> Result<PathBuf> {
+    pub fn write_demo_photos(
+        &self,
+        dem: &Dem,
+        dir: &Path,
+        opts: &DemoPhotoOptions,
+    ) -> Result<PathBuf> {
         if opts.width == 0 || opts.height == 0 || opts.width > 16_384 || opts.height > 16_384 {
-            return Err(Error::BadOption(format!("demo photo size {} x {} must be in 1..=16384", opts.width, opts.height)));
+            return Err(Error::BadOption(format!(
+                "demo photo size {} x {} must be in 1..=16384",
+                opts.width, opts.height
+            )));
         }
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let mut entries = Vec::new();
@@ -329,4 +401,3 @@ impl DemoScene {
         Ok(list)
     }
 }
-

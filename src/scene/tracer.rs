@@ -36,7 +36,9 @@ impl<'a> DemTracer<'a> {
     /// Errors for a DEM of fewer than 2 × 2 samples.
     pub fn new(dem: &'a Dem, origin: DVec3) -> Result<DemTracer<'a>> {
         if dem.width < 2 || dem.height < 2 {
-            return Err(Error::BadOption("ray casting needs a DEM of at least 2 x 2 samples".into()));
+            return Err(Error::BadOption(
+                "ray casting needs a DEM of at least 2 x 2 samples".into(),
+            ));
         }
         let (w, h) = (dem.width, dem.height);
         let tracer_tris: Vec<[Vec3; 3]> = (0..2 * (w - 1) * (h - 1))
@@ -76,19 +78,32 @@ impl DemHit {
     pub fn on_triangle(t: f64, p: [DVec3; 3], bary: [f32; 3]) -> DemHit {
         let b = bary.map(|x| x as f64);
         let point = p[0] + (p[1] - p[0]) * b[1] + (p[2] - p[0]) * b[2];
-        let mut normal = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize().unwrap_or(DVec3::Z);
+        let mut normal = (p[1] - p[0])
+            .cross(p[2] - p[0])
+            .try_normalize()
+            .unwrap_or(DVec3::Z);
         if normal.z < 0.0 {
             normal = -normal;
         }
         let slope_deg = normal.z.clamp(0.0, 1.0).acos().to_degrees();
-        DemHit { t, point, normal, slope_deg }
+        DemHit {
+            t,
+            point,
+            normal,
+            slope_deg,
+        }
     }
 }
 
 /// Whether `point` is seen from `eye` by a tracer's `nearest(origin, unit dir, t_max)`: the
 /// nearest hit towards it lies no more than `tolerance` metres before it (false for `eye`
 /// at the point or non-finite input).
-pub(crate) fn sees_with(eye: DVec3, point: DVec3, tolerance: f64, nearest: impl Fn(DVec3, DVec3, f64) -> Option<DemHit>) -> bool {
+pub(crate) fn sees_with(
+    eye: DVec3,
+    point: DVec3,
+    tolerance: f64,
+    nearest: impl Fn(DVec3, DVec3, f64) -> Option<DemHit>,
+) -> bool {
     let d = point - eye;
     let len = d.length();
     if !(len > 0.0) || !len.is_finite() {
@@ -101,7 +116,11 @@ pub(crate) fn sees_with(eye: DVec3, point: DVec3, tolerance: f64, nearest: impl 
 fn corners(w: usize, i: usize) -> [(usize, usize); 3] {
     let q = i / 2;
     let (r, c) = (q / (w - 1), q % (w - 1));
-    if i % 2 == 0 { [(r, c), (r + 1, c), (r + 1, c + 1)] } else { [(r, c), (r + 1, c + 1), (r, c + 1)] }
+    if i % 2 == 0 {
+        [(r, c), (r + 1, c), (r + 1, c + 1)]
+    } else {
+        [(r, c), (r + 1, c + 1), (r, c + 1)]
+    }
 }
 
 /// World position of sample `(r, c)`.

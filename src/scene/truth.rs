@@ -128,13 +128,20 @@ pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Re
         photo_cells += usize::from(which == TextureChoice::Photo && rec.photo.is_some());
     }
     let mut report = texel_truth_with(store, scene, level, |rec| {
-        let active = rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture);
+        let active = rec
+            .reparam
+            .as_ref()
+            .map_or(&rec.files.texture, |r| &r.files.texture);
         match (&rec.photo, which) {
             (Some(p), TextureChoice::Photo) => Ok(store.read_png(&p.texture)?.to_rgba8()),
             (Some(p), TextureChoice::Active) => {
                 // on the photo texture's texels, so that both choices score the same points
                 let img = store.read_png(active)?.to_rgba8();
-                let k = if img.width() > 0 && p.texels % img.width() == 0 { p.texels / img.width() } else { 1 };
+                let k = if img.width() > 0 && p.texels % img.width() == 0 {
+                    p.texels / img.width()
+                } else {
+                    1
+                };
                 Ok(crate::photo::magnify(&img, k))
             }
             (None, _) => Ok(store.read_png(active)?.to_rgba8()),
@@ -152,16 +159,25 @@ pub fn texel_truth_covered(store: &Store, scene: &DemoScene) -> Result<(TruthRep
     let level = store.manifest.quadtree.levels.saturating_sub(1);
     let masked = |photo: bool| {
         move |rec: &CellRecord| -> Result<RgbaImage> {
-            let active = rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture);
+            let active = rec
+                .reparam
+                .as_ref()
+                .map_or(&rec.files.texture, |r| &r.files.texture);
             let Some(p) = &rec.photo else {
                 // No photo colour: every texel is excluded.
                 let mut img = store.read_png(active)?.to_rgba8();
                 img.pixels_mut().for_each(|px| px[3] = 0);
                 return Ok(img);
             };
-            let mut img = store.read_png(if photo { &p.texture } else { active })?.to_rgba8();
+            let mut img = store
+                .read_png(if photo { &p.texture } else { active })?
+                .to_rgba8();
             let conf = store.read_png(&p.confidence)?.to_luma8();
-            if !photo && conf.width() > img.width() && img.width() > 0 && conf.width() % img.width() == 0 {
+            if !photo
+                && conf.width() > img.width()
+                && img.width() > 0
+                && conf.width() % img.width() == 0
+            {
                 // a photo texture larger than the active one: compare on its texels
                 img = crate::photo::magnify(&img, conf.width() / img.width());
             }
@@ -196,9 +212,17 @@ pub fn texel_truth_with(
     level: u8,
     texture: impl Fn(&CellRecord) -> Result<RgbaImage> + Sync,
 ) -> Result<TruthReport> {
-    let cells: Vec<&CellRecord> = store.manifest.cells.iter().filter(|c| c.level == level).collect();
+    let cells: Vec<&CellRecord> = store
+        .manifest
+        .cells
+        .iter()
+        .filter(|c| c.level == level)
+        .collect();
     if cells.is_empty() {
-        return Err(Error::store(&store.dir, format!("no cells on level {level}")));
+        return Err(Error::store(
+            &store.dir,
+            format!("no cells on level {level}"),
+        ));
     }
     let noises = scene.noises();
     let per_cell: Vec<Sums> = cells
@@ -210,7 +234,12 @@ pub fn texel_truth_with(
             if img.height() != n || n == 0 || n > crate::resample::MAX_TEXELS {
                 return Err(Error::store(
                     &store.dir,
-                    format!("cell {}: texture is {} x {}, expected a square", rec.id, img.width(), img.height()),
+                    format!(
+                        "cell {}: texture is {} x {}, expected a square",
+                        rec.id,
+                        img.width(),
+                        img.height()
+                    ),
                 ));
             }
             let nv = mesh.surface_vertices as usize;
@@ -222,7 +251,10 @@ pub fn texel_truth_with(
                 .collect();
             let tris = mesh.surface();
             if tris.iter().flatten().any(|&k| k as usize >= nv) {
-                return Err(Error::store(&store.dir, format!("cell {}: surface triangle uses a skirt vertex", rec.id)));
+                return Err(Error::store(
+                    &store.dir,
+                    format!("cell {}: surface triangle uses a skirt vertex", rec.id),
+                ));
             }
             let (ids, weights) = locate_texel_centres(&st, tris, n);
             let origin = glam::DVec3::from_array(rec.origin);
@@ -239,12 +271,19 @@ pub fn texel_truth_with(
                 }
                 let tri = tris[id as usize];
                 let [w0, w1, w2] = weights[k];
-                let pos = tri.map(|v| origin + glam::Vec3::from_array(mesh.positions[v as usize]).as_dvec3());
+                let pos = tri.map(|v| {
+                    origin + glam::Vec3::from_array(mesh.positions[v as usize]).as_dvec3()
+                });
                 let x = pos[0] * w0 + pos[1] * w1 + pos[2] * w2;
                 let normal = (pos[1] - pos[0]).cross(pos[2] - pos[0]);
-                let slope = (normal.z.abs() / normal.length()).clamp(0.0, 1.0).acos().to_degrees();
+                let slope = (normal.z.abs() / normal.length())
+                    .clamp(0.0, 1.0)
+                    .acos()
+                    .to_degrees();
                 let truth = surface_colour(&noises, scene, x.x, x.y, x.z, slope);
-                let err: f64 = (0..3).map(|q| (px[q] as f64 - truth[q] * 255.0).powi(2)).sum();
+                let err: f64 = (0..3)
+                    .map(|q| (px[q] as f64 - truth[q] * 255.0).powi(2))
+                    .sum();
                 let class = if slope > STEEP_DEG {
                     0
                 } else if slope < FLAT_DEG {

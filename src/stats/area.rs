@@ -17,13 +17,20 @@ pub fn triangle_area_3d(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
 pub(crate) fn cross(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
     let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
 }
 
 /// Slope in degrees of a triangle with unnormalised normal `n` (0 = horizontal).
 #[inline]
 pub(crate) fn slope_deg(n: [f64; 3]) -> f64 {
-    (n[0] * n[0] + n[1] * n[1]).sqrt().atan2(n[2].abs()).to_degrees()
+    (n[0] * n[0] + n[1] * n[1])
+        .sqrt()
+        .atan2(n[2].abs())
+        .to_degrees()
 }
 
 /// Cell-local position of DEM sample `(col, row)`: metres east and north of sample
@@ -42,9 +49,19 @@ pub(crate) fn local_position(dem: &Dem, c0: u32, r0: u32, col: u32, row: u32) ->
 /// the DEM. Panics if a vertex lies outside the DEM or a triangle names a missing vertex
 /// (TINs are built by cliffmap and validated when loaded).
 pub fn tin_surface_area(dem: &Dem, tin: &Tin) -> f64 {
-    let (c0, r0) = tin.vertices.iter().fold((u32::MAX, u32::MAX), |(c, r), v| (c.min(v[0]), r.min(v[1])));
-    let p: Vec<[f64; 3]> = tin.vertices.iter().map(|v| local_position(dem, c0, r0, v[0], v[1])).collect();
-    tin.triangles.iter().map(|t| triangle_area_3d(p[t[0] as usize], p[t[1] as usize], p[t[2] as usize])).sum()
+    let (c0, r0) = tin
+        .vertices
+        .iter()
+        .fold((u32::MAX, u32::MAX), |(c, r), v| (c.min(v[0]), r.min(v[1])));
+    let p: Vec<[f64; 3]> = tin
+        .vertices
+        .iter()
+        .map(|v| local_position(dem, c0, r0, v[0], v[1]))
+        .collect();
+    tin.triangles
+        .iter()
+        .map(|t| triangle_area_3d(p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]))
+        .sum()
 }
 
 /// Area and slope of the full-resolution DEM surface over a sample rectangle, triangulated
@@ -94,7 +111,10 @@ pub fn dem_surface(dem: &Dem, rect: SampleRect) -> DemSurface {
     let g = &dem.georef;
     DemSurface {
         area_3d: area,
-        planar_area: (rect.c1 - rect.c0) as f64 * g.spacing_x * (rect.r1 - rect.r0) as f64 * g.spacing_y,
+        planar_area: (rect.c1 - rect.c0) as f64
+            * g.spacing_x
+            * (rect.r1 - rect.r0) as f64
+            * g.spacing_y,
         max_slope_deg: max_slope,
         mean_slope_deg: if area > 0.0 { slope_area / area } else { 0.0 },
     }
@@ -113,7 +133,9 @@ mod tests {
         let n = cross([0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]);
         assert!((slope_deg(n) - 45.0).abs() < 1e-12);
         assert!(
-            (triangle_area_3d([0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0]) - 0.5 * 2f64.sqrt()).abs()
+            (triangle_area_3d([0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 1.0, 0.0])
+                - 0.5 * 2f64.sqrt())
+            .abs()
                 < 1e-15
         );
     }
@@ -121,18 +143,37 @@ mod tests {
     #[test]
     fn dem_surface_of_a_tilted_plane() {
         // h = 0.5 x + 0.25 y (exact in f32), spacings 2 x 3
-        let g = GridGeoref { origin_x: 0.0, origin_y: 0.0, spacing_x: 2.0, spacing_y: 3.0 };
+        let g = GridGeoref {
+            origin_x: 0.0,
+            origin_y: 0.0,
+            spacing_x: 2.0,
+            spacing_y: 3.0,
+        };
         let (w, h) = (20usize, 15usize);
-        let z: Vec<f32> =
-            (0..w * h).map(|k| (0.5 * 2.0 * (k % w) as f64 - 0.25 * 3.0 * (k / w) as f64) as f32).collect();
+        let z: Vec<f32> = (0..w * h)
+            .map(|k| (0.5 * 2.0 * (k % w) as f64 - 0.25 * 3.0 * (k / w) as f64) as f32)
+            .collect();
         let dem = Dem::from_heights(w, h, z, g).unwrap();
-        let rect = SampleRect { c0: 3, r0: 2, c1: 17, r1: 11 };
+        let rect = SampleRect {
+            c0: 3,
+            r0: 2,
+            c1: 17,
+            r1: 11,
+        };
         let s = dem_surface(&dem, rect);
         let planar = 14.0 * 2.0 * 9.0 * 3.0;
         let k = (1.0f64 + 0.25 + 0.0625).sqrt();
         assert_eq!(s.planar_area, planar);
-        assert!((s.area_3d - planar * k).abs() < 1e-9 * planar, "{} vs {}", s.area_3d, planar * k);
+        assert!(
+            (s.area_3d - planar * k).abs() < 1e-9 * planar,
+            "{} vs {}",
+            s.area_3d,
+            planar * k
+        );
         let slope = (1.0 / k).acos().to_degrees();
-        assert!((s.max_slope_deg - slope).abs() < 1e-9 && (s.mean_slope_deg - slope).abs() < 1e-9, "{s:?}");
+        assert!(
+            (s.max_slope_deg - slope).abs() < 1e-9 && (s.mean_slope_deg - slope).abs() < 1e-9,
+            "{s:?}"
+        );
     }
 }

@@ -27,10 +27,18 @@ pub struct RelTexelBins {
 /// Bins finite `rel_texels` into 40 equal bins on a linear scale from `min(1, smallest value)`
 /// to `max(p99.5, threshold)` (at least 0.01 wide), plus an overflow bin for larger values.
 pub fn rel_texel_bins(rel_texels: &[f64], threshold: f64) -> RelTexelBins {
-    let mut v: Vec<f64> = rel_texels.iter().copied().filter(|x| x.is_finite()).collect();
+    let mut v: Vec<f64> = rel_texels
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
     v.sort_unstable_by(f64::total_cmp);
     let lo = v.first().map_or(1.0, |&m| m.min(1.0));
-    let p995 = if v.is_empty() { lo } else { quantile_sorted(&v, 0.995) };
+    let p995 = if v.is_empty() {
+        lo
+    } else {
+        quantile_sorted(&v, 0.995)
+    };
     let mut hi = p995.max(if threshold.is_finite() { threshold } else { lo });
     if hi - lo < 0.01 {
         hi = lo + 0.01;
@@ -46,7 +54,12 @@ pub fn rel_texel_bins(rel_texels: &[f64], threshold: f64) -> RelTexelBins {
             counts[k] += 1;
         }
     }
-    RelTexelBins { lo, hi, counts, overflow }
+    RelTexelBins {
+        lo,
+        hi,
+        counts,
+        overflow,
+    }
 }
 
 /// Plot size in pixels.
@@ -64,8 +77,8 @@ pub fn write_histogram_png(path: &Path, rel_texels: &[f64], threshold: f64) -> R
     let mut buf = vec![255u8; (w * h * 3) as usize];
     draw(&mut buf, &bins, rel_texels.len(), threshold)
         .map_err(|e| fail(format!("drawing the histogram: {e}")))?;
-    let img =
-        image::RgbImage::from_raw(w, h, buf).ok_or_else(|| fail("plot buffer has the wrong size".into()))?;
+    let img = image::RgbImage::from_raw(w, h, buf)
+        .ok_or_else(|| fail("plot buffer has the wrong size".into()))?;
     let mut png = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .map_err(|e| fail(format!("encoding PNG: {e}")))?;
@@ -82,10 +95,20 @@ fn draw(
     root.fill(&WHITE)?;
     let width = (bins.hi - bins.lo) / bins.counts.len() as f64;
     let x_max = bins.hi + if bins.overflow > 0 { 2.0 * width } else { 0.0 };
-    let y_max = bins.counts.iter().copied().chain([bins.overflow]).max().unwrap_or(0).max(1);
+    let y_max = bins
+        .counts
+        .iter()
+        .copied()
+        .chain([bins.overflow])
+        .max()
+        .unwrap_or(0)
+        .max(1);
     let y_max = y_max + (y_max / 10).max(1);
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("Average texel stretch per cell ({n_cells} cells)"), ("sans-serif", 26))
+        .caption(
+            format!("Average texel stretch per cell ({n_cells} cells)"),
+            ("sans-serif", 26),
+        )
         .margin(20)
         .x_label_area_size(55)
         .y_label_area_size(70)
@@ -100,23 +123,40 @@ fn draw(
         .draw()?;
     let bar = RGBColor(70, 110, 180);
     chart
-        .draw_series(bins.counts.iter().enumerate().filter(|(_, c)| **c > 0).map(|(k, &c)| {
-            let x0 = bins.lo + k as f64 * width;
-            Rectangle::new([(x0, 0), (x0 + width, c)], bar.filled())
-        }))?
+        .draw_series(
+            bins.counts
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c > 0)
+                .map(|(k, &c)| {
+                    let x0 = bins.lo + k as f64 * width;
+                    Rectangle::new([(x0, 0), (x0 + width, c)], bar.filled())
+                }),
+        )?
         .label(format!("cells per bin (width {width:.3})"))
         .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], bar.filled()));
     if bins.overflow > 0 {
         let x0 = bins.hi + width;
         let over = RGBColor(200, 60, 60);
         chart
-            .draw_series([Rectangle::new([(x0, 0), (x0 + width, bins.overflow)], over.mix(0.5).filled())])?
-            .label(format!("overflow: {} cell(s) > {:.3} (p99.5)", bins.overflow, bins.hi))
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], over.mix(0.5).filled()));
+            .draw_series([Rectangle::new(
+                [(x0, 0), (x0 + width, bins.overflow)],
+                over.mix(0.5).filled(),
+            )])?
+            .label(format!(
+                "overflow: {} cell(s) > {:.3} (p99.5)",
+                bins.overflow, bins.hi
+            ))
+            .legend(move |(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 14, y + 5)], over.mix(0.5).filled())
+            });
     }
     if threshold.is_finite() && threshold >= bins.lo && threshold <= x_max {
         chart
-            .draw_series(LineSeries::new([(threshold, 0), (threshold, y_max)], BLACK.stroke_width(2)))?
+            .draw_series(LineSeries::new(
+                [(threshold, 0), (threshold, y_max)],
+                BLACK.stroke_width(2),
+            ))?
             .label(format!("threshold {threshold}"))
             .legend(|(x, y)| PathElement::new([(x, y), (x + 14, y)], BLACK.stroke_width(2)));
     }
@@ -156,14 +196,18 @@ mod tests {
     fn histogram_png_is_written_and_decodes() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("hist.png");
-        let v: Vec<f64> =
-            (0..500).map(|k| 1.0 + (k as f64 * 0.37).sin().abs() * (k % 7) as f64 * 0.2).collect();
+        let v: Vec<f64> = (0..500)
+            .map(|k| 1.0 + (k as f64 * 0.37).sin().abs() * (k % 7) as f64 * 0.2)
+            .collect();
         write_histogram_png(&p, &v, 1.5).unwrap();
         let img = image::open(&p).unwrap();
         assert_eq!((img.width(), img.height()), SIZE);
         // something other than white was drawn (bars, text)
         let rgb = img.to_rgb8();
-        let dark = rgb.pixels().filter(|p| p.0.iter().all(|&c| c < 100)).count();
+        let dark = rgb
+            .pixels()
+            .filter(|p| p.0.iter().all(|&c| c < 100))
+            .count();
         assert!(dark > 1000, "{dark} dark pixels");
         // empty input still plots
         write_histogram_png(&p, &[], 1.5).unwrap();

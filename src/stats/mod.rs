@@ -35,8 +35,12 @@ mod summary;
 pub use area::{DemSurface, dem_surface, tin_surface_area, triangle_area_3d};
 pub use cell::cell_stats;
 pub use histogram::{RelTexelBins, rel_texel_bins, write_histogram_png};
-pub use stretch::{STEEP_STRETCH, StretchSummary, stretch_bin_edges, summarize_stretch, texel_stretch};
-pub use summary::{CellStatsEntry, HistogramBin, LevelSummary, StatsSummary, stats_json, summarize};
+pub use stretch::{
+    STEEP_STRETCH, StretchSummary, stretch_bin_edges, summarize_stretch, texel_stretch,
+};
+pub use summary::{
+    CellStatsEntry, HistogramBin, LevelSummary, StatsSummary, stats_json, summarize,
+};
 
 use serde::{Deserialize, Serialize};
 
@@ -82,7 +86,11 @@ impl Percentiles {
 pub(crate) fn quantile_sorted(v: &[f64], q: f64) -> f64 {
     let pos = q.clamp(0.0, 1.0) * (v.len() - 1) as f64;
     let (k, f) = (pos.floor() as usize, pos - pos.floor());
-    if k + 1 < v.len() { v[k] + (v[k + 1] - v[k]) * f } else { v[k] }
+    if k + 1 < v.len() {
+        v[k] + (v[k + 1] - v[k]) * f
+    } else {
+        v[k]
+    }
 }
 
 /// Texel-stretch statistics of one cell (definitions in the [module docs](self)). All fields

@@ -55,7 +55,8 @@ pub fn texel_stretch(
     for tri in triangles {
         let [a, b, c] = tri.map(|k| k as usize);
         let p = [uvs[a], uvs[b], uvs[c]].map(|q| [q[0] * tf, q[1] * tf]);
-        let twice_uv = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        let twice_uv =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
         if twice_uv == 0.0 || !twice_uv.is_finite() {
             continue;
         }
@@ -69,8 +70,14 @@ pub fn texel_stretch(
             let d = [e[0] - s[0], e[1] - s[1]];
             (s, d, EPS * (d[0] * d[0] + d[1] * d[1]).sqrt())
         });
-        let (min_u, max_u) = (p[0][0].min(p[1][0]).min(p[2][0]), p[0][0].max(p[1][0]).max(p[2][0]));
-        let (min_v, max_v) = (p[0][1].min(p[1][1]).min(p[2][1]), p[0][1].max(p[1][1]).max(p[2][1]));
+        let (min_u, max_u) = (
+            p[0][0].min(p[1][0]).min(p[2][0]),
+            p[0][0].max(p[1][0]).max(p[2][0]),
+        );
+        let (min_v, max_v) = (
+            p[0][1].min(p[1][1]).min(p[2][1]),
+            p[0][1].max(p[1][1]).max(p[2][1]),
+        );
         // texel centres k + 0.5 within [min - EPS, max + EPS]
         let i0 = (min_u - 0.5 - EPS).ceil().max(0.0);
         let i1 = (max_u - 0.5 + EPS).floor().min(tf - 1.0);
@@ -83,8 +90,9 @@ pub fn texel_stretch(
             let y = j as f64 + 0.5;
             for i in i0 as usize..=i1 as usize {
                 let x = i as f64 + 0.5;
-                let inside =
-                    edges.iter().all(|(s, d, tol)| sign * (d[0] * (y - s[1]) - d[1] * (x - s[0])) >= -tol);
+                let inside = edges
+                    .iter()
+                    .all(|(s, d, tol)| sign * (d[0] * (y - s[1]) - d[1] * (x - s[0])) >= -tol);
                 let cell = &mut out[j * t + i];
                 if inside && cell.is_nan() {
                     *cell = stretch;
@@ -113,7 +121,11 @@ pub struct StretchSummary {
 pub fn summarize_stretch(stretch: &[f32]) -> StretchSummary {
     let edges = stretch_bin_edges();
     let mut histogram = vec![0u64; edges.len()];
-    let mut vals: Vec<f64> = stretch.iter().filter(|s| !s.is_nan()).map(|&s| s as f64).collect();
+    let mut vals: Vec<f64> = stretch
+        .iter()
+        .filter(|s| !s.is_nan())
+        .map(|&s| s as f64)
+        .collect();
     let mut steep = 0u64;
     for &v in &vals {
         histogram[bin_index(&edges, v)] += 1;
@@ -123,7 +135,11 @@ pub fn summarize_stretch(stretch: &[f32]) -> StretchSummary {
     StretchSummary {
         percentiles: Percentiles::of(&mut vals),
         covered,
-        steep_fraction: if covered > 0 { steep as f64 / covered as f64 } else { 0.0 },
+        steep_fraction: if covered > 0 {
+            steep as f64 / covered as f64
+        } else {
+            0.0
+        },
         histogram,
     }
 }
@@ -142,7 +158,12 @@ mod tests {
     type Mesh = (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<[f64; 2]>);
 
     fn square(w: f64, h: f64, p: f64) -> Mesh {
-        let pos = vec![[0.0, 0.0, 0.0], [0.0, -h, 0.0], [w, -h, p * w], [w, 0.0, p * w]];
+        let pos = vec![
+            [0.0, 0.0, 0.0],
+            [0.0, -h, 0.0],
+            [w, -h, p * w],
+            [w, 0.0, p * w],
+        ];
         let uv = pos.iter().map(|q| [q[0] / w, -q[1] / h]).collect();
         (pos, vec![[0, 1, 2], [0, 2, 3]], uv)
     }
@@ -181,7 +202,10 @@ mod tests {
         let s = texel_stretch(&pos, &[[0, 1, 2]], &uv2, 8, 100.0);
         assert!((s[0] - 2.0).abs() < 1e-6);
         let sum = summarize_stretch(&s);
-        assert_eq!(sum.covered as usize, s.iter().filter(|v| !v.is_nan()).count());
+        assert_eq!(
+            sum.covered as usize,
+            s.iter().filter(|v| !v.is_nan()).count()
+        );
         assert!(sum.covered > 0 && (sum.percentiles.max - 2.0).abs() < 1e-6);
         // exactly 2 is not "steep"
         assert_eq!(sum.steep_fraction, 0.0);

@@ -97,7 +97,9 @@ pub struct StatsSummary {
 /// for a given order of entries; empty input gives zero counts.
 pub fn summarize(entries: &[CellStatsEntry], threshold: f64) -> StatsSummary {
     let above = |e: &&&CellStatsEntry| e.stats.rel_texel > threshold;
-    let rel = |es: &[&CellStatsEntry]| Percentiles::of(&mut es.iter().map(|e| e.stats.rel_texel).collect());
+    let rel = |es: &[&CellStatsEntry]| {
+        Percentiles::of(&mut es.iter().map(|e| e.stats.rel_texel).collect())
+    };
     let all: Vec<&CellStatsEntry> = entries.iter().collect();
     let cells_above = all.iter().filter(above).count();
 
@@ -113,7 +115,11 @@ pub fn summarize(entries: &[CellStatsEntry], threshold: f64) -> StatsSummary {
                 level,
                 cells: es.len(),
                 cells_above: n_above,
-                fraction_above: if es.is_empty() { 0.0 } else { n_above as f64 / es.len() as f64 },
+                fraction_above: if es.is_empty() {
+                    0.0
+                } else {
+                    n_above as f64 / es.len() as f64
+                },
                 rel_texel: rel(&es),
             }
         })
@@ -134,7 +140,11 @@ pub fn summarize(entries: &[CellStatsEntry], threshold: f64) -> StatsSummary {
             lo: edges[k],
             hi: edges.get(k + 1).copied(),
             texels,
-            fraction: if covered > 0 { texels as f64 / covered as f64 } else { 0.0 },
+            fraction: if covered > 0 {
+                texels as f64 / covered as f64
+            } else {
+                0.0
+            },
         })
         .collect();
 
@@ -180,28 +190,54 @@ mod tests {
             stretch_histogram: h,
             ..CellStats::default()
         };
-        let tin = Tin { triangles: vec![[0, 1, 2]; 3], max_error: 0.25, ..Tin::default() };
+        let tin = Tin {
+            triangles: vec![[0, 1, 2]; 3],
+            max_error: 0.25,
+            ..Tin::default()
+        };
         CellStatsEntry::new(CellKey { level, x, y: 0 }, &tin, stats)
     }
 
     #[test]
     fn summary_counts_and_levels() {
-        let es = vec![entry(0, 0, 1.1, 2), entry(1, 0, 1.0, 2), entry(1, 1, 2.5, 8), entry(1, 2, 1.3, 4)];
+        let es = vec![
+            entry(0, 0, 1.1, 2),
+            entry(1, 0, 1.0, 2),
+            entry(1, 1, 2.5, 8),
+            entry(1, 2, 1.3, 4),
+        ];
         let s = summarize(&es, 1.2);
         assert_eq!((s.cells, s.cells_above), (4, 2));
         assert_eq!(s.percent_above, 50.0);
         assert_eq!(s.rel_texel.max, 2.5);
         assert!((s.rel_texel.p50 - 1.2).abs() < 1e-12); // between 1.1 and 1.3
         assert_eq!(s.levels.len(), 2);
-        assert_eq!((s.levels[0].level, s.levels[0].cells, s.levels[0].cells_above), (0, 1, 0));
-        assert_eq!((s.levels[1].level, s.levels[1].cells, s.levels[1].cells_above), (1, 3, 2));
+        assert_eq!(
+            (
+                s.levels[0].level,
+                s.levels[0].cells,
+                s.levels[0].cells_above
+            ),
+            (0, 1, 0)
+        );
+        assert_eq!(
+            (
+                s.levels[1].level,
+                s.levels[1].cells,
+                s.levels[1].cells_above
+            ),
+            (1, 3, 2)
+        );
         assert!((s.levels[1].fraction_above - 2.0 / 3.0).abs() < 1e-12);
         assert_eq!(s.covered_texels, 40);
         assert_eq!(s.texel_stretch_histogram[2].texels, 20);
         assert_eq!(s.texel_stretch_histogram[2].fraction, 0.5);
         assert_eq!(s.texel_stretch_histogram.last().unwrap().hi, None);
         let empty = summarize(&[], 1.2);
-        assert_eq!((empty.cells, empty.percent_above, empty.rel_texel.max), (0, 0.0, 0.0));
+        assert_eq!(
+            (empty.cells, empty.percent_above, empty.rel_texel.max),
+            (0, 0.0, 0.0)
+        );
     }
 
     #[test]
@@ -230,7 +266,10 @@ mod tests {
         assert_eq!(cells.len(), 2);
         let c = cells[1].as_object().unwrap();
         assert_eq!(c["id"], "2-3-0");
-        assert_eq!((c["level"].as_u64(), c["x"].as_u64(), c["y"].as_u64()), (Some(2), Some(3), Some(0)));
+        assert_eq!(
+            (c["level"].as_u64(), c["x"].as_u64(), c["y"].as_u64()),
+            (Some(2), Some(3), Some(0))
+        );
         assert_eq!(c["triangles"], 3);
         assert_eq!(c["max_error"], 0.25);
         assert_eq!(c["rel_texel"], 1.7);

@@ -19,7 +19,11 @@ pub fn write_file(store: &Path, rel: &str, bytes: &[u8]) -> Result<FileRef> {
 
 /// The record of `bytes` stored at `rel` (size and checksum).
 pub(crate) fn file_ref(rel: &str, bytes: &[u8]) -> FileRef {
-    FileRef { path: rel.to_string(), bytes: bytes.len() as u64, crc32: crc32_hex(bytes) }
+    FileRef {
+        path: rel.to_string(),
+        bytes: bytes.len() as u64,
+        crc32: crc32_hex(bytes),
+    }
 }
 
 /// Reads `store/file.path` and checks its size and checksum.

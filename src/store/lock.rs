@@ -30,16 +30,28 @@ impl StoreLock {
     /// fails naming the process that holds it.
     pub fn acquire(dir: &Path, command: &str) -> Result<StoreLock> {
         if !dir.is_dir() {
-            return Err(Error::store(dir, "not a directory (expected a cliffmap store made by `cliffmap build`)"));
+            return Err(Error::store(
+                dir,
+                "not a directory (expected a cliffmap store made by `cliffmap build`)",
+            ));
         }
         let key = dir.canonicalize().map_err(|e| Error::io(dir, e))?;
         let mut held = HELD.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(h) = held.iter_mut().find(|h| h.0 == key) {
             h.1 += 1;
-            return Ok(StoreLock { dir: key, _file: None });
+            return Ok(StoreLock {
+                dir: key,
+                _file: None,
+            });
         }
         let path = key.join(".lock");
-        let mut file = std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).open(&path).map_err(|e| Error::io(&path, e))?;
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(|e| Error::io(&path, e))?;
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
@@ -49,7 +61,11 @@ impl StoreLock {
                     dir,
                     format!(
                         "another cliffmap process is writing this store ({}); wait for it to finish, then run `{command}` again",
-                        if holder.is_empty() { "holder unknown".to_string() } else { holder.to_string() }
+                        if holder.is_empty() {
+                            "holder unknown".to_string()
+                        } else {
+                            holder.to_string()
+                        }
                     ),
                 ));
             }
@@ -58,7 +74,10 @@ impl StoreLock {
         let _ = file.set_len(0);
         let _ = write!(file, "pid {} running `{command}`", std::process::id());
         held.push((key.clone(), 1));
-        Ok(StoreLock { dir: key, _file: Some(file) })
+        Ok(StoreLock {
+            dir: key,
+            _file: Some(file),
+        })
     }
 }
 
@@ -86,8 +105,15 @@ mod tests {
         let b = StoreLock::acquire(tmp.path(), "cliffmap reparam").unwrap(); // same process: nested
         drop(b);
         // A different open file description (as another process would have) is refused.
-        let f = std::fs::OpenOptions::new().read(true).write(true).open(tmp.path().join(".lock")).unwrap();
-        assert!(matches!(f.try_lock(), Err(std::fs::TryLockError::WouldBlock)));
+        let f = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(tmp.path().join(".lock"))
+            .unwrap();
+        assert!(matches!(
+            f.try_lock(),
+            Err(std::fs::TryLockError::WouldBlock)
+        ));
         drop(a);
         assert!(f.try_lock().is_ok());
         let text = std::fs::read_to_string(tmp.path().join(".lock")).unwrap();

@@ -161,7 +161,11 @@ pub struct ReparamSettings {
 impl CellRecord {
     /// The cell's quadtree key.
     pub fn key(&self) -> CellKey {
-        CellKey { level: self.level, x: self.x, y: self.y }
+        CellKey {
+            level: self.level,
+            x: self.x,
+            y: self.y,
+        }
     }
 }
 
@@ -326,15 +330,21 @@ impl Manifest {
     pub fn read(dir: &Path) -> Result<Manifest> {
         let path = dir.join("manifest.json");
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-        let m: Manifest =
-            serde_json::from_str(&text).map_err(|e| Error::store(&path, format!("invalid manifest: {e}")))?;
+        let m: Manifest = serde_json::from_str(&text)
+            .map_err(|e| Error::store(&path, format!("invalid manifest: {e}")))?;
         if m.format != STORE_FORMAT {
-            return Err(Error::store(&path, format!("format is {:?}, expected {STORE_FORMAT:?}", m.format)));
+            return Err(Error::store(
+                &path,
+                format!("format is {:?}, expected {STORE_FORMAT:?}", m.format),
+            ));
         }
         if m.version != STORE_VERSION {
             return Err(Error::store(
                 &path,
-                format!("store version {} is not supported (this cliffmap reads version {STORE_VERSION})", m.version),
+                format!(
+                    "store version {} is not supported (this cliffmap reads version {STORE_VERSION})",
+                    m.version
+                ),
             ));
         }
         if let Some(want) = &m.content_crc32 {
@@ -356,8 +366,10 @@ impl Manifest {
     /// file's bytes with the checksum's own 8 digits written as `00000000`.
     pub fn write(&mut self, dir: &Path) -> Result<()> {
         self.content_crc32 = Some(CRC_PLACEHOLDER.into());
-        let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| Error::store(dir, e.to_string()))?;
-        let at = checksum_digits(&bytes).ok_or_else(|| Error::store(dir, "manifest checksum field not found"))?;
+        let mut bytes =
+            serde_json::to_vec_pretty(self).map_err(|e| Error::store(dir, e.to_string()))?;
+        let at = checksum_digits(&bytes)
+            .ok_or_else(|| Error::store(dir, "manifest checksum field not found"))?;
         let crc = super::crc32_hex(&bytes);
         bytes[at..at + 8].copy_from_slice(crc.as_bytes());
         self.content_crc32 = Some(crc);
@@ -413,9 +425,16 @@ mod tests {
         let text = std::fs::read_to_string(&path).unwrap();
         // One changed digit of a value: detected.
         std::fs::write(&path, text.replacen("0.5", "0.6", 1)).unwrap();
-        assert!(Manifest::read(dir.path()).unwrap_err().to_string().contains("checksum mismatch"));
+        assert!(
+            Manifest::read(dir.path())
+                .unwrap_err()
+                .to_string()
+                .contains("checksum mismatch")
+        );
         // A field written by a later version (unknown here) with a correct checksum: accepted.
-        let mut future = text.replacen('{', "{\n  \"future_field\": [1, 2],", 1).into_bytes();
+        let mut future = text
+            .replacen('{', "{\n  \"future_field\": [1, 2],", 1)
+            .into_bytes();
         let at = checksum_digits(&future).unwrap();
         future[at..at + 8].copy_from_slice(CRC_PLACEHOLDER.as_bytes());
         let crc = crate::store::crc32_hex(&future);

@@ -49,7 +49,14 @@ impl CellMesh {
         let mut out = Vec::with_capacity(HEADER + nv * 20 + self.triangles.len() * 12);
         out.extend_from_slice(MAGIC);
         let flags = u32::from(self.uvs.is_some());
-        for v in [VERSION, flags, nv as u32, self.triangles.len() as u32, self.surface_vertices, self.surface_triangles] {
+        for v in [
+            VERSION,
+            flags,
+            nv as u32,
+            self.triangles.len() as u32,
+            self.surface_vertices,
+            self.surface_triangles,
+        ] {
             out.extend_from_slice(&v.to_le_bytes());
         }
         for p in &self.positions {
@@ -79,15 +86,34 @@ impl CellMesh {
         if bytes.len() < HEADER || &bytes[..8] != MAGIC {
             return Err(bad("not a cliffmap mesh (bad magic or too short)"));
         }
-        let word = |i: usize| u32::from_le_bytes([bytes[8 + 4 * i], bytes[9 + 4 * i], bytes[10 + 4 * i], bytes[11 + 4 * i]]);
-        let (version, flags, nv, nt, sv, st) = (word(0), word(1), word(2) as usize, word(3) as usize, word(4), word(5));
+        let word = |i: usize| {
+            u32::from_le_bytes([
+                bytes[8 + 4 * i],
+                bytes[9 + 4 * i],
+                bytes[10 + 4 * i],
+                bytes[11 + 4 * i],
+            ])
+        };
+        let (version, flags, nv, nt, sv, st) = (
+            word(0),
+            word(1),
+            word(2) as usize,
+            word(3) as usize,
+            word(4),
+            word(5),
+        );
         if version != VERSION {
-            return Err(bad(&format!("unsupported version {version} (this cliffmap reads {VERSION})")));
+            return Err(bad(&format!(
+                "unsupported version {version} (this cliffmap reads {VERSION})"
+            )));
         }
         let has_uv = flags & 1 == 1;
         let need = HEADER as u64 + nv as u64 * if has_uv { 20 } else { 12 } + nt as u64 * 12;
         if bytes.len() as u64 != need {
-            return Err(bad(&format!("size {} bytes, header announces {need}", bytes.len())));
+            return Err(bad(&format!(
+                "size {} bytes, header announces {need}",
+                bytes.len()
+            )));
         }
         if sv as usize > nv || st as usize > nt {
             return Err(bad("surface counts exceed totals"));
@@ -103,11 +129,18 @@ impl CellMesh {
         };
         let pos = f32s(nv * 3);
         let uv = has_uv.then(|| f32s(nv * 2));
-        if pos.iter().chain(uv.iter().flatten()).any(|c| !c.is_finite()) {
+        if pos
+            .iter()
+            .chain(uv.iter().flatten())
+            .any(|c| !c.is_finite())
+        {
             return Err(bad("non-finite coordinate"));
         }
         let tri_bytes = &bytes[HEADER + 4 * (pos.len() + uv.as_ref().map_or(0, Vec::len))..];
-        let idx: Vec<u32> = tri_bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let idx: Vec<u32> = tri_bytes
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
         if idx.iter().any(|&i| i as usize >= nv) {
             return Err(bad("triangle index out of range"));
         }

@@ -30,7 +30,8 @@ use std::path::{Path, PathBuf};
 pub use files::{crc32_hex, is_intact, read_verified, write_file};
 pub use lock::StoreLock;
 pub use manifest::{
-    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord, PhotoLevelReport, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
+    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord,
+    PhotoLevelReport, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
     STORE_VERSION,
 };
 pub use mesh::CellMesh;
@@ -52,9 +53,15 @@ impl Store {
     /// Opens the store in `dir` (reads and validates `manifest.json`).
     pub fn open(dir: &Path) -> Result<Store> {
         if !dir.is_dir() {
-            return Err(Error::store(dir, "not a directory (expected a cliffmap store made by `cliffmap build`)"));
+            return Err(Error::store(
+                dir,
+                "not a directory (expected a cliffmap store made by `cliffmap build`)",
+            ));
         }
-        Ok(Store { dir: dir.to_path_buf(), manifest: Manifest::read(dir)? })
+        Ok(Store {
+            dir: dir.to_path_buf(),
+            manifest: Manifest::read(dir)?,
+        })
     }
 
     /// The record of cell `id`, or an error listing how to find valid ids.
@@ -76,7 +83,11 @@ impl Store {
     /// Reads and verifies the mesh the cell currently uses: the reparameterized one (with
     /// texture coordinates) if the cell has it, else the orthographic one.
     pub fn read_active_mesh(&self, rec: &CellRecord) -> Result<CellMesh> {
-        self.read_mesh_file(rec.reparam.as_ref().map_or(&rec.files.mesh, |r| &r.files.mesh))
+        self.read_mesh_file(
+            rec.reparam
+                .as_ref()
+                .map_or(&rec.files.mesh, |r| &r.files.mesh),
+        )
     }
 
     fn read_mesh_file(&self, f: &FileRef) -> Result<CellMesh> {
@@ -92,13 +103,23 @@ impl Store {
     /// Reads and verifies the colour texture of the cell's active parameterization (the
     /// reparameterized one if present, else the orthographic one); photo textures excluded.
     pub fn read_active_texture(&self, rec: &CellRecord) -> Result<image::RgbaImage> {
-        self.read_png(rec.reparam.as_ref().map_or(&rec.files.texture, |r| &r.files.texture)).map(|i| i.to_rgba8())
+        self.read_png(
+            rec.reparam
+                .as_ref()
+                .map_or(&rec.files.texture, |r| &r.files.texture),
+        )
+        .map(|i| i.to_rgba8())
     }
 
     /// Reads and verifies the normal map of the cell's active parameterization (same
     /// layout as [`Store::read_active_texture`]).
     pub fn read_active_normal_map(&self, rec: &CellRecord) -> Result<image::RgbImage> {
-        self.read_png(rec.reparam.as_ref().map_or(&rec.files.normal, |r| &r.files.normal)).map(|i| i.to_rgb8())
+        self.read_png(
+            rec.reparam
+                .as_ref()
+                .map_or(&rec.files.normal, |r| &r.files.normal),
+        )
+        .map(|i| i.to_rgb8())
     }
 
     /// Reads and verifies a cell's normal map.
@@ -139,5 +160,8 @@ pub fn texcoord(rec: &CellRecord, mesh: &CellMesh, i: usize) -> [f32; 2] {
     let e = &rec.extent;
     let x = p[0] as f64 + rec.origin[0];
     let y = p[1] as f64 + rec.origin[1];
-    [((x - e.min_x) / e.width()) as f32, ((e.max_y - y) / e.height()) as f32]
+    [
+        ((x - e.min_x) / e.width()) as f32,
+        ((e.max_y - y) / e.height()) as f32,
+    ]
 }

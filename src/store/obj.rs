@@ -12,17 +12,35 @@ use super::mesh::CellMesh;
 pub fn obj_text(record: &CellRecord, mesh: &CellMesh, world: bool) -> String {
     let n = mesh.surface_vertices as usize;
     let mut s = String::with_capacity(n * 64 + mesh.surface().len() * 32);
-    let _ = writeln!(s, "# cliffmap cell {} (level {}), {} frame", record.id, record.level, if world { "world" } else { "cell-local" });
-    let _ = writeln!(s, "# origin {:.4} {:.4} {:.4}", record.origin[0], record.origin[1], record.origin[2]);
+    let _ = writeln!(
+        s,
+        "# cliffmap cell {} (level {}), {} frame",
+        record.id,
+        record.level,
+        if world { "world" } else { "cell-local" }
+    );
+    let _ = writeln!(
+        s,
+        "# origin {:.4} {:.4} {:.4}",
+        record.origin[0], record.origin[1], record.origin[2]
+    );
     let texture = match (&mesh.uvs, &record.reparam) {
         (Some(_), Some(r)) => &r.files.texture.path,
         _ => &record.files.texture.path,
     };
-    let kind = if mesh.uvs.is_some() { "reparam" } else { "ortho" };
+    let kind = if mesh.uvs.is_some() {
+        "reparam"
+    } else {
+        "ortho"
+    };
     let _ = writeln!(s, "# parameterization {kind}, texture {texture}");
     for p in &mesh.positions[..n] {
         if world {
-            let w = [p[0] as f64 + record.origin[0], p[1] as f64 + record.origin[1], p[2] as f64 + record.origin[2]];
+            let w = [
+                p[0] as f64 + record.origin[0],
+                p[1] as f64 + record.origin[1],
+                p[2] as f64 + record.origin[2],
+            ];
             let _ = writeln!(s, "v {:.4} {:.4} {:.4}", w[0], w[1], w[2]);
         } else {
             let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);

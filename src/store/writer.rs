@@ -34,7 +34,11 @@ impl BackgroundWriter {
             }
             first
         });
-        BackgroundWriter { dir: dir.to_path_buf(), tx: Some(tx), thread: Some(thread) }
+        BackgroundWriter {
+            dir: dir.to_path_buf(),
+            tx: Some(tx),
+            thread: Some(thread),
+        }
     }
 
     /// Queues `bytes` for `dir/rel` and returns the file's record (size and checksum of
@@ -45,7 +49,10 @@ impl BackgroundWriter {
         let sent = self.tx.as_ref().map(|tx| tx.send((path.clone(), bytes)));
         match sent {
             Some(Ok(())) => Ok(file),
-            _ => Err(Error::store(path, "the file writer stopped before this file")),
+            _ => Err(Error::store(
+                path,
+                "the file writer stopped before this file",
+            )),
         }
     }
 
@@ -79,11 +86,20 @@ mod tests {
     fn writes_every_file_and_reports_failures() {
         let dir = tempfile::tempdir().unwrap();
         let w = BackgroundWriter::new(dir.path());
-        let refs: Vec<FileRef> = (0..20).map(|i| w.submit(&format!("cells/{i}.bin"), vec![i as u8; 100 + i]).unwrap()).collect();
+        let refs: Vec<FileRef> = (0..20)
+            .map(|i| {
+                w.submit(&format!("cells/{i}.bin"), vec![i as u8; 100 + i])
+                    .unwrap()
+            })
+            .collect();
         w.finish().unwrap();
         for (i, r) in refs.iter().enumerate() {
             let bytes = std::fs::read(dir.path().join(&r.path)).unwrap();
-            assert_eq!((bytes.len() as u64, crc32_hex(&bytes)), (r.bytes, r.crc32.clone()), "file {i}");
+            assert_eq!(
+                (bytes.len() as u64, crc32_hex(&bytes)),
+                (r.bytes, r.crc32.clone()),
+                "file {i}"
+            );
         }
         // a path under a regular file cannot be created: finish reports it
         std::fs::write(dir.path().join("plain"), b"x").unwrap();

@@ -13,7 +13,12 @@ pub fn verify_store(dir: &Path) -> VerifyReport {
     let manifest = match Manifest::read(dir) {
         Ok(m) => m,
         Err(e) => {
-            rep.findings.push(Finding { cell: None, file: "manifest.json".into(), layer: Layer::Manifest, problem: e.to_string() });
+            rep.findings.push(Finding {
+                cell: None,
+                file: "manifest.json".into(),
+                layer: Layer::Manifest,
+                problem: e.to_string(),
+            });
             return rep;
         }
     };
@@ -21,18 +26,41 @@ pub fn verify_store(dir: &Path) -> VerifyReport {
     let mut seen = HashSet::new();
     for c in &manifest.cells {
         let mut add = |file: &str, layer: Layer, problem: String| {
-            rep.findings.push(Finding { cell: Some(c.id.clone()), file: file.to_string(), layer, problem })
+            rep.findings.push(Finding {
+                cell: Some(c.id.clone()),
+                file: file.to_string(),
+                layer,
+                problem,
+            })
         };
         if !seen.insert(c.id.clone()) {
-            add("manifest.json", Layer::Manifest, format!("cell id {} appears twice", c.id));
+            add(
+                "manifest.json",
+                Layer::Manifest,
+                format!("cell id {} appears twice", c.id),
+            );
         }
         if c.id != format!("{}-{}-{}", c.level, c.x, c.y) {
-            add("manifest.json", Layer::Manifest, format!("cell id {} does not match its level/x/y {}-{}-{}", c.id, c.level, c.x, c.y));
+            add(
+                "manifest.json",
+                Layer::Manifest,
+                format!(
+                    "cell id {} does not match its level/x/y {}-{}-{}",
+                    c.id, c.level, c.x, c.y
+                ),
+            );
         }
         let q = &manifest.quadtree;
         let side = 1u64 << c.level;
         if c.level >= q.levels || c.x as u64 >= side || c.y as u64 >= side {
-            add("manifest.json", Layer::Manifest, format!("cell {} lies outside the quadtree ({} levels)", c.id, q.levels));
+            add(
+                "manifest.json",
+                Layer::Manifest,
+                format!(
+                    "cell {} lies outside the quadtree ({} levels)",
+                    c.id, q.levels
+                ),
+            );
         }
     }
     for c in &manifest.cells {
@@ -54,9 +82,22 @@ pub fn verify_store(dir: &Path) -> VerifyReport {
 }
 
 /// Reads `f` and checks size and checksum; records a finding and returns `None` if wrong.
-fn read_checked(dir: &Path, c: &CellRecord, f: &FileRef, layer: Layer, rep: &mut VerifyReport) -> Option<Vec<u8>> {
+fn read_checked(
+    dir: &Path,
+    c: &CellRecord,
+    f: &FileRef,
+    layer: Layer,
+    rep: &mut VerifyReport,
+) -> Option<Vec<u8>> {
     rep.files_checked += 1;
-    let mut add = |problem: String| rep.findings.push(Finding { cell: Some(c.id.clone()), file: f.path.clone(), layer, problem });
+    let mut add = |problem: String| {
+        rep.findings.push(Finding {
+            cell: Some(c.id.clone()),
+            file: f.path.clone(),
+            layer,
+            problem,
+        })
+    };
     let bytes = match std::fs::read(dir.join(&f.path)) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -69,19 +110,35 @@ fn read_checked(dir: &Path, c: &CellRecord, f: &FileRef, layer: Layer, rep: &mut
         }
     };
     if bytes.len() as u64 != f.bytes {
-        add(format!("size {} bytes, recorded {} (truncated or overwritten)", bytes.len(), f.bytes));
+        add(format!(
+            "size {} bytes, recorded {} (truncated or overwritten)",
+            bytes.len(),
+            f.bytes
+        ));
         return None;
     }
     let crc = crc32_hex(&bytes);
     if crc != f.crc32 {
-        add(format!("checksum {crc}, recorded {} (content damaged)", f.crc32));
+        add(format!(
+            "checksum {crc}, recorded {} (content damaged)",
+            f.crc32
+        ));
         return None;
     }
     Some(bytes)
 }
 
-fn check_mesh(dir: &Path, c: &CellRecord, f: &FileRef, layer: Layer, want_uvs: bool, rep: &mut VerifyReport) {
-    let Some(bytes) = read_checked(dir, c, f, layer, rep) else { return };
+fn check_mesh(
+    dir: &Path,
+    c: &CellRecord,
+    f: &FileRef,
+    layer: Layer,
+    want_uvs: bool,
+    rep: &mut VerifyReport,
+) {
+    let Some(bytes) = read_checked(dir, c, f, layer, rep) else {
+        return;
+    };
     let mut problems = Vec::new();
     match CellMesh::from_bytes(&bytes, &dir.join(&f.path)) {
         Err(e) => problems.push(e.to_string()),
@@ -92,48 +149,93 @@ fn check_mesh(dir: &Path, c: &CellRecord, f: &FileRef, layer: Layer, want_uvs: b
                     m.surface_vertices, m.surface_triangles, c.vertices, c.triangles
                 ));
             }
-            if let Some(t) = m.triangles.iter().position(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+            if let Some(t) = m
+                .triangles
+                .iter()
+                .position(|t| t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+            {
                 problems.push(format!("triangle {t} repeats a corner"));
             }
             // Surface vertices inside the recorded world bounding box (cell-local f32).
             let ns = (m.surface_vertices as usize).min(m.positions.len());
             for (i, p) in m.positions[..ns].iter().enumerate() {
-                let w = [p[0] as f64 + c.origin[0], p[1] as f64 + c.origin[1], p[2] as f64 + c.origin[2]];
+                let w = [
+                    p[0] as f64 + c.origin[0],
+                    p[1] as f64 + c.origin[1],
+                    p[2] as f64 + c.origin[2],
+                ];
                 let outside = (0..3).any(|k| {
-                    let tol = 0.01 + 1e-6 * (c.bbox_max[k] - c.origin[k]).abs().max((c.bbox_min[k] - c.origin[k]).abs());
+                    let tol = 0.01
+                        + 1e-6
+                            * (c.bbox_max[k] - c.origin[k])
+                                .abs()
+                                .max((c.bbox_min[k] - c.origin[k]).abs());
                     w[k] < c.bbox_min[k] - tol || w[k] > c.bbox_max[k] + tol
                 });
                 if outside {
-                    problems.push(format!("surface vertex {i} at {w:?} lies outside the cell's bounding box"));
+                    problems.push(format!(
+                        "surface vertex {i} at {w:?} lies outside the cell's bounding box"
+                    ));
                     break;
                 }
             }
             match (&m.uvs, want_uvs) {
                 (Some(uvs), true) => {
-                    if let Some(i) = uvs.iter().position(|uv| !(0.0..=1.0).contains(&uv[0]) || !(0.0..=1.0).contains(&uv[1])) {
-                        problems.push(format!("texture coordinate {i} {:?} outside [0, 1]", uvs[i]));
+                    if let Some(i) = uvs.iter().position(|uv| {
+                        !(0.0..=1.0).contains(&uv[0]) || !(0.0..=1.0).contains(&uv[1])
+                    }) {
+                        problems.push(format!(
+                            "texture coordinate {i} {:?} outside [0, 1]",
+                            uvs[i]
+                        ));
                     }
                 }
-                (None, true) => problems.push("the reparameterized mesh has no texture coordinates".into()),
-                (Some(_), false) => problems.push("the orthographic mesh has texture coordinates".into()),
+                (None, true) => {
+                    problems.push("the reparameterized mesh has no texture coordinates".into())
+                }
+                (Some(_), false) => {
+                    problems.push("the orthographic mesh has texture coordinates".into())
+                }
                 (None, false) => {}
             }
         }
     }
     for p in problems {
-        rep.findings.push(Finding { cell: Some(c.id.clone()), file: f.path.clone(), layer, problem: p });
+        rep.findings.push(Finding {
+            cell: Some(c.id.clone()),
+            file: f.path.clone(),
+            layer,
+            problem: p,
+        });
     }
 }
 
-fn check_png(dir: &Path, c: &CellRecord, f: &FileRef, layer: Layer, side: u32, rep: &mut VerifyReport) {
-    let Some(bytes) = read_checked(dir, c, f, layer, rep) else { return };
-    let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png).map(|i| (i.width(), i.height()));
+fn check_png(
+    dir: &Path,
+    c: &CellRecord,
+    f: &FileRef,
+    layer: Layer,
+    side: u32,
+    rep: &mut VerifyReport,
+) {
+    let Some(bytes) = read_checked(dir, c, f, layer, rep) else {
+        return;
+    };
+    let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+        .map(|i| (i.width(), i.height()));
     let problem = match decoded {
         Err(e) => Some(format!("cannot decode PNG: {e}")),
-        Ok((w, h)) if (w, h) != (side, side) => Some(format!("texture is {w}x{h}, the manifest records {side}x{side}")),
+        Ok((w, h)) if (w, h) != (side, side) => Some(format!(
+            "texture is {w}x{h}, the manifest records {side}x{side}"
+        )),
         Ok(_) => None,
     };
     if let Some(problem) = problem {
-        rep.findings.push(Finding { cell: Some(c.id.clone()), file: f.path.clone(), layer, problem });
+        rep.findings.push(Finding {
+            cell: Some(c.id.clone()),
+            file: f.path.clone(),
+            layer,
+            problem,
+        });
     }
 }

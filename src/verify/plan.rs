@@ -44,7 +44,12 @@ pub fn repair_plan(report: &VerifyReport) -> RepairPlan {
         }
     }
     let [b, r, p] = sets.map(|s| s.into_iter().collect::<Vec<_>>());
-    RepairPlan { manifest, base: b, reparam: r, photo: p }
+    RepairPlan {
+        manifest,
+        base: b,
+        reparam: r,
+        photo: p,
+    }
 }
 
 /// After the base layer was rebuilt (`rebuilt`, a fresh build's manifest), carries over from

@@ -6,7 +6,10 @@ use std::process::{Command, Output};
 
 /// Runs the `cliffmap` binary with `args`.
 pub fn cliffmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cliffmap")).args(args).output().expect("cannot start cliffmap")
+    Command::new(env!("CARGO_BIN_EXE_cliffmap"))
+        .args(args)
+        .output()
+        .expect("cannot start cliffmap")
 }
 
 /// Runs `cliffmap` and fails the test (printing its output) unless it succeeds.
@@ -26,8 +29,14 @@ pub fn fails_naming(args: &[&str], needle: &str) {
     let o = cliffmap(args);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "cliffmap {args:?} should fail");
-    assert!(err.contains(needle), "error of {args:?} should name {needle:?}: {err}");
-    assert!(!err.contains("panicked"), "cliffmap {args:?} panicked: {err}");
+    assert!(
+        err.contains(needle),
+        "error of {args:?} should name {needle:?}: {err}"
+    );
+    assert!(
+        !err.contains("panicked"),
+        "cliffmap {args:?} panicked: {err}"
+    );
 }
 
 /// Runs the Khronos glTF validator (tools/js, installed by `.ci/run` with `npm ci --prefix
@@ -39,8 +48,17 @@ pub fn validate_gltf(files: &[&std::path::Path]) {
         tools.join("node_modules/gltf-validator").exists(),
         "the glTF validator is not installed: run `npm ci --prefix tools/js` (as .ci/run does)"
     );
-    let o = Command::new("node").arg(tools.join("validate_gltf.mjs")).args(files).output().expect("cannot start node");
-    assert!(o.status.success(), "glTF validation failed:\n{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let o = Command::new("node")
+        .arg(tools.join("validate_gltf.mjs"))
+        .args(files)
+        .output()
+        .expect("cannot start node");
+    assert!(
+        o.status.success(),
+        "glTF validation failed:\n{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// A path as `&str` for argument lists.
@@ -84,5 +102,20 @@ pub fn write_cliff_dem(path: &std::path::Path) {
 
 /// `cliffmap build` arguments for [`write_cliff_dem`]'s DEM into `out`.
 pub fn cliff_build_args<'a>(dem: &'a std::path::Path, out: &'a std::path::Path) -> Vec<&'a str> {
-    vec!["build", "--dem", s(dem), "--width", "129", "--height", "129", "--spacing", "2", "--cell-intervals", "32", "--quiet", "--out", s(out)]
+    vec![
+        "build",
+        "--dem",
+        s(dem),
+        "--width",
+        "129",
+        "--height",
+        "129",
+        "--spacing",
+        "2",
+        "--cell-intervals",
+        "32",
+        "--quiet",
+        "--out",
+        s(out),
+    ]
 }

@@ -11,7 +11,10 @@ use std::path::PathBuf;
 pub fn real_data(rel: &str) -> PathBuf {
     let candidates = [
         std::env::var_os("CLIFFMAP_SHARED_DATA").map(PathBuf::from),
-        Some(PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"))),
+        Some(PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../shared/data/real"
+        ))),
         Some(PathBuf::from("/work/shared/data/real")),
     ];
     for dir in candidates.into_iter().flatten() {
@@ -57,14 +60,39 @@ pub fn engabreen_ortho(dem: &Dem) -> Ortho {
 /// A small store of the demo scene (129 × 129 samples at 4 m, max error 0.5 m, 32-interval
 /// cells with 64² textures) in `dir`, reparameterized when `reparam`.
 pub fn small_demo_store(dir: &std::path::Path, reparam: bool) {
-    use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
-    let scene = cliffmap::scene::DemoScene { samples: 129, spacing: 4.0, ..cliffmap::scene::DemoScene::default() };
+    use cliffmap::pipeline::{
+        BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store,
+    };
+    let scene = cliffmap::scene::DemoScene {
+        samples: 129,
+        spacing: 4.0,
+        ..cliffmap::scene::DemoScene::default()
+    };
     let (dem, ortho) = scene.generate().unwrap();
-    let inputs =
-        BuildInputs { dem: &dem, ortho: Some(&ortho), dem_source: "t".into(), ortho_source: Some("t".into()), fingerprint: "small-demo".into() };
-    let opts = BuildOptions { max_error: 0.5, cell_intervals: 32, cell_texels: 64, quiet: true, force: true, ..BuildOptions::default() };
+    let inputs = BuildInputs {
+        dem: &dem,
+        ortho: Some(&ortho),
+        dem_source: "t".into(),
+        ortho_source: Some("t".into()),
+        fingerprint: "small-demo".into(),
+    };
+    let opts = BuildOptions {
+        max_error: 0.5,
+        cell_intervals: 32,
+        cell_texels: 64,
+        quiet: true,
+        force: true,
+        ..BuildOptions::default()
+    };
     build_store(&inputs, &opts, dir).unwrap();
     if reparam {
-        reparam_store(dir, &ReparamOptions { quiet: true, ..ReparamOptions::default() }).unwrap();
+        reparam_store(
+            dir,
+            &ReparamOptions {
+                quiet: true,
+                ..ReparamOptions::default()
+            },
+        )
+        .unwrap();
     }
 }

@@ -31,9 +31,30 @@ fn write_geo<W: std::io::Write + std::io::Seek, K: tiff::encoder::TiffKind>(
     dir: &mut tiff::encoder::DirectoryEncoder<'_, W, K>,
     geo: &Geo,
 ) {
-    dir.write_tag(Tag::ModelPixelScaleTag, &[geo.scale.0, geo.scale.1, 0.0][..]).unwrap();
-    dir.write_tag(Tag::ModelTiepointTag, &[geo.tie.0, geo.tie.1, 0.0, geo.tie.2, geo.tie.3, 0.0][..]).unwrap();
-    let mut keys: Vec<u16> = vec![1, 1, 0, 0, 1024, 0, 1, 1, 1025, 0, 1, if geo.pixel_is_point { 2 } else { 1 }];
+    dir.write_tag(
+        Tag::ModelPixelScaleTag,
+        &[geo.scale.0, geo.scale.1, 0.0][..],
+    )
+    .unwrap();
+    dir.write_tag(
+        Tag::ModelTiepointTag,
+        &[geo.tie.0, geo.tie.1, 0.0, geo.tie.2, geo.tie.3, 0.0][..],
+    )
+    .unwrap();
+    let mut keys: Vec<u16> = vec![
+        1,
+        1,
+        0,
+        0,
+        1024,
+        0,
+        1,
+        1,
+        1025,
+        0,
+        1,
+        if geo.pixel_is_point { 2 } else { 1 },
+    ];
     if let Some(e) = geo.epsg {
         keys.extend_from_slice(&[3072, 0, 1, e]);
     }
@@ -57,7 +78,10 @@ pub fn write_strips<C: ColorType>(
     [C::Inner]: TiffValue,
 {
     let f = BufWriter::new(File::create(path).unwrap());
-    let mut enc = TiffEncoder::new(f).unwrap().with_compression(compression).with_predictor(predictor);
+    let mut enc = TiffEncoder::new(f)
+        .unwrap()
+        .with_compression(compression)
+        .with_predictor(predictor);
     let mut img = enc.new_image::<C>(w, h).unwrap();
     img.rows_per_strip(3).unwrap();
     if let Some(g) = geo {
@@ -127,11 +151,20 @@ pub fn write_raw(path: &Path, raw: &Raw, bytes: &[u8], geo: Option<&Geo>, lie_of
     }
     dir.write_tag(Tag::ImageWidth, raw.width).unwrap();
     dir.write_tag(Tag::ImageLength, raw.height).unwrap();
-    dir.write_tag(Tag::BitsPerSample, &vec![raw.bits; raw.samples as usize][..]).unwrap();
+    dir.write_tag(
+        Tag::BitsPerSample,
+        &vec![raw.bits; raw.samples as usize][..],
+    )
+    .unwrap();
     dir.write_tag(Tag::Compression, 1u16).unwrap();
-    dir.write_tag(Tag::PhotometricInterpretation, raw.photometric).unwrap();
+    dir.write_tag(Tag::PhotometricInterpretation, raw.photometric)
+        .unwrap();
     dir.write_tag(Tag::SamplesPerPixel, raw.samples).unwrap();
-    dir.write_tag(Tag::SampleFormat, &vec![raw.sample_format; raw.samples as usize][..]).unwrap();
+    dir.write_tag(
+        Tag::SampleFormat,
+        &vec![raw.sample_format; raw.samples as usize][..],
+    )
+    .unwrap();
     if raw.extra_alpha {
         dir.write_tag(Tag::ExtraSamples, &[2u16][..]).unwrap();
     }

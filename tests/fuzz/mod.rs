@@ -35,12 +35,31 @@ impl Rng {
         self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
     pub fn below(&mut self, n: usize) -> usize {
-        if n == 0 { 0 } else { (self.next() % n as u64) as usize }
+        if n == 0 {
+            0
+        } else {
+            (self.next() % n as u64) as usize
+        }
     }
 }
 
-const INTERESTING: &[u8] = &[0, 1, 0x7f, 0x80, 0xff, b'0', b'9', b'-', b'.', b'e', b'"', b',', b'{', b'}', b'[', b']', b'\n', b' '];
-const NUMBERS: &[&str] = &["0", "-1", "1e309", "-1e309", "NaN", "4294967296", "18446744073709551616", "1e-320", "99999999", "-0", "3.5"];
+const INTERESTING: &[u8] = &[
+    0, 1, 0x7f, 0x80, 0xff, b'0', b'9', b'-', b'.', b'e', b'"', b',', b'{', b'}', b'[', b']',
+    b'\n', b' ',
+];
+const NUMBERS: &[&str] = &[
+    "0",
+    "-1",
+    "1e309",
+    "-1e309",
+    "NaN",
+    "4294967296",
+    "18446744073709551616",
+    "1e-320",
+    "99999999",
+    "-0",
+    "3.5",
+];
 
 /// A mutation of `input` (1–4 operations).
 pub fn mutate(rng: &mut Rng, input: &[u8], other: &[u8]) -> Vec<u8> {
@@ -78,7 +97,9 @@ pub fn mutate(rng: &mut Rng, input: &[u8], other: &[u8]) -> Vec<u8> {
                 // replace a run of digits by an interesting number
                 let i = rng.below(n);
                 if let Some(s) = (i..n).find(|&k| v[k].is_ascii_digit()) {
-                    let e = (s..n).find(|&k| !v[k].is_ascii_digit() && v[k] != b'.').unwrap_or(n);
+                    let e = (s..n)
+                        .find(|&k| !v[k].is_ascii_digit() && v[k] != b'.')
+                        .unwrap_or(n);
                     let num = NUMBERS[rng.below(NUMBERS.len())].as_bytes().to_vec();
                     v.splice(s..e, num);
                 }
@@ -112,30 +133,51 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
 pub const MAX_MEMORY: u64 = 64 << 20;
 
 fn dem_opts(format: Option<DemFormat>) -> DemLoadOptions {
-    DemLoadOptions { format, max_memory: MAX_MEMORY, ..Default::default() }
+    DemLoadOptions {
+        format,
+        max_memory: MAX_MEMORY,
+        ..Default::default()
+    }
 }
 
 fn png16_seed() -> Vec<u8> {
-    let img = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 6, |x, y| image::Luma([(x * 977 + y * 131) as u16]));
+    let img = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 6, |x, y| {
+        image::Luma([(x * 977 + y * 131) as u16])
+    });
     let mut c = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut c, image::ImageFormat::Png).expect("png encodes");
+    img.write_to(&mut c, image::ImageFormat::Png)
+        .expect("png encodes");
     c.into_inner()
 }
 
 fn terrain_rgb_seed() -> Vec<u8> {
-    let img = image::RgbImage::from_fn(8, 6, |x, y| image::Rgb([1, (x * 20) as u8, (y * 30) as u8]));
+    let img =
+        image::RgbImage::from_fn(8, 6, |x, y| image::Rgb([1, (x * 20) as u8, (y * 30) as u8]));
     let mut c = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut c, image::ImageFormat::Png).expect("png encodes");
+    img.write_to(&mut c, image::ImageFormat::Png)
+        .expect("png encodes");
     c.into_inner()
 }
 
 fn geotiff_seeds(dir: &Path) -> Vec<Vec<u8>> {
     use super::common::tiffgen::{Geo, write_strips};
     use tiff::encoder::{Compression, Predictor, colortype};
-    let geo = Geo { scale: (2.0, 2.0), tie: (0.0, 0.0, 500000.0, 7000000.0), pixel_is_point: false, epsg: Some(32633), nodata: Some("-9999".into()) };
+    let geo = Geo {
+        scale: (2.0, 2.0),
+        tie: (0.0, 0.0, 500000.0, 7000000.0),
+        pixel_is_point: false,
+        epsg: Some(32633),
+        nodata: Some("-9999".into()),
+    };
     let data: Vec<f32> = (0..8 * 6).map(|i| 100.0 + i as f32 * 0.5).collect();
     let mut out = Vec::new();
-    for (k, comp) in [Compression::Uncompressed, Compression::Deflate(Default::default())].into_iter().enumerate() {
+    for (k, comp) in [
+        Compression::Uncompressed,
+        Compression::Deflate(Default::default()),
+    ]
+    .into_iter()
+    .enumerate()
+    {
         let p = dir.join(format!("seed{k}.tif"));
         write_strips::<colortype::Gray32Float>(&p, 8, 6, &data, comp, Predictor::None, Some(&geo));
         out.push(std::fs::read(&p).expect("seed written"));
@@ -158,7 +200,8 @@ fn camera_seeds() -> Vec<Vec<u8>> {
     };
     vec![
         serde_json::to_vec_pretty(&camera_to_json(&cam)).expect("serializes"),
-        serde_json::to_vec_pretty(&cliffmap::camera::camera_to_imgraft_json(&cam)).expect("serializes"),
+        serde_json::to_vec_pretty(&cliffmap::camera::camera_to_imgraft_json(&cam))
+            .expect("serializes"),
     ]
 }
 
@@ -170,7 +213,9 @@ fn photo_list_files(dir: &Path) {
         return;
     }
     let cams = camera_seeds();
-    image::RgbImage::new(1600, 1200).save(dir.join("a.png")).expect("png written");
+    image::RgbImage::new(1600, 1200)
+        .save(dir.join("a.png"))
+        .expect("png written");
     write(dir, "a.json", &cams[0]);
     write(dir, "b.json", &cams[1]);
 }
@@ -183,11 +228,36 @@ const GCP_CSV: &str = "x,y,z,u,v,name,weight\n446722.1,7396671.2,770.3,1960,1203
 /// A tiny store built from a 33 x 33 DEM (its manifest and one mesh are the seeds).
 fn store_seeds(dir: &Path) -> (Vec<u8>, Vec<u8>) {
     use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-    let heights: Vec<f32> = (0..33 * 33).map(|i| if i % 33 > 15 { 40.0 } else { 0.0 } + (i / 33) as f32 * 0.3).collect();
-    let dem = cliffmap::Dem::from_heights(33, 33, heights, cliffmap::GridGeoref::new(500000.0, 7000000.0, 2.0)).expect("valid dem");
+    let heights: Vec<f32> = (0..33 * 33)
+        .map(|i| if i % 33 > 15 { 40.0 } else { 0.0 } + (i / 33) as f32 * 0.3)
+        .collect();
+    let dem = cliffmap::Dem::from_heights(
+        33,
+        33,
+        heights,
+        cliffmap::GridGeoref::new(500000.0, 7000000.0, 2.0),
+    )
+    .expect("valid dem");
     let out = dir.join("seed_store");
-    let inputs = BuildInputs { dem: &dem, ortho: None, dem_source: "fuzz".into(), ortho_source: None, fingerprint: "fuzz".into() };
-    let m = build_store(&inputs, &BuildOptions { max_error: 0.5, cell_intervals: 16, cell_texels: 16, quiet: true, force: true }, &out).expect("builds");
+    let inputs = BuildInputs {
+        dem: &dem,
+        ortho: None,
+        dem_source: "fuzz".into(),
+        ortho_source: None,
+        fingerprint: "fuzz".into(),
+    };
+    let m = build_store(
+        &inputs,
+        &BuildOptions {
+            max_error: 0.5,
+            cell_intervals: 16,
+            cell_texels: 16,
+            quiet: true,
+            force: true,
+        },
+        &out,
+    )
+    .expect("builds");
     let manifest = std::fs::read(out.join("manifest.json")).expect("manifest");
     let mesh = std::fs::read(out.join(&m.cells[0].files.mesh.path)).expect("mesh");
     (manifest, mesh)
@@ -196,24 +266,57 @@ fn store_seeds(dir: &Path) -> (Vec<u8>, Vec<u8>) {
 /// Every target with its generated seeds (`scratch` holds seed files).
 pub fn targets(scratch: &Path) -> Vec<Target> {
     let (manifest, mesh) = store_seeds(scratch);
-    let raw: Vec<u8> = (0..64).flat_map(|i| (100.0f32 + i as f32).to_le_bytes()).collect();
+    let raw: Vec<u8> = (0..64)
+        .flat_map(|i| (100.0f32 + i as f32).to_le_bytes())
+        .collect();
     vec![
-        Target { name: "dem_geotiff", seeds: geotiff_seeds(scratch), run: |b, d| load_dem(&write(d, "f.tif", b), &dem_opts(None)).is_ok() },
-        Target { name: "dem_png16", seeds: vec![png16_seed()], run: |b, d| load_dem(&write(d, "f.png", b), &dem_opts(Some(DemFormat::Png16))).is_ok() },
+        Target {
+            name: "dem_geotiff",
+            seeds: geotiff_seeds(scratch),
+            run: |b, d| load_dem(&write(d, "f.tif", b), &dem_opts(None)).is_ok(),
+        },
+        Target {
+            name: "dem_png16",
+            seeds: vec![png16_seed()],
+            run: |b, d| load_dem(&write(d, "f.png", b), &dem_opts(Some(DemFormat::Png16))).is_ok(),
+        },
         Target {
             name: "dem_terrain_rgb",
             seeds: vec![terrain_rgb_seed()],
-            run: |b, d| (load_dem(&write(d, "f.png", b), &dem_opts(Some(DemFormat::TerrainRgb)))).is_ok(),
+            run: |b, d| {
+                (load_dem(
+                    &write(d, "f.png", b),
+                    &dem_opts(Some(DemFormat::TerrainRgb)),
+                ))
+                .is_ok()
+            },
         },
         Target {
             name: "dem_raw_f32",
             seeds: vec![raw],
-            run: |b, d| (load_dem(&write(d, "f.f32", b), &DemLoadOptions { width: Some(8), height: Some(8), ..dem_opts(None) })).is_ok(),
+            run: |b, d| {
+                (load_dem(
+                    &write(d, "f.f32", b),
+                    &DemLoadOptions {
+                        width: Some(8),
+                        height: Some(8),
+                        ..dem_opts(None)
+                    },
+                ))
+                .is_ok()
+            },
         },
         Target {
             name: "camera_json",
             seeds: camera_seeds(),
-            run: |b, _| (camera_from_json_str(&String::from_utf8_lossy(b), Path::new("fuzz.json"), (1600, 1200))).is_ok(),
+            run: |b, _| {
+                (camera_from_json_str(
+                    &String::from_utf8_lossy(b),
+                    Path::new("fuzz.json"),
+                    (1600, 1200),
+                ))
+                .is_ok()
+            },
         },
         Target {
             name: "photos_json",
@@ -229,8 +332,12 @@ pub fn targets(scratch: &Path) -> Vec<Target> {
             run: |b, d| {
                 // cameras.txt and images.txt joined by a 0x01 byte
                 if !d.join("b.png").exists() {
-                    image::RgbImage::new(1600, 1200).save(d.join("a.png")).expect("png written");
-                    image::RgbImage::new(800, 600).save(d.join("b.png")).expect("png written");
+                    image::RgbImage::new(1600, 1200)
+                        .save(d.join("a.png"))
+                        .expect("png written");
+                    image::RgbImage::new(800, 600)
+                        .save(d.join("b.png"))
+                        .expect("png written");
                 }
                 let text = String::from_utf8_lossy(b);
                 let (cams, imgs) = text.split_once('\u{1}').unwrap_or((&text, ""));
@@ -242,7 +349,14 @@ pub fn targets(scratch: &Path) -> Vec<Target> {
         Target {
             name: "gcp",
             seeds: vec![GCP_TEXT.as_bytes().to_vec(), GCP_CSV.as_bytes().to_vec()],
-            run: |b, _| (parse_gcps(&String::from_utf8_lossy(b), Path::new("fuzz.gcp"), PixelOrigin::Format)).is_ok(),
+            run: |b, _| {
+                (parse_gcps(
+                    &String::from_utf8_lossy(b),
+                    Path::new("fuzz.gcp"),
+                    PixelOrigin::Format,
+                ))
+                .is_ok()
+            },
         },
         Target {
             name: "manifest",
@@ -252,14 +366,22 @@ pub fn targets(scratch: &Path) -> Vec<Target> {
                 Manifest::read(d).is_ok()
             },
         },
-        Target { name: "mesh", seeds: vec![mesh], run: |b, _| CellMesh::from_bytes(b, Path::new("fuzz.mesh")).is_ok() },
+        Target {
+            name: "mesh",
+            seeds: vec![mesh],
+            run: |b, _| CellMesh::from_bytes(b, Path::new("fuzz.mesh")).is_ok(),
+        },
     ]
 }
 
 /// The checked-in corpus files of `target` (fuzz/corpus/NAME/*), sorted.
 pub fn corpus(name: &str) -> Vec<Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus").join(name);
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir).map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).collect()).unwrap_or_default();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/corpus")
+        .join(name);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
     files.sort();
     files.iter().filter_map(|p| std::fs::read(p).ok()).collect()
 }
@@ -280,7 +402,14 @@ pub struct Report {
 }
 
 /// Runs `target` on its seeds, then on `iterations` mutations (or until `deadline`).
-pub fn fuzz(target: &Target, extra: &[Vec<u8>], seed: u64, iterations: u64, deadline: Option<std::time::Instant>, scratch: &Path) -> Report {
+pub fn fuzz(
+    target: &Target,
+    extra: &[Vec<u8>],
+    seed: u64,
+    iterations: u64,
+    deadline: Option<std::time::Instant>,
+    scratch: &Path,
+) -> Report {
     let dir = scratch.join(target.name);
     std::fs::create_dir_all(&dir).expect("scratch directory");
     let pool: Vec<Vec<u8>> = target.seeds.iter().chain(extra).cloned().collect();
@@ -288,13 +417,18 @@ pub fn fuzz(target: &Target, extra: &[Vec<u8>], seed: u64, iterations: u64, dead
     let mut rep = Report::default();
     let one = |input: &[u8], rep: &mut Report| -> bool {
         let t = std::time::Instant::now();
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| (target.run)(input, &dir)));
+        let r =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| (target.run)(input, &dir)));
         rep.slowest_s = rep.slowest_s.max(t.elapsed().as_secs_f64());
         rep.runs += 1;
         let ok = matches!(r, Ok(true));
         rep.accepted += u64::from(ok);
         if let Err(e) = r {
-            let msg = e.downcast_ref::<String>().cloned().or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
+            let msg = e
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
             rep.panics.push((input.to_vec(), msg));
         }
         ok

@@ -5,7 +5,12 @@ use cliffmap::ParamMesh;
 
 /// A mesh of `cols` x `rows` samples; sample (r, c) is at (xs[c], ys[r], z(r, c)) plus
 /// `offset`. Two triangles per quad, counter-clockwise seen from +z (ys increasing).
-pub fn grid_mesh(xs: &[f64], ys: &[f64], z: impl Fn(usize, usize) -> f64, offset: [f64; 3]) -> ParamMesh {
+pub fn grid_mesh(
+    xs: &[f64],
+    ys: &[f64],
+    z: impl Fn(usize, usize) -> f64,
+    offset: [f64; 3],
+) -> ParamMesh {
     let (cols, rows) = (xs.len(), ys.len());
     let mut positions = Vec::with_capacity(cols * rows);
     for (r, &y) in ys.iter().enumerate() {
@@ -30,7 +35,10 @@ pub fn grid_mesh(xs: &[f64], ys: &[f64], z: impl Fn(usize, usize) -> f64, offset
             }
         }
     }
-    ParamMesh { positions, triangles }
+    ParamMesh {
+        positions,
+        triangles,
+    }
 }
 
 /// A square `n` x `n` grid with unit spacing and heights `z(r, c)`.
@@ -51,5 +59,11 @@ pub fn wall(n: usize, deg: f64) -> ParamMesh {
 pub fn box_plateau(n: usize, deg: f64) -> ParamMesh {
     let h = deg.to_radians().tan();
     let (lo, hi) = (n / 3, n - 1 - n / 3);
-    height_grid(n, move |r, c| if (lo..=hi).contains(&r) && (lo..=hi).contains(&c) { h } else { 0.0 })
+    height_grid(n, move |r, c| {
+        if (lo..=hi).contains(&r) && (lo..=hi).contains(&c) {
+            h
+        } else {
+            0.0
+        }
+    })
 }

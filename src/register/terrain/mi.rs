@@ -52,7 +52,10 @@ impl GreyImage {
                         }
                     }
                     let s = s.map(|v| v / n.max(1) as f32);
-                    [0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2], (s[2] - s[0]) / (s[0] + s[1] + s[2] + 30.0)]
+                    [
+                        0.2126 * s[0] + 0.7152 * s[1] + 0.0722 * s[2],
+                        (s[2] - s[0]) / (s[0] + s[1] + s[2] + 30.0),
+                    ]
                 })
             })
             .collect();
@@ -61,7 +64,14 @@ impl GreyImage {
             v.sort_unstable_by(f32::total_cmp);
             let lo = v[v.len() / 100];
             let hi = v[(v.len() * 99 / 100).min(v.len() - 1)];
-            (lo, if hi > lo { (classes - 1) as f32 / (hi - lo) } else { 0.0 })
+            (
+                lo,
+                if hi > lo {
+                    (classes - 1) as f32 / (hi - lo)
+                } else {
+                    0.0
+                },
+            )
         };
         let (l0, ls) = stretch(0, LUMA);
         let (c0, cs) = stretch(1, CHROMA);
@@ -70,14 +80,19 @@ impl GreyImage {
             data.push(((p[0] - l0) * ls).clamp(0.0, (LUMA - 1) as f32));
             data.push(((p[1] - c0) * cs).clamp(0.0, (CHROMA - 1) as f32));
         }
-        GreyImage { width: w, height: h, data }
+        GreyImage {
+            width: w,
+            height: h,
+            data,
+        }
     }
 
     /// Bilinear (luma, chroma) at pixel position (u, v) (pixel-centre convention), `None`
     /// outside.
     #[inline]
     fn at(&self, u: f64, v: f64) -> Option<[f32; 2]> {
-        if !(u >= 0.0 && v >= 0.0 && u <= (self.width - 1) as f64 && v <= (self.height - 1) as f64) {
+        if !(u >= 0.0 && v >= 0.0 && u <= (self.width - 1) as f64 && v <= (self.height - 1) as f64)
+        {
             return None;
         }
         let (x0, y0) = (u.floor() as usize, v.floor() as usize);
@@ -117,7 +132,10 @@ pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
                     }
                     continue;
                 };
-                let (l, c) = ((g[0].floor() as usize).min(LUMA - 2), (g[1].floor() as usize).min(CHROMA - 2));
+                let (l, c) = (
+                    (g[0].floor() as usize).min(LUMA - 2),
+                    (g[1].floor() as usize).min(CHROMA - 2),
+                );
                 let (fl, fc) = (g[0] - l as f32, g[1] - c as f32);
                 joint[row + c * LUMA + l] += (1.0 - fl) * (1.0 - fc);
                 joint[row + c * LUMA + l + 1] += fl * (1.0 - fc);
@@ -150,7 +168,12 @@ pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
             }
         }
     }
-    let ent = |v: &[f64]| -v.iter().filter(|&&p| p > 0.0).map(|&p| p * p.ln()).sum::<f64>();
+    let ent = |v: &[f64]| {
+        -v.iter()
+            .filter(|&&p| p > 0.0)
+            .map(|&p| p * p.ln())
+            .sum::<f64>()
+    };
     if h_joint <= 0.0 {
         return 1.0;
     }

@@ -79,14 +79,23 @@ impl TerrainOptions {
         if self.free.is_empty() {
             return Err(Error::BadOption("register: no free parameters".into()));
         }
-        if let Some(p) = self.free.iter().find(|p| matches!(p, Param::X | Param::Y | Param::Z)) {
+        if let Some(p) = self
+            .free
+            .iter()
+            .find(|p| matches!(p, Param::X | Param::Y | Param::Z))
+        {
             return Err(Error::BadOption(format!(
                 "register: the camera position ({}) cannot be refined against the terrain yet (measured: the score \
                  drifts with it, docs/registration.md); fit it from GCPs with fit-camera, or keep it fixed",
                 p.name()
             )));
         }
-        if let Some(p) = self.free.iter().find(|p| !matches!(p, Param::Yaw | Param::Pitch | Param::Roll | Param::F | Param::Fx | Param::Fy)) {
+        if let Some(p) = self.free.iter().find(|p| {
+            !matches!(
+                p,
+                Param::Yaw | Param::Pitch | Param::Roll | Param::F | Param::Fx | Param::Fy
+            )
+        }) {
             return Err(Error::BadOption(format!(
                 "register: parameter {} cannot be refined against the terrain (free: yaw, pitch, roll, f, fx, fy)",
                 p.name()
@@ -125,7 +134,12 @@ pub struct TerrainFit {
 /// module docs. Errors for parameters that cannot be registered this way or a camera not
 /// sized like the photo; a search that does not converge is a result with
 /// `converged: false`, not an error.
-pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &CameraModel, opts: &TerrainOptions) -> Result<TerrainFit> {
+pub fn register_to_terrain(
+    terrain: &TerrainScene,
+    photo: &RgbImage,
+    rough: &CameraModel,
+    opts: &TerrainOptions,
+) -> Result<TerrainFit> {
     let t0 = Instant::now();
     if (rough.width, rough.height) != photo.dimensions() {
         return Err(Error::BadOption(format!(
@@ -151,9 +165,19 @@ pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &Cam
     let f16 = cam16.fx;
     let angle_free = [Param::Yaw, Param::Pitch, Param::Roll].map(|p| opts.free.contains(&p));
     let step = 0.7 / f16; // radians: 0.7 px at this scale
-    let counts: [i64; 3] = [0, 1, 2].map(|k| if angle_free[k] { (opts.search_deg[k].to_radians() / step).ceil() as i64 } else { 0 });
+    let counts: [i64; 3] = [0, 1, 2].map(|k| {
+        if angle_free[k] {
+            (opts.search_deg[k].to_radians() / step).ceil() as i64
+        } else {
+            0
+        }
+    });
     let roll_step = 0.7 / (cam16.width as f64 / 2.0).max(1.0); // radians: 0.7 px at the side
-    let roll_n = if angle_free[2] { (opts.search_deg[2].to_radians() / roll_step).ceil() as i64 } else { 0 };
+    let roll_n = if angle_free[2] {
+        (opts.search_deg[2].to_radians() / roll_step).ceil() as i64
+    } else {
+        0
+    };
     let mut grid: Vec<[f64; 3]> = Vec::new();
     for r in -roll_n..=roll_n {
         for p in -counts[1]..=counts[1] {
@@ -179,7 +203,10 @@ pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &Cam
     let mut peaks: Vec<[f64; 3]> = Vec::new();
     for &i in &order {
         let g = grid[i];
-        if peaks.iter().all(|p| (0..3).any(|k| (p[k] - g[k]).abs() > 4.0 * step)) {
+        if peaks
+            .iter()
+            .all(|p| (0..3).any(|k| (p[k] - g[k]).abs() > 4.0 * step))
+        {
             peaks.push(g);
         }
         if peaks.len() == 3 {
@@ -189,9 +216,17 @@ pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &Cam
 
     // Nelder-Mead from each peak on photos reduced 2 and 4 times less than the grid's; the
     // best goes on through every finer scale.
-    let space = Space { base: start, free: opts.free.clone(), depth, bounds: opts.bounds };
+    let space = Space {
+        base: start,
+        free: opts.free.clone(),
+        depth,
+        bounds: opts.bounds,
+    };
     let mut best: Option<(CameraParams, f64)> = None;
-    let levels: Vec<u32> = [coarse / 2, coarse / 4].into_iter().filter(|&f| f > finest).collect();
+    let levels: Vec<u32> = [coarse / 2, coarse / 4]
+        .into_iter()
+        .filter(|&f| f > finest)
+        .collect();
     for peak in &peaks {
         let mut c = start;
         for k in 0..3 {
@@ -227,7 +262,12 @@ pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &Cam
         evals += e;
         (cam, score) = (c2, s2);
     }
-    let samples = terrain.sample(&scaled(&cam.camera(), &grey), 1.0, 0.04, Some(band_width(finest)))?;
+    let samples = terrain.sample(
+        &scaled(&cam.camera(), &grey),
+        1.0,
+        0.04,
+        Some(band_width(finest)),
+    )?;
     let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
     let mut repeat: f64 = 0.0;
     for kick in [[3.0, -3.0], [-3.0, 3.0]] {
@@ -244,9 +284,14 @@ pub fn register_to_terrain(terrain: &TerrainScene, photo: &RgbImage, rough: &Cam
     let reason = if at_bound {
         Some("the search reached the largest change allowed".to_string())
     } else if repeat > opts.repeat_px {
-        Some(format!("restarts disagree by {repeat:.2} px (limit {:.2} px)", opts.repeat_px))
+        Some(format!(
+            "restarts disagree by {repeat:.2} px (limit {:.2} px)",
+            opts.repeat_px
+        ))
     } else if score <= score_start {
-        Some(format!("the score did not rise ({score_start:.4} -> {score:.4})"))
+        Some(format!(
+            "the score did not rise ({score_start:.4} -> {score:.4})"
+        ))
     } else {
         None
     };
@@ -308,7 +353,13 @@ impl Space {
 
 /// Nelder-Mead at one scale from `from`, with samples cast from `from`: the best camera, its
 /// score and the evaluations spent.
-fn refine(terrain: &TerrainScene, space: &Space, from: &CameraParams, grey: &GreyImage, step_px: f64) -> Result<(CameraParams, f64, usize)> {
+fn refine(
+    terrain: &TerrainScene,
+    space: &Space,
+    from: &CameraParams,
+    grey: &GreyImage,
+    step_px: f64,
+) -> Result<(CameraParams, f64, usize)> {
     let cam = scaled(&from.camera(), grey);
     let factor = (from.size.0 / grey.width.max(1)).max(1);
     let samples = terrain.sample(&cam, 1.0, 0.06, Some(band_width(factor)))?;
@@ -341,7 +392,10 @@ fn median_depth(terrain: &TerrainScene, cam: &CameraModel) -> f64 {
     let mut d: Vec<f64> = Vec::new();
     for j in 1..16 {
         for i in 1..16 {
-            let (u, v) = (cam.width as f64 * i as f64 / 16.0, cam.height as f64 * j as f64 / 16.0);
+            let (u, v) = (
+                cam.width as f64 * i as f64 / 16.0,
+                cam.height as f64 * j as f64 / 16.0,
+            );
             if let Some(dir) = cam.pixel_ray(u, v) {
                 if let Some(p) = terrain.hit(cam.position, dir) {
                     d.push((p - cam.position).length());
@@ -358,8 +412,16 @@ fn median_depth(terrain: &TerrainScene, cam: &CameraModel) -> f64 {
 pub fn pixel_distance(a: &CameraModel, b: &CameraModel, depth: f64) -> f64 {
     let (w, h) = (a.width as f64, a.height as f64);
     let mut worst: f64 = 0.0;
-    for (u, v) in [(0.0, 0.0), (w - 1.0, 0.0), (0.0, h - 1.0), (w - 1.0, h - 1.0), (w / 2.0, h / 2.0)] {
-        let Some(dir) = a.pixel_ray(u, v) else { continue };
+    for (u, v) in [
+        (0.0, 0.0),
+        (w - 1.0, 0.0),
+        (0.0, h - 1.0),
+        (w - 1.0, h - 1.0),
+        (w / 2.0, h / 2.0),
+    ] {
+        let Some(dir) = a.pixel_ray(u, v) else {
+            continue;
+        };
         let p: DVec3 = a.position + dir * depth;
         match b.project(p) {
             Some(q) => worst = worst.max(((q[0] - u).powi(2) + (q[1] - v).powi(2)).sqrt()),

@@ -24,18 +24,30 @@ pub fn maximise(
     }
     let mut vals: Vec<f64> = pts.iter().map(|p| f(p)).collect();
     let mut evals = n + 1;
-    let lerp = |a: &[f64], b: &[f64], t: f64| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect() };
+    let lerp = |a: &[f64], b: &[f64], t: f64| -> Vec<f64> {
+        a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect()
+    };
     while evals < max_evals {
         // Order best (highest) first; ties keep their order, so the run is deterministic.
         let mut order: Vec<usize> = (0..=n).collect();
         order.sort_by(|&a, &b| vals[b].total_cmp(&vals[a]));
         pts = order.iter().map(|&i| pts[i].clone()).collect();
         vals = order.iter().map(|&i| vals[i]).collect();
-        let spread_x = pts[1..].iter().map(|p| p.iter().zip(&pts[0]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+        let spread_x = pts[1..]
+            .iter()
+            .map(|p| {
+                p.iter()
+                    .zip(&pts[0])
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max);
         if vals[0] - vals[n] <= ftol && spread_x <= xtol {
             break;
         }
-        let centroid: Vec<f64> = (0..n).map(|k| pts[..n].iter().map(|p| p[k]).sum::<f64>() / n as f64).collect();
+        let centroid: Vec<f64> = (0..n)
+            .map(|k| pts[..n].iter().map(|p| p[k]).sum::<f64>() / n as f64)
+            .collect();
         let worst = pts[n].clone();
         let xr = lerp(&centroid, &worst, -1.0);
         let fr = f(&xr);
@@ -69,7 +81,9 @@ pub fn maximise(
             }
         }
     }
-    let best = (0..=n).max_by(|&a, &b| vals[a].total_cmp(&vals[b]).then(b.cmp(&a))).unwrap_or(0);
+    let best = (0..=n)
+        .max_by(|&a, &b| vals[a].total_cmp(&vals[b]).then(b.cmp(&a)))
+        .unwrap_or(0);
     (pts[best].clone(), vals[best], evals)
 }
 
@@ -79,8 +93,15 @@ mod tests {
 
     #[test]
     fn finds_the_peak_of_a_tilted_quadratic() {
-        let mut f = |x: &[f64]| -((x[0] - 1.0).powi(2) + 10.0 * (x[1] + 2.0 - 0.5 * x[0]).powi(2) + (x[2] - 0.3).powi(2));
+        let mut f = |x: &[f64]| {
+            -((x[0] - 1.0).powi(2)
+                + 10.0 * (x[1] + 2.0 - 0.5 * x[0]).powi(2)
+                + (x[2] - 0.3).powi(2))
+        };
         let (x, v, evals) = maximise(&mut f, &[0.0, 0.0, 0.0], 1.0, 1e-7, 1e-12, 5000);
-        assert!((x[0] - 1.0).abs() < 1e-4 && (x[1] + 1.5).abs() < 1e-4 && (x[2] - 0.3).abs() < 1e-4, "{x:?} {v} {evals}");
+        assert!(
+            (x[0] - 1.0).abs() < 1e-4 && (x[1] + 1.5).abs() < 1e-4 && (x[2] - 0.3).abs() < 1e-4,
+            "{x:?} {v} {evals}"
+        );
     }
 }

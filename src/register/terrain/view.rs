@@ -52,8 +52,17 @@ impl<'a> TerrainScene<'a> {
     /// The finest level of `store`, in an f32 frame centred on `near` (a camera position).
     pub fn new(store: &'a Store, near: DVec3) -> Result<TerrainScene<'a>> {
         let level = store.manifest.quadtree.levels.saturating_sub(1);
-        let scene = LevelScene::from_store(store, level, near, crate::photo::RayAccel::Bvh(crate::photo::BvhQuality::default()))?;
-        let (mut lo, mut hi, mut top_z) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], f64::NEG_INFINITY);
+        let scene = LevelScene::from_store(
+            store,
+            level,
+            near,
+            crate::photo::RayAccel::Bvh(crate::photo::BvhQuality::default()),
+        )?;
+        let (mut lo, mut hi, mut top_z) = (
+            [f64::INFINITY; 2],
+            [f64::NEG_INFINITY; 2],
+            f64::NEG_INFINITY,
+        );
         for c in &scene.cells {
             for p in &c.positions {
                 let w = c.origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
@@ -63,7 +72,14 @@ impl<'a> TerrainScene<'a> {
             }
         }
         let n = scene.cells.len();
-        Ok(TerrainScene { store, scene, textures: std::sync::Mutex::new(vec![None; n]), top_z, lo, hi })
+        Ok(TerrainScene {
+            store,
+            scene,
+            textures: std::sync::Mutex::new(vec![None; n]),
+            top_z,
+            lo,
+            hi,
+        })
     }
 
     /// Samples of the view of `cam` at the centres of a `step`-pixel grid inside the image
@@ -75,13 +91,24 @@ impl<'a> TerrainScene<'a> {
     /// are dropped. With `band = Some(w)` only the samples within `w` grid steps of a
     /// layer boundary (sky against terrain, dropped against kept, or a distance jump of
     /// more than 25 %: the silhouettes) are kept. Deterministic.
-    pub fn sample(&self, cam: &CameraModel, step: f64, margin: f64, band: Option<usize>) -> Result<Vec<Sample>> {
+    pub fn sample(
+        &self,
+        cam: &CameraModel,
+        step: f64,
+        margin: f64,
+        band: Option<usize>,
+    ) -> Result<Vec<Sample>> {
         let (w, h) = (cam.width as f64, cam.height as f64);
         let (u0, v0) = (margin * w, margin * h);
-        let (nu, nv) = (((w - 2.0 * u0) / step).floor() as usize, ((h - 2.0 * v0) / step).floor() as usize);
+        let (nu, nv) = (
+            ((w - 2.0 * u0) / step).floor() as usize,
+            ((h - 2.0 * v0) / step).floor() as usize,
+        );
         let caster = cam.ray_caster();
         let origin = (cam.position - self.scene.frame_origin).as_vec3();
-        let Some(bvh) = self.scene.bvh() else { return Ok(Vec::new()) };
+        let Some(bvh) = self.scene.bvh() else {
+            return Ok(Vec::new());
+        };
         // (direction, hit: (triangle, t, bary))
         let raw: Vec<Option<(DVec3, Option<crate::photo::TriHit>)>> = (0..nu * nv)
             .into_par_iter()
@@ -96,11 +123,19 @@ impl<'a> TerrainScene<'a> {
             })
             .collect();
         // Textures of the cells hit.
-        let mut need: Vec<usize> = raw.iter().flatten().filter_map(|(_, h)| h.map(|h| self.scene.cell_of(h.triangle) as usize)).collect();
+        let mut need: Vec<usize> = raw
+            .iter()
+            .flatten()
+            .filter_map(|(_, h)| h.map(|h| self.scene.cell_of(h.triangle) as usize))
+            .collect();
         need.sort_unstable();
         need.dedup();
         self.load_textures(&need)?;
-        let textures = self.textures.lock().map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?.clone();
+        let textures = self
+            .textures
+            .lock()
+            .map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?
+            .clone();
         // Per terrain hit: grey, steep, distance.
         struct Hit {
             point: DVec3,
@@ -120,20 +155,42 @@ impl<'a> TerrainScene<'a> {
                     let plane = self.scene.plane(hh.triangle);
                     let steep = plane[2].abs() < std::f32::consts::FRAC_1_SQRT_2;
                     let tex = self.scene.tri_texcoords(hh.triangle);
-                    let p = [0, 1].map(|k| hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]);
-                    let grey = textures[self.scene.cell_of(hh.triangle) as usize].as_deref().map_or(0.5, |t| grey_at(t, p));
-                    out_at.push(Some(Ok(Hit { point, grey, steep, dist: hh.t })));
+                    let p = [0, 1].map(|k| {
+                        hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]
+                    });
+                    let grey = textures[self.scene.cell_of(hh.triangle) as usize]
+                        .as_deref()
+                        .map_or(0.5, |t| grey_at(t, p));
+                    out_at.push(Some(Ok(Hit {
+                        point,
+                        grey,
+                        steep,
+                        dist: hh.t,
+                    })));
                 }
                 None if self.rises_above(cam.position, *dir) => out_at.push(Some(Err(*dir))),
                 None => out_at.push(None),
             }
         }
-        let mut greys: Vec<f32> = out_at.iter().flatten().filter_map(|a| a.as_ref().ok().map(|h| h.grey)).collect();
-        let mut dists: Vec<f32> = out_at.iter().flatten().filter_map(|a| a.as_ref().ok().map(|h| h.dist)).collect();
+        let mut greys: Vec<f32> = out_at
+            .iter()
+            .flatten()
+            .filter_map(|a| a.as_ref().ok().map(|h| h.grey))
+            .collect();
+        let mut dists: Vec<f32> = out_at
+            .iter()
+            .flatten()
+            .filter_map(|a| a.as_ref().ok().map(|h| h.dist))
+            .collect();
         greys.sort_unstable_by(f32::total_cmp);
         dists.sort_unstable_by(f32::total_cmp);
         let cuts: Vec<f32> = (1..GREY_CLASSES as usize)
-            .map(|k| greys.get(k * greys.len() / GREY_CLASSES as usize).copied().unwrap_or(0.5))
+            .map(|k| {
+                greys
+                    .get(k * greys.len() / GREY_CLASSES as usize)
+                    .copied()
+                    .unwrap_or(0.5)
+            })
             .collect();
         let median = dists.get(dists.len() / 2).copied().unwrap_or(0.0);
         // Layers for the band: 0 dropped, 1 sky, else the hit's distance.
@@ -146,7 +203,11 @@ impl<'a> TerrainScene<'a> {
                     Some(Ok(h)) => h.dist,
                 };
                 let differs = |a: f32, b: f32| {
-                    if a <= 0.0 || b <= 0.0 { a != b } else { a.max(b) > 1.25 * a.min(b) }
+                    if a <= 0.0 || b <= 0.0 {
+                        a != b
+                    } else {
+                        a.max(b) > 1.25 * a.min(b)
+                    }
                 };
                 let mut edge = vec![false; out_at.len()];
                 for r in 0..nv {
@@ -173,9 +234,15 @@ impl<'a> TerrainScene<'a> {
                 Ok(hit) => {
                     let g = cuts.iter().filter(|&&c| hit.grey > c).count() as u8;
                     let class = 2 * u8::from(hit.dist > median) + u8::from(hit.steep);
-                    Sample { at: SampleAt::Point(hit.point), label: 1 + g + GREY_CLASSES * class }
+                    Sample {
+                        at: SampleAt::Point(hit.point),
+                        label: 1 + g + GREY_CLASSES * class,
+                    }
                 }
-                Err(dir) => Sample { at: SampleAt::Sky(dir), label: SKY },
+                Err(dir) => Sample {
+                    at: SampleAt::Sky(dir),
+                    label: SKY,
+                },
             })
             .collect())
     }
@@ -202,7 +269,10 @@ impl<'a> TerrainScene<'a> {
 
     fn load_textures(&self, cells: &[usize]) -> Result<()> {
         let missing: Vec<usize> = {
-            let t = self.textures.lock().map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
+            let t = self
+                .textures
+                .lock()
+                .map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
             cells.iter().copied().filter(|&c| t[c].is_none()).collect()
         };
         let loaded: Vec<(usize, RgbaImage)> = missing
@@ -212,7 +282,10 @@ impl<'a> TerrainScene<'a> {
                 self.store.read_active_texture(rec).map(|t| (c, t))
             })
             .collect::<Result<_>>()?;
-        let mut t = self.textures.lock().map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
+        let mut t = self
+            .textures
+            .lock()
+            .map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
         for (c, img) in loaded {
             t[c] = Some(std::sync::Arc::new(img));
         }
@@ -227,7 +300,10 @@ impl<'a> TerrainScene<'a> {
     /// The first terrain hit of the ray from `from` along the unit `dir` (world), if any.
     pub fn hit(&self, from: DVec3, dir: DVec3) -> Option<DVec3> {
         let origin: Vec3 = (from - self.scene.frame_origin).as_vec3();
-        let h = self.scene.bvh()?.nearest(origin, dir.as_vec3(), 0.05, f32::INFINITY)?;
+        let h = self
+            .scene
+            .bvh()?
+            .nearest(origin, dir.as_vec3(), 0.05, f32::INFINITY)?;
         Some(from + dir * h.t as f64)
     }
 }
@@ -269,17 +345,23 @@ fn dilate_line(src: &[bool], dst: &mut [bool], start: usize, stride: usize, n: u
         if src[start + k * stride] {
             last_set = Some(k);
         }
-        dst[start + k * stride] = last_set.is_some_and(|l| k - l <= w) || (next_set[k] != usize::MAX && next_set[k] - k <= w);
+        dst[start + k * stride] = last_set.is_some_and(|l| k - l <= w)
+            || (next_set[k] != usize::MAX && next_set[k] - k <= w);
     }
 }
 
 /// Two numbers in [-0.5, 0.5) from an index (SplitMix64), the same on every run.
 fn jitter(i: u64) -> (f64, f64) {
-    let mut z = i.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(0x2545_F491_4F6C_DD1D);
+    let mut z = i
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(0x2545_F491_4F6C_DD1D);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^= z >> 31;
-    ((z >> 40) as f64 / (1u64 << 24) as f64 - 0.5, (z & 0xFF_FFFF) as f64 / (1u64 << 24) as f64 - 0.5)
+    (
+        (z >> 40) as f64 / (1u64 << 24) as f64 - 0.5,
+        (z & 0xFF_FFFF) as f64 / (1u64 << 24) as f64 - 0.5,
+    )
 }
 
 #[cfg(test)]
