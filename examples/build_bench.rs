@@ -4,10 +4,18 @@
 //!
 //! ```sh
 //! for n in 1025 2049 4097; do cargo run --release --example build_bench -- $n; done
+//! cargo run --release --example build_bench -- 1025 256 fast,balanced   # PNG compression knob
 //! ```
+//! Arguments: samples per side (default 1025), texture side (default 256) and a
+//! comma-separated list of `--png-compression` values (default `fast`); the scene is
+//! generated once and built once per value (peak RSS is then the maximum so far). Each row
+//! also gives the bytes of the PNG files written and the seconds spent encoding them
+//! (measured by re-encoding the store's PNGs in this process after the build, one thread).
 
 use std::time::Instant;
 
+use clap::ValueEnum;
+use cliffmap::fsutil::{PngCompression, encode_png};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
 
@@ -35,6 +43,13 @@ fn main() -> anyhow::Result<()> {
         .map(|s| s.parse())
         .transpose()?
         .unwrap_or(256);
+    let compressions: Vec<PngCompression> = match std::env::args().nth(3) {
+        None => vec![PngCompression::Fast],
+        Some(list) => list
+            .split(',')
+            .map(|c| PngCompression::from_str(c, true).map_err(|e| anyhow::anyhow!("{c}: {e}")))
+            .collect::<anyhow::Result<_>>()?,
+    };
     let scene = DemoScene {
         samples,
         ..DemoScene::default()
@@ -42,34 +57,55 @@ fn main() -> anyhow::Result<()> {
     let t0 = Instant::now();
     let (dem, ortho) = scene.generate()?;
     let gen_s = t0.elapsed().as_secs_f64();
-    let dir = tempfile::tempdir()?;
-    let opts = BuildOptions {
-        quiet: true,
-        cell_texels: texels,
-        ..BuildOptions::default()
-    };
-    let inputs = BuildInputs {
-        dem: &dem,
-        ortho: Some(&ortho),
-        dem_source: "bench".into(),
-        ortho_source: None,
-        fingerprint: format!("bench-{samples}"),
-    };
-    let t1 = Instant::now();
-    let m = build_store(&inputs, &opts, dir.path())?;
-    let build_s = t1.elapsed().as_secs_f64();
-    let tris: u64 = m.cells.iter().map(|c| c.triangles as u64).sum();
-    let n = (samples * samples) as f64;
-    println!(
-        "| {samples}² | {:.1} M | {} | {} | {} | {:.1} | {:.2} | {:.0} | {:.0} |",
-        n / 1e6,
-        m.quadtree.levels,
-        m.cells.len(),
-        tris,
-        gen_s,
-        build_s,
-        build_s / n * 1e9,
-        peak_rss_mib()
-    );
+    println!("| DEM | samples | levels | cells | triangles | scene gen (s) | PNG compression | build (s) | ns/sample | PNG MB | PNG encode s (1 thread) | peak RSS (MiB) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for compression in compressions {
+        let dir = tempfile::tempdir()?;
+        let opts = BuildOptions {
+            quiet: true,
+            cell_texels: texels,
+            png_compression: compression,
+            ..BuildOptions::default()
+        };
+        let inputs = BuildInputs {
+            dem: &dem,
+            ortho: Some(&ortho),
+            dem_source: "bench".into(),
+            ortho_source: None,
+            fingerprint: format!("bench-{samples}"),
+        };
+        let t1 = Instant::now();
+        let m = build_store(&inputs, &opts, dir.path())?;
+        let build_s = t1.elapsed().as_secs_f64();
+        let tris: u64 = m.cells.iter().map(|c| c.triangles as u64).sum();
+        let (mut png_bytes, mut enc_s) = (0u64, 0.0f64);
+        for c in &m.cells {
+            for f in [&c.files.texture, &c.files.normal] {
+                let path = dir.path().join(&f.path);
+                png_bytes += std::fs::metadata(&path)?.len();
+                let img = image::open(&path)?;
+                let t = Instant::now();
+                match img {
+                    image::DynamicImage::ImageRgb8(i) => drop(encode_png(&path, &i, compression)?),
+                    other => drop(encode_png(&path, &other.to_rgba8(), compression)?),
+                }
+                enc_s += t.elapsed().as_secs_f64();
+            }
+        }
+        let n = (samples * samples) as f64;
+        println!(
+            "| {samples}² | {:.1} M | {} | {} | {} | {:.1} | {compression:?} | {:.2} | {:.0} | {:.1} | {:.2} | {:.0} |",
+            n / 1e6,
+            m.quadtree.levels,
+            m.cells.len(),
+            tris,
+            gen_s,
+            build_s,
+            build_s / n * 1e9,
+            png_bytes as f64 / 1e6,
+            enc_s,
+            peak_rss_mib()
+        );
+    }
     Ok(())
 }

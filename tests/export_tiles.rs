@@ -212,3 +212,97 @@ fn ecef_agrees_with_pyproj_within_5_cm() {
         );
     }
 }
+
+/// Writes a global 1° geoid grid (EPSG:4326, PixelIsPoint) with value `n(lon, lat)`.
+fn write_geoid_grid(path: &Path, n: impl Fn(f64, f64) -> f64, lat_range: (f64, f64)) {
+    use common::tiffgen::{Geo, write_strips};
+    let (lat1, lat0) = lat_range;
+    let (w, h) = (361u32, (lat1 - lat0) as u32 + 1);
+    let v: Vec<f32> = (0..h)
+        .flat_map(|r| (0..w).map(move |c| (c, r)))
+        .map(|(c, r)| n(c as f64 - 180.0, lat1 - r as f64) as f32)
+        .collect();
+    let geo = Geo {
+        scale: (1.0, 1.0),
+        tie: (0.0, 0.0, -180.0, lat1),
+        pixel_is_point: true,
+        epsg: Some(4326),
+        nodata: None,
+    };
+    write_strips::<tiff::encoder::colortype::Gray32Float>(
+        path,
+        w,
+        h,
+        &v,
+        tiff::encoder::Compression::Uncompressed,
+        tiff::tags::Predictor::None,
+        Some(&geo),
+    );
+}
+
+#[test]
+fn a_geoid_grid_replaces_the_constant_offset() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("store");
+    small_store(&dir);
+    let d = dir.to_str().unwrap();
+    let export = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name);
+        let mut args = vec!["export-tiles", d, "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--quiet"];
+        args.extend_from_slice(extra);
+        ok(&args);
+        out
+    };
+    // A constant grid gives exactly the constant offset's tileset and tiles.
+    let constant = tmp.path().join("egm_constant.tif");
+    write_geoid_grid(&constant, |_, _| 35.0, (90.0, -90.0));
+    let a = export("offset", &["--geoid-offset", "35"]);
+    let b = export("grid", &["--geoid", constant.to_str().unwrap()]);
+    let files = cli_util::files_under(&a);
+    assert!(files.len() > 3);
+    for f in files {
+        let rel = f.strip_prefix(&a).unwrap();
+        if rel == Path::new("tileset.json") {
+            let ta: serde_json::Value = serde_json::from_slice(&std::fs::read(&f).unwrap()).unwrap();
+            let tb: serde_json::Value = serde_json::from_slice(&std::fs::read(b.join(rel)).unwrap()).unwrap();
+            assert_eq!(ta["root"], tb["root"]);
+            let h = tb["asset"]["extras"]["cliffmap"]["heights"].as_str().unwrap();
+            assert!(h.contains("egm_constant.tif") && h.contains("35.00..35.00"), "{h}");
+        } else {
+            assert!(std::fs::read(&f).unwrap() == std::fs::read(b.join(rel)).unwrap(), "{} differs", rel.display());
+        }
+    }
+    // A sloped grid moves each tile by its own N: the root frame's origin rises by N there.
+    let sloped = tmp.path().join("egm_sloped.tif");
+    write_geoid_grid(&sloped, |lon, lat| 10.0 + 0.5 * lon + 0.25 * lat, (90.0, -90.0));
+    let c = export("sloped", &["--geoid", sloped.to_str().unwrap()]);
+    let root = |dir: &Path| -> DVec3 {
+        let ts: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("tileset.json")).unwrap()).unwrap();
+        let m = ts["root"]["transform"].as_array().unwrap();
+        DVec3::new(m[12].as_f64().unwrap(), m[13].as_f64().unwrap(), m[14].as_f64().unwrap())
+    };
+    let (qa, qc) = (root(&a), root(&c));
+    let up = ecef_to_enu(qa).row(2);
+    let store = Store::open(&dir).unwrap();
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for cell in &store.manifest.cells {
+        lo = lo.min(DVec3::from_array(cell.bbox_min));
+        hi = hi.max(DVec3::from_array(cell.bbox_max));
+    }
+    let n = ToEcef::with_geoid("EPSG:32633", cliffmap::export::GeoidGrid::read(&sloped).unwrap())
+        .unwrap()
+        .geoid_height((lo + hi) * 0.5)
+        .unwrap();
+    assert!(((qc - qa).dot(up) - (n - 35.0)).abs() < 1e-3, "{} vs {}", (qc - qa).dot(up), n - 35.0);
+    // A grid that does not reach the store, and both flags at once, are refused.
+    let south = tmp.path().join("egm_south.tif");
+    write_geoid_grid(&south, |_, _| 20.0, (-60.0, -90.0));
+    let o = tmp.path().join("refused");
+    let os = o.to_str().unwrap();
+    fails_naming(&["export-tiles", d, "--out", os, "--crs", "EPSG:32633", "--geoid", south.to_str().unwrap()], "egm_south.tif");
+    fails_naming(
+        &["export-tiles", d, "--out", os, "--crs", "EPSG:32633", "--geoid", south.to_str().unwrap(), "--geoid-offset", "3"],
+        "--geoid",
+    );
+    assert!(!o.join("tileset.json").exists());
+}

@@ -47,6 +47,7 @@ fn build(dir: &Path) {
         cell_texels: 64,
         quiet: true,
         force: false,
+        ..BuildOptions::default()
     };
     build_store(&inputs, &opts, dir).unwrap();
 }

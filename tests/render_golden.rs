@@ -45,6 +45,7 @@ fn small_store(out: &Path) {
         cell_texels: 64,
         quiet: true,
         force: true,
+        ..BuildOptions::default()
     };
     build_store(&inputs, &opts, out).unwrap();
 }

@@ -153,3 +153,43 @@ fn not_a_store_is_a_clear_error() {
         "{out}"
     );
 }
+
+/// A store written with non-default PNG compression is repaired with the same compression
+/// (the build's recipe and the reparam settings record it), byte for byte; a build resumed
+/// with another compression is refused as "other options".
+#[test]
+fn a_repair_keeps_the_recorded_png_compression() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dem = tmp.path().join("dem.f32");
+    write_cliff_dem(&dem);
+    let store = tmp.path().join("store");
+    let mut args = cliff_build_args(&dem, &store);
+    args.extend(["--png-compression", "balanced"]);
+    ok(&args);
+    ok(&["reparam", s(&store), "--quiet", "--png-compression", "best"]);
+    let before = snapshot(&store);
+    let m = manifest(&store);
+    assert_eq!(m["reparam"]["png_compression"], "best");
+    let cells = m["cells"].as_array().unwrap();
+    let base_tex = cells[0]["files"]["texture"]["path"].as_str().unwrap().to_string();
+    let reparam_tex = cells
+        .iter()
+        .find_map(|c| c.get("reparam"))
+        .expect("some cell is reparameterized")["files"]["texture"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    flip_byte(&store.join(&base_tex), 60);
+    flip_byte(&store.join(&reparam_tex), 60);
+    ok(&["verify", "--repair", s(&store)]);
+    let after = snapshot(&store);
+    for (k, v) in &before {
+        assert!(after.get(k) == Some(v), "{k} differs after the repair");
+    }
+
+    let mut other = cliff_build_args(&dem, &store);
+    other.extend(["--png-compression", "fast"]);
+    let o = cliffmap(&other);
+    assert!(!o.status.success(), "a resume with another compression must be refused");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("other inputs or options"));
+}

@@ -16,8 +16,12 @@ pub struct Args {
     #[arg(long)]
     crs: Option<String>,
     /// Geoid height in metres added to the store's heights (orthometric → ellipsoidal).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "geoid")]
     geoid_offset: Option<f64>,
+    /// Geoid height grid (single-band GeoTIFF in EPSG:4326 longitude/latitude, e.g. PROJ's
+    /// us_nga_egm96_15.tif) whose bilinear value at each vertex is added instead.
+    #[arg(long)]
+    geoid: Option<PathBuf>,
     /// Camera JSON(s) to write as views for the page (`index.html?camera=views/NAME.json`,
     /// NAME the file's stem); repeatable.
     #[arg(long)]
@@ -49,6 +53,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         &TilesOptions {
             crs: a.crs,
             geoid_offset: a.geoid_offset,
+            geoid_grid: a.geoid,
             views,
         },
     )?;

@@ -5,17 +5,25 @@
 use glam::{DMat3, DVec3};
 use proj4rs::Proj;
 
+use super::geoid::GeoidGrid;
 use crate::error::{Error, Result};
 
-/// A projected (or geographic) CRS paired with WGS 84 geocentric coordinates. Heights in
-/// and out are ellipsoidal; [`ToEcef::to_ecef`] adds the constant `height_offset` (the geoid
-/// height, metres) to the store's heights first.
+/// A projected (or geographic) CRS paired with WGS 84 geocentric coordinates.
+/// [`ToEcef::to_ecef`] adds the geoid height N (metres; a constant, or bilinear in a
+/// [`GeoidGrid`] at the point's longitude/latitude) to the store's heights first, so
+/// orthometric store heights become ellipsoidal ones; [`ToEcef::from_ecef`] removes it.
 pub struct ToEcef {
     src: Proj,
     geocent: Proj,
-    /// Metres added to every height before the transform (orthometric → ellipsoidal).
-    pub height_offset: f64,
+    longlat: Proj,
+    heights: Heights,
     latlong: bool,
+}
+
+/// What is added to the store's heights.
+enum Heights {
+    Offset(f64),
+    Grid(GeoidGrid),
 }
 
 impl ToEcef {
@@ -31,12 +39,40 @@ impl ToEcef {
                 "geoid offset {height_offset} is not finite"
             )));
         }
+        let longlat = Proj::from_proj_string("+proj=longlat +datum=WGS84 +no_defs")
+            .map_err(|e| Error::BadOption(format!("geographic CRS: {e}")))?;
         Ok(ToEcef {
             latlong: src.is_latlong(),
             src,
             geocent,
-            height_offset,
+            longlat,
+            heights: Heights::Offset(height_offset),
         })
+    }
+
+    /// As [`ToEcef::new`], with the geoid height taken from `grid` at every point.
+    pub fn with_geoid(crs: &str, grid: GeoidGrid) -> Result<ToEcef> {
+        let mut t = ToEcef::new(crs, 0.0)?;
+        t.heights = Heights::Grid(grid);
+        Ok(t)
+    }
+
+    /// The geoid height N (metres) [`ToEcef::to_ecef`] adds at `p` (the store's CRS).
+    pub fn geoid_height(&self, p: DVec3) -> Result<f64> {
+        match &self.heights {
+            Heights::Offset(m) => Ok(*m),
+            Heights::Grid(g) => {
+                let (lon, lat) = if self.latlong {
+                    (p.x, p.y)
+                } else {
+                    let (a, b, _) =
+                        proj4rs::adaptors::transform_xyz(&self.src, &self.longlat, p.x, p.y, p.z)
+                            .map_err(|e| Error::BadOption(format!("cannot transform {p} to longitude/latitude: {e}")))?;
+                    (a.to_degrees(), b.to_degrees())
+                };
+                g.undulation(lon, lat)
+            }
+        }
     }
 
     /// The ECEF position (metres) of a point in the CRS (x, y in its units, degrees for a
@@ -52,7 +88,7 @@ impl ToEcef {
             &self.geocent,
             x,
             y,
-            p.z + self.height_offset,
+            p.z + self.geoid_height(p)?,
         )
         .map_err(|e| Error::BadOption(format!("cannot transform {p} to ECEF: {e}")))?;
         let q = DVec3::new(a, b, c);
@@ -73,7 +109,14 @@ impl ToEcef {
         } else {
             (a, b)
         };
-        Ok(DVec3::new(a, b, c - self.height_offset))
+        let n = match &self.heights {
+            Heights::Offset(m) => *m,
+            Heights::Grid(g) => {
+                let (lon, lat) = geodetic_lon_lat(q);
+                g.undulation(lon.to_degrees(), lat.to_degrees())?
+            }
+        };
+        Ok(DVec3::new(a, b, c - n))
     }
 }
 
@@ -150,6 +193,36 @@ mod tests {
         let q0 = ToEcef::new("EPSG:32633", 0.0).unwrap().to_ecef(p).unwrap();
         let up = ecef_to_enu(q0).row(2);
         assert!(((q - q0).dot(up) - 35.0).abs() < 1e-6 && (q - q0).length() < 35.0 + 1e-6);
+    }
+
+    /// N = 10 + 0.05·lon + 0.1·lat on a global 1° grid (bilinear is exact on it).
+    fn plane_grid() -> GeoidGrid {
+        let (w, h) = (361, 181);
+        let v: Vec<f32> = (0..h)
+            .flat_map(|r| {
+                (0..w).map(move |c| (10.0 + 0.05 * (c as f64 - 180.0) + 0.1 * (90.0 - r as f64)) as f32)
+            })
+            .collect();
+        GeoidGrid::from_samples(w, h, v, -180.0, 90.0, 1.0, 1.0).unwrap()
+    }
+
+    #[test]
+    fn a_geoid_grid_adds_its_value_at_the_point_and_round_trips() {
+        let t = ToEcef::with_geoid("EPSG:32633", plane_grid()).unwrap();
+        // UTM 33N's central meridian on the equator: longitude 15°, latitude 0.
+        let n = t.geoid_height(DVec3::new(500_000.0, 0.0, 0.0)).unwrap();
+        assert!((n - 10.75).abs() < 1e-5, "{n}");
+        let p = DVec3::new(446_722.0, 7_396_671.0, 770.0);
+        let q = t.to_ecef(p).unwrap();
+        let (lon, lat) = geodetic_lon_lat(q);
+        let want = 10.0 + 0.05 * lon.to_degrees() + 0.1 * lat.to_degrees();
+        let q_const = ToEcef::new("EPSG:32633", want).unwrap().to_ecef(p).unwrap();
+        assert!((q - q_const).length() < 1e-4, "{}", (q - q_const).length());
+        assert!((t.from_ecef(q).unwrap() - p).length() < 1e-3);
+        // A geographic store CRS takes the point's own degrees.
+        let g = ToEcef::with_geoid("EPSG:4326", plane_grid()).unwrap();
+        let n = g.geoid_height(DVec3::new(-120.5, 46.25, 0.0)).unwrap();
+        assert!((n - (10.0 - 0.05 * 120.5 + 0.1 * 46.25)).abs() < 1e-5, "{n}");
     }
 
     #[test]

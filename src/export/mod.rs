@@ -11,6 +11,7 @@
 
 mod cells;
 mod ecef;
+mod geoid;
 mod glb;
 mod tiles;
 
@@ -22,6 +23,7 @@ use serde_json::json;
 
 pub use cells::{CellSelection, ExportCell, TextureSource, read_export_cell, select_cells};
 pub use ecef::{ToEcef, ecef_to_enu, proj_string};
+pub use geoid::GeoidGrid;
 pub use glb::write_glb;
 pub use tiles::{TilesOptions, TilesReport, export_tiles, tile_path};
 

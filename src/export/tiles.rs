@@ -23,6 +23,10 @@ pub struct TilesOptions {
     /// Geoid height (metres) added to the store's (orthometric) heights to make them
     /// ellipsoidal; `None`: the heights are written as they are.
     pub geoid_offset: Option<f64>,
+    /// A geoid height grid (GeoTIFF in longitude/latitude, [`super::GeoidGrid`]) whose
+    /// bilinear value at each vertex is added instead of a constant; excludes
+    /// `geoid_offset`.
+    pub geoid_grid: Option<std::path::PathBuf>,
     /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
     /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
     pub views: Vec<(String, crate::camera::CameraModel)>,
@@ -62,8 +66,15 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
                 dir.display()
             ))
         })?;
-    let offset = opts.geoid_offset.unwrap_or(0.0);
-    let to_ecef = ToEcef::new(&crs, offset)?;
+    let to_ecef = match (&opts.geoid_grid, opts.geoid_offset) {
+        (Some(_), Some(_)) => {
+            return Err(Error::BadOption(
+                "give either a geoid offset or a geoid grid, not both".into(),
+            ));
+        }
+        (Some(path), None) => ToEcef::with_geoid(&crs, super::GeoidGrid::read(path)?)?,
+        (None, m) => ToEcef::new(&crs, m.unwrap_or(0.0))?,
+    };
     let cells = &store.manifest.cells;
     if cells.is_empty() {
         return Err(Error::store(
@@ -144,9 +155,22 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         b = b.max(bx[1]);
     }
     let root_error = (2.0 * top_error).max(1.0);
-    let heights = match opts.geoid_offset {
-        Some(m) => format!("store heights + constant geoid offset {m} m (ellipsoidal, WGS 84)"),
-        None => "store heights written as they are (taken as ellipsoidal; give --geoid-offset for orthometric heights)".to_string(),
+    let heights = match (&opts.geoid_grid, opts.geoid_offset) {
+        (Some(path), _) => {
+            let (mut n0, mut n1) = (f64::INFINITY, f64::NEG_INFINITY);
+            for x in [lo.x, (lo.x + hi.x) * 0.5, hi.x] {
+                for y in [lo.y, (lo.y + hi.y) * 0.5, hi.y] {
+                    let n = to_ecef.geoid_height(DVec3::new(x, y, 0.0))?;
+                    (n0, n1) = (n0.min(n), n1.max(n));
+                }
+            }
+            format!(
+                "store heights + geoid grid {} (bilinear per vertex; N {n0:.2}..{n1:.2} m over the store's extent) (ellipsoidal, WGS 84)",
+                path.display()
+            )
+        }
+        (None, Some(m)) => format!("store heights + constant geoid offset {m} m (ellipsoidal, WGS 84)"),
+        (None, None) => "store heights written as they are (taken as ellipsoidal; give --geoid-offset or --geoid for orthometric heights)".to_string(),
     };
     let tileset = json!({
         "asset": {"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION")),

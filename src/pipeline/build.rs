@@ -9,7 +9,7 @@ use super::{derived_ortho, local_mesh, progress_bar};
 use crate::cells::{self, CellKey, LevelBorders, Quadtree};
 use crate::dem::Dem;
 use crate::error::{Error, Result};
-use crate::fsutil::{encode_png, write_atomic};
+use crate::fsutil::{PngCompression, encode_png, write_atomic};
 use crate::ortho::Ortho;
 use crate::stats;
 use crate::store::{
@@ -26,6 +26,10 @@ pub struct BuildOptions {
     pub cell_intervals: u32,
     /// Texture side in texels (power of two, 8..=8192).
     pub cell_texels: u32,
+    /// PNG compression of the textures and normal maps (same pixels; part of the build's
+    /// identity unless `fast`, what earlier stores used, so they keep their key).
+    #[serde(default, skip_serializing_if = "is_default_png")]
+    pub png_compression: PngCompression,
     /// Hide progress bars.
     #[serde(skip)]
     pub quiet: bool,
@@ -40,10 +44,15 @@ impl Default for BuildOptions {
             max_error: 0.5,
             cell_intervals: 64,
             cell_texels: 256,
+            png_compression: PngCompression::default(),
             quiet: false,
             force: false,
         }
     }
+}
+
+fn is_default_png(c: &PngCompression) -> bool {
+    *c == PngCompression::Fast
 }
 
 impl BuildOptions {
@@ -394,8 +403,8 @@ fn build_cell(
 
     let stem = cell_stem(key.level, key.x, key.y);
     let mesh_ref = write_file(out, &format!("{stem}.mesh"), &lm.mesh.to_bytes())?;
-    let tex_ref = write_png(out, &format!("{stem}.png"), &texture)?;
-    let nrm_ref = write_png(out, &format!("{stem}.normal.png"), &normal)?;
+    let tex_ref = write_png(out, &format!("{stem}.png"), &texture, opts.png_compression)?;
+    let nrm_ref = write_png(out, &format!("{stem}.normal.png"), &normal, opts.png_compression)?;
     let rec = CellRecord {
         id: key.id(),
         level: key.level,
@@ -433,11 +442,12 @@ pub(crate) fn write_png<P, C>(
     out: &Path,
     rel: &str,
     img: &image::ImageBuffer<P, C>,
+    compression: PngCompression,
 ) -> Result<store::FileRef>
 where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,
     C: std::ops::Deref<Target = [P::Subpixel]>,
 {
-    write_file(out, rel, &encode_png(&out.join(rel), img)?)
+    write_file(out, rel, &encode_png(&out.join(rel), img, compression)?)
 }

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use super::{progress_bar, write_stats};
 use crate::colour::ColourSpace;
 use crate::error::{Error, Result};
-use crate::fsutil::encode_png;
+use crate::fsutil::{PngCompression, encode_png};
 use crate::photo::{
     BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform,
     ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
@@ -63,6 +63,8 @@ pub struct ProjectOptions {
     pub colour_space: ColourSpace,
     /// Photo texture sizes.
     pub texture: PhotoTextureOptions,
+    /// PNG compression of the photo textures and confidence maps (default fast).
+    pub png_compression: PngCompression,
     /// Hide progress bars.
     pub quiet: bool,
 }
@@ -79,6 +81,7 @@ impl Default for ProjectOptions {
             leveling_max_pixels: 1 << 20,
             colour_space: ColourSpace::Linear,
             texture: PhotoTextureOptions::default(),
+            png_compression: PngCompression::default(),
             quiet: false,
         }
     }
@@ -1007,13 +1010,14 @@ fn submit_png<P, C>(
     dir: &Path,
     rel: &str,
     img: &image::ImageBuffer<P, C>,
+    compression: PngCompression,
 ) -> Result<FileRef>
 where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,
     C: std::ops::Deref<Target = [P::Subpixel]>,
 {
-    writer.submit(rel, encode_png(&dir.join(rel), img)?)
+    writer.submit(rel, encode_png(&dir.join(rel), img, compression)?)
 }
 
 fn finish_cell(
@@ -1080,12 +1084,19 @@ fn finish_cell(
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {
         texels: acc.texels,
-        texture: submit_png(writer, &store.dir, &format!("{stem}.photo.png"), &b.texture)?,
+        texture: submit_png(
+            writer,
+            &store.dir,
+            &format!("{stem}.photo.png"),
+            &b.texture,
+            opts.png_compression,
+        )?,
         confidence: submit_png(
             writer,
             &store.dir,
             &format!("{stem}.photo.conf.png"),
             &b.confidence,
+            opts.png_compression,
         )?,
         photo_texels: b.photo_texels,
         steep_texels: b.steep_texels,

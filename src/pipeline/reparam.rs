@@ -8,6 +8,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::build::write_png;
+use crate::fsutil::PngCompression;
 use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
 use crate::georef::GridGeoref;
@@ -30,6 +31,8 @@ pub struct ReparamOptions {
     pub mixed_resolution: bool,
     /// Resampling filter and fill; `texels` is set per cell.
     pub resample: ResampleOptions,
+    /// PNG compression of the reparameterized textures (default fast).
+    pub png_compression: PngCompression,
     /// Hide progress bars.
     pub quiet: bool,
 }
@@ -41,6 +44,7 @@ impl Default for ReparamOptions {
             param: ParamOptions::default(),
             mixed_resolution: false,
             resample: ResampleOptions::default(),
+            png_compression: PngCompression::default(),
             quiet: false,
         }
     }
@@ -161,6 +165,7 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
             crate::resample::Fill::PullPush => "pull-push".into(),
             _ => "average-border".into(),
         }),
+        png_compression: opts.png_compression,
     });
     write_stats(dir, &store.manifest, opts.threshold)?;
     store.manifest.write(dir)?;
@@ -196,6 +201,7 @@ pub fn recorded_reparam_options(settings: &ReparamSettings) -> Option<ReparamOpt
             fill,
             ..ResampleOptions::default()
         },
+        png_compression: settings.png_compression,
         quiet: true,
     })
 }
@@ -328,8 +334,8 @@ fn reparam_cell(
             &format!("{stem}.reparam.mesh"),
             &new_mesh.to_bytes(),
         )?,
-        texture: write_png(&store.dir, &format!("{stem}.reparam.png"), &col.image)?,
-        normal: write_png(&store.dir, &format!("{stem}.reparam.normal.png"), &nrm_rgb)?,
+        texture: write_png(&store.dir, &format!("{stem}.reparam.png"), &col.image, opts.png_compression)?,
+        normal: write_png(&store.dir, &format!("{stem}.reparam.normal.png"), &nrm_rgb, opts.png_compression)?,
     };
     // Per-texel stretch relative to an ortho texel (base area / cell_texels²).
     let ratio = texels as f64 / t_old;

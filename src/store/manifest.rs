@@ -156,6 +156,10 @@ pub struct ReparamSettings {
     /// Fill of texels outside the chart ("average-border" or "pull-push"; absent in older stores).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fill: Option<String>,
+    /// PNG compression of the reparameterized textures (absent in stores written before the
+    /// knob existed, which used `fast`, the default).
+    #[serde(default)]
+    pub png_compression: crate::fsutil::PngCompression,
 }
 
 impl CellRecord {

@@ -254,6 +254,7 @@ fn store_seeds(dir: &Path) -> (Vec<u8>, Vec<u8>) {
             cell_texels: 16,
             quiet: true,
             force: true,
+            ..BuildOptions::default()
         },
         &out,
     )
