@@ -2,7 +2,8 @@
 //! projected (so the walls carry photo textures), the generated CesiumJS page in headless
 //! Chromium (SwiftShader WebGL, `tools/js/screenshot_tiles.mjs`) from a demo photo's camera,
 //! compared with `cliffmap render --unlit` (best texture) of the same camera on terrain
-//! pixels. Chromium,
+//! pixels, and the page's ortho texture mode (`--modes all`, `?mode=ortho`) with
+//! `render --mode ortho`. Chromium,
 //! CesiumJS and puppeteer-core are installed by `.ci/run`.
 
 mod cli_util;
@@ -85,8 +86,11 @@ fn cesium_page_shows_what_cliffmap_renders() {
         "EPSG:32633",
         "--view",
         c,
+        "--modes",
+        "all",
         "--quiet",
     ]);
+    assert!(out.join("tileset_ortho.json").exists() && out.join("tileset_reparam.json").exists());
     assert!(out.join("index.html").exists() && out.join("views/view.json").exists());
     // The tiles carry the photo textures where the store has them.
     let m = cliffmap::store::Store::open(&store).unwrap();
@@ -114,61 +118,51 @@ fn cesium_page_shows_what_cliffmap_renders() {
             c.id
         );
     }
-    let shot = tmp.path().join("cesium.png");
-    let status = std::process::Command::new("node")
-        .arg(tools.join("screenshot_tiles.mjs"))
-        .args([
-            o,
-            "views/view.json",
-            shot.to_str().unwrap(),
-            &w.to_string(),
-            &h.to_string(),
-        ])
-        .status()
-        .expect("cannot start node");
-    assert!(status.success(), "the browser screenshot failed");
-    let ours = tmp.path().join("cliffmap.png");
-    // `--camera` takes a pinhole view; the demo's first photo has no distortion.
-    ok(&[
-        "render",
-        s,
-        "--camera",
-        c,
-        "--size",
-        &format!("{w}x{h}"),
-        "--unlit",
-        "--out",
-        ours.to_str().unwrap(),
-    ]);
-    let a = image::open(&shot).unwrap().to_rgb8();
-    let b = image::open(&ours).unwrap().to_rgb8();
+    // The best texture (default page) against `cliffmap render`, then the ortho mode of the
+    // page's toggle against `render --mode ortho`.
+    for mode in [None, Some("ortho")] {
+        let shot = tmp.path().join(format!("cesium_{}.png", mode.unwrap_or("best")));
+        let mut args = vec![o.to_string(), "views/view.json".into(), shot.to_str().unwrap().into(), w.to_string(), h.to_string()];
+        args.extend(mode.map(String::from));
+        let status = std::process::Command::new("node")
+            .arg(tools.join("screenshot_tiles.mjs"))
+            .args(&args)
+            .status()
+            .expect("cannot start node");
+        assert!(status.success(), "the browser screenshot failed ({mode:?})");
+        let ours = tmp.path().join(format!("cliffmap_{}.png", mode.unwrap_or("best")));
+        // `--camera` takes a pinhole view; the demo's first photo has no distortion.
+        let size = format!("{w}x{h}");
+        let mut r = vec!["render", s, "--camera", c, "--size", &size, "--unlit", "--out", ours.to_str().unwrap()];
+        if let Some(m) = mode {
+            r.extend(["--mode", m]);
+        }
+        ok(&r);
+        let (psnr, share) = terrain_psnr(&shot, &ours, w, h);
+        eprintln!("Cesium vs cliffmap render ({mode:?}): {psnr:.1} dB on {:.0} % terrain pixels", 100.0 * share);
+        assert!(share > 0.3, "only {:.0} % of the pixels are terrain in both images ({mode:?})", 100.0 * share);
+        assert!(psnr >= 28.0, "Cesium's view differs from cliffmap's render ({mode:?}): {psnr:.1} dB");
+    }
+    // The two modes show different textures (the photo detail is in the best one only).
+    let (between, _) = terrain_psnr(&tmp.path().join("cesium_best.png"), &tmp.path().join("cesium_ortho.png"), w, h);
+    assert!(between < 40.0, "the ortho and photo modes look the same ({between:.1} dB)");
+}
+
+/// PSNR (dB) of two renders on the pixels that are terrain in both (neither cliffmap's sky
+/// nor Cesium's black background), and the share of such pixels.
+fn terrain_psnr(a: &std::path::Path, b: &std::path::Path, w: u32, h: u32) -> (f64, f64) {
+    let a = image::open(a).unwrap().to_rgb8();
+    let b = image::open(b).unwrap().to_rgb8();
     assert_eq!(a.dimensions(), b.dimensions());
     let sky = [170i32, 200, 235];
     let (mut se, mut n) = (0.0f64, 0usize);
     for (pa, pb) in a.pixels().zip(b.pixels()) {
-        let is_sky = (0..3).map(|k| (pb[k] as i32 - sky[k]).abs()).sum::<i32>() <= 6;
-        let is_background = pa.0.iter().map(|&v| v as i32).sum::<i32>() <= 6;
-        if !is_sky && !is_background {
-            se += (0..3)
-                .map(|k| (pa[k] as f64 - pb[k] as f64).powi(2))
-                .sum::<f64>()
-                / 3.0;
+        let is_sky = |p: &image::Rgb<u8>| (0..3).map(|k| (p[k] as i32 - sky[k]).abs()).sum::<i32>() <= 6;
+        let is_background = |p: &image::Rgb<u8>| p.0.iter().map(|&v| v as i32).sum::<i32>() <= 6;
+        if !is_sky(pb) && !is_sky(pa) && !is_background(pa) && !is_background(pb) {
+            se += (0..3).map(|k| (pa[k] as f64 - pb[k] as f64).powi(2)).sum::<f64>() / 3.0;
             n += 1;
         }
     }
-    let share = n as f64 / (w * h) as f64;
-    assert!(
-        share > 0.3,
-        "only {:.0} % of the pixels are terrain in both images",
-        100.0 * share
-    );
-    let psnr = 10.0 * (255.0f64.powi(2) / (se / n as f64)).log10();
-    eprintln!(
-        "Cesium vs cliffmap render: {psnr:.1} dB on {:.0} % terrain pixels",
-        100.0 * share
-    );
-    assert!(
-        psnr >= 28.0,
-        "Cesium's view differs from cliffmap's render: {psnr:.1} dB"
-    );
+    (10.0 * (255.0f64.powi(2) / (se / n.max(1) as f64)).log10(), n as f64 / (w * h) as f64)
 }

@@ -306,3 +306,36 @@ fn a_geoid_grid_replaces_the_constant_offset() {
     );
     assert!(!o.join("tileset.json").exists());
 }
+
+/// `--modes all`: a tileset per texture mode, each GLB carrying exactly that mode's store
+/// texture, and every tileset listing the modes for the page's toggle.
+#[test]
+fn every_texture_mode_gets_its_own_tileset() {
+    use cliffmap::export::{TextureSource, tile_path_for, tileset_name};
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("store");
+    common::small_demo_store(&dir, true);
+    let out = tmp.path().join("tiles");
+    ok(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--modes", "ortho,reparam", "--quiet"]);
+    let store = Store::open(&dir).unwrap();
+    let rec = store.manifest.cells.iter().find(|c| c.reparam.is_some()).expect("a reparameterized cell");
+    for (mode, file) in [
+        (TextureSource::Photo, &rec.reparam.as_ref().unwrap().files.texture),
+        (TextureSource::Reparam, &rec.reparam.as_ref().unwrap().files.texture),
+        (TextureSource::Ortho, &rec.files.texture),
+    ] {
+        let ts: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(tileset_name(mode))).unwrap()).unwrap();
+        let modes = ts["asset"]["extras"]["cliffmap"]["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), 3);
+        assert_eq!(ts["asset"]["extras"]["cliffmap"]["texture_mode"], mode.name());
+        let glb = std::fs::read(out.join(tile_path_for(mode, rec.level, rec.x, rec.y))).unwrap();
+        let g = gltf::Gltf::from_slice(&glb).unwrap();
+        let blob = g.blob.as_deref().unwrap();
+        let img = g.document.images().next().unwrap();
+        let gltf::image::Source::View { view, .. } = img.source() else { panic!("embedded image expected") };
+        let bytes = &blob[view.offset()..view.offset() + view.length()];
+        assert!(bytes == std::fs::read(dir.join(&file.path)).unwrap().as_slice(), "{mode:?}");
+    }
+    cli_util::fails_naming(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--modes", "sepia"], "sepia");
+}

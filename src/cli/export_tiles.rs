@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use cliffmap::export::{TilesOptions, export_tiles};
+use cliffmap::export::{TextureSource, TilesOptions, export_tiles};
 
 /// Flags of `cliffmap export-tiles`.
 #[derive(clap::Args, Debug)]
@@ -22,6 +22,11 @@ pub struct Args {
     /// us_nga_egm96_15.tif) whose bilinear value at each vertex is added instead.
     #[arg(long)]
     geoid: Option<PathBuf>,
+    /// Texture modes to export, comma-separated from photo (the best texture each cell has,
+    /// always written as tileset.json), reparam and ortho, or "all"; each other mode gets
+    /// tileset_MODE.json + tiles_MODE/, and the page offers a toggle (`?mode=MODE`).
+    #[arg(long, default_value = "photo", value_parser = parse_modes)]
+    modes: Modes,
     /// Camera JSON(s) to write as views for the page (`index.html?camera=views/NAME.json`,
     /// NAME the file's stem); repeatable.
     #[arg(long)]
@@ -54,6 +59,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             crs: a.crs,
             geoid_offset: a.geoid_offset,
             geoid_grid: a.geoid,
+            extra_modes: a.modes.0,
             views,
         },
     )?;
@@ -71,4 +77,27 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         println!("heights: {}", r.heights);
     }
     Ok(())
+}
+
+/// The texture modes of `--modes` (besides the best texture).
+#[derive(Clone, Debug)]
+struct Modes(Vec<TextureSource>);
+
+fn parse_modes(s: &str) -> Result<Modes, String> {
+    let mut out = Vec::new();
+    for m in s.split(',').map(str::trim) {
+        let list: &[TextureSource] = match m {
+            "photo" | "best" => &[],
+            "reparam" => &[TextureSource::Reparam],
+            "ortho" => &[TextureSource::Ortho],
+            "all" => &[TextureSource::Reparam, TextureSource::Ortho],
+            _ => return Err(format!("unknown texture mode {m:?}: expected photo, reparam, ortho or all")),
+        };
+        for t in list {
+            if !out.contains(t) {
+                out.push(*t);
+            }
+        }
+    }
+    Ok(Modes(out))
 }

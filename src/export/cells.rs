@@ -65,8 +65,20 @@ pub struct ExportCell {
 /// when the cell has it, else the orthographic one with texture coordinates from x, y), and
 /// that texture's bytes, verified against the manifest's checksum.
 pub fn read_export_cell(store: &Store, rec: &CellRecord) -> Result<ExportCell> {
-    let mesh = store.read_active_mesh(rec)?;
-    let (file, texture) = match (&rec.photo, &rec.reparam) {
+    read_export_cell_as(store, rec, TextureSource::Photo)
+}
+
+/// As [`read_export_cell`] with the best texture at most `mode` (as `cliffmap render
+/// --mode`): `Photo` = the best the cell has, `Reparam` = reparameterized where the cell has
+/// it, else ortho, `Ortho` = the orthographic mesh and texture everywhere.
+pub fn read_export_cell_as(store: &Store, rec: &CellRecord, mode: TextureSource) -> Result<ExportCell> {
+    let photo = rec.photo.as_ref().filter(|_| mode == TextureSource::Photo);
+    let reparam = rec.reparam.as_ref().filter(|_| mode != TextureSource::Ortho);
+    let mesh = match reparam {
+        Some(r) => store.read_mesh_file(&r.files.mesh)?,
+        None => store.read_mesh(rec)?,
+    };
+    let (file, texture) = match (photo, reparam) {
         (Some(p), _) => (&p.texture, TextureSource::Photo),
         (None, Some(r)) => (&r.files.texture, TextureSource::Reparam),
         (None, None) => (&rec.files.texture, TextureSource::Ortho),

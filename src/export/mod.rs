@@ -21,11 +21,15 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde_json::json;
 
-pub use cells::{CellSelection, ExportCell, TextureSource, read_export_cell, select_cells};
+pub use cells::{
+    CellSelection, ExportCell, TextureSource, read_export_cell, read_export_cell_as, select_cells,
+};
 pub use ecef::{ToEcef, ecef_to_enu, proj_string};
 pub use geoid::GeoidGrid;
 pub use glb::write_glb;
-pub use tiles::{TilesOptions, TilesReport, export_tiles, tile_path};
+pub use tiles::{
+    TilesOptions, TilesReport, export_tiles, tile_path, tile_path_for, tileset_name,
+};
 
 use crate::error::Result;
 use crate::store::Store;

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde_json::{Value, json};
 
 use super::ecef::{ToEcef, ecef_to_enu};
-use super::{ExportCell, TextureSource, read_export_cell, write_glb};
+use super::{ExportCell, TextureSource, read_export_cell_as, write_glb};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::store::Store;
@@ -27,6 +27,10 @@ pub struct TilesOptions {
     /// bilinear value at each vertex is added instead of a constant; excludes
     /// `geoid_offset`.
     pub geoid_grid: Option<std::path::PathBuf>,
+    /// Texture modes exported besides the best texture (`tileset.json`, `tiles/`): each as
+    /// `tileset_MODE.json` + `tiles_MODE/` ([`tileset_name`], [`tile_path_for`]), listed in
+    /// every tileset's `asset.extras.cliffmap.modes` for the page's toggle.
+    pub extra_modes: Vec<TextureSource>,
     /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
     /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
     pub views: Vec<(String, crate::camera::CameraModel)>,
@@ -92,69 +96,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
     let rot = ecef_to_enu(centre);
     let to_enu = |p: DVec3| -> Result<DVec3> { Ok(rot * (to_ecef.to_ecef(p)? - centre)) };
 
-    // GLBs in parallel (one cell at a time in memory per thread), bounding boxes back.
-    let results: Vec<(usize, [DVec3; 2], TextureSource, u64)> = (0..cells.len())
-        .into_par_iter()
-        .map(|i| {
-            let rec = &cells[i];
-            let cell: ExportCell = read_export_cell(&store, rec)?;
-            let enu: Vec<DVec3> = cell.positions.iter().map(|&p| to_enu(p)).collect::<Result<_>>()?;
-            let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for p in &enu {
-                a = a.min(*p);
-                b = b.max(*p);
-            }
-            let extras = json!({"cliffmap": {"cell": rec.id, "texture": cell.texture.name(), "max_error_m": rec.max_error}});
-            let bytes = write_glb(
-                std::slice::from_ref(&cell),
-                &|_, v| [enu[v].x, enu[v].z, -enu[v].y],
-                &extras,
-            )?;
-            write_atomic(&out.join(tile_path(rec.level, rec.x, rec.y)), &bytes)?;
-            Ok((i, [a, b], cell.texture, bytes.len() as u64))
-        })
-        .collect::<Result<_>>()?;
-    let mut boxes = vec![[DVec3::ZERO; 2]; cells.len()];
-    let mut textures = [0usize; 3];
-    let mut bytes = 0;
-    for (i, bx, t, n) in results {
-        boxes[i] = bx;
-        textures[t.index()] += 1;
-        bytes += n;
-    }
-
-    // The explicit tree.
-    let index: std::collections::HashMap<(u8, u32, u32), usize> = cells
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ((c.level, c.x, c.y), i))
-        .collect();
-    let mut pruned = 0usize;
-    let mut listed = 0usize;
-    let top: Vec<usize> = cells
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.level == 0)
-        .map(|(i, _)| i)
-        .collect();
-    let mut children = Vec::new();
-    for &i in &top {
-        children.push(tile_json(
-            i,
-            &store,
-            &index,
-            &boxes,
-            &mut pruned,
-            &mut listed,
-        ));
-    }
-    let top_error = top.iter().map(|&i| cells[i].max_error).fold(0.0, f64::max);
-    let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for bx in &boxes {
-        a = a.min(bx[0]);
-        b = b.max(bx[1]);
-    }
-    let root_error = (2.0 * top_error).max(1.0);
+    // Heights report (the extent's corners and centre for a grid).
     let heights = match (&opts.geoid_grid, opts.geoid_offset) {
         (Some(path), _) => {
             let (mut n0, mut n1) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -172,18 +114,25 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         (None, Some(m)) => format!("store heights + constant geoid offset {m} m (ellipsoidal, WGS 84)"),
         (None, None) => "store heights written as they are (taken as ellipsoidal; give --geoid-offset or --geoid for orthometric heights)".to_string(),
     };
-    let tileset = json!({
-        "asset": {"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION")),
-                  "extras": {"cliffmap": {"crs": crs, "heights": heights, "frame": "east-north-up at the root transform's origin"}}},
-        "geometricError": root_error,
-        "root": {
-            "transform": enu_to_ecef_matrix(rot, centre),
-            "boundingVolume": {"box": box_json([a, b])},
-            "geometricError": root_error,
-            "refine": "REPLACE",
-            "children": children,
+
+    let mut modes = vec![TextureSource::Photo];
+    for m in &opts.extra_modes {
+        if !modes.contains(m) {
+            modes.push(*m);
         }
-    });
+    }
+    let listing: Vec<Value> = modes
+        .iter()
+        .map(|&m| json!({"mode": m.name(), "tileset": tileset_name(m)}))
+        .collect();
+    let ctx = TilesetContext { store: &store, out, to_enu: &to_enu, rot, centre, crs: &crs, heights: &heights, modes: &listing };
+    let mut report = None;
+    let mut bytes = 0;
+    for &m in &modes {
+        let r = write_tileset(&ctx, m)?;
+        bytes += r.bytes;
+        report.get_or_insert(r);
+    }
     for (name, cam) in &opts.views {
         let v = view_json(&to_ecef, cam)?;
         write_atomic(
@@ -195,15 +144,123 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         &out.join("index.html"),
         include_str!("index.html").as_bytes(),
     )?;
+    let mut r = report.ok_or_else(|| Error::BadOption("no texture mode to export".into()))?;
+    r.bytes = bytes;
+    r.heights = heights;
+    Ok(r)
+}
+
+/// What every mode's tileset shares.
+struct TilesetContext<'a> {
+    store: &'a Store,
+    out: &'a Path,
+    to_enu: &'a (dyn Fn(DVec3) -> Result<DVec3> + Sync),
+    rot: DMat3,
+    centre: DVec3,
+    crs: &'a str,
+    heights: &'a str,
+    modes: &'a [Value],
+}
+
+/// The tileset file of a texture mode: `tileset.json` for the best texture (photo), else
+/// `tileset_MODE.json`.
+pub fn tileset_name(mode: TextureSource) -> String {
+    match mode {
+        TextureSource::Photo => "tileset.json".into(),
+        m => format!("tileset_{}.json", m.name()),
+    }
+}
+
+/// Writes one mode's GLBs and tileset (its tileset file last); the report's `heights` is
+/// left empty.
+fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesReport> {
+    let (store, out) = (ctx.store, ctx.out);
+    let cells = &store.manifest.cells;
+    // GLBs in parallel (one cell at a time in memory per thread), bounding boxes back.
+    let results: Vec<(usize, [DVec3; 2], TextureSource, u64)> = (0..cells.len())
+        .into_par_iter()
+        .map(|i| {
+            let rec = &cells[i];
+            let cell: ExportCell = read_export_cell_as(store, rec, mode)?;
+            let enu: Vec<DVec3> = cell.positions.iter().map(|&p| (ctx.to_enu)(p)).collect::<Result<_>>()?;
+            let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for p in &enu {
+                a = a.min(*p);
+                b = b.max(*p);
+            }
+            let extras = json!({"cliffmap": {"cell": rec.id, "texture": cell.texture.name(), "max_error_m": rec.max_error}});
+            let bytes = write_glb(
+                std::slice::from_ref(&cell),
+                &|_, v| [enu[v].x, enu[v].z, -enu[v].y],
+                &extras,
+            )?;
+            write_atomic(&out.join(tile_path_for(mode, rec.level, rec.x, rec.y)), &bytes)?;
+            Ok((i, [a, b], cell.texture, bytes.len() as u64))
+        })
+        .collect::<Result<_>>()?;
+    let mut boxes = vec![[DVec3::ZERO; 2]; cells.len()];
+    let mut textures = [0usize; 3];
+    let mut bytes = 0;
+    for (i, bx, t, n) in results {
+        boxes[i] = bx;
+        textures[t.index()] += 1;
+        bytes += n;
+    }
+    // The explicit tree.
+    let index: std::collections::HashMap<(u8, u32, u32), usize> = cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ((c.level, c.x, c.y), i))
+        .collect();
+    let mut pruned = 0usize;
+    let mut listed = 0usize;
+    let top: Vec<usize> = cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.level == 0)
+        .map(|(i, _)| i)
+        .collect();
+    let mut children = Vec::new();
+    for &i in &top {
+        children.push(tile_json(
+            mode,
+            i,
+            store,
+            &index,
+            &boxes,
+            &mut pruned,
+            &mut listed,
+        ));
+    }
+    let top_error = top.iter().map(|&i| cells[i].max_error).fold(0.0, f64::max);
+    let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for bx in &boxes {
+        a = a.min(bx[0]);
+        b = b.max(bx[1]);
+    }
+    let root_error = (2.0 * top_error).max(1.0);
+    let tileset = json!({
+        "asset": {"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION")),
+                  "extras": {"cliffmap": {"crs": ctx.crs, "heights": ctx.heights, "texture_mode": mode.name(), "modes": ctx.modes,
+                                          "frame": "east-north-up at the root transform's origin"}}},
+        "geometricError": root_error,
+        "root": {
+            "transform": enu_to_ecef_matrix(ctx.rot, ctx.centre),
+            "boundingVolume": {"box": box_json([a, b])},
+            "geometricError": root_error,
+            "refine": "REPLACE",
+            "children": children,
+        }
+    });
     let text = serde_json::to_string(&tileset)
-        .map_err(|e| Error::BadOption(format!("tileset.json: {e}")))?;
-    write_atomic(&out.join("tileset.json"), text.as_bytes())?;
+        .map_err(|e| Error::BadOption(format!("{}: {e}", tileset_name(mode))))?;
+    write_atomic(&out.join(tileset_name(mode)), text.as_bytes())?;
     Ok(TilesReport {
         tiles: listed,
         pruned,
         textures,
         bytes,
-        heights,
+        heights: String::new(),
     })
 }
 
@@ -227,12 +284,24 @@ fn view_json(to_ecef: &ToEcef, cam: &crate::camera::CameraModel) -> Result<Value
     )
 }
 
-/// The GLB of cell (level, x, y), relative to the tileset's folder.
+/// The GLB of cell (level, x, y) in the best-texture tileset, relative to the tileset's
+/// folder.
 pub fn tile_path(level: u8, x: u32, y: u32) -> String {
-    format!("tiles/{level}/{x}-{y}.glb")
+    tile_path_for(TextureSource::Photo, level, x, y)
 }
 
+/// The GLB of cell (level, x, y) in the tileset of texture mode `mode` (`tiles/` for the
+/// best texture, `tiles_MODE/` for the others).
+pub fn tile_path_for(mode: TextureSource, level: u8, x: u32, y: u32) -> String {
+    match mode {
+        TextureSource::Photo => format!("tiles/{level}/{x}-{y}.glb"),
+        m => format!("tiles_{}/{level}/{x}-{y}.glb", m.name()),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn tile_json(
+    mode: TextureSource,
     i: usize,
     store: &Store,
     index: &std::collections::HashMap<(u8, u32, u32), usize>,
@@ -261,12 +330,12 @@ fn tile_json(
     let mut t = json!({
         "boundingVolume": {"box": box_json(boxes[i])},
         "geometricError": c.max_error,
-        "content": {"uri": tile_path(c.level, c.x, c.y)},
+        "content": {"uri": tile_path_for(mode, c.level, c.x, c.y)},
     });
     if covered {
         let children: Vec<Value> = kids
             .iter()
-            .map(|&k| tile_json(k, store, index, boxes, pruned, listed))
+            .map(|&k| tile_json(mode, k, store, index, boxes, pruned, listed))
             .collect();
         t["children"] = Value::Array(children);
     } else if !kids.is_empty() {

@@ -90,7 +90,8 @@ impl Store {
         )
     }
 
-    fn read_mesh_file(&self, f: &FileRef) -> Result<CellMesh> {
+    /// Reads and verifies the mesh file `f` (one of the store's mesh records).
+    pub fn read_mesh_file(&self, f: &FileRef) -> Result<CellMesh> {
         let bytes = read_verified(&self.dir, f)?;
         CellMesh::from_bytes(&bytes, &self.dir.join(&f.path))
     }
