@@ -1,5 +1,5 @@
 //! Concurrent writers and full disks: a second writer is refused with a clear message; a
-//! build or reparam that runs out of space fails naming the file, leaves no temporary
+//! build, reparam or project that runs out of space fails naming the file, leaves no temporary
 //! file and no half-updated store, and (for a build) resumes to the same store.
 //!
 //! The full-disk tests mount a small tmpfs, which needs root (as in CI, see .ci/run).
@@ -196,4 +196,71 @@ fn a_reparam_that_fills_the_disk_leaves_the_store_as_it_was() {
             .any(|p| p.to_string_lossy().ends_with(".tmp"))
     );
     ok(&["verify", s(&store)]);
+}
+
+#[test]
+fn a_project_that_fills_the_disk_leaves_the_store_as_it_was() {
+    use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = cliffmap::scene::DemoScene {
+        samples: 129,
+        spacing: 4.0,
+        ..cliffmap::scene::DemoScene::default()
+    };
+    let (dem, ortho) = scene.generate().unwrap();
+    let built = tmp.path().join("store");
+    build_store(
+        &BuildInputs {
+            dem: &dem,
+            ortho: Some(&ortho),
+            dem_source: "t".into(),
+            ortho_source: Some("t".into()),
+            fingerprint: "project-enospc".into(),
+        },
+        &BuildOptions {
+            cell_intervals: 32,
+            cell_texels: 64,
+            quiet: true,
+            force: true,
+            ..BuildOptions::default()
+        },
+        &built,
+    )
+    .unwrap();
+    let list = scene
+        .write_demo_photos(
+            &dem,
+            &tmp.path().join("photos"),
+            &cliffmap::scene::DemoPhotoOptions { width: 320, height: 240, supersample: 1 },
+        )
+        .unwrap();
+    let size: u64 = files_under(&built)
+        .iter()
+        .map(|p| std::fs::metadata(p).unwrap().len().div_ceil(4096) * 4096)
+        .sum();
+    let fs = SmallFs::new(size / 1024 + 64);
+    let store = fs.path().join("store");
+    copy_dir(&built, &store);
+    let manifest_before = std::fs::read(store.join("manifest.json")).unwrap();
+    let o = fs.cliffmap(&["project", s(&store), "--photos", s(&list), "--quiet"], size / 1024);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "project should run out of space");
+    assert!(err.contains("No space left on device"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(
+        std::fs::read(store.join("manifest.json")).unwrap(),
+        manifest_before,
+        "the manifest must be untouched"
+    );
+    assert!(
+        !files_under(&store)
+            .iter()
+            .any(|p| p.to_string_lossy().ends_with(".tmp"))
+    );
+    ok(&["verify", s(&store)]);
+    // Moved to a disk with room, the left store takes the same command.
+    let again = tmp.path().join("again");
+    copy_dir(&store, &again);
+    ok(&["project", s(&again), "--photos", s(&list), "--quiet"]);
+    ok(&["verify", s(&again)]);
 }
