@@ -339,3 +339,32 @@ fn every_texture_mode_gets_its_own_tileset() {
     }
     cli_util::fails_naming(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--modes", "sepia"], "sepia");
 }
+
+/// `--jpeg-quality Q`: every GLB embeds a JPEG (declared `image/jpeg`) of the same size as
+/// the store texture it replaces, close to it in colour.
+#[test]
+fn jpeg_textures_replace_the_pngs_on_request() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("store");
+    common::small_demo_store(&dir, true);
+    let out = tmp.path().join("tiles");
+    ok(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--jpeg-quality", "90", "--quiet"]);
+    let store = Store::open(&dir).unwrap();
+    let rec = store.manifest.cells.iter().find(|c| c.reparam.is_some()).expect("a reparameterized cell");
+    let glb = std::fs::read(out.join(cliffmap::export::tile_path_for(cliffmap::export::TextureSource::Photo, rec.level, rec.x, rec.y))).unwrap();
+    let g = gltf::Gltf::from_slice(&glb).unwrap();
+    let blob = g.blob.as_deref().unwrap();
+    let img = g.document.images().next().unwrap();
+    let gltf::image::Source::View { view, mime_type } = img.source() else { panic!("embedded image expected") };
+    assert_eq!(mime_type, "image/jpeg");
+    let jpeg = image::load_from_memory_with_format(&blob[view.offset()..view.offset() + view.length()], image::ImageFormat::Jpeg)
+        .unwrap()
+        .to_rgb8();
+    let png = image::open(dir.join(&rec.reparam.as_ref().unwrap().files.texture.path)).unwrap().to_rgb8();
+    assert_eq!(jpeg.dimensions(), png.dimensions());
+    let mse = jpeg.as_raw().iter().zip(png.as_raw()).map(|(&a, &b)| (a as f64 - b as f64).powi(2)).sum::<f64>()
+        / png.as_raw().len() as f64;
+    let psnr = 10.0 * (255.0f64 * 255.0 / mse.max(1e-9)).log10();
+    assert!(psnr > 30.0, "JPEG q90 against the PNG: {psnr:.1} dB");
+    cli_util::fails_naming(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--jpeg-quality", "0"], "jpeg-quality");
+}

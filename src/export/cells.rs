@@ -53,8 +53,11 @@ pub struct ExportCell {
     pub surface: Vec<[u32; 3]>,
     /// Skirt triangles.
     pub skirt: Vec<[u32; 3]>,
-    /// The texture file's bytes (PNG) and where they come from.
-    pub texture_png: Vec<u8>,
+    /// The texture's bytes: the store's PNG file as stored, or a JPEG after
+    /// [`ExportCell::texture_to_jpeg`].
+    pub texture_bytes: Vec<u8>,
+    /// The texture's media type, `image/png` or `image/jpeg`.
+    pub texture_mime: &'static str,
     /// Which texture that is.
     pub texture: TextureSource,
     /// The cell's geometric error (metres).
@@ -83,7 +86,7 @@ pub fn read_export_cell_as(store: &Store, rec: &CellRecord, mode: TextureSource)
         (None, Some(r)) => (&r.files.texture, TextureSource::Reparam),
         (None, None) => (&rec.files.texture, TextureSource::Ortho),
     };
-    let texture_png = store.read_file(file)?;
+    let texture_bytes = store.read_file(file)?;
     let origin = DVec3::from_array(rec.origin);
     let positions: Vec<DVec3> = mesh
         .positions
@@ -107,10 +110,30 @@ pub fn read_export_cell_as(store: &Store, rec: &CellRecord, mode: TextureSource)
         uvs,
         surface: mesh.triangles[..split].to_vec(),
         skirt: mesh.triangles[split..].to_vec(),
-        texture_png,
+        texture_bytes,
+        texture_mime: "image/png",
         texture,
         max_error: rec.max_error,
     })
+}
+
+impl ExportCell {
+    /// Re-encodes the colour texture as a baseline JPEG of `quality` (1..=100) from its RGB;
+    /// alpha is dropped (the exported materials are opaque, so it is never shown). Errors
+    /// name the cell.
+    pub fn texture_to_jpeg(&mut self, quality: u8) -> Result<()> {
+        let bad = |e: String| Error::BadOption(format!("cell {}: texture to JPEG: {e}", self.id));
+        let rgb = image::load_from_memory_with_format(&self.texture_bytes, image::ImageFormat::Png)
+            .map_err(|e| bad(e.to_string()))?
+            .to_rgb8();
+        let mut out = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality.clamp(1, 100))
+            .encode_image(&rgb)
+            .map_err(|e| bad(e.to_string()))?;
+        self.texture_bytes = out;
+        self.texture_mime = "image/jpeg";
+        Ok(())
+    }
 }
 
 /// Which cells to export.

@@ -79,10 +79,10 @@ pub fn write_glb(
             json::accessor::Type::Vec2,
             None,
         ));
-        let image_view = push_view(&mut root, &mut bin, cell.texture_png.clone(), None);
+        let image_view = push_view(&mut root, &mut bin, cell.texture_bytes.clone(), None);
         let image = root.push(json::Image {
             buffer_view: Some(image_view),
-            mime_type: Some(json::image::MimeType("image/png".into())),
+            mime_type: Some(json::image::MimeType(cell.texture_mime.into())),
             name: Some(format!("{} {}", cell.id, cell.texture.name())),
             uri: None,
             extensions: None,

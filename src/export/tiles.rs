@@ -31,6 +31,9 @@ pub struct TilesOptions {
     /// `tileset_MODE.json` + `tiles_MODE/` ([`tileset_name`], [`tile_path_for`]), listed in
     /// every tileset's `asset.extras.cliffmap.modes` for the page's toggle.
     pub extra_modes: Vec<TextureSource>,
+    /// Embed colour textures as JPEG of this quality (1..=100) instead of the store's PNG
+    /// bytes (smaller tiles for the web; alpha is not shown by the opaque materials).
+    pub jpeg_quality: Option<u8>,
     /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
     /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
     pub views: Vec<(String, crate::camera::CameraModel)>,
@@ -125,7 +128,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         .iter()
         .map(|&m| json!({"mode": m.name(), "tileset": tileset_name(m)}))
         .collect();
-    let ctx = TilesetContext { store: &store, out, to_enu: &to_enu, rot, centre, crs: &crs, heights: &heights, modes: &listing };
+    let ctx = TilesetContext { store: &store, out, to_enu: &to_enu, rot, centre, crs: &crs, heights: &heights, modes: &listing, jpeg_quality: opts.jpeg_quality };
     let mut report = None;
     let mut bytes = 0;
     for &m in &modes {
@@ -160,6 +163,7 @@ struct TilesetContext<'a> {
     crs: &'a str,
     heights: &'a str,
     modes: &'a [Value],
+    jpeg_quality: Option<u8>,
 }
 
 /// The tileset file of a texture mode: `tileset.json` for the best texture (photo), else
@@ -181,7 +185,10 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
         .into_par_iter()
         .map(|i| {
             let rec = &cells[i];
-            let cell: ExportCell = read_export_cell_as(store, rec, mode)?;
+            let mut cell: ExportCell = read_export_cell_as(store, rec, mode)?;
+            if let Some(q) = ctx.jpeg_quality {
+                cell.texture_to_jpeg(q)?;
+            }
             let enu: Vec<DVec3> = cell.positions.iter().map(|&p| (ctx.to_enu)(p)).collect::<Result<_>>()?;
             let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
             for p in &enu {
