@@ -59,7 +59,7 @@ fn main() {
         "| footprint side (texels) | exact splat, Mfootprints/s | bilinear peer, Mfootprints/s | ratio |"
     );
     println!("|---|---|---|---|");
-    for s in [0.1f32, 0.35, 0.7, 1.5, 4.0] {
+    for s in [0.1f32, 0.35, 0.7, 1.5, 4.0, 8.0, 16.0] {
         let time = |collapse: bool| {
             let fps = footprints(n, s, collapse);
             let runs: Vec<f64> = (0..5)

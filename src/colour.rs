@@ -98,16 +98,23 @@ static THRESHOLDS: LazyLock<[f32; 255]> =
     LazyLock::new(|| std::array::from_fn(|k| srgb_to_linear((k as f64 + 0.5) / 255.0) as f32));
 
 /// Entries of [`ENCODE_START`]: the linear range [0, 1] in equal bins.
-const ENCODE_BINS: usize = 4096;
+const ENCODE_BINS: usize = 1 << 16;
 
-/// Per bin of the linear range, the 8-bit value of the bin's lower end: the search for a
-/// value's code starts there and passes at most a few boundaries (adjacent boundaries are at
-/// least 3·10⁻⁴ apart, a bin 2.4·10⁻⁴ wide).
-static ENCODE_START: LazyLock<[u8; ENCODE_BINS]> = LazyLock::new(|| {
-    std::array::from_fn(|i| {
-        let l = i as f32 / ENCODE_BINS as f32;
-        THRESHOLDS.iter().take_while(|&&t| t <= l).count() as u8
-    })
+/// Per bin of the linear range, the 8-bit value of the bin's lower end. Adjacent value
+/// boundaries are at least 3·10⁻⁴ apart and a bin is 1.5·10⁻⁵ wide, so at most one boundary
+/// lies in a bin: a value's code is the bin's, or one more if it is at or past that boundary.
+static ENCODE_START: LazyLock<Vec<u8>> = LazyLock::new(|| {
+    let t = &*THRESHOLDS;
+    let mut k = 0usize;
+    (0..ENCODE_BINS)
+        .map(|i| {
+            let l = i as f32 / ENCODE_BINS as f32;
+            while k < t.len() && t[k] <= l {
+                k += 1;
+            }
+            k as u8
+        })
+        .collect()
 });
 
 /// The 8-bit sRGB value of the linear intensity `l` (rounded in the sRGB encoding: the
@@ -120,12 +127,12 @@ pub fn encode_u8(l: f32) -> u8 {
     if l >= 1.0 {
         return 255;
     }
-    let t = &*THRESHOLDS;
-    let mut k = ENCODE_START[((l * ENCODE_BINS as f32) as usize).min(ENCODE_BINS - 1)] as usize;
-    while k < 255 && t[k] <= l {
-        k += 1;
+    let k = ENCODE_START[((l * ENCODE_BINS as f32) as usize).min(ENCODE_BINS - 1)];
+    // (THRESHOLDS has 255 entries: index 255 stands for "no further boundary")
+    match THRESHOLDS.get(k as usize) {
+        Some(&t) if t <= l => k + 1,
+        _ => k,
     }
-    k as u8
 }
 
 /// Linear intensity of the 8-bit sRGB value `v`.
@@ -168,6 +175,21 @@ mod tests {
                 THRESHOLDS.iter().filter(|&&t| t <= l).count(),
                 "{l}"
             );
+        }
+        // and on the f32 values next to every boundary
+        for &t in THRESHOLDS.iter() {
+            let mut l = t;
+            for _ in 0..4 {
+                l = f32::from_bits(l.to_bits() - 1);
+            }
+            for _ in 0..9 {
+                assert_eq!(
+                    encode_u8(l) as usize,
+                    THRESHOLDS.iter().filter(|&&b| b <= l).count(),
+                    "{l}"
+                );
+                l = f32::from_bits(l.to_bits() + 1);
+            }
         }
         assert_eq!(encode_u8(f32::NAN), 0);
         assert_eq!(encode_u8(-1.0), 0);

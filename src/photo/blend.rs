@@ -67,27 +67,39 @@ pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
         .map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) })
         .collect();
     let ow = (w * scale) as usize;
+    let row_len = w as usize * 4;
+    // Each source row pair serves `scale` output rows: the pair's rows are interpolated
+    // along x once per band of output rows, then each output row along y.
+    let across = |y: usize, buf: &mut Vec<f32>| {
+        let r = &lin[y * row_len..][..row_len];
+        buf.clear();
+        buf.extend(cols.iter().flat_map(|&(x0, x1, fx)| {
+            std::array::from_fn::<f32, 4, _>(|k| r[4 * x0 + k] + (r[4 * x1 + k] - r[4 * x0 + k]) * fx)
+        }));
+    };
     let mut out = vec![0u8; ow * rows.len() * 4];
-    out.par_chunks_mut(ow * 4)
-        .zip(rows.par_iter())
-        .for_each(|(row, &(y0, y1, fy))| {
-            let (r0, r1) = (
-                &lin[y0 * w as usize * 4..][..w as usize * 4],
-                &lin[y1 * w as usize * 4..][..w as usize * 4],
-            );
-            for (px, &(x0, x1, fx)) in row.chunks_exact_mut(4).zip(&cols) {
-                let mut v = [0.0f32; 4];
-                for k in 0..4 {
-                    let top = r0[4 * x0 + k] + (r0[4 * x1 + k] - r0[4 * x0 + k]) * fx;
-                    let bottom = r1[4 * x0 + k] + (r1[4 * x1 + k] - r1[4 * x0 + k]) * fx;
-                    v[k] = top + (bottom - top) * fy;
+    let band = scale as usize;
+    out.par_chunks_mut(ow * 4 * band)
+        .zip(rows.par_chunks(band))
+        .for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(top, bottom), (chunk, band_rows)| {
+                let mut have = (usize::MAX, usize::MAX);
+                for (row, &(y0, y1, fy)) in chunk.chunks_exact_mut(ow * 4).zip(band_rows) {
+                    if have != (y0, y1) {
+                        across(y0, top);
+                        across(y1, bottom);
+                        have = (y0, y1);
+                    }
+                    for ((px, t), b) in row.chunks_exact_mut(4).zip(top.chunks_exact(4)).zip(bottom.chunks_exact(4)) {
+                        px[0] = encode_u8(t[0] + (b[0] - t[0]) * fy);
+                        px[1] = encode_u8(t[1] + (b[1] - t[1]) * fy);
+                        px[2] = encode_u8(t[2] + (b[2] - t[2]) * fy);
+                        px[3] = (t[3] + (b[3] - t[3]) * fy + 0.5) as u8;
+                    }
                 }
-                px[0] = encode_u8(v[0]);
-                px[1] = encode_u8(v[1]);
-                px[2] = encode_u8(v[2]);
-                px[3] = (v[3] + 0.5) as u8;
-            }
-        });
+            },
+        );
     RgbaImage::from_raw(w * scale, h * scale, out).unwrap_or_else(|| existing.clone())
 }
 
@@ -361,6 +373,35 @@ mod tests {
                 mean >= mean1 - 0.5,
                 "scale {scale}: mean share {mean} < {mean1}"
             );
+        }
+    }
+
+    #[test]
+    fn magnify_is_bilinear_in_linear_light_at_every_texel() {
+        let img = RgbaImage::from_fn(5, 3, |x, y| {
+            image::Rgba([(x * 53 + y * 17) as u8, (y * 90) as u8, ((x * y * 31) % 256) as u8, (40 + x * 40) as u8])
+        });
+        for scale in [2u32, 4, 8] {
+            let m = magnify(&img, scale);
+            for (ox, oy, p) in m.enumerate_pixels() {
+                let at = |o: u32, n: u32| {
+                    let u = ((o as f64 + 0.5) / scale as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+                    let i = u.floor() as u32;
+                    (i, (i + 1).min(n - 1), (u - i as f64) as f32)
+                };
+                let ((x0, x1, fx), (y0, y1, fy)) = (at(ox, 5), at(oy, 3));
+                for k in 0..4 {
+                    let v = |x, y| {
+                        let b = img.get_pixel(x, y).0[k];
+                        if k == 3 { b as f32 } else { decode_u8(b) }
+                    };
+                    let top = v(x0, y0) + (v(x1, y0) - v(x0, y0)) * fx;
+                    let bottom = v(x0, y1) + (v(x1, y1) - v(x0, y1)) * fx;
+                    let l = top + (bottom - top) * fy;
+                    let want = if k == 3 { (l + 0.5) as u8 } else { encode_u8(l) };
+                    assert_eq!(p.0[k], want, "scale {scale} texel {ox},{oy} channel {k}");
+                }
+            }
         }
     }
 
