@@ -11,6 +11,13 @@
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
+//!     [--occlusion-margin PX] [--rough SEED [--register]]
+//! ```
+//! `--rough SEED` projects with every camera turned and zoomed at random inside what a phone's
+//! compass and EXIF give (yaw ±3°, pitch and roll ±1.5°, focal length ±3 %; seeded);
+//! `--register` first refines those cameras with `cliffmap register` (prints the errors
+//! before and after) and projects the registered ones.
+//! ```text
 //! ```
 //! `--perturb-*` project the photos with every camera's yaw turned by DEG degrees or its
 //! position moved by (DX, DY, DZ) metres (docs/registration.md, "Sensitivity"); the oracle
@@ -102,8 +109,44 @@ fn main() -> anyhow::Result<()> {
         scene.write_demo_photos(&dem, &photos_dir, &popts)?;
         eprintln!("store and photos: {:.1} s", t0.elapsed().as_secs_f64());
         // projection with perturbed poses (the truth, the oracle and the scores keep the exact ones)
-        let project_list =
+        let mut project_list =
             perturbed_list(&list, flag("--perturb-yaw"), flag("--perturb-position"))?;
+        if let Some(seed) = flag("--rough") {
+            project_list = rough_list(&project_list, seed.parse()?)?;
+        }
+        if has("--register") {
+            let specs = cliffmap::photo::read_photo_specs(&project_list)?;
+            let out = project_list.with_file_name("photos_registered.json");
+            let t = Instant::now();
+            let regs = cliffmap::pipeline::register_photos(
+                &store,
+                &specs,
+                &out,
+                &cliffmap::register::TerrainOptions::default(),
+                &mut |w| eprintln!("warning: {w}"),
+            )?;
+            let exact = cliffmap::photo::read_photo_specs(&list)?;
+            for (r, e) in regs.iter().zip(&exact) {
+                let (ya, pa, ra) = cliffmap::camera::yaw_pitch_roll_from_rotation(&r.fit.camera.world_to_camera);
+                let (yb, pb, rb) = cliffmap::camera::yaw_pitch_roll_from_rotation(&e.camera.world_to_camera);
+                let (y0, p0, r0) = cliffmap::camera::yaw_pitch_roll_from_rotation(&r.rough.world_to_camera);
+                let d = |a: f64, b: f64| {
+                    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+                    d.min(std::f64::consts::TAU - d).to_degrees()
+                };
+                eprintln!(
+                    "register {}: converged {}; error before yaw/pitch/roll {:.3}/{:.3}/{:.3} deg, f {:+.2} %; after {:.4}/{:.4}/{:.4} deg, f {:+.3} %",
+                    r.name,
+                    r.fit.converged,
+                    d(y0, yb), d(p0, pb), d(r0, rb),
+                    (r.rough.fx / e.camera.fx - 1.0) * 100.0,
+                    d(ya, yb), d(pa, pb), d(ra, rb),
+                    (r.fit.camera.fx / e.camera.fx - 1.0) * 100.0,
+                );
+            }
+            eprintln!("register: {:.1} s", t.elapsed().as_secs_f64());
+            project_list = out;
+        }
         let photos = cliffmap::photo::read_photo_list(&project_list)?;
         let t = Instant::now();
         let mut popts = ProjectOptions {
@@ -136,6 +179,9 @@ fn main() -> anyhow::Result<()> {
                 .split_once(',')
                 .ok_or_else(|| anyhow::anyhow!("--resolution-ramp LO,HI"))?;
             popts.confidence.resolution_ramp = [a.parse()?, b.parse()?];
+        }
+        if let Some(m) = flag("--occlusion-margin") {
+            popts.confidence.occlusion_margin_px = m.parse()?;
         }
         if has("--best") {
             popts.blend = cliffmap::photo::BlendMode::Best;
@@ -234,6 +280,47 @@ fn perturbed_list(
         entry["camera"] = serde_json::json!(out);
     }
     let out = dir.join("photos_perturbed.json");
+    std::fs::write(&out, doc.to_string())?;
+    Ok(out)
+}
+
+/// Every camera of `list` turned and zoomed at random (seed `seed`): yaw ±3°, pitch and roll
+/// ±1.5°, focal length ±3 % (uniform), position kept; written beside it.
+fn rough_list(list: &std::path::Path, seed: u64) -> anyhow::Result<PathBuf> {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5DEE_CE66_D;
+    let mut rnd = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let dir = list.parent().unwrap_or(std::path::Path::new("."));
+    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(list)?)?;
+    for entry in doc["photos"]
+        .as_array_mut()
+        .ok_or_else(|| anyhow::anyhow!("no photos"))?
+    {
+        let name = entry["camera"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("photo without camera"))?
+            .to_string();
+        let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
+        let (y, p, r) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
+        cam.world_to_camera = cliffmap::camera::rotation_from_yaw_pitch_roll(
+            y + (3.0 * rnd()).to_radians(),
+            p + (1.5 * rnd()).to_radians(),
+            r + (1.5 * rnd()).to_radians(),
+        );
+        let k = 1.0 + 0.03 * rnd();
+        cam.fx *= k;
+        cam.fy *= k;
+        let out = format!("{}.rough.json", name.trim_end_matches(".json"));
+        std::fs::write(dir.join(&out), cliffmap::camera::camera_to_json(&cam).to_string())?;
+        entry["camera"] = serde_json::json!(out);
+    }
+    let out = dir.join("photos_rough.json");
     std::fs::write(&out, doc.to_string())?;
     Ok(out)
 }

@@ -43,6 +43,11 @@ pub struct Args {
     /// Keep every photo texture at its active texture's size (no photo-driven sizes).
     #[arg(long)]
     pub fixed_photo_texels: bool,
+    /// Occlusion margin: photo pixels closer than PX (pose uncertainty, full-resolution
+    /// pixels) plus the TIN error's displacement to an occlusion edge of the photo (a
+    /// silhouette, the skyline, a depth jump) count less; 0 switches it off.
+    #[arg(long, default_value_t = 2.0, value_name = "PX")]
+    pub occlusion_margin: f64,
     /// Colour space photo colours are averaged and blended in.
     #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
     pub colour_space: String,
@@ -98,6 +103,10 @@ pub fn options(a: &Args) -> ProjectOptions {
             budget_bytes: a.photo_texture_budget,
             texels_per_pixel: a.texels_per_pixel,
             texels_per_delivered: a.max_texels_per_photo_pixel,
+        },
+        confidence: cliffmap::photo::ConfidenceParams {
+            occlusion_margin_px: a.occlusion_margin,
+            ..Default::default()
         },
         png_compression: a.png_compression,
         quiet: a.quiet,

@@ -21,6 +21,7 @@ use image::RgbImage;
 use super::PixelFootprint;
 use super::confidence::{BorderFeather, ConfidenceParams};
 use super::level::ColourTransform;
+use super::occlusion::{OcclusionMap, occlusion_weight};
 use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
 pub use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::colour::ColourSpace;
@@ -58,6 +59,22 @@ pub struct PhotoSamples<'a> {
     feather: BorderFeather,
     /// Radians per pixel: `1 / √(fx·fy)` of the camera the footprints were cast with.
     pixel_angle: f32,
+    /// The occlusion margin's inputs, if on.
+    occlusion: Option<OcclusionTerm<'a>>,
+}
+
+/// What [`PhotoSamples`] needs for the occlusion margin ([`super::occlusion`]).
+#[derive(Clone, Debug)]
+struct OcclusionTerm<'a> {
+    map: &'a OcclusionMap,
+    /// Full-resolution pixels per pixel of the image the footprints were cast for.
+    step_scale: f32,
+    /// Pose uncertainty, full-resolution pixels.
+    margin_px: f32,
+    /// Full-resolution focal length, pixels.
+    focal_full: f32,
+    /// TIN error (metres) per manifest cell.
+    cell_error: &'a [f32],
 }
 
 impl<'a> PhotoSamples<'a> {
@@ -88,7 +105,45 @@ impl<'a> PhotoSamples<'a> {
             lut,
             feather: params.border_feather(image.width(), image.height()),
             pixel_angle,
+            occlusion: None,
         }
+    }
+}
+
+impl<'a> PhotoSamples<'a> {
+    /// Adds the occlusion margin of `params` ([`super::occlusion`]): `map` of this photo,
+    /// the image these samples are of being `step_scale` times smaller per side than the
+    /// full-resolution photo of focal length `focal_full` pixels; `cell_error[c]` the TIN
+    /// error (metres) of manifest cell `c`. No change when the margin is 0.
+    pub fn with_occlusion(
+        mut self,
+        map: &'a OcclusionMap,
+        step_scale: f32,
+        focal_full: f64,
+        cell_error: &'a [f32],
+        params: &ConfidenceParams,
+    ) -> PhotoSamples<'a> {
+        if params.occlusion_margin_px > 0.0 {
+            self.occlusion = Some(OcclusionTerm {
+                map,
+                step_scale,
+                margin_px: params.occlusion_margin_px as f32,
+                focal_full: focal_full as f32,
+                cell_error,
+            });
+        }
+        self
+    }
+
+    /// The occlusion weight of footprint `fp` (1 without the margin).
+    #[inline]
+    fn occlusion_weight(&self, fp: &PixelFootprint) -> f32 {
+        let Some(o) = &self.occlusion else {
+            return 1.0;
+        };
+        let eps = o.cell_error.get(fp.cell as usize).copied().unwrap_or(0.0);
+        let margin = o.margin_px + o.focal_full * eps / fp.distance.max(1e-3);
+        occlusion_weight(o.map.distance_px(fp.pixel, o.step_scale), margin)
     }
 }
 
@@ -134,6 +189,19 @@ impl PhotoAccum {
         footprint_m: f32,
         grazing: f32,
     ) {
+        self.add_clear(fp, rgb, feather, 1.0, footprint_m, grazing);
+    }
+
+    /// [`PhotoAccum::add`] of a pixel with occlusion weight `clear` in [0, 1].
+    pub fn add_clear(
+        &mut self,
+        fp: &PixelFootprint,
+        rgb: [f32; 3],
+        feather: f32,
+        clear: f32,
+        footprint_m: f32,
+        grazing: f32,
+    ) {
         let sc = self.scale as f32;
         let corners = if self.scale == 1 {
             fp.corners
@@ -143,7 +211,7 @@ impl PhotoAccum {
         let shape = footprint_shape(&corners);
         let sums = &mut self.sums;
         let q = feather;
-        let (qr, qg) = (q * footprint_m, q * grazing);
+        let (qr, qg, qo) = (q * footprint_m, q * grazing, q * clear);
         let deposit = |i: usize, w: f64| {
             let w = w as f32;
             let Some(s) = sums.get_mut(i) else { return };
@@ -155,6 +223,7 @@ impl PhotoAccum {
             }
             s.footprint += w * qr;
             s.grazing += w * qg;
+            s.clear += w * qo;
         };
         let bbox = MAX_SPLAT_BBOX * (self.scale as f64 * self.scale as f64);
         let s = match shape {
@@ -210,13 +279,14 @@ impl PhotoAccum {
                 lut[2][raw[o + 2] as usize],
             ];
             let border = photo.feather.at(fp.pixel) as f32;
+            let clear = photo.occlusion_weight(fp);
             let grazing = 1.0 / fp.cos_view.max(MIN_COS_VIEW);
             let footprint = fp.distance * photo.pixel_angle * grazing;
             if !(grazing.is_finite() && footprint.is_finite()) {
                 self.kinds[2] += 1;
                 continue;
             }
-            self.add(fp, rgb, border, footprint, grazing);
+            self.add_clear(fp, rgb, border, clear, footprint, grazing);
         }
     }
 
@@ -243,6 +313,11 @@ impl PhotoAccum {
         [s.footprint / s.weight, s.grazing / s.weight]
     }
 }
+
+/// The least factor of a photo's selection weight on texels next to its occlusion edges
+/// (occlusion weight 0): another photo that sees such a texel clear of its own edges wins
+/// unless it resolves the surface about 5.6× more coarsely (`1000^(1/4)`, γ = 4).
+const EDGE_FLOOR: f32 = 1e-3;
 
 /// `x^−p` for `x > 0`; by multiplications when `p` is a small whole number (the default 4).
 #[inline]
@@ -403,6 +478,7 @@ impl CellAccum {
                             colour: c.map(|v| w * v),
                             footprint: w * res,
                             grazing: w,
+                            clear: 0.0,
                         },
                         BlendMode::Best => TexelSums {
                             coverage: conf,
@@ -410,6 +486,7 @@ impl CellAccum {
                             colour: c,
                             footprint: res,
                             grazing: w,
+                            clear: 0.0,
                         },
                     };
                 }
@@ -450,7 +527,10 @@ impl CellAccum {
         let res = ctx
             .photo_resolution(b, [s.footprint / s.weight, s.grazing / s.weight])
             .max(1e-6);
-        let w = conf * inverse_power(res, sharpness);
+        // a photo near its occlusion edges keeps a little weight, so that it still gives
+        // colour where no other photo does
+        let clear = EDGE_FLOOR + (1.0 - EDGE_FLOOR) * (s.clear / s.weight).clamp(0.0, 1.0);
+        let w = conf * clear * inverse_power(res, sharpness);
         Some((c, conf, res, if w.is_finite() { w } else { 0.0 }))
     }
 
@@ -630,6 +710,61 @@ mod tests {
             &params(),
             ColourSpace::Srgb,
         )
+    }
+
+    #[test]
+    fn a_photo_clear_of_its_occlusion_edges_wins_over_one_next_to_them() {
+        // two 16 x 8 photos whose every pixel deposits into its own texel; photo A's rows
+        // 0..2 are sky (an occlusion edge along row 2), photo B sees everything and is 1.5x
+        // coarser on the surface (distance 15 m against 10 m)
+        let (red, blue) = (
+            RgbImage::from_pixel(16, 8, image::Rgb([250, 0, 0])),
+            RgbImage::from_pixel(16, 8, image::Rgb([0, 0, 250])),
+        );
+        let grid = |rows: std::ops::Range<u32>, distance: f32| -> Vec<PixelFootprint> {
+            rows.flat_map(|r| (0..16u32).map(move |c| (c, r)))
+                .map(|(c, r)| PixelFootprint { distance, ..fp([c, r], square(c as f32, r as f32, 1.0), 1.0) })
+                .collect()
+        };
+        let (fa, fb) = (grid(2..8, 10.0), grid(0..8, 15.0));
+        let set = crate::photo::FootprintSet {
+            cells: vec![crate::photo::CellFootprints { cell: 0, chunks: vec![fa.clone()] }],
+            ..crate::photo::FootprintSet::default()
+        };
+        let map = OcclusionMap::from_footprints(&set, 16, 8, 1.0, 0.1);
+        let errors = [0.0f32];
+        let merged = |margin: f64, with_b: bool| {
+            let p = ConfidenceParams { occlusion_margin_px: margin, ..params() };
+            let sa = PhotoSamples::new(&red, [1000.0; 2], &ColourTransform::IDENTITY, &p, ColourSpace::Srgb)
+                .with_occlusion(&map, 1.0, 1000.0, &errors, &p);
+            let mut a = PhotoAccum::new(16);
+            a.add_samples(&fa, &sa);
+            let ctx = CellContext::flat(16, 0.0, 1.0);
+            let (mut acc, _) = CellAccum::from_photo(a, 0, BlendMode::Confidence, ctx, &p);
+            if with_b {
+                let sb = PhotoSamples::new(&blue, [1000.0; 2], &ColourTransform::IDENTITY, &p, ColourSpace::Srgb);
+                let mut b = PhotoAccum::new(16);
+                b.add_samples(&fb, &sb);
+                acc.merge(&b, 1);
+            }
+            acc
+        };
+        let acc = merged(3.0, true);
+        // row 2 touches A's edge: B wins there; rows from 5 on are clear in A: A wins (the
+        // sharper); in between the weights cross over
+        assert_eq!(acc.best_photo(2 * 16 + 8), Some(1));
+        let red_share = |t: usize| acc.colour_at(t).map(|c| c[0] / (c[0] + c[2])).unwrap();
+        assert!(red_share(2 * 16 + 8) < 0.01);
+        assert_eq!(acc.best_photo(6 * 16 + 8), Some(0));
+        assert!(red_share(6 * 16 + 8) > 0.8);
+        assert!(red_share(3 * 16 + 8) < red_share(4 * 16 + 8));
+        // without the margin A wins everywhere it sees
+        let acc = merged(0.0, true);
+        assert_eq!(acc.best_photo(2 * 16 + 8), Some(0));
+        // and alone, A gives its colour next to its edge as well, with full confidence
+        let acc = merged(3.0, false);
+        assert!(acc.colour_at(2 * 16 + 8).is_some_and(|c| c[0] > 0.9));
+        assert_eq!(acc.confidence(2 * 16 + 8), 1.0);
     }
 
     #[test]

@@ -18,7 +18,9 @@
 //!   size of the texture the photo is splatted into, so a larger texture never lowers the
 //!   photo's share (tested).
 //! - Between photos, each texel weights a photo by its coverage confidence times its
-//!   resolution to the power `−sharpness_power`, so the sharpest photo wins.
+//!   resolution to the power `−sharpness_power`, so the sharpest photo wins, times its
+//!   occlusion term ([`super::occlusion`]), so that a photo seeing the texel clear of its own
+//!   occlusion edges wins over one seeing it next to them.
 
 use crate::error::{Error, Result};
 
@@ -41,6 +43,11 @@ pub struct ConfidenceParams {
     /// γ of the per-texel photo weight `confidence · resolution^−γ` between photos, in
     /// [0, 16]. Default 4 (a photo 2× sharper weighs 16×).
     pub sharpness_power: f64,
+    /// Pose uncertainty (full-resolution photo pixels, in [0, 1000]) of the occlusion
+    /// margin ([`super::occlusion`]): photo pixels closer than this plus the TIN error's
+    /// displacement (pixels) to an occlusion edge of the photo count less. 0 = no margin.
+    /// Default 2.
+    pub occlusion_margin_px: f64,
 }
 
 impl Default for ConfidenceParams {
@@ -50,6 +57,7 @@ impl Default for ConfidenceParams {
             ramp: [0.05, 0.35],
             resolution_ramp: [0.0, 2.0],
             sharpness_power: 4.0,
+            occlusion_margin_px: 2.0,
         }
     }
 }
@@ -89,6 +97,12 @@ impl ConfidenceParams {
             return Err(Error::BadOption(format!(
                 "sharpness power must be in [0, 16], got {}",
                 self.sharpness_power
+            )));
+        }
+        if !(0.0..=1000.0).contains(&self.occlusion_margin_px) {
+            return Err(Error::BadOption(format!(
+                "occlusion margin must be in [0, 1000] pixels, got {}",
+                self.occlusion_margin_px
             )));
         }
         Ok(())

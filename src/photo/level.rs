@@ -372,6 +372,7 @@ mod tests {
                 colour: [c; 3],
                 footprint: r,
                 grazing: 1.2,
+                clear: 1.0,
             };
         }
         let existing = RgbaImage::from_pixel(2, 2, image::Rgba([100, 100, 100, 255]));
@@ -419,6 +420,7 @@ mod tests {
                 colour: [0.2 + 0.1 * t as f32; 3],
                 footprint: 0.1,
                 grazing: 1.2,
+                clear: 1.0,
             };
         }
         let ok = CellContext {

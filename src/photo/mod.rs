@@ -37,6 +37,7 @@ mod corners;
 mod footprint;
 mod input;
 mod level;
+mod occlusion;
 mod pyramid;
 mod reconstruct;
 mod scene;
@@ -52,6 +53,7 @@ pub use accumulate::{
     BlendMode, CellAccum, CellContext, MIN_COS_SLOPE, PhotoAccum, PhotoSamples, TexelSums,
 };
 pub use blend::{Blended, blend_cell, magnify};
+pub use occlusion::{OcclusionMap, occlusion_weight};
 pub use bvh::{BvhQuality, TriHit, TriangleBvh, nearest_brute_force};
 pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};

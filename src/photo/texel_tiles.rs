@@ -20,6 +20,9 @@ pub struct TexelSums {
     pub footprint: f32,
     /// `G`: feathered area over the view cosine.
     pub grazing: f32,
+    /// `O`: feathered area times the occlusion weight ([`super::occlusion`]), so that
+    /// `O / W` is the mean occlusion weight of the deposits.
+    pub clear: f32,
 }
 
 /// Texels per tile side.
@@ -46,6 +49,7 @@ const ZERO: TexelSums = TexelSums {
     colour: [0.0; 3],
     footprint: 0.0,
     grazing: 0.0,
+    clear: 0.0,
 };
 
 impl TexelTiles {

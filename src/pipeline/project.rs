@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::{PngCompression, encode_png};
 use crate::photo::{
     BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform,
-    ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
+    ConfidenceParams, FootprintBuffers, OcclusionMap, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
     PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS, SizeRequest,
     SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
     for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
@@ -318,11 +318,19 @@ pub fn project_store(
         buffers: &buffers,
         bars: &bars,
         finest,
+        cell_errors: store
+            .manifest
+            .cells
+            .iter()
+            .map(|c| c.max_error.max(0.0) as f32)
+            .collect(),
     };
     let mut pending: Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))> = None;
     // The photo textures are written on a thread of their own (the fsyncs do not hold up
     // the workers); all are on disk before the manifest refers to them.
     let writer = BackgroundWriter::new(dir);
+    // per photo, its occlusion map (made at the finest level, used by every level)
+    let mut occlusion: Vec<Option<OcclusionMap>> = photos.iter().map(|_| None).collect();
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
             || {
@@ -341,6 +349,7 @@ pub fn project_store(
                     level,
                     run.project_level(
                         level,
+                        &mut occlusion,
                         &mut cached,
                         &mut first_scene,
                         &mut reports,
@@ -395,6 +404,7 @@ pub fn project_store(
         photo_driven_sizes: opts.texture.photo_driven,
         max_photo_texels: opts.texture.max_texels,
         photo_texture_budget: opts.texture.budget_bytes,
+        occlusion_margin_px: opts.confidence.occlusion_margin_px,
         photos: reports,
         levels: level_reports,
     };
@@ -513,6 +523,8 @@ struct LevelRun<'a> {
     buffers: &'a FootprintBuffers,
     bars: &'a [ProgressBar],
     finest: usize,
+    /// TIN error (metres) per manifest cell, for the occlusion margin.
+    cell_errors: Vec<f32>,
 }
 
 impl LevelRun<'_> {
@@ -523,6 +535,7 @@ impl LevelRun<'_> {
     fn project_level(
         &self,
         level: usize,
+        occlusion: &mut [Option<OcclusionMap>],
         cached: &mut [Option<(usize, FootprintSet)>],
         first_scene: &mut Option<LevelScene>,
         reports: &mut [PhotoReport],
@@ -545,13 +558,30 @@ impl LevelRun<'_> {
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
             let cells = &self.store.manifest.cells;
-            let samples = PhotoSamples::new(
+            if level == self.finest
+                && self.opts.confidence.occlusion_margin_px > 0.0
+                && occlusion[pi].is_none()
+            {
+                occlusion[pi] = Some(self.occlusion_map(pyr, level, &mut scenes[pi])?);
+                timer.lap(&format!("level {level} photo {pi}: occlusion map"));
+            }
+            let mut samples = PhotoSamples::new(
                 img,
                 [cam.fx, cam.fy],
                 &self.transforms[pi],
                 &self.opts.confidence,
                 self.opts.colour_space,
             );
+            if let Some(map) = &occlusion[pi] {
+                let (_, full) = pyr.level(0);
+                samples = samples.with_occlusion(
+                    map,
+                    (1u64 << step) as f32,
+                    (full.fx * full.fy).sqrt(),
+                    &self.cell_errors,
+                    &self.opts.confidence,
+                );
+            }
             // This photo's deposits per manifest cell, filled batch by batch in row order.
             let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
             let counts = match cached[pi].take() {
@@ -633,6 +663,40 @@ impl LevelRun<'_> {
             timer.lap(&format!("level {level} photo {pi}: merge"));
         }
         Ok((accs, sizing))
+    }
+
+    /// The occlusion map of a photo ([`OcclusionMap`]): its pyramid image at half size (or
+    /// the full one if it has no smaller image) cast onto the finest level `level` (with
+    /// `scene`, built there if `None` and kept).
+    fn occlusion_map(
+        &self,
+        pyr: &PhotoPyramid,
+        level: usize,
+        scene: &mut Option<LevelScene>,
+    ) -> Result<OcclusionMap> {
+        let step = OCCLUSION_STEP.min(pyr.steps());
+        let (img, cam) = pyr.level(step);
+        if scene.is_none() {
+            *scene = Some(LevelScene::from_store(
+                self.store,
+                level as u8,
+                cam.position,
+                self.opts.ray,
+            )?);
+        }
+        let Some(scene) = scene.as_ref() else {
+            return Err(Error::BadOption("no scene for the occlusion map".into()));
+        };
+        let fs = photo_footprints_in(self.buffers, scene, &cam, &self.opts.footprint);
+        let map = OcclusionMap::from_footprints(
+            &fs,
+            img.width(),
+            img.height(),
+            (1u64 << step) as f32,
+            self.opts.footprint.max_depth_jump,
+        );
+        self.buffers.recycle(fs);
+        Ok(map)
     }
 
     /// The photo texture scale of every cell of `level` (indexed by manifest cell; 1 for
@@ -770,6 +834,10 @@ impl LevelRun<'_> {
         Ok(out)
     }
 }
+
+/// Pyramid halvings between the full-resolution photo and the image its occlusion map is
+/// cast from (edges located to a map pixel, 2 full-resolution pixels).
+const OCCLUSION_STEP: usize = 1;
 
 /// Pyramid halvings between a level's image and its sizing cast's.
 const SIZING_STEPS: usize = 2;

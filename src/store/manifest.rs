@@ -260,6 +260,10 @@ pub struct PhotoSettings {
     /// GPU bytes the enlarged photo textures of all levels were allowed.
     #[serde(default)]
     pub photo_texture_budget: u64,
+    /// Pose uncertainty of the occlusion margin, full-resolution photo pixels (0: no
+    /// margin, as in stores written before 2026-12-04).
+    #[serde(default)]
+    pub occlusion_margin_px: f64,
     /// One report per photo, in input order.
     pub photos: Vec<PhotoReport>,
     /// Per quadtree level (root first): texel counts over all cells of the level.
