@@ -66,6 +66,8 @@ fn main() -> anyhow::Result<()> {
     }
     if let Some(f) = flag("--free") {
         opts.free = parse_free(f)?;
+        // (x, y, z: the silhouette-edge stage, which the command does not offer)
+        opts.experimental_position = true;
     }
     let (dem, ortho) = scene.generate()?;
     let store_dir = out.join("store");
@@ -147,6 +149,12 @@ fn main() -> anyhow::Result<()> {
                     100.0 * (q.focal[0] / truth.focal[0] - 1.0),
                 )
             };
+            if let Some(e) = &fit.edges {
+                eprintln!(
+                    "{} {s}: edges {} matched, median {:.2} px, restart {:.2} m, sigma {:?}",
+                    p.name, e.matched, e.median_px, e.position_repeat_m, e.sigma
+                );
+            }
             let (a0, p0, f0) = err(&c);
             let (a1, p1, f1) = err(&got);
             let goal = a1.iter().all(|&e| e <= 0.02) && p1 <= 0.3;

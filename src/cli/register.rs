@@ -17,7 +17,8 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Parameters to refine: yaw, pitch, roll, f (or fx, fy). The position stays as given
-    /// (refining it against the terrain is not supported yet).
+    /// (refining it against the terrain is not reliable yet: docs/registration.md,
+    /// "Position").
     #[arg(long, default_value = "yaw,pitch,roll,f")]
     free: String,
     /// Half-widths of the coarse search over yaw, pitch and roll, degrees "Y,P,R".

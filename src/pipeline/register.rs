@@ -131,6 +131,15 @@ fn report_entry(r: &PhotoRegistration) -> Value {
             "x_m": change(Param::X), "y_m": change(Param::Y), "z_m": change(Param::Z),
         },
         "applied": r.fit.converged,
+        "edges": r.fit.edges.as_ref().map(|e| json!({
+            "matched": e.matched,
+            "median_px": e.median_px,
+            "position_repeat_m": e.position_repeat_m,
+            "sigma": e.sigma.iter().map(|(p, v)| {
+                let v = if p.is_angle() { v.to_degrees() } else { *v };
+                (format!("{}{}", p.name(), if p.is_angle() { "_deg" } else if matches!(p, Param::X | Param::Y | Param::Z) { "_m" } else { "_px" }), json!(v))
+            }).collect::<serde_json::Map<String, Value>>(),
+        })),
         "evaluations": r.fit.evaluations,
         "seconds": r.fit.seconds,
         "camera": file_name(&r.camera_file),

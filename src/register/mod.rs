@@ -47,4 +47,6 @@ pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
 pub use start::{rotation_from_bearings, start_from_gcps, start_from_position};
-pub use terrain::{TerrainFit, TerrainOptions, TerrainScene, register_to_terrain};
+pub use terrain::{
+    EdgeFit, EdgeOptions, TerrainFit, TerrainOptions, TerrainScene, refine_edges, register_to_terrain,
+};

@@ -24,6 +24,7 @@
 //! whole-pixel shifts are not favoured (the grid effect of partial-volume interpolation). The verdict comes from a
 //! restart: Nelder-Mead from the result moved by a few pixels must come back to it.
 
+mod edges;
 mod mi;
 mod simplex;
 mod view;
@@ -34,7 +35,8 @@ use glam::DVec3;
 use image::RgbImage;
 
 pub use mi::{GreyImage, nmi};
-pub use view::{LABELS, SKY, Sample, SampleAt, TerrainScene};
+pub use edges::{ContourPoint, EdgeFit, EdgeImage, EdgeOptions, contour, refine_edges};
+pub use view::{LABELS, RayEnd, SKY, Sample, SampleAt, TerrainScene};
 
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
@@ -55,6 +57,13 @@ pub struct TerrainOptions {
     pub repeat_px: f64,
     /// Finest photo scale used (1 = full resolution, 2 = half, ...; a power of two).
     pub finest_factor: u32,
+    /// Standard deviation (metres) of the rough position, the prior of the position's
+    /// refinement when x, y, z are free (a phone's GPS: a few metres).
+    pub position_sigma_m: f64,
+    /// Allow x, y, z to be free (the silhouette-edge stage). Off by default and not offered
+    /// by the command: measured on the demo scene it recovers the position in only a few
+    /// starts and can agree with itself on a wrong one (docs/registration.md, "Position").
+    pub experimental_position: bool,
 }
 
 impl Default for TerrainOptions {
@@ -68,40 +77,70 @@ impl Default for TerrainOptions {
             bounds: [8.0, 0.08, 15.0],
             repeat_px: 1.0,
             finest_factor: 1,
+            position_sigma_m: 5.0,
+            experimental_position: false,
         }
     }
 }
 
 impl TerrainOptions {
-    /// Errors for a free parameter that cannot be refined against the terrain (position,
-    /// k1, k2, cx, cy) or an empty free set.
+    /// Errors for a free parameter that cannot be refined against the terrain (k1, k2, cx,
+    /// cy; x, y, z unless `experimental_position`), an empty free set, a free position
+    /// without the three angles, or a non-positive position prior.
     pub fn validate(&self) -> Result<()> {
         if self.free.is_empty() {
             return Err(Error::BadOption("register: no free parameters".into()));
         }
-        if let Some(p) = self
-            .free
-            .iter()
-            .find(|p| matches!(p, Param::X | Param::Y | Param::Z))
-        {
-            return Err(Error::BadOption(format!(
-                "register: the camera position ({}) cannot be refined against the terrain yet (measured: the score \
-                 drifts with it, docs/registration.md); fit it from GCPs with fit-camera, or keep it fixed",
-                p.name()
-            )));
-        }
         if let Some(p) = self.free.iter().find(|p| {
             !matches!(
                 p,
-                Param::Yaw | Param::Pitch | Param::Roll | Param::F | Param::Fx | Param::Fy
+                Param::Yaw
+                    | Param::Pitch
+                    | Param::Roll
+                    | Param::F
+                    | Param::Fx
+                    | Param::Fy
+                    | Param::X
+                    | Param::Y
+                    | Param::Z
             )
         }) {
             return Err(Error::BadOption(format!(
-                "register: parameter {} cannot be refined against the terrain (free: yaw, pitch, roll, f, fx, fy)",
+                "register: parameter {} cannot be refined against the terrain (free: yaw, pitch, roll, f, fx, fy, x, y, z)",
                 p.name()
             )));
         }
+        if self.position_free() && !self.experimental_position {
+            return Err(Error::BadOption(
+                "register: the camera position cannot be refined against the terrain reliably yet (measured: \
+                 silhouettes alone leave the distance along the view traded against the focal length, \
+                 docs/registration.md, \"Position\"); fit it from GCPs with fit-camera, or keep it fixed"
+                    .into(),
+            ));
+        }
+        if self.position_free()
+            && ![Param::Yaw, Param::Pitch, Param::Roll]
+                .iter()
+                .all(|p| self.free.contains(p))
+        {
+            return Err(Error::BadOption(
+                "register: a free position needs yaw, pitch and roll free as well".into(),
+            ));
+        }
+        if !(self.position_sigma_m > 0.0 && self.position_sigma_m.is_finite()) {
+            return Err(Error::BadOption(format!(
+                "register: the position's standard deviation must be positive, got {}",
+                self.position_sigma_m
+            )));
+        }
         Ok(())
+    }
+
+    /// Whether x, y or z is free.
+    pub fn position_free(&self) -> bool {
+        self.free
+            .iter()
+            .any(|p| matches!(p, Param::X | Param::Y | Param::Z))
     }
 }
 
@@ -126,9 +165,35 @@ pub struct TerrainFit {
     pub repeat_px: f64,
     /// Score evaluations.
     pub evaluations: usize,
+    /// With the position free: the silhouette-edge stage's result (else `None`).
+    pub edges: Option<EdgeSummary>,
     /// Seconds spent.
     pub seconds: f64,
 }
+
+/// What the silhouette-edge stage of [`register_to_terrain`] found (position free).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EdgeSummary {
+    /// Silhouette points matched to photo edges in the last fit.
+    pub matched: usize,
+    /// Median point-to-edge distance of the last fit, full-resolution pixels.
+    pub median_px: f64,
+    /// Largest distance (metres) between the position found from the search's result and
+    /// those found from it moved 2 m east and 2 m south, and 3 m back along the view (the
+    /// restarts).
+    pub position_repeat_m: f64,
+    /// Standard deviation of each free parameter (radians, metres, pixels) from the fit's
+    /// covariance.
+    pub sigma: Vec<(Param, f64)>,
+}
+
+/// Most median point-to-edge distance (full-resolution pixels) of a trusted position fit
+/// (measured on the demo scene: 0.35–0.6 px where the position was found within 0.2 m,
+/// 0.85–1.8 px where it was not).
+const EDGE_MEDIAN_PX: f64 = 0.75;
+
+/// Most distance (metres) between the position found and the restart's.
+const POSITION_REPEAT_M: f64 = 0.5;
 
 /// Refines `rough` (the camera of `photo`, sized like it) against the terrain; see the
 /// module docs. Errors for parameters that cannot be registered this way or a camera not
@@ -151,6 +216,13 @@ pub fn register_to_terrain(
         )));
     }
     opts.validate()?;
+    // the mutual-information search keeps the position; the edge stage frees it
+    let mi_free: Vec<Param> = opts
+        .free
+        .iter()
+        .copied()
+        .filter(|p| !matches!(p, Param::X | Param::Y | Param::Z))
+        .collect();
     let finest = opts.finest_factor.clamp(1, 16).next_power_of_two();
     let mut evals = 0usize;
     let start = CameraParams::from_camera(rough);
@@ -163,7 +235,7 @@ pub fn register_to_terrain(
     let cam16 = scaled(rough, &grey16);
     let samples = terrain.sample(&cam16, 1.0, 0.08, Some(band_width(coarse)))?;
     let f16 = cam16.fx;
-    let angle_free = [Param::Yaw, Param::Pitch, Param::Roll].map(|p| opts.free.contains(&p));
+    let angle_free = [Param::Yaw, Param::Pitch, Param::Roll].map(|p| mi_free.contains(&p));
     let step = 0.7 / f16; // radians: 0.7 px at this scale
     let counts: [i64; 3] = [0, 1, 2].map(|k| {
         if angle_free[k] {
@@ -218,7 +290,7 @@ pub fn register_to_terrain(
     // best goes on through every finer scale.
     let space = Space {
         base: start,
-        free: opts.free.clone(),
+        free: mi_free.clone(),
         depth,
         bounds: opts.bounds,
     };
@@ -270,7 +342,9 @@ pub fn register_to_terrain(
     )?;
     let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
     let mut repeat: f64 = 0.0;
-    for kick in [[3.0, -3.0], [-3.0, 3.0]] {
+    // (with the position free the edge stage restarts instead)
+    let kicks: &[[f64; 2]] = if opts.position_free() { &[] } else { &[[3.0, -3.0], [-3.0, 3.0]] };
+    for kick in kicks {
         let mut c = cam;
         let f = scaled(&cam.camera(), &grey).fx;
         c.angles[0] += kick[0] / f;
@@ -281,6 +355,18 @@ pub fn register_to_terrain(
     }
     let found = cam.camera();
     let at_bound = space.outside(&cam, 0.98);
+    if opts.position_free() {
+        return finish_with_edges(
+            terrain,
+            photo,
+            rough,
+            &found,
+            opts,
+            depth,
+            (score_start, score, evals),
+            t0,
+        );
+    }
     let reason = if at_bound {
         Some("the search reached the largest change allowed".to_string())
     } else if repeat > opts.repeat_px {
@@ -304,6 +390,100 @@ pub fn register_to_terrain(
         score_final: score,
         repeat_px: repeat,
         evaluations: evals,
+        edges: None,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The position stage: [`refine_edges`] from the mutual-information result `mi` (found with
+/// the rough position), and again from it moved by 2 m east and 2 m south and 3 m back
+/// along the view (the restarts); trusted when all end within [`POSITION_REPEAT_M`] and `opts.repeat_px` of each other,
+/// the matches fit within [`EDGE_MEDIAN_PX`] and no parameter reached its bound.
+#[allow(clippy::too_many_arguments)]
+fn finish_with_edges(
+    terrain: &TerrainScene,
+    photo: &RgbImage,
+    rough: &CameraModel,
+    mi: &CameraModel,
+    opts: &TerrainOptions,
+    depth: f64,
+    (score_start, score, evals): (f64, f64, usize),
+    t0: Instant,
+) -> Result<TerrainFit> {
+    let eopts = EdgeOptions {
+        free: opts.free.clone(),
+        position_sigma_m: opts.position_sigma_m,
+        ..EdgeOptions::default()
+    };
+    let not_fitted = |why: String| TerrainFit {
+        camera: *rough,
+        found: *mi,
+        converged: false,
+        reason: Some(why),
+        score_start,
+        score_final: score,
+        repeat_px: f64::NAN,
+        evaluations: evals,
+        edges: None,
+        seconds: t0.elapsed().as_secs_f64(),
+    };
+    // (an edge fit that cannot be made, e.g. too few silhouettes matched, is a verdict)
+    let first = match refine_edges(terrain, photo, mi, rough, &eopts) {
+        Ok(f) => f,
+        Err(e) => return Ok(not_fitted(e.to_string())),
+    };
+    // restarts: moved sideways, and back along the view (where distance trades with focal
+    // length when the silhouettes lie at similar distances)
+    let axis = mi.world_to_camera.row(2);
+    let back = -DVec3::new(axis.x, axis.y, 0.0).normalize_or_zero() * 3.0;
+    let found = first.camera;
+    let (mut position_repeat_m, mut repeat) = (0.0f64, 0.0f64);
+    for kick in [DVec3::new(2.0, -2.0, 0.0), back] {
+        let mut kicked = *mi;
+        kicked.position += kick;
+        let again = match refine_edges(terrain, photo, &kicked, rough, &eopts) {
+            Ok(f) => f,
+            Err(e) => return Ok(not_fitted(format!("restart: {e}"))),
+        };
+        position_repeat_m = position_repeat_m.max((found.position - again.camera.position).length());
+        repeat = repeat.max(pixel_distance(&found, &again.camera, depth));
+    }
+    let space = Space {
+        base: CameraParams::from_camera(rough),
+        free: opts.free.clone(),
+        depth,
+        bounds: opts.bounds,
+    };
+    let reason = if space.outside(&CameraParams::from_camera(&found), 0.98) {
+        Some("the search reached the largest change allowed".to_string())
+    } else if !(first.median_px <= EDGE_MEDIAN_PX) {
+        Some(format!(
+            "the silhouettes fit the photo's edges to {:.2} px (median; limit {EDGE_MEDIAN_PX} px)",
+            first.median_px
+        ))
+    } else if position_repeat_m > POSITION_REPEAT_M || repeat > opts.repeat_px {
+        Some(format!(
+            "restarts disagree by {position_repeat_m:.2} m and {repeat:.2} px (limits {POSITION_REPEAT_M} m, {:.2} px)",
+            opts.repeat_px
+        ))
+    } else {
+        None
+    };
+    Ok(TerrainFit {
+        camera: if reason.is_none() { found } else { *rough },
+        found,
+        converged: reason.is_none(),
+        reason,
+        score_start,
+        score_final: score,
+        repeat_px: repeat,
+        evaluations: evals,
+        edges: Some(EdgeSummary {
+            matched: first.matched,
+            median_px: first.median_px,
+            position_repeat_m,
+            sigma: first.sigma,
+        }),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

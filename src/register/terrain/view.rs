@@ -37,6 +37,15 @@ pub struct Sample {
     pub label: u8,
 }
 
+/// Where a ray ends ([`TerrainScene::classify`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RayEnd {
+    /// On the terrain: the point (world metres) and its distance from the ray's origin.
+    Terrain(DVec3, f64),
+    /// In the sky.
+    Sky,
+}
+
 /// The store's finest level as a ray-castable scene with the active textures the rays hit
 /// (loaded on demand) and the terrain's highest point.
 pub struct TerrainScene<'a> {
@@ -290,6 +299,17 @@ impl<'a> TerrainScene<'a> {
             t[c] = Some(std::sync::Arc::new(img));
         }
         Ok(())
+    }
+
+    /// What the ray from `from` along the unit `dir` (world) meets: the terrain (point and
+    /// distance), the sky ([`TerrainScene::rises_above`]), or nothing known (`None`: it
+    /// leaves the store's extent below its top).
+    pub fn classify(&self, from: DVec3, dir: DVec3) -> Option<RayEnd> {
+        match self.hit(from, dir) {
+            Some(p) => Some(RayEnd::Terrain(p, (p - from).length())),
+            None if self.rises_above(from, dir) => Some(RayEnd::Sky),
+            None => None,
+        }
     }
 
     /// The terrain's highest point (world metres).
