@@ -243,6 +243,34 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A copy of the photo list `list`, written beside it as `photos_{tag}.json`, whose every
+/// camera is `change`d and written as `{camera stem}.{tag}.json`.
+fn rewrite_cameras(
+    list: &std::path::Path,
+    tag: &str,
+    mut change: impl FnMut(&mut cliffmap::camera::CameraModel),
+) -> anyhow::Result<PathBuf> {
+    let dir = list.parent().unwrap_or(std::path::Path::new("."));
+    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(list)?)?;
+    for entry in doc["photos"]
+        .as_array_mut()
+        .ok_or_else(|| anyhow::anyhow!("no photos"))?
+    {
+        let name = entry["camera"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("photo without camera"))?
+            .to_string();
+        let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
+        change(&mut cam);
+        let out = format!("{}.{tag}.json", name.trim_end_matches(".json"));
+        std::fs::write(dir.join(&out), cliffmap::camera::camera_to_json(&cam).to_string())?;
+        entry["camera"] = serde_json::json!(out);
+    }
+    let out = dir.join(format!("photos_{tag}.json"));
+    std::fs::write(&out, doc.to_string())?;
+    Ok(out)
+}
+
 /// `list` itself, or a copy next to it whose cameras have their yaw turned by `yaw` degrees
 /// and their position moved by `position` ("DX,DY,DZ" metres).
 fn perturbed_list(
@@ -257,31 +285,12 @@ fn perturbed_list(
     let dpos: Vec<f64> =
         position.map_or(Ok(vec![0.0; 3]), |s| s.split(',').map(str::parse).collect())?;
     anyhow::ensure!(dpos.len() == 3, "--perturb-position DX,DY,DZ");
-    let dir = list.parent().unwrap_or(std::path::Path::new("."));
-    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(list)?)?;
-    for entry in doc["photos"]
-        .as_array_mut()
-        .ok_or_else(|| anyhow::anyhow!("no photos"))?
-    {
-        let name = entry["camera"]
-            .as_str()
-            .ok_or_else(|| anyhow::anyhow!("photo without camera"))?
-            .to_string();
-        let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
+    rewrite_cameras(list, "perturbed", |cam| {
         let (y, p, r) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
         cam.world_to_camera =
             cliffmap::camera::rotation_from_yaw_pitch_roll(y + dyaw.to_radians(), p, r);
         cam.position += glam::DVec3::new(dpos[0], dpos[1], dpos[2]);
-        let out = format!("{}.perturbed.json", name.trim_end_matches(".json"));
-        std::fs::write(
-            dir.join(&out),
-            cliffmap::camera::camera_to_json(&cam).to_string(),
-        )?;
-        entry["camera"] = serde_json::json!(out);
-    }
-    let out = dir.join("photos_perturbed.json");
-    std::fs::write(&out, doc.to_string())?;
-    Ok(out)
+    })
 }
 
 /// Every camera of `list` turned and zoomed at random (seed `seed`): yaw ±3°, pitch and roll
@@ -296,17 +305,7 @@ fn rough_list(list: &std::path::Path, seed: u64) -> anyhow::Result<PathBuf> {
         z ^= z >> 31;
         (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     };
-    let dir = list.parent().unwrap_or(std::path::Path::new("."));
-    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(list)?)?;
-    for entry in doc["photos"]
-        .as_array_mut()
-        .ok_or_else(|| anyhow::anyhow!("no photos"))?
-    {
-        let name = entry["camera"]
-            .as_str()
-            .ok_or_else(|| anyhow::anyhow!("photo without camera"))?
-            .to_string();
-        let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
+    rewrite_cameras(list, "rough", |cam| {
         let (y, p, r) = cliffmap::camera::yaw_pitch_roll_from_rotation(&cam.world_to_camera);
         cam.world_to_camera = cliffmap::camera::rotation_from_yaw_pitch_roll(
             y + (3.0 * rnd()).to_radians(),
@@ -316,11 +315,5 @@ fn rough_list(list: &std::path::Path, seed: u64) -> anyhow::Result<PathBuf> {
         let k = 1.0 + 0.03 * rnd();
         cam.fx *= k;
         cam.fy *= k;
-        let out = format!("{}.rough.json", name.trim_end_matches(".json"));
-        std::fs::write(dir.join(&out), cliffmap::camera::camera_to_json(&cam).to_string())?;
-        entry["camera"] = serde_json::json!(out);
-    }
-    let out = dir.join("photos_rough.json");
-    std::fs::write(&out, doc.to_string())?;
-    Ok(out)
+    })
 }

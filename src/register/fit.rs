@@ -23,10 +23,11 @@
 //! each parameter's standard deviation `√diag(s² (JᵀWJ)⁻¹)` with
 //! `s² = Σ w ρ |r|² / (n − k)`.
 
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use levenberg_marquardt::LevenbergMarquardt;
+use nalgebra::DVector;
 
 use super::gcp::Gcp;
+use super::lsq::{Lsq, OffsetProblem, jacobian};
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -168,36 +169,21 @@ impl Problem<'_> {
     }
 }
 
-impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, Dyn>;
-    type ParameterStorage = Owned<f64, Dyn>;
+impl OffsetProblem for Problem<'_> {
+    fn free(&self) -> &[Param] {
+        self.free
+    }
 
-    fn set_params(&mut self, x: &DVector<f64>) {
+    fn offsets(&self) -> &DVector<f64> {
+        &self.x
+    }
+
+    fn set_offsets(&mut self, x: &DVector<f64>) {
         self.x.copy_from(x);
     }
 
-    fn params(&self) -> DVector<f64> {
-        self.x.clone()
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        let r = self.residuals_at(&self.x);
-        r.iter().all(|v| v.is_finite()).then_some(r)
-    }
-
-    fn jacobian(&self) -> Option<DMatrix<f64>> {
-        let (m, n) = (2 * self.points.len(), self.free.len());
-        let mut j = DMatrix::zeros(m, n);
-        for (k, param) in self.free.iter().enumerate() {
-            let h = param.step();
-            let (mut lo, mut hi) = (self.x.clone(), self.x.clone());
-            lo[k] -= h;
-            hi[k] += h;
-            let d = (self.residuals_at(&hi) - self.residuals_at(&lo)) / (2.0 * h);
-            j.set_column(k, &d);
-        }
-        j.iter().all(|v| v.is_finite()).then_some(j)
+    fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
+        Problem::residuals_at(self, x)
     }
 }
 
@@ -312,7 +298,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             points: points_of(&rho),
             x: x.clone(),
         };
-        let (solved, report) = solver.minimize(problem);
+        let (Lsq(solved), report) = solver.minimize(Lsq(problem));
         if report.termination.was_usage_issue() || !solved.x.iter().all(|v| v.is_finite()) {
             return Err(Error::BadOption(format!(
                 "fit-camera: the solver failed ({:?})",
@@ -358,7 +344,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     } else {
         f64::NAN
     };
-    let jac = problem.jacobian();
+    let jac = jacobian(&problem);
     if let Some(j) = &jac {
         // the free parameters must be determined: columns scaled to unit norm, the smallest
         // singular value against the largest (repeated GCPs, points on one ray, or a free

@@ -17,13 +17,14 @@
 
 use glam::DVec3;
 use image::RgbImage;
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use levenberg_marquardt::LevenbergMarquardt;
+use nalgebra::DVector;
 use rayon::prelude::*;
 
 use super::view::{RayEnd, TerrainScene};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
+use crate::register::lsq::{Lsq, OffsetProblem, jacobian};
 use crate::register::params::{CameraParams, Param};
 
 /// One silhouette point of the terrain seen from a camera.
@@ -434,36 +435,21 @@ impl Problem<'_> {
     }
 }
 
-impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, Dyn>;
-    type ParameterStorage = Owned<f64, Dyn>;
+impl OffsetProblem for Problem<'_> {
+    fn free(&self) -> &[Param] {
+        self.free
+    }
 
-    fn set_params(&mut self, x: &DVector<f64>) {
+    fn offsets(&self) -> &DVector<f64> {
+        &self.x
+    }
+
+    fn set_offsets(&mut self, x: &DVector<f64>) {
         self.x.copy_from(x);
     }
 
-    fn params(&self) -> DVector<f64> {
-        self.x.clone()
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        let r = self.residuals_at(&self.x);
-        r.iter().all(|v| v.is_finite()).then_some(r)
-    }
-
-    fn jacobian(&self) -> Option<DMatrix<f64>> {
-        let (m, n) = (self.matches.len() + 4, self.free.len());
-        let mut j = DMatrix::zeros(m, n);
-        for (k, param) in self.free.iter().enumerate() {
-            let h = param.step();
-            let (mut lo, mut hi) = (self.x.clone(), self.x.clone());
-            lo[k] -= h;
-            hi[k] += h;
-            let d = (self.residuals_at(&hi) - self.residuals_at(&lo)) / (2.0 * h);
-            j.set_column(k, &d);
-        }
-        j.iter().all(|v| v.is_finite()).then_some(j)
+    fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
+        Problem::residuals_at(self, x)
     }
 }
 
@@ -502,7 +488,7 @@ fn fit_matches(
         let delta = 1.345 * scale;
         problem.sw = d.iter().map(|&v| if v <= delta { 1.0 } else { (delta / v).sqrt() }).collect();
         problem.prior_weight = (matches.len() as f64 / 16.0).sqrt() * scale.max(0.5);
-        let (p, report) = LevenbergMarquardt::new().minimize(problem);
+        let (Lsq(p), report) = LevenbergMarquardt::new().minimize(Lsq(problem));
         problem = p;
         if !report.termination.was_successful() && !problem.x.iter().all(|v| v.is_finite()) {
             return Err(Error::BadOption("register: the edge fit failed".into()));
@@ -512,7 +498,8 @@ fn fit_matches(
     let med = median(&d);
     // covariance s² (JᵀJ)⁻¹ of the weighted problem, s² its residual variance
     let mut sigma = Vec::new();
-    if let (Some(j), Some(r)) = (problem.jacobian(), problem.residuals()) {
+    let r = problem.residuals_at(&problem.x);
+    if let (Some(j), true) = (jacobian(&problem), r.iter().all(|v| v.is_finite())) {
         let dof = (r.len() as f64 - opts.free.len() as f64).max(1.0);
         let s2 = r.norm_squared() / dof;
         if let Some(inv) = (j.transpose() * &j).try_inverse() {

@@ -171,6 +171,33 @@ pub struct TerrainFit {
     pub seconds: f64,
 }
 
+impl TerrainFit {
+    /// The fit of a search that ended at `found`: its camera when `reason` is `None` (the
+    /// verdict), else `rough`'s.
+    fn judged(
+        rough: &CameraModel,
+        found: CameraModel,
+        reason: Option<String>,
+        (score_start, score_final, evaluations): (f64, f64, usize),
+        repeat_px: f64,
+        edges: Option<EdgeSummary>,
+        t0: Instant,
+    ) -> TerrainFit {
+        TerrainFit {
+            camera: if reason.is_none() { found } else { *rough },
+            found,
+            converged: reason.is_none(),
+            reason,
+            score_start,
+            score_final,
+            repeat_px,
+            evaluations,
+            edges,
+            seconds: t0.elapsed().as_secs_f64(),
+        }
+    }
+}
+
 /// What the silhouette-edge stage of [`register_to_terrain`] found (position free).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeSummary {
@@ -381,18 +408,15 @@ pub fn register_to_terrain(
     } else {
         None
     };
-    Ok(TerrainFit {
-        camera: if reason.is_none() { found } else { *rough },
+    Ok(TerrainFit::judged(
+        rough,
         found,
-        converged: reason.is_none(),
         reason,
-        score_start,
-        score_final: score,
-        repeat_px: repeat,
-        evaluations: evals,
-        edges: None,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+        (score_start, score, evals),
+        repeat,
+        None,
+        t0,
+    ))
 }
 
 /// The position stage: [`refine_edges`] from the mutual-information result `mi` (found with
@@ -415,17 +439,8 @@ fn finish_with_edges(
         position_sigma_m: opts.position_sigma_m,
         ..EdgeOptions::default()
     };
-    let not_fitted = |why: String| TerrainFit {
-        camera: *rough,
-        found: *mi,
-        converged: false,
-        reason: Some(why),
-        score_start,
-        score_final: score,
-        repeat_px: f64::NAN,
-        evaluations: evals,
-        edges: None,
-        seconds: t0.elapsed().as_secs_f64(),
+    let not_fitted = |why: String| {
+        TerrainFit::judged(rough, *mi, Some(why), (score_start, score, evals), f64::NAN, None, t0)
     };
     // (an edge fit that cannot be made, e.g. too few silhouettes matched, is a verdict)
     let first = match refine_edges(terrain, photo, mi, rough, &eopts) {
@@ -469,23 +484,21 @@ fn finish_with_edges(
     } else {
         None
     };
-    Ok(TerrainFit {
-        camera: if reason.is_none() { found } else { *rough },
+    let summary = EdgeSummary {
+        matched: first.matched,
+        median_px: first.median_px,
+        position_repeat_m,
+        sigma: first.sigma,
+    };
+    Ok(TerrainFit::judged(
+        rough,
         found,
-        converged: reason.is_none(),
         reason,
-        score_start,
-        score_final: score,
-        repeat_px: repeat,
-        evaluations: evals,
-        edges: Some(EdgeSummary {
-            matched: first.matched,
-            median_px: first.median_px,
-            position_repeat_m,
-            sigma: first.sigma,
-        }),
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+        (score_start, score, evals),
+        repeat,
+        Some(summary),
+        t0,
+    ))
 }
 
 /// The free parameters as a vector in pixel units at one scale: an angle step moves the
