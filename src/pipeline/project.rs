@@ -676,16 +676,14 @@ impl LevelRun<'_> {
     ) -> Result<OcclusionMap> {
         let step = OCCLUSION_STEP.min(pyr.steps());
         let (img, cam) = pyr.level(step);
-        if scene.is_none() {
-            *scene = Some(LevelScene::from_store(
+        let scene = match scene {
+            Some(s) => s,
+            None => scene.insert(LevelScene::from_store(
                 self.store,
                 level as u8,
                 cam.position,
                 self.opts.ray,
-            )?);
-        }
-        let Some(scene) = scene.as_ref() else {
-            return Err(Error::BadOption("no scene for the occlusion map".into()));
+            )?),
         };
         let fs = photo_footprints_in(self.buffers, scene, &cam, &self.opts.footprint);
         let map = OcclusionMap::from_footprints(

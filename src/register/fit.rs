@@ -27,7 +27,7 @@ use levenberg_marquardt::LevenbergMarquardt;
 use nalgebra::DVector;
 
 use super::gcp::Gcp;
-use super::lsq::{Lsq, OffsetProblem, jacobian};
+use super::lsq::{Lsq, Residuals, jacobian, params_at};
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -138,7 +138,6 @@ struct Problem<'a> {
     free: &'a [Param],
     /// Per fitted GCP: world point, observed pixel, √(w ρ).
     points: Vec<(glam::DVec3, [f64; 2], f64)>,
-    x: DVector<f64>,
 }
 
 /// A residual standing for a point that went behind the camera during the search (the LM
@@ -147,11 +146,13 @@ const BEHIND_PX: f64 = 1e6;
 
 impl Problem<'_> {
     fn params_at(&self, x: &DVector<f64>) -> CameraParams {
-        let mut p = self.base;
-        for (k, &param) in self.free.iter().enumerate() {
-            p.set(param, self.base.get(param) + x[k]);
-        }
-        p
+        params_at(&self.base, self.free, x)
+    }
+}
+
+impl Residuals for Problem<'_> {
+    fn free(&self) -> &[Param] {
+        self.free
     }
 
     fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
@@ -166,24 +167,6 @@ impl Problem<'_> {
             r[2 * i + 1] = sw * dv;
         }
         r
-    }
-}
-
-impl OffsetProblem for Problem<'_> {
-    fn free(&self) -> &[Param] {
-        self.free
-    }
-
-    fn offsets(&self) -> &DVector<f64> {
-        &self.x
-    }
-
-    fn set_offsets(&mut self, x: &DVector<f64>) {
-        self.x.copy_from(x);
-    }
-
-    fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
-        Problem::residuals_at(self, x)
     }
 }
 
@@ -296,16 +279,16 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             base,
             free: &opts.free,
             points: points_of(&rho),
-            x: x.clone(),
         };
-        let (Lsq(solved), report) = solver.minimize(Lsq(problem));
-        if report.termination.was_usage_issue() || !solved.x.iter().all(|v| v.is_finite()) {
+        let (Lsq { problem: solved, x: sx }, report) =
+            solver.minimize(Lsq { problem, x: x.clone() });
+        if report.termination.was_usage_issue() || !sx.iter().all(|v| v.is_finite()) {
             return Err(Error::BadOption(format!(
                 "fit-camera: the solver failed ({:?})",
                 report.termination
             )));
         }
-        x = solved.x.clone();
+        x = sx;
         let e = norms_at(&x, &solved);
         sigma_px = median(&e) / 1.1774;
         if !opts.robust || rounds >= opts.max_rounds.max(1) {
@@ -331,7 +314,6 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
         base,
         free: &opts.free,
         points: points_of(&rho),
-        x: x.clone(),
     };
     let fitted = problem.params_at(&x);
     let camera = fitted.camera();
@@ -344,7 +326,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     } else {
         f64::NAN
     };
-    let jac = jacobian(&problem);
+    let jac = jacobian(&problem, &x);
     if let Some(j) = &jac {
         // the free parameters must be determined: columns scaled to unit norm, the smallest
         // singular value against the largest (repeated GCPs, points on one ray, or a free

@@ -6,59 +6,69 @@
 use levenberg_marquardt::LeastSquaresProblem;
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 
-use super::params::Param;
+use super::params::{CameraParams, Param};
+
+/// `base` with the free parameters `free` moved by the offsets `x`.
+pub(crate) fn params_at(base: &CameraParams, free: &[Param], x: &DVector<f64>) -> CameraParams {
+    let mut p = *base;
+    for (k, &param) in free.iter().enumerate() {
+        p.set(param, base.get(param) + x[k]);
+    }
+    p
+}
 
 /// A camera fit's residuals as a function of the offsets of its free parameters.
-pub(crate) trait OffsetProblem {
+pub(crate) trait Residuals {
     /// The free parameters, in the order of the offsets.
     fn free(&self) -> &[Param];
-    /// The current offsets.
-    fn offsets(&self) -> &DVector<f64>;
-    /// Sets the current offsets.
-    fn set_offsets(&mut self, x: &DVector<f64>);
     /// The residuals at offsets `x`.
     fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64>;
 }
 
-/// The Jacobian of `p`'s residuals at its current offsets by central differences; `None`
-/// if an entry is not finite.
-pub(crate) fn jacobian<P: OffsetProblem>(p: &P) -> Option<DMatrix<f64>> {
-    let x = p.offsets();
-    let r0 = p.residuals_at(x);
-    let mut j = DMatrix::zeros(r0.len(), p.free().len());
+/// The Jacobian of `p`'s residuals at offsets `x` by central differences; `None` if an
+/// entry is not finite.
+pub(crate) fn jacobian<P: Residuals>(p: &P, x: &DVector<f64>) -> Option<DMatrix<f64>> {
+    let mut j: Option<DMatrix<f64>> = None;
     for (k, param) in p.free().iter().enumerate() {
         let h = param.step();
         let (mut lo, mut hi) = (x.clone(), x.clone());
         lo[k] -= h;
         hi[k] += h;
         let d = (p.residuals_at(&hi) - p.residuals_at(&lo)) / (2.0 * h);
-        j.set_column(k, &d);
+        j.get_or_insert_with(|| DMatrix::zeros(d.len(), p.free().len()))
+            .set_column(k, &d);
     }
+    let j = j.unwrap_or_else(|| DMatrix::zeros(p.residuals_at(x).len(), 0));
     j.iter().all(|v| v.is_finite()).then_some(j)
 }
 
-/// An [`OffsetProblem`] as the solver's problem.
-pub(crate) struct Lsq<P>(pub P);
+/// A [`Residuals`] problem at offsets `x`, as the solver's problem.
+pub(crate) struct Lsq<P> {
+    /// The residuals.
+    pub problem: P,
+    /// The current offsets.
+    pub x: DVector<f64>,
+}
 
-impl<P: OffsetProblem> LeastSquaresProblem<f64, Dyn, Dyn> for Lsq<P> {
+impl<P: Residuals> LeastSquaresProblem<f64, Dyn, Dyn> for Lsq<P> {
     type ResidualStorage = Owned<f64, Dyn>;
     type JacobianStorage = Owned<f64, Dyn, Dyn>;
     type ParameterStorage = Owned<f64, Dyn>;
 
     fn set_params(&mut self, x: &DVector<f64>) {
-        self.0.set_offsets(x);
+        self.x.copy_from(x);
     }
 
     fn params(&self) -> DVector<f64> {
-        self.0.offsets().clone()
+        self.x.clone()
     }
 
     fn residuals(&self) -> Option<DVector<f64>> {
-        let r = self.0.residuals_at(self.0.offsets());
+        let r = self.problem.residuals_at(&self.x);
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
-        jacobian(&self.0)
+        jacobian(&self.problem, &self.x)
     }
 }

@@ -36,6 +36,7 @@
 mod exif;
 mod fit;
 mod gcp;
+mod grey;
 mod lsq;
 mod pair;
 mod params;

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 
 use super::fit::{CameraFit, FitOptions, fit_camera};
 use super::gcp::Gcp;
+use super::grey::Grey;
 use super::params::Param;
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -64,43 +65,7 @@ pub struct PatchMatch {
     pub ncc: f64,
 }
 
-/// A grey image as f32 luminance (Rec. 709 weights of the sRGB values).
-struct Grey {
-    w: usize,
-    h: usize,
-    v: Vec<f32>,
-}
-
 impl Grey {
-    fn of(img: &RgbImage) -> Grey {
-        let v = img
-            .pixels()
-            .map(|p| 0.2126 * p.0[0] as f32 + 0.7152 * p.0[1] as f32 + 0.0722 * p.0[2] as f32)
-            .collect();
-        Grey {
-            w: img.width() as usize,
-            h: img.height() as usize,
-            v,
-        }
-    }
-
-    /// Box-filtered by `k` (the last partial blocks dropped).
-    fn reduced(&self, k: usize) -> Grey {
-        let (w, h) = (self.w / k, self.h / k);
-        let mut v = vec![0.0; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let mut s = 0.0;
-                for dy in 0..k {
-                    let row = &self.v[(y * k + dy) * self.w + x * k..][..k];
-                    s += row.iter().sum::<f32>();
-                }
-                v[y * w + x] = s / (k * k) as f32;
-            }
-        }
-        Grey { w, h, v }
-    }
-
     /// The patch of half size `r` at integer centre `(cx, cy)` with its mean removed, and
     /// its norm; `None` outside the image.
     fn patch(&self, cx: i64, cy: i64, r: i64) -> Option<(Vec<f32>, f32)> {

@@ -24,7 +24,8 @@ use rayon::prelude::*;
 use super::view::{RayEnd, TerrainScene};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
-use crate::register::lsq::{Lsq, OffsetProblem, jacobian};
+use crate::register::grey::Grey;
+use crate::register::lsq::{Lsq, Residuals, jacobian, params_at};
 use crate::register::params::{CameraParams, Param};
 
 /// One silhouette point of the terrain seen from a camera.
@@ -58,8 +59,9 @@ pub fn contour(
     let nu = ((w - 2.0 * margin) / step).floor().max(0.0) as usize;
     let nv = ((h - 2.0 * margin) / step).floor().max(0.0) as usize;
     let at = |i: usize, j: usize| [margin + (i as f64 + 0.5) * step, margin + (j as f64 + 0.5) * step];
+    let caster = cam.ray_caster();
     let end = |p: [f64; 2]| -> Option<RayEnd> {
-        let dir = cam.pixel_ray(p[0], p[1])?;
+        let dir = caster.ray(p[0], p[1])?;
         terrain.classify(cam.position, dir)
     };
     let grid: Vec<Option<RayEnd>> = (0..nu * nv)
@@ -172,22 +174,10 @@ pub struct EdgeImage {
 impl EdgeImage {
     /// The gradient of `photo` box-filtered by `factor` per axis.
     pub fn from_photo(photo: &RgbImage, factor: u32) -> EdgeImage {
-        let f = factor.max(1);
-        let (w, h) = ((photo.width() / f).max(1) as usize, (photo.height() / f).max(1) as usize);
-        let mut luma = vec![0.0f32; w * h];
-        luma.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, v) in row.iter_mut().enumerate() {
-                let (mut s, mut n) = (0.0f32, 0.0f32);
-                for yy in y as u32 * f..((y as u32 + 1) * f).min(photo.height()) {
-                    for xx in x as u32 * f..((x as u32 + 1) * f).min(photo.width()) {
-                        let c = photo.get_pixel(xx, yy).0;
-                        s += 0.2126 * c[0] as f32 + 0.7152 * c[1] as f32 + 0.0722 * c[2] as f32;
-                        n += 1.0;
-                    }
-                }
-                *v = s / n.max(1.0);
-            }
-        });
+        let Grey { w, h, v: luma } = Grey::of(photo).reduced(factor.max(1) as usize);
+        if w == 0 || h == 0 {
+            return EdgeImage { width: 0, height: 0, gx: Vec::new(), gy: Vec::new() };
+        }
         let k: Vec<f32> = (-3..=3).map(|i: i32| (-(i * i) as f32 / 2.0).exp()).collect();
         let ks: f32 = k.iter().sum();
         let blur = |src: &[f32], dx: usize, dy: usize| -> Vec<f32> {
@@ -234,6 +224,9 @@ impl EdgeImage {
     /// outside the image.
     fn gradient(&self, p: [f64; 2]) -> Option<[f64; 2]> {
         let (x, y) = (p[0], p[1]);
+        if self.width == 0 || self.height == 0 {
+            return None;
+        }
         if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64) {
             return None;
         }
@@ -399,28 +392,49 @@ struct Problem<'a> {
     sigmas: (f64, f64),
     /// Pixels a standard deviation of a prior costs.
     prior_weight: f64,
-    x: DVector<f64>,
 }
 
+/// The residual of a silhouette point that went behind the camera during the search.
+const BEHIND_PX: f64 = 1e6;
+
 impl Problem<'_> {
-    fn params_at(&self, x: &DVector<f64>) -> CameraParams {
-        let mut p = self.base;
-        for (k, &param) in self.free.iter().enumerate() {
-            p.set(param, self.base.get(param) + x[k]);
-        }
-        p
+    /// The working camera at offsets `x`.
+    fn camera_at(&self, x: &DVector<f64>) -> CameraModel {
+        params_at(&self.base, self.free, x)
+            .camera()
+            .resized(self.size.0, self.size.1)
+    }
+
+    /// Signed distance (working pixels, along the match's normal) from where `cam` shows
+    /// match `m`'s silhouette point to its photo edge; `None` behind the camera.
+    fn distance(cam: &CameraModel, m: &Match) -> Option<f64> {
+        let (world, edge, nrm, _) = m;
+        let p = cam.project(*world)?;
+        Some((p[0] - edge[0]) * nrm[0] + (p[1] - edge[1]) * nrm[1])
+    }
+
+    /// Absolute distances of every match at offsets `x` ([`BEHIND_PX`] behind the camera).
+    fn abs_distances(&self, x: &DVector<f64>) -> Vec<f64> {
+        let cam = self.camera_at(x);
+        self.matches
+            .iter()
+            .map(|m| Self::distance(&cam, m).map_or(BEHIND_PX, f64::abs))
+            .collect()
+    }
+}
+
+impl Residuals for Problem<'_> {
+    fn free(&self) -> &[Param] {
+        self.free
     }
 
     fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
-        let params = self.params_at(x);
+        let params = params_at(&self.base, self.free, x);
         let cam = params.camera().resized(self.size.0, self.size.1);
         let n = self.matches.len();
         let mut r = DVector::zeros(n + 4);
-        for (i, (world, edge, nrm, _)) in self.matches.iter().enumerate() {
-            r[i] = match cam.project(*world) {
-                Some(p) => self.sw[i] * ((p[0] - edge[0]) * nrm[0] + (p[1] - edge[1]) * nrm[1]),
-                None => 1e6,
-            };
+        for (i, m) in self.matches.iter().enumerate() {
+            r[i] = Self::distance(&cam, m).map_or(BEHIND_PX, |d| self.sw[i] * d);
         }
         // priors: a standard deviation costs as much as every match off by the matches'
         // robust scale (the matches as independent measurements of what the prior holds)
@@ -432,24 +446,6 @@ impl Problem<'_> {
         r[n + 2] = k * d.z / sp;
         r[n + 3] = k * (params.focal[0] / self.prior.focal[0] - 1.0) / sf;
         r
-    }
-}
-
-impl OffsetProblem for Problem<'_> {
-    fn free(&self) -> &[Param] {
-        self.free
-    }
-
-    fn offsets(&self) -> &DVector<f64> {
-        &self.x
-    }
-
-    fn set_offsets(&mut self, x: &DVector<f64>) {
-        self.x.copy_from(x);
-    }
-
-    fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
-        Problem::residuals_at(self, x)
     }
 }
 
@@ -473,33 +469,27 @@ fn fit_matches(
         size: (w, h),
         sigmas: (opts.position_sigma_m.max(1e-3), opts.focal_sigma.max(1e-6)),
         prior_weight: 1.0,
-        x: DVector::zeros(opts.free.len()),
     };
-    let dist = |p: &Problem| -> Vec<f64> {
-        let sw = p.sw.clone();
-        let unweighted = Problem { sw: vec![1.0; sw.len()], base: p.base, prior: p.prior, free: p.free, matches: p.matches, size: p.size, sigmas: p.sigmas, prior_weight: p.prior_weight, x: p.x.clone() };
-        let r = unweighted.residuals_at(&p.x);
-        r.iter().take(p.matches.len()).map(|v| v.abs()).collect()
-    };
+    let mut x = DVector::zeros(opts.free.len());
     for _ in 0..4 {
-        let d = dist(&problem);
+        let d = problem.abs_distances(&x);
         let med = median(&d);
         let scale = (1.4826 * med).max(0.3);
         let delta = 1.345 * scale;
         problem.sw = d.iter().map(|&v| if v <= delta { 1.0 } else { (delta / v).sqrt() }).collect();
         problem.prior_weight = (matches.len() as f64 / 16.0).sqrt() * scale.max(0.5);
-        let (Lsq(p), report) = LevenbergMarquardt::new().minimize(Lsq(problem));
-        problem = p;
-        if !report.termination.was_successful() && !problem.x.iter().all(|v| v.is_finite()) {
+        let (solved, report) = LevenbergMarquardt::new().minimize(Lsq { problem, x });
+        (problem, x) = (solved.problem, solved.x);
+        if !report.termination.was_successful() && !x.iter().all(|v| v.is_finite()) {
             return Err(Error::BadOption("register: the edge fit failed".into()));
         }
     }
-    let d = dist(&problem);
+    let d = problem.abs_distances(&x);
     let med = median(&d);
     // covariance s² (JᵀJ)⁻¹ of the weighted problem, s² its residual variance
     let mut sigma = Vec::new();
-    let r = problem.residuals_at(&problem.x);
-    if let (Some(j), true) = (jacobian(&problem), r.iter().all(|v| v.is_finite())) {
+    let r = problem.residuals_at(&x);
+    if let (Some(j), true) = (jacobian(&problem, &x), r.iter().all(|v| v.is_finite())) {
         let dof = (r.len() as f64 - opts.free.len() as f64).max(1.0);
         let s2 = r.norm_squared() / dof;
         if let Some(inv) = (j.transpose() * &j).try_inverse() {
@@ -508,7 +498,7 @@ fn fit_matches(
             }
         }
     }
-    Ok((problem.params_at(&problem.x), med, 1.4826 * med, sigma))
+    Ok((params_at(&problem.base, problem.free, &x), med, 1.4826 * med, sigma))
 }
 
 fn median(v: &[f64]) -> f64 {
