@@ -206,6 +206,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn occlusion_margin_outside_its_range_is_refused() {
+        for m in [-1.0, f64::NAN, 1e4] {
+            let p = ConfidenceParams { occlusion_margin_px: m, ..ConfidenceParams::default() };
+            assert!(p.validate().is_err_and(|e| e.to_string().contains("occlusion margin")), "{m}");
+        }
+        for m in [0.0, 2.0, 1000.0] {
+            ConfidenceParams { occlusion_margin_px: m, ..ConfidenceParams::default() }.validate().unwrap();
+        }
+    }
+
+    #[test]
     fn terms_and_ramps() {
         let p = ConfidenceParams::default();
         p.validate().unwrap();
