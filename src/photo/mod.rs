@@ -43,6 +43,7 @@ mod reconstruct;
 mod scene;
 mod silhouette;
 mod sizing;
+mod coarse_deposits;
 mod splat;
 mod texel_tiles;
 mod triangle;
