@@ -22,7 +22,6 @@ use super::PixelFootprint;
 use super::confidence::{BorderFeather, ConfidenceParams};
 use super::level::ColourTransform;
 use super::occlusion::{OcclusionMap, occlusion_weight};
-use super::coarse_deposits::CoarseDeposits;
 use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
 pub use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::colour::ColourSpace;
@@ -156,13 +155,8 @@ pub struct PhotoAccum {
     /// Factor (a power of two, >= 1) from the footprints' texel units (the cell's active
     /// texture) to this texture's.
     pub scale: u32,
-    /// Per texel, row-major: the sums (tiles allocated where footprints deposited). In an
-    /// enlarged texture (`scale` > 1) footprints large against its texels are first held on
-    /// coarser grids ([`super::coarse_deposits`]) and only added here by
-    /// [`PhotoAccum::finish`] (which [`CellAccum::from_photo`] and [`CellAccum::merge`] call).
+    /// Per texel, row-major: the sums (tiles allocated where footprints deposited).
     pub sums: TexelTiles,
-    /// Deposits held on coarser grids until [`PhotoAccum::finish`].
-    coarse: CoarseDeposits,
     /// Footprints deposited exactly / by the bilinear fallback / skipped.
     pub kinds: [u64; 3],
 }
@@ -181,16 +175,8 @@ impl PhotoAccum {
             texels,
             scale: scale.max(1),
             sums: TexelTiles::new(texels),
-            coarse: CoarseDeposits::new(texels, scale),
             kinds: [0; 3],
         }
-    }
-
-    /// Adds the deposits held on coarser grids into [`PhotoAccum::sums`]
-    /// ([`CoarseDeposits::spread_into`]); the accessors below read `sums` alone, so call this
-    /// once every footprint is in. Idempotent.
-    pub fn finish(&mut self) {
-        self.coarse.spread_into(&mut self.sums);
     }
 
     /// Deposits a footprint of colour `rgb` (working space 0..1) with border feather
@@ -223,18 +209,7 @@ impl PhotoAccum {
             fp.corners.map(|c| [c[0] * sc, c[1] * sc])
         };
         let shape = footprint_shape(&corners);
-        // large against the texels: on the coarsest grid where it still spans MIN_SPAN texels
-        let level = match shape {
-            Some((poly, _)) => self.coarse.level_for(shorter_side(&poly)),
-            None => 0,
-        };
-        let (sums, texels, shape) = if level == 0 {
-            (&mut self.sums, self.texels, shape)
-        } else {
-            let k = 1.0 / (1u64 << level) as f64;
-            let shape = shape.map(|(poly, area)| (poly.map(|p| [p[0] * k, p[1] * k]), area * k * k));
-            (self.coarse.grid_mut(level), self.texels >> level, shape)
-        };
+        let sums = &mut self.sums;
         let q = feather;
         let (qr, qg, qo) = (q * footprint_m, q * grazing, q * clear);
         let deposit = |i: usize, w: f64| {
@@ -250,10 +225,9 @@ impl PhotoAccum {
             s.grazing += w * qg;
             s.clear += w * qo;
         };
-        let grid_scale = (self.scale as f64) / (1u64 << level) as f64;
-        let bbox = MAX_SPLAT_BBOX * grid_scale * grid_scale;
+        let bbox = MAX_SPLAT_BBOX * (self.scale as f64 * self.scale as f64);
         let s = match shape {
-            Some((poly, area)) => splat_polygon_limited(&poly, area, texels, bbox, deposit),
+            Some((poly, area)) => splat_polygon_limited(&poly, area, self.texels, bbox, deposit),
             None => Splat {
                 area: 0.0,
                 kind: SplatKind::Skipped,
@@ -338,19 +312,6 @@ impl PhotoAccum {
         let s = self.sums.get(t);
         [s.footprint / s.weight, s.grazing / s.weight]
     }
-}
-
-/// The shorter side of `poly`'s bounding box (NaN if a coordinate is NaN).
-#[inline]
-fn shorter_side(poly: &[[f64; 2]; 4]) -> f64 {
-    let (mut lo, mut hi) = (poly[0], poly[0]);
-    for p in &poly[1..] {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (hi[0] - lo[0]).min(hi[1] - lo[1])
 }
 
 /// The least factor of a photo's selection weight on texels next to its occlusion edges
@@ -493,13 +454,12 @@ impl CellAccum {
     /// [`CellAccum::new`] followed by [`CellAccum::merge`] of `p` (bit for bit), using `p`'s
     /// memory; also returns how many texels `p` gave colour.
     pub fn from_photo(
-        mut p: PhotoAccum,
+        p: PhotoAccum,
         photo: u16,
         mode: BlendMode,
         context: CellContext,
         params: &ConfidenceParams,
     ) -> (CellAccum, u64) {
-        p.finish();
         let (texels, scale) = (p.texels, p.scale.max(1));
         let mut merged = p.sums;
         let sharpness = params.sharpness_power as f32;
@@ -576,8 +536,7 @@ impl CellAccum {
 
     /// Adds the deposits of photo number `photo` (same texture size); returns how many texels
     /// it gave colour.
-    pub fn merge(&mut self, mut p: PhotoAccum, photo: u16) -> u64 {
-        p.finish();
+    pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
         let mut written = 0;
         let label = photo.saturating_add(1);
         let n = self.merged.len().min(p.sums.len());
@@ -786,7 +745,7 @@ mod tests {
                 let sb = PhotoSamples::new(&blue, [1000.0; 2], &ColourTransform::IDENTITY, &p, ColourSpace::Srgb);
                 let mut b = PhotoAccum::new(16);
                 b.add_samples(&fb, &sb);
-                acc.merge(b.clone(), 1);
+                acc.merge(&b, 1);
             }
             acc
         };
@@ -866,56 +825,6 @@ mod tests {
             // interior texels are fully covered: full confidence (the view angle is in the resolution)
             assert!((a.confidence(3 * 8 + 3) - 1.0).abs() < 1e-4);
         }
-    }
-
-    #[test]
-    fn footprints_large_against_an_enlarged_texture_fill_it_like_the_exact_splat() {
-        // a 10 × 10-pixel photo of a uniform colour on a cell of 8 texels, its texture
-        // enlarged 8 times: pixels from 0.4 to 17 texels of the enlarged texture across,
-        // so deposits go to levels 0, 1 and 2
-        let img = RgbImage::from_pixel(10, 10, image::Rgb([30, 160, 220]));
-        let a = |t: f32| 0.03 + 7.9 * (t / 10.0).powi(3);
-        let fps: Vec<PixelFootprint> = (0..10)
-            .flat_map(|r| (0..10).map(move |c| (c, r)))
-            .map(|(c, r)| {
-                let (x0, x1, y0, y1) = (a(c as f32), a(c as f32 + 1.0), a(r as f32), a(r as f32 + 1.0));
-                fp([c, r], [[x0, y0], [x1, y0], [x1, y1], [x0, y1]], 0.9)
-            })
-            .collect();
-        let samples = srgb_samples(&img);
-        let mut coarse = PhotoAccum::with_scale(64, 8);
-        coarse.add_samples(&fps, &samples);
-        assert!(!coarse.coarse.is_empty(), "some deposits held on coarser grids");
-        coarse.finish();
-        assert!(coarse.coarse.is_empty());
-        // the exact splat of the same footprints straight into the enlarged texture
-        let mut exact = PhotoAccum::new(64);
-        let scaled: Vec<PixelFootprint> = fps
-            .iter()
-            .map(|f| PixelFootprint {
-                corners: f.corners.map(|c| [8.0 * c[0], 8.0 * c[1]]),
-                ..*f
-            })
-            .collect();
-        exact.add_samples(&scaled, &samples);
-        let (mut total_c, mut total_e, mut worst) = (0.0f64, 0.0f64, 0.0f32);
-        for t in 0..64 * 64 {
-            let (c, e) = (coarse.sums.get(t), exact.sums.get(t));
-            total_c += c.coverage as f64;
-            total_e += e.coverage as f64;
-            if let Some(col) = coarse.colour_at(t) {
-                assert!((col[1] - 160.0 / 255.0).abs() < 1e-5, "texel {t}: {col:?}");
-            }
-            // fully covered texels stay fully covered: no seam where coarse deposits
-            // meet fine ones (the photo's own edge at 63.4 texels is spread over the last
-            // coarse texel, 4 texels of level 2: left out)
-            let (x, y) = (t % 64, t / 64);
-            if e.coverage > 0.999 && x < 60 && y < 60 {
-                worst = worst.max((c.coverage - 1.0).abs());
-            }
-        }
-        assert!((total_c - total_e).abs() < 1e-4 * total_e, "{total_c} vs {total_e}");
-        assert!(worst < 0.05, "a fully covered texel ends at coverage 1 ± {worst}");
     }
 
     #[test]
@@ -1089,9 +998,9 @@ mod tests {
         ] {
             let mut acc = CellAccum::new(1, 1, mode, ctx.clone(), &params());
             let written = if first_red {
-                acc.merge(a.clone(), 0) + acc.merge(b.clone(), 1)
+                acc.merge(&a, 0) + acc.merge(&b, 1)
             } else {
-                acc.merge(b.clone(), 1) + acc.merge(a.clone(), 0)
+                acc.merge(&b, 1) + acc.merge(&a, 0)
             };
             assert_eq!(written, 2);
             let c = acc.colour_at(0).unwrap();
@@ -1110,10 +1019,10 @@ mod tests {
         // a cell's first photo handed over equals merging it into an empty accumulator
         for mode in [BlendMode::Confidence, BlendMode::Best] {
             let mut merged = CellAccum::new(1, 1, mode, ctx.clone(), &params());
-            let n = merged.merge(a.clone(), 0) + merged.merge(b.clone(), 1);
+            let n = merged.merge(&a, 0) + merged.merge(&b, 1);
             let (mut adopted, m) =
                 CellAccum::from_photo(a.clone(), 0, mode, ctx.clone(), &params());
-            assert_eq!(n, m + adopted.merge(b.clone(), 1));
+            assert_eq!(n, m + adopted.merge(&b, 1));
             assert_eq!(merged, adopted);
         }
         let empty = CellAccum::new(1, 1, BlendMode::Best, ctx, &params());
@@ -1146,8 +1055,8 @@ mod tests {
         let ctx = CellContext::flat(40, 0.1, 1.0);
         for mode in [BlendMode::Confidence, BlendMode::Best] {
             let mut acc = CellAccum::new(40, 1, mode, ctx.clone(), &params());
-            acc.merge(photo(0.5, 0.5, 10.0), 0);
-            acc.merge(photo(6.2, 3.1, 14.0), 1);
+            acc.merge(&photo(0.5, 0.5, 10.0), 0);
+            acc.merge(&photo(6.2, 3.1, 14.0), 1);
             let mut seen = vec![false; 1600];
             acc.for_each_coloured(|t, c, conf, res, best| {
                 seen[t] = true;

@@ -220,7 +220,7 @@ mod tests {
         );
         let ctx = CellContext::flat(n, 0.0, 0.04);
         let mut acc = CellAccum::new(n, 1, BlendMode::Confidence, ctx, &params);
-        acc.merge(pa, 0);
+        acc.merge(&pa, 0);
         let mut existing = RgbaImage::from_pixel(n, n, image::Rgba([10, 10, 10, 255]));
         // an unknown existing texel where the photo is coarse
         existing.put_pixel(30, 0, image::Rgba([0, 0, 0, 0]));
@@ -320,7 +320,7 @@ mod tests {
             let mut pa = PhotoAccum::with_scale(t, scale);
             pa.add_samples(&fps, &samples);
             let mut acc = CellAccum::new(t, scale, BlendMode::Confidence, ctx.clone(), &params);
-            acc.merge(pa, 0);
+            acc.merge(&pa, 0);
             let b = blend_cell(&existing, &acc, &params, ColourSpace::Linear, &[], &[]);
             assert_eq!(b.texture.dimensions(), (t, t));
             shares.push((

@@ -43,7 +43,6 @@ mod reconstruct;
 mod scene;
 mod silhouette;
 mod sizing;
-mod coarse_deposits;
 mod splat;
 mod texel_tiles;
 mod triangle;

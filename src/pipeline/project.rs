@@ -638,7 +638,7 @@ impl LevelRun<'_> {
                 .enumerate()
                 .map(|(ci, ((acc, pa), ctx))| match (acc.as_mut(), pa) {
                     (_, None) => Ok(0),
-                    (Some(acc), Some(pa)) => Ok(acc.merge(pa, pi as u16)),
+                    (Some(acc), Some(pa)) => Ok(acc.merge(&pa, pi as u16)),
                     (None, Some(pa)) => {
                         let ctx = match ctx.take() {
                             Some(c) => c,
