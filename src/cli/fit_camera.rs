@@ -22,7 +22,9 @@ pub struct Args {
     gcps: PathBuf,
     /// Start camera (Camera JSON, e.g. ImGRAFT-style): position, view direction, focal
     /// length and image size. Without it: --position and the size (--size or --image), or the
-    /// size alone (a start from the GCPs by DLT + RANSAC, at least 6 GCPs).
+    /// size alone (a start from the GCPs by P3P + RANSAC, at least 4 GCPs, and with 6 or more
+    /// also by DLT + RANSAC, the better kept; the focal length from --focal-px or EXIF, else
+    /// searched).
     #[arg(long)]
     camera: Option<PathBuf>,
     /// Camera position "X,Y,Z" (world metres) for a start without --camera (or to replace
@@ -132,7 +134,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 /// The start camera: --camera (position replaced by --position), else --yaw with
-/// --focal-px, else the orientation from the GCP bearings at --position, else the DLT of
+/// --focal-px, else the orientation from the GCP bearings at --position, else P3P or DLT of
 /// the GCPs.
 fn start_camera(
     a: &Args,
@@ -151,14 +153,6 @@ fn start_camera(
         return Ok(cam);
     }
     let (w, h) = image_size(a)?;
-    let Some(position) = position else {
-        let cam = cliffmap::register::start_from_gcps(w, h, gcps)?;
-        eprintln!(
-            "start from the GCPs alone (DLT + RANSAC): position {:.1}, {:.1}, {:.1}, focal {:.0} px",
-            cam.position.x, cam.position.y, cam.position.z, cam.fx
-        );
-        return Ok(cam);
-    };
     let mut focal = a.focal_px;
     if let (None, Some(img)) = (focal, &a.image) {
         if let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)? {
@@ -169,6 +163,14 @@ fn start_camera(
             focal = Some(e.focal_px);
         }
     }
+    let Some(position) = position else {
+        let (cam, how) = cliffmap::register::start_without_position(w, h, gcps, focal)?;
+        eprintln!(
+            "start from the GCPs alone ({how}): position {:.1}, {:.1}, {:.1}, focal {:.0} px",
+            cam.position.x, cam.position.y, cam.position.z, cam.fx
+        );
+        return Ok(cam);
+    };
     match (a.yaw, focal) {
         (Some(yaw), Some(f)) => {
             let r = rotation_from_yaw_pitch_roll(

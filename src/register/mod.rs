@@ -39,6 +39,7 @@ mod gcp;
 mod grey;
 mod lsq;
 mod pair;
+mod p3p;
 mod params;
 mod start;
 pub mod terrain;
@@ -47,8 +48,11 @@ pub use exif::{ExifFocal, exif_focal_px};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
+pub use p3p::{p3p, start_from_gcps_p3p};
 pub use params::{CameraParams, Param, parse_free};
-pub use start::{rotation_from_bearings, start_from_gcps, start_from_position};
+pub use start::{
+    rotation_from_bearings, start_from_gcps, start_from_position, start_without_position,
+};
 pub use terrain::{
     EdgeFit, EdgeOptions, TerrainFit, TerrainOptions, TerrainScene, refine_edges, register_to_terrain,
 };

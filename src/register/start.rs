@@ -233,6 +233,35 @@ pub fn start_from_gcps(width: u32, height: u32, gcps: &[Gcp]) -> Result<CameraMo
     })
 }
 
+/// A start camera with the position unknown, and how it was found: P3P + RANSAC
+/// ([`super::start_from_gcps_p3p`], ≥ 4 GCPs, `focal_px` fixed or searched) and, with ≥ 6
+/// GCPs, the DLT ([`start_from_gcps`]); the one that reprojects more GCPs within 2 % of the
+/// image diagonal (then the smaller capped error sum) wins, P3P on ties. Errors when neither
+/// gives a camera.
+pub fn start_without_position(
+    width: u32,
+    height: u32,
+    gcps: &[Gcp],
+    focal_px: Option<f64>,
+) -> Result<(CameraModel, &'static str)> {
+    let tol = 0.02 * (width as f64).hypot(height as f64);
+    let p3p = super::start_from_gcps_p3p(width, height, gcps, focal_px);
+    let dlt = (gcps.len() >= 6).then(|| start_from_gcps(width, height, gcps));
+    match (p3p, dlt) {
+        (Ok(a), Some(Ok(b))) => {
+            let (sa, sb) = (super::p3p::score(&a, gcps, tol), super::p3p::score(&b, gcps, tol));
+            if sb.0 > sa.0 || (sb.0 == sa.0 && sb.1 < sa.1) {
+                Ok((b, "DLT + RANSAC"))
+            } else {
+                Ok((a, "P3P + RANSAC"))
+            }
+        }
+        (Ok(a), _) => Ok((a, "P3P + RANSAC")),
+        (Err(_), Some(Ok(b))) => Ok((b, "DLT + RANSAC")),
+        (Err(e), _) => Err(e),
+    }
+}
+
 /// The DLT camera of `gcps` (≥ 6, not coplanar), or `None`.
 fn dlt_camera(gcps: &[&Gcp], width: u32, height: u32) -> Option<CameraModel> {
     let n = gcps.len() as f64;
