@@ -305,3 +305,126 @@ fn img_8937_registers_to_img_8902_on_stable_ground() {
         "{dy} {dp}"
     );
 }
+
+/// A small JPEG whose EXIF holds a GPS fix (WGS 84 degrees, minutes, ten-thousandths of
+/// seconds) and altitude.
+fn jpeg_with_gps(path: &std::path::Path, lat: [u32; 3], lon: [u32; 3], alt_dm: u32) {
+    use exif::{Field, In, Rational, Tag, Value};
+    let dms = |v: [u32; 3]| {
+        Value::Rational(vec![
+            Rational {
+                num: v[0],
+                denom: 1,
+            },
+            Rational {
+                num: v[1],
+                denom: 1,
+            },
+            Rational {
+                num: v[2],
+                denom: 10_000,
+            },
+        ])
+    };
+    let fields = [
+        Field {
+            tag: Tag::GPSLatitudeRef,
+            ifd_num: In::PRIMARY,
+            value: Value::Ascii(vec![b"N".to_vec()]),
+        },
+        Field {
+            tag: Tag::GPSLatitude,
+            ifd_num: In::PRIMARY,
+            value: dms(lat),
+        },
+        Field {
+            tag: Tag::GPSLongitudeRef,
+            ifd_num: In::PRIMARY,
+            value: Value::Ascii(vec![b"E".to_vec()]),
+        },
+        Field {
+            tag: Tag::GPSLongitude,
+            ifd_num: In::PRIMARY,
+            value: dms(lon),
+        },
+        Field {
+            tag: Tag::GPSAltitude,
+            ifd_num: In::PRIMARY,
+            value: Value::Rational(vec![Rational {
+                num: alt_dm,
+                denom: 10,
+            }]),
+        },
+    ];
+    let mut w = exif::experimental::Writer::new();
+    for f in &fields {
+        w.push_field(f);
+    }
+    let mut blob = std::io::Cursor::new(Vec::new());
+    w.write(&mut blob, false).unwrap();
+    let blob = blob.into_inner();
+    let mut jpeg = Vec::new();
+    image::RgbImage::new(8, 8)
+        .write_to(
+            &mut std::io::Cursor::new(&mut jpeg),
+            image::ImageFormat::Jpeg,
+        )
+        .unwrap();
+    let mut out = jpeg[..2].to_vec();
+    out.extend([0xFF, 0xE1]);
+    out.extend(((blob.len() + 8) as u16).to_be_bytes());
+    out.extend(b"Exif\0\0");
+    out.extend(&blob);
+    out.extend(&jpeg[2..]);
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn exif_gps_fix_gives_the_start_position_in_the_crs() {
+    // IMG_8902's surveyed position (446722, 7396671, 770) in UTM 33N is 66°41'2.4612" N,
+    // 13°47'37.2190" E (pyproj), i.e. within 2 mm after rounding to 1e-4 seconds
+    let dir = tempfile::tempdir().unwrap();
+    let img = dir.path().join("gps.jpg");
+    jpeg_with_gps(&img, [66, 41, 24612], [13, 47, 372190], 7700);
+    let out = dir.path().join("fit.json");
+    let o = ok(&[
+        "fit-camera",
+        "--gcps",
+        &path("engabreen/gcp8902.txt"),
+        "--image",
+        img.to_str().unwrap(),
+        "--crs",
+        "EPSG:32633",
+        "--size",
+        "4290x2856",
+        "--free",
+        "yaw,pitch,roll,fx,fy,k1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("start position from EXIF GPS"), "{err}");
+    assert!(err.contains("m from the GPS fix"), "{err}");
+    let cam = camera_from_json_file(&out, (0, 0)).unwrap();
+    let off = cam.position - glam::DVec3::new(446722.0, 7396671.0, 770.0);
+    assert!(off.length() < 0.01, "{off:?}");
+    // the same fit as from the surveyed position (ImGRAFT's 3.04 px)
+    assert!((rmse_of(&out) - 3.044).abs() < 0.01, "{}", rmse_of(&out));
+    // a wrong CRS code is an error, not a silent position
+    cli_util::fails_naming(
+        &[
+            "fit-camera",
+            "--gcps",
+            &path("engabreen/gcp8902.txt"),
+            "--image",
+            img.to_str().unwrap(),
+            "--crs",
+            "EPSG:1",
+            "--size",
+            "4290x2856",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "EPSG:1",
+    );
+}

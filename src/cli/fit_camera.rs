@@ -51,6 +51,11 @@ pub struct Args {
     /// focal length.
     #[arg(long)]
     image: Option<PathBuf>,
+    /// CRS of the GCPs' world coordinates (EPSG:CODE or a PROJ string): with --image and
+    /// neither --position nor --camera, the photo's EXIF GPS fix (WGS 84, altitude above sea
+    /// level) in this CRS is the start position.
+    #[arg(long)]
+    crs: Option<String>,
     /// Sensor width in mm, for photos whose EXIF gives the focal length in mm alone.
     #[arg(long)]
     sensor_width_mm: Option<f64>,
@@ -163,6 +168,10 @@ fn start_camera(
             focal = Some(e.focal_px);
         }
     }
+    let position = match (position, &a.crs, &a.image) {
+        (None, Some(crs), Some(img)) => gps_position(img, crs, w, h, gcps, focal)?,
+        (p, _, _) => p,
+    };
     let Some(position) = position else {
         let (cam, how) = cliffmap::register::start_without_position(w, h, gcps, focal)?;
         eprintln!(
@@ -188,6 +197,58 @@ fn start_camera(
         ),
         (None, f) => Ok(start_from_position(position, w, h, gcps, f)?),
     }
+}
+
+/// The photo's EXIF GPS fix in `crs` (`None`, with a note, without a fix or an altitude),
+/// with how far it lies from the position the GCPs alone give (a wrong CRS or zone shows as
+/// kilometres).
+fn gps_position(
+    img: &std::path::Path,
+    crs: &str,
+    w: u32,
+    h: u32,
+    gcps: &[cliffmap::register::Gcp],
+    focal: Option<f64>,
+) -> anyhow::Result<Option<DVec3>> {
+    let Some(gps) = cliffmap::register::exif_gps(img)? else {
+        eprintln!(
+            "{}: no EXIF GPS fix; the start comes from the GCPs",
+            img.display()
+        );
+        return Ok(None);
+    };
+    let Some(alt) = gps.altitude_m else {
+        eprintln!(
+            "{}: the EXIF GPS fix has no altitude; the start comes from the GCPs",
+            img.display()
+        );
+        return Ok(None);
+    };
+    let p = cliffmap::crs::from_lon_lat(crs, gps.lon_deg, gps.lat_deg, alt)?;
+    eprintln!(
+        "start position from EXIF GPS ({:.6}, {:.6}, {alt:.1} m): {:.1}, {:.1}, {:.1} in {crs}",
+        gps.lat_deg, gps.lon_deg, p.x, p.y, p.z
+    );
+    if let Some(d) = gps.direction_deg {
+        eprintln!(
+            "EXIF image direction {d:.1}° from {} north (yaw {:.1}°)",
+            if gps.direction_magnetic {
+                "magnetic"
+            } else {
+                "true"
+            },
+            (90.0 - d).rem_euclid(360.0)
+        );
+    }
+    if gcps.len() >= 4
+        && let Ok((cam, how)) = cliffmap::register::start_without_position(w, h, gcps, focal)
+    {
+        eprintln!(
+            "the GCPs alone ({how}) put the camera {:.1} m from the GPS fix",
+            cam.position.distance(p)
+        );
+    }
+    Ok(Some(p))
 }
 
 fn parse_position(s: &str) -> anyhow::Result<DVec3> {

@@ -6,6 +6,7 @@ use glam::{DMat3, DVec3};
 use proj4rs::Proj;
 
 use super::geoid::GeoidGrid;
+pub use crate::crs::proj_string;
 use crate::error::{Error, Result};
 
 /// A projected (or geographic) CRS paired with WGS 84 geocentric coordinates.
@@ -67,7 +68,11 @@ impl ToEcef {
                 } else {
                     let (a, b, _) =
                         proj4rs::adaptors::transform_xyz(&self.src, &self.longlat, p.x, p.y, p.z)
-                            .map_err(|e| Error::BadOption(format!("cannot transform {p} to longitude/latitude: {e}")))?;
+                            .map_err(|e| {
+                            Error::BadOption(format!(
+                                "cannot transform {p} to longitude/latitude: {e}"
+                            ))
+                        })?;
                     (a.to_degrees(), b.to_degrees())
                 };
                 g.undulation(lon, lat)
@@ -118,26 +123,6 @@ impl ToEcef {
         };
         Ok(DVec3::new(a, b, c - n))
     }
-}
-
-/// The PROJ string of `crs` (`EPSG:CODE` looked up, a `+proj=` string as given).
-pub fn proj_string(crs: &str) -> Result<String> {
-    let t = crs.trim();
-    if t.starts_with('+') {
-        return Ok(t.to_string());
-    }
-    let code = t
-        .strip_prefix("EPSG:")
-        .or_else(|| t.strip_prefix("epsg:"))
-        .and_then(|c| c.parse::<u16>().ok())
-        .ok_or_else(|| {
-            Error::BadOption(format!(
-                "CRS {crs:?}: expected EPSG:CODE or a PROJ string (+proj=...)"
-            ))
-        })?;
-    crs_definitions::from_code(code)
-        .map(|d| d.proj4.to_string())
-        .ok_or_else(|| Error::BadOption(format!("CRS {crs:?}: EPSG code {code} is not known")))
 }
 
 /// Rotation from ECEF to the east-north-up frame at ECEF point `q` (rows east, north, up,
@@ -200,7 +185,9 @@ mod tests {
         let (w, h) = (361, 181);
         let v: Vec<f32> = (0..h)
             .flat_map(|r| {
-                (0..w).map(move |c| (10.0 + 0.05 * (c as f64 - 180.0) + 0.1 * (90.0 - r as f64)) as f32)
+                (0..w).map(move |c| {
+                    (10.0 + 0.05 * (c as f64 - 180.0) + 0.1 * (90.0 - r as f64)) as f32
+                })
             })
             .collect();
         GeoidGrid::from_samples(w, h, v, -180.0, 90.0, 1.0, 1.0).unwrap()
@@ -222,7 +209,10 @@ mod tests {
         // A geographic store CRS takes the point's own degrees.
         let g = ToEcef::with_geoid("EPSG:4326", plane_grid()).unwrap();
         let n = g.geoid_height(DVec3::new(-120.5, 46.25, 0.0)).unwrap();
-        assert!((n - (10.0 - 0.05 * 120.5 + 0.1 * 46.25)).abs() < 1e-5, "{n}");
+        assert!(
+            (n - (10.0 - 0.05 * 120.5 + 0.1 * 46.25)).abs() < 1e-5,
+            "{n}"
+        );
     }
 
     #[test]

@@ -1,4 +1,5 @@
-//! A photo's focal length in pixels from its EXIF data (`kamadak-exif`).
+//! A photo's focal length in pixels, and its GPS position and heading, from its EXIF data
+//! (`kamadak-exif`).
 //!
 //! In order of preference: `FocalLength` (mm) times `FocalPlaneXResolution` (pixels per
 //! `FocalPlaneResolutionUnit` on the sensor, scaled to the image's width when the EXIF
@@ -6,6 +7,12 @@
 //! equivalent is defined by the diagonal of a 36 × 24 mm frame); `FocalLength` with a
 //! sensor width the caller gives (`f · width_px / sensor_mm`). A photo without EXIF, or
 //! without these fields, gives `None`; malformed EXIF is an error naming the file.
+//!
+//! GPS ([`exif_gps`]): `GPSLatitude`/`GPSLongitude` (degrees, minutes, seconds) with their
+//! `N`/`S`, `E`/`W` references, `GPSAltitude` with `GPSAltitudeRef` (1 = below sea level),
+//! `GPSImgDirection` with `GPSImgDirectionRef` (`T` true north, `M` magnetic). The latitude
+//! and longitude are WGS 84 (as the EXIF standard says); the altitude is above sea level,
+//! i.e. close to an orthometric height like a DEM's, not an ellipsoidal one.
 
 use std::path::Path;
 
@@ -92,6 +99,89 @@ pub fn exif_focal_px(
     Ok(None)
 }
 
+/// A photo's GPS fix and heading from EXIF (see the [module docs](self)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExifGps {
+    /// WGS 84 latitude, degrees north.
+    pub lat_deg: f64,
+    /// WGS 84 longitude, degrees east.
+    pub lon_deg: f64,
+    /// Altitude above sea level, metres, if recorded.
+    pub altitude_m: Option<f64>,
+    /// Direction the camera looked, degrees clockwise from north, if recorded.
+    pub direction_deg: Option<f64>,
+    /// Whether that direction is from magnetic north (`GPSImgDirectionRef` `M`) rather than
+    /// true north.
+    pub direction_magnetic: bool,
+}
+
+/// The GPS fix of the photo at `path`: `None` without EXIF or without a latitude and
+/// longitude; an error for malformed EXIF or coordinates outside ±90° / ±180°.
+pub fn exif_gps(path: &Path) -> Result<Option<ExifGps>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let data = match exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file)) {
+        Ok(d) => d,
+        Err(exif::Error::NotFound(_)) => return Ok(None),
+        Err(exif::Error::Io(e)) => return Err(Error::io(path, e)),
+        Err(e) => return Err(Error::bad_input(path, format!("malformed EXIF data: {e}"))),
+    };
+    let field = |t: Tag| data.get_field(t, In::PRIMARY);
+    let text = |t: Tag| -> Option<String> {
+        match &field(t)?.value {
+            Value::Ascii(v) => v
+                .first()
+                .map(|b| String::from_utf8_lossy(b).trim().to_ascii_uppercase()),
+            _ => None,
+        }
+    };
+    let dms = |t: Tag| -> Option<f64> {
+        match &field(t)?.value {
+            Value::Rational(v) if !v.is_empty() && v.iter().all(|r| r.denom != 0) => Some(
+                v.iter()
+                    .take(3)
+                    .zip([1.0, 60.0, 3600.0])
+                    .map(|(r, d)| r.num as f64 / r.denom as f64 / d)
+                    .sum(),
+            ),
+            _ => None,
+        }
+    };
+    let (Some(lat), Some(lon)) = (dms(Tag::GPSLatitude), dms(Tag::GPSLongitude)) else {
+        return Ok(None);
+    };
+    let lat = if text(Tag::GPSLatitudeRef).as_deref() == Some("S") {
+        -lat
+    } else {
+        lat
+    };
+    let lon = if text(Tag::GPSLongitudeRef).as_deref() == Some("W") {
+        -lon
+    } else {
+        lon
+    };
+    if !(lat.abs() <= 90.0 && lon.abs() <= 180.0) {
+        return Err(Error::bad_input(
+            path,
+            format!("EXIF GPS position {lat}, {lon} is not a latitude and longitude"),
+        ));
+    }
+    let below = field(Tag::GPSAltitudeRef).and_then(|f| f.value.get_uint(0)) == Some(1);
+    let altitude_m = field(Tag::GPSAltitude)
+        .and_then(rational)
+        .filter(|a| a.is_finite())
+        .map(|a| if below { -a } else { a });
+    let direction_deg = field(Tag::GPSImgDirection)
+        .and_then(rational)
+        .filter(|d| d.is_finite() && (0.0..=360.0).contains(d));
+    Ok(Some(ExifGps {
+        lat_deg: lat,
+        lon_deg: lon,
+        altitude_m,
+        direction_deg,
+        direction_magnetic: text(Tag::GPSImgDirectionRef).as_deref() == Some("M"),
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -106,5 +196,89 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("missing.jpg"), "{e}");
+        assert_eq!(exif_gps(&p).unwrap(), None);
+    }
+
+    /// A JPEG with the EXIF `fields` in an APP1 segment.
+    fn jpeg_with_exif(dir: &Path, fields: &[exif::Field]) -> std::path::PathBuf {
+        let mut w = exif::experimental::Writer::new();
+        for f in fields {
+            w.push_field(f);
+        }
+        let mut blob = std::io::Cursor::new(Vec::new());
+        w.write(&mut blob, false).unwrap();
+        let blob = blob.into_inner();
+        let mut jpeg = Vec::new();
+        image::RgbImage::new(8, 8)
+            .write_to(
+                &mut std::io::Cursor::new(&mut jpeg),
+                image::ImageFormat::Jpeg,
+            )
+            .unwrap();
+        let mut out = jpeg[..2].to_vec();
+        out.extend([0xFF, 0xE1]);
+        out.extend(((blob.len() + 8) as u16).to_be_bytes());
+        out.extend(b"Exif\0\0");
+        out.extend(&blob);
+        out.extend(&jpeg[2..]);
+        let p = dir.join("gps.jpg");
+        std::fs::write(&p, out).unwrap();
+        p
+    }
+
+    fn rat(v: &[(u32, u32)]) -> Value {
+        Value::Rational(
+            v.iter()
+                .map(|&(n, d)| exif::Rational { num: n, denom: d })
+                .collect(),
+        )
+    }
+
+    fn field(tag: Tag, value: Value) -> exif::Field {
+        exif::Field {
+            tag,
+            ifd_num: In::PRIMARY,
+            value,
+        }
+    }
+
+    #[test]
+    fn gps_position_altitude_and_heading_are_read_with_their_references() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = jpeg_with_exif(
+            dir.path(),
+            &[
+                field(Tag::GPSLatitudeRef, Value::Ascii(vec![b"S".to_vec()])),
+                field(Tag::GPSLatitude, rat(&[(66, 1), (41, 1), (1230, 100)])),
+                field(Tag::GPSLongitudeRef, Value::Ascii(vec![b"W".to_vec()])),
+                field(Tag::GPSLongitude, rat(&[(13, 1), (30, 1), (0, 1)])),
+                field(Tag::GPSAltitudeRef, Value::Byte(vec![1])),
+                field(Tag::GPSAltitude, rat(&[(7705, 10)])),
+                field(Tag::GPSImgDirectionRef, Value::Ascii(vec![b"M".to_vec()])),
+                field(Tag::GPSImgDirection, rat(&[(21925, 100)])),
+            ],
+        );
+        let g = exif_gps(&p).unwrap().unwrap();
+        assert!(
+            (g.lat_deg + (66.0 + 41.0 / 60.0 + 12.3 / 3600.0)).abs() < 1e-12,
+            "{g:?}"
+        );
+        assert!((g.lon_deg + 13.5).abs() < 1e-12);
+        assert_eq!(g.altitude_m, Some(-770.5));
+        assert_eq!(g.direction_deg, Some(219.25));
+        assert!(g.direction_magnetic);
+        // a latitude beyond the pole is refused, naming the file
+        let bad = jpeg_with_exif(
+            dir.path(),
+            &[
+                field(Tag::GPSLatitude, rat(&[(95, 1)])),
+                field(Tag::GPSLongitude, rat(&[(1, 1)])),
+            ],
+        );
+        let e = exif_gps(&bad).unwrap_err().to_string();
+        assert!(e.contains("gps.jpg") && e.contains("latitude"), "{e}");
+        // no GPS fields: none
+        let none = jpeg_with_exif(dir.path(), &[field(Tag::FocalLength, rat(&[(30, 1)]))]);
+        assert_eq!(exif_gps(&none).unwrap(), None);
     }
 }

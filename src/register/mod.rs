@@ -38,21 +38,22 @@ mod fit;
 mod gcp;
 mod grey;
 mod lsq;
-mod pair;
 mod p3p;
+mod pair;
 mod params;
 mod start;
 pub mod terrain;
 
-pub use exif::{ExifFocal, exif_focal_px};
+pub use exif::{ExifFocal, ExifGps, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
-pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use p3p::{p3p, start_from_gcps_p3p};
+pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
 pub use start::{
     rotation_from_bearings, start_from_gcps, start_from_position, start_without_position,
 };
 pub use terrain::{
-    EdgeFit, EdgeOptions, TerrainFit, TerrainOptions, TerrainScene, refine_edges, register_to_terrain,
+    EdgeFit, EdgeOptions, TerrainFit, TerrainOptions, TerrainScene, refine_edges,
+    register_to_terrain,
 };

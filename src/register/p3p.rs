@@ -57,7 +57,11 @@ pub fn p3p(bearing: [DVec3; 3], world: [DVec3; 3]) -> Vec<(DMat3, DVec3)> {
             continue;
         }
         let s1 = (b2 / qv).sqrt();
-        let cam = [bearing[0] * s1, bearing[1] * (u * s1), bearing[2] * (v * s1)];
+        let cam = [
+            bearing[0] * s1,
+            bearing[1] * (u * s1),
+            bearing[2] * (v * s1),
+        ];
         if let Some(pose) = rigid_motion(&cam, &world) {
             poses.push(pose);
         }
@@ -202,7 +206,10 @@ pub fn start_from_gcps_p3p(
                     k2: 0.0,
                 };
                 let (n, s) = score(&cam, gcps, tol);
-                if best.as_ref().is_none_or(|b| n > b.0 || (n == b.0 && s < b.1)) {
+                if best
+                    .as_ref()
+                    .is_none_or(|b| n > b.0 || (n == b.0 && s < b.1))
+                {
                     best = Some((n, s, cam));
                 }
             }
@@ -230,7 +237,10 @@ pub fn start_from_gcps_p3p(
                     (k_best, c_best) = (k, c);
                 }
             }
-            let (mut a, mut b) = ((k_best as f64 - 1.0).max(0.0), (k_best as f64 + 1.0).min(64.0));
+            let (mut a, mut b) = (
+                (k_best as f64 - 1.0).max(0.0),
+                (k_best as f64 + 1.0).min(64.0),
+            );
             let g = 0.5 * (5f64.sqrt() - 1.0);
             for _ in 0..30 {
                 let (c, d) = (b - g * (b - a), a + g * (b - a));
@@ -241,7 +251,11 @@ pub fn start_from_gcps_p3p(
                 }
             }
             let k = 0.5 * (a + b);
-            if cost(k) <= c_best { best_at(f_of(k)) } else { best_at(f_of(k_best as f64)) }
+            if cost(k) <= c_best {
+                best_at(f_of(k))
+            } else {
+                best_at(f_of(k_best as f64))
+            }
         }
     };
     match best {
@@ -258,9 +272,9 @@ pub fn start_from_gcps_p3p(
 /// at `tol` (points behind the camera count as `tol`).
 pub(crate) fn score(cam: &CameraModel, gcps: &[Gcp], tol: f64) -> (usize, f64) {
     gcps.iter().fold((0, 0.0), |(n, s), g| {
-        let e = cam
-            .project(g.world)
-            .map_or(f64::INFINITY, |p| (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1]));
+        let e = cam.project(g.world).map_or(f64::INFINITY, |p| {
+            (p[0] - g.pixel[0]).hypot(p[1] - g.pixel[1])
+        });
         (n + (e <= tol) as usize, s + e.min(tol))
     })
 }
@@ -317,7 +331,10 @@ mod tests {
         let mut k = 0u32;
         while out.len() < n {
             k += 1;
-            let (px, py) = ((k * 7919 % 1500) as f64 + 50.0, (k * 104729 % 1100) as f64 + 50.0);
+            let (px, py) = (
+                (k * 7919 % 1500) as f64 + 50.0,
+                (k * 104729 % 1100) as f64 + 50.0,
+            );
             let depth = 150.0 + (k * 6151 % 750) as f64;
             let ray = cam.world_to_camera.transpose()
                 * DVec3::new((px - cam.cx) / cam.fx, (py - cam.cy) / cam.fy, 1.0);
@@ -337,14 +354,23 @@ mod tests {
         let cam = camera(1650.0);
         let g = gcps(&cam, 3);
         let b = [0, 1, 2].map(|i| {
-            DVec3::new((g[i].pixel[0] - cam.cx) / cam.fx, (g[i].pixel[1] - cam.cy) / cam.fy, 1.0)
-                .normalize()
+            DVec3::new(
+                (g[i].pixel[0] - cam.cx) / cam.fx,
+                (g[i].pixel[1] - cam.cy) / cam.fy,
+                1.0,
+            )
+            .normalize()
         });
         let poses = p3p(b, [g[0].world, g[1].world, g[2].world]);
         assert!(!poses.is_empty() && poses.len() <= 4);
         let best = poses
             .iter()
-            .map(|(r, c)| (c.distance(cam.position), (*r - cam.world_to_camera).abs_diff_eq(DMat3::ZERO, 1e-6)))
+            .map(|(r, c)| {
+                (
+                    c.distance(cam.position),
+                    (*r - cam.world_to_camera).abs_diff_eq(DMat3::ZERO, 1e-6),
+                )
+            })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .unwrap();
         assert!(best.0 < 1e-5 && best.1, "{best:?} of {poses:?}");
@@ -357,7 +383,11 @@ mod tests {
         let cam = camera(1650.0);
         let g = gcps(&cam, 4);
         let got = start_from_gcps_p3p(1600, 1200, &g, Some(1650.0)).unwrap();
-        assert!(got.position.distance(cam.position) < 1e-4, "{:?}", got.position);
+        assert!(
+            got.position.distance(cam.position) < 1e-4,
+            "{:?}",
+            got.position
+        );
         // an outlier among six is voted out
         let mut g = gcps(&cam, 6);
         g[2].pixel = [900.0, 100.0];
@@ -372,6 +402,10 @@ mod tests {
         let g = gcps(&cam, 8);
         let got = start_from_gcps_p3p(1600, 1200, &g, None).unwrap();
         assert!((got.fx / 2100.0 - 1.0).abs() < 0.01, "f {}", got.fx);
-        assert!(got.position.distance(cam.position) < 0.02 * 500.0, "{:?}", got.position);
+        assert!(
+            got.position.distance(cam.position) < 0.02 * 500.0,
+            "{:?}",
+            got.position
+        );
     }
 }

@@ -249,7 +249,10 @@ pub fn start_without_position(
     let dlt = (gcps.len() >= 6).then(|| start_from_gcps(width, height, gcps));
     match (p3p, dlt) {
         (Ok(a), Some(Ok(b))) => {
-            let (sa, sb) = (super::p3p::score(&a, gcps, tol), super::p3p::score(&b, gcps, tol));
+            let (sa, sb) = (
+                super::p3p::score(&a, gcps, tol),
+                super::p3p::score(&b, gcps, tol),
+            );
             if sb.0 > sa.0 || (sb.0 == sa.0 && sb.1 < sa.1) {
                 Ok((b, "DLT + RANSAC"))
             } else {
