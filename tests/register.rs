@@ -2,6 +2,7 @@
 //! scene with exact cameras, and on bad input.
 
 mod cli_util;
+mod common;
 
 use std::path::Path;
 
@@ -209,17 +210,33 @@ fn silhouette_edges_move_a_camera_towards_its_position_and_the_command_refuses_i
     rough.position += glam::DVec3::new(1.2, -0.8, 0.3);
     rough.angles[0] += 0.1f64.to_radians();
     let terrain = TerrainScene::new(&store, p.camera.position).unwrap();
-    let fit = refine_edges(&terrain, &p.image, &rough.camera(), &rough.camera(), &EdgeOptions::default()).unwrap();
+    let fit = refine_edges(
+        &terrain,
+        &p.image,
+        &rough.camera(),
+        &rough.camera(),
+        &EdgeOptions::default(),
+    )
+    .unwrap();
     let got = CameraParams::from_camera(&fit.camera);
     let before = (rough.position - truth.position).length();
     let after = (got.position - truth.position).length();
-    let errs: Vec<f64> = (0..3).map(|k| angle_diff_deg(got.angles[k], truth.angles[k])).collect();
+    let errs: Vec<f64> = (0..3)
+        .map(|k| angle_diff_deg(got.angles[k], truth.angles[k]))
+        .collect();
     eprintln!("position error {before:.2} m -> {after:.2} m, angles {errs:?} deg, {fit:?}");
-    assert!(after < 0.5 * before, "position error {before:.2} m -> {after:.2} m");
+    assert!(
+        after < 0.5 * before,
+        "position error {before:.2} m -> {after:.2} m"
+    );
     // (0.1° is 1.4 px of these 800-px photos)
     assert!(errs.iter().all(|&e| e < 0.1), "{errs:?}");
     assert!(fit.median_px < 1.0 && fit.matched > 100, "{fit:?}");
-    assert!(fit.sigma.iter().any(|(p, s)| *p == cliffmap::register::Param::X && *s > 0.0));
+    assert!(
+        fit.sigma
+            .iter()
+            .any(|(p, s)| *p == cliffmap::register::Param::X && *s > 0.0)
+    );
 
     // the command does not offer it (measured: it can agree with itself on a wrong
     // position, docs/registration.md, "Position")
@@ -238,4 +255,107 @@ fn silhouette_edges_move_a_camera_towards_its_position_and_the_command_refuses_i
         "position",
     );
     assert!(!out.exists());
+}
+
+#[test]
+fn a_photo_from_the_same_place_is_tied_to_a_known_one() {
+    // ImGRAFT's Engabreen pair: IMG_8937 is IMG_8902's camera turned a little. IMG_8902's
+    // fitted camera is known; IMG_8937 starts from it and is tied by patch matches on rock
+    // (the glacier moved between the shots and is masked out).
+    let t = tempfile::tempdir().unwrap();
+    let store = t.path().join("eng.store");
+    let dir = common::real_data("engabreen");
+    let p = |n: &str| dir.join(n).display().to_string();
+    ok(&[
+        "build",
+        "--dem",
+        &p("engabreen_dem_3m_507x590.f32"),
+        "--width",
+        "507",
+        "--height",
+        "590",
+        "--spacing",
+        "3",
+        "--origin",
+        "445302.17,7396769.45",
+        "--ortho",
+        &p("engabreen_ortho_3m_507x590.png"),
+        "--ortho-same-grid",
+        "--max-error",
+        "1.0",
+        "--cell-texels",
+        "64",
+        "--out",
+        store.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let list = t.path().join("pair.json");
+    let cam = p("engabreen_camera_IMG_8902.json");
+    std::fs::write(
+        &list,
+        serde_json::json!({"photos": [
+            {"image": p("IMG_8902.jpg"), "imgraft": cam},
+            {"image": p("IMG_8937.jpg"), "imgraft": cam},
+        ]})
+        .to_string(),
+    )
+    .unwrap();
+    let out = t.path().join("reg").join("registered.json");
+    std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+    ok(&[
+        "register",
+        store.to_str().unwrap(),
+        "--photos",
+        list.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--known",
+        "IMG_8902.jpg",
+        "--moving-mask",
+        &p("engabreen_glacier_mask_507x590.png"),
+    ]);
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
+    )
+    .unwrap();
+    let (a, b) = (&report["photos"][0], &report["photos"][1]);
+    assert_eq!(a["method"], "known");
+    assert_eq!(b["method"], "tie", "{b}");
+    assert_eq!(b["tie"]["anchor"], "IMG_8902.jpg");
+    // the goal of issue #17: a match residual of at most 0.5 px (ImGRAFT: 0.41 px)
+    let rmse = b["tie"]["rmse_inliers_px"].as_f64().unwrap();
+    assert!(rmse <= 0.5, "{rmse}");
+    assert!(b["tie"]["inliers"].as_u64().unwrap() >= 100, "{b}");
+    // ImGRAFT's rotation between the two: yaw +0.1263°, pitch +0.0176° (cliffmap's agrees
+    // to 0.3 px at f = 6014 px)
+    let yaw = b["change_found"]["yaw_deg"].as_f64().unwrap();
+    let pitch = b["change_found"]["pitch_deg"].as_f64().unwrap();
+    assert!(
+        (yaw - 0.1263).abs() < 0.005 && (pitch - 0.0176).abs() < 0.005,
+        "{yaw} {pitch}"
+    );
+    // the known camera is written unchanged, the tied one at its position
+    let specs = cliffmap::photo::read_photo_specs(&out).unwrap();
+    let given = camera_from_json_file(Path::new(&cam), (0, 0)).unwrap();
+    assert!(
+        specs[0]
+            .camera
+            .world_to_camera
+            .abs_diff_eq(given.world_to_camera, 1e-12)
+    );
+    assert!(specs[1].camera.position.abs_diff_eq(given.position, 1e-9));
+    // a known name not in the list is refused
+    fails_naming(
+        &[
+            "register",
+            store.to_str().unwrap(),
+            "--photos",
+            list.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--known",
+            "IMG_0000.jpg",
+        ],
+        "IMG_0000.jpg",
+    );
 }

@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use cliffmap::pipeline::register_photos;
-use cliffmap::register::{TerrainOptions, parse_free};
+use cliffmap::pipeline::{TieSettings, register_photos_with};
+use cliffmap::register::{TerrainOptions, TieOptions, parse_free};
 
 /// Flags of `cliffmap register`.
 #[derive(clap::Args, Debug)]
@@ -27,6 +27,21 @@ pub struct Args {
     /// Restarts must agree within this many pixels for a photo to count as registered.
     #[arg(long, default_value_t = 1.0)]
     repeat_px: f64,
+    /// Photos (names as in the list, comma-separated) whose given cameras are trusted, e.g.
+    /// fitted with GCPs: kept as they are, and anchors for the photo-to-photo ties.
+    #[arg(long, value_delimiter = ',')]
+    known: Vec<String>,
+    /// A photo the terrain does not place is tied to a placed photo taken within this many
+    /// metres of it (same place: rotation from patch matches between the two).
+    #[arg(long, default_value_t = 2.0)]
+    tie_distance_m: f64,
+    /// Most RMSE (pixels) of a tie's inlier matches.
+    #[arg(long, default_value_t = 1.0)]
+    tie_rmse_px: f64,
+    /// Surfaces that moved between photos (a glacier), left out of the ties' matches: a
+    /// grey PNG on the store's DEM grid, values >= 128 moving.
+    #[arg(long)]
+    moving_mask: Option<PathBuf>,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
@@ -52,28 +67,63 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ..TerrainOptions::default()
     };
     opts.validate()?;
+    if !(a.tie_distance_m.is_finite() && a.tie_distance_m >= 0.0) {
+        anyhow::bail!("--tie-distance-m must be >= 0, got {}", a.tie_distance_m);
+    }
+    if !(a.tie_rmse_px.is_finite() && a.tie_rmse_px > 0.0) {
+        anyhow::bail!("--tie-rmse-px must be positive, got {}", a.tie_rmse_px);
+    }
+    let moving_mask = match &a.moving_mask {
+        Some(p) => {
+            Some(image::DynamicImage::ImageRgb8(cliffmap::fsutil::decode_rgb8(p)?).to_luma8())
+        }
+        None => None,
+    };
+    let ties = TieSettings {
+        known: a
+            .known
+            .iter()
+            .map(|k| k.trim().to_string())
+            .filter(|k| !k.is_empty())
+            .collect(),
+        options: TieOptions {
+            max_distance_m: a.tie_distance_m,
+            max_rmse_px: a.tie_rmse_px,
+            ..TieOptions::default()
+        },
+        moving_mask,
+    };
     let specs = cliffmap::photo::read_photo_specs(&a.photos)?;
     let mut warn = |s: &str| eprintln!("warning: {s}");
-    let results = register_photos(&a.store, &specs, &a.out, &opts, &mut warn)?;
+    let results = register_photos_with(&a.store, &specs, &a.out, &opts, &ties, &mut warn)?;
     if !a.quiet {
         println!(
             "{:<28} {:>10} {:>9} {:>9} {:>8} {:>7}",
             "photo", "verdict", "score", "repeat", "evals", "s"
         );
         for r in &results {
+            let verdict = match (r.fit.converged, r.method) {
+                (true, "terrain") => "registered",
+                (true, m) => m,
+                (false, _) => "kept",
+            };
+            let (score, repeat) = if r.fit.score_start.is_finite() {
+                (
+                    format!("{:.3}>{:.3}", r.fit.score_start, r.fit.score_final),
+                    format!("{:.2}px", r.fit.repeat_px),
+                )
+            } else {
+                match &r.tie {
+                    Some((anchor, t)) if t.accepted => (
+                        format!("tie {anchor}"),
+                        format!("{:.2}px", t.rmse_inliers_px),
+                    ),
+                    _ => ("-".into(), "-".into()),
+                }
+            };
             println!(
-                "{:<28} {:>10} {:>4.3}>{:.3} {:>7.2}px {:>8} {:>7.1}",
-                r.name,
-                if r.fit.converged {
-                    "registered"
-                } else {
-                    "kept"
-                },
-                r.fit.score_start,
-                r.fit.score_final,
-                r.fit.repeat_px,
-                r.fit.evaluations,
-                r.fit.seconds
+                "{:<28} {:>10} {:>9} {:>9} {:>8} {:>7.1}",
+                r.name, verdict, score, repeat, r.fit.evaluations, r.fit.seconds
             );
         }
         println!("wrote {}", a.out.display());

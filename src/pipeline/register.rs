@@ -1,6 +1,13 @@
 //! `register`: every photo of a list refined against a store's terrain, then a new photo
 //! list with the refined cameras and a report.
 //!
+//! Three ways a photo gets its camera, in this order: **known** photos (named in
+//! [`TieSettings::known`], e.g. fitted with GCPs) keep theirs; every other photo is
+//! registered against the **terrain** ([`register_to_terrain`]); a photo the terrain does not
+//! place is then **tied** ([`tie_photo`]) to the nearest known or registered photo taken
+//! within [`TieOptions::max_distance_m`] of it, if the tie passes its checks. A photo none of
+//! them places keeps its given camera, with a warning.
+//!
 //! Output files (all written atomically, the list last): `OUT` (the same format as
 //! `photos.json`, image paths relative to its folder), `OUT_STEM.NAME.camera.json` per photo
 //! (cliffmap Camera JSON), and `OUT_STEM.report.json` (per photo: verdict, reason, scores,
@@ -15,7 +22,8 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::PhotoSpec;
 use crate::register::{
-    CameraParams, Param, TerrainFit, TerrainOptions, TerrainScene, register_to_terrain,
+    CameraParams, Param, TerrainFit, TerrainOptions, TerrainScene, TieFit, TieOptions,
+    register_to_terrain, tie_photo,
 };
 use crate::store::Store;
 
@@ -26,17 +34,30 @@ pub struct PhotoRegistration {
     pub name: String,
     /// The camera given.
     pub rough: CameraModel,
-    /// The terrain fit (its `camera` is the one written).
+    /// The terrain fit (its `camera` is the one written; for a known or tied photo a fit
+    /// of that camera with no search: scores NaN, no evaluations).
     pub fit: TerrainFit,
+    /// How the camera was found: "terrain", "known" or "tie".
+    pub method: &'static str,
+    /// The tie tried after the terrain failed, if any (accepted or not), and its anchor.
+    pub tie: Option<(String, TieFit)>,
     /// The camera file written.
     pub camera_file: PathBuf,
 }
 
-/// Registers each photo of `specs` (decoded one at a time) against the store in `store_dir`
-/// with `opts`, and writes the refined list to `out` with camera files and a report beside
-/// it (module docs). A photo that does not converge keeps its given camera (its camera
-/// file is a copy of it) and is reported with the reason; `warn` is called with a line for
-/// it.
+/// Known photos and photo-to-photo ties for [`register_photos_with`].
+#[derive(Clone, Debug, Default)]
+pub struct TieSettings {
+    /// Names of photos whose given cameras are trusted (kept, and anchors for ties).
+    pub known: Vec<String>,
+    /// When a tie is tried and accepted.
+    pub options: TieOptions,
+    /// Moving surfaces to leave out of the ties' matches (e.g. a glacier between time-lapse
+    /// shots): a grey raster on the store's DEM grid, values ≥ 128 moving.
+    pub moving_mask: Option<image::GrayImage>,
+}
+
+/// [`register_photos_with`] without known photos, ties on by default.
 pub fn register_photos(
     store_dir: &Path,
     specs: &[PhotoSpec],
@@ -44,7 +65,45 @@ pub fn register_photos(
     opts: &TerrainOptions,
     warn: &mut dyn FnMut(&str),
 ) -> Result<Vec<PhotoRegistration>> {
+    register_photos_with(store_dir, specs, out, opts, &TieSettings::default(), warn)
+}
+
+/// Registers each photo of `specs` (decoded one at a time) against the store in `store_dir`
+/// with `opts`, known photos and ties as `ties` says, and writes the refined list to `out`
+/// with camera files and a report beside it (module docs). A photo nothing places keeps
+/// its given camera (its camera file is a copy of it) and is reported with the reason;
+/// `warn` is called with a line for it. Errors for a known name not in the list or a
+/// moving mask not of the store's DEM size.
+pub fn register_photos_with(
+    store_dir: &Path,
+    specs: &[PhotoSpec],
+    out: &Path,
+    opts: &TerrainOptions,
+    ties: &TieSettings,
+    warn: &mut dyn FnMut(&str),
+) -> Result<Vec<PhotoRegistration>> {
     let store = Store::open(store_dir)?;
+    if let Some(k) = ties
+        .known
+        .iter()
+        .find(|k| !specs.iter().any(|s| &s.name == *k))
+    {
+        return Err(Error::BadOption(format!(
+            "known photo {k:?} is not in the photo list"
+        )));
+    }
+    if let Some(m) = &ties.moving_mask {
+        let d = &store.manifest.dem;
+        if m.dimensions() != (d.width, d.height) {
+            return Err(Error::BadOption(format!(
+                "the moving-surface mask is {}x{}, the store's DEM {}x{}",
+                m.width(),
+                m.height(),
+                d.width,
+                d.height
+            )));
+        }
+    }
     let dir = out
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -54,15 +113,120 @@ pub fn register_photos(
         || "registered".to_string(),
         |s| s.to_string_lossy().into_owned(),
     );
-    let mut results = Vec::with_capacity(specs.len());
-    for spec in specs {
+    // known photos first, then each other photo: tied to a placed photo from the same place
+    // if one is, else registered against the terrain; last, ties for the photos the terrain
+    // did not place, to photos placed after them
+    let mut fits: Vec<Option<(TerrainFit, &'static str)>> = specs
+        .iter()
+        .map(|s| {
+            ties.known
+                .contains(&s.name)
+                .then(|| (given(&s.camera), "known"))
+        })
+        .collect();
+    let mut tied: Vec<Option<(String, TieFit)>> = vec![None; specs.len()];
+    let georef = store.manifest.georef;
+    let stable = |p: glam::DVec3| match &ties.moving_mask {
+        None => true,
+        Some(m) => {
+            let (r, c) = georef.grid(p.x, p.y);
+            let (r, c) = (r.round(), c.round());
+            !(r >= 0.0
+                && c >= 0.0
+                && (r as u32) < m.height()
+                && (c as u32) < m.width()
+                && m.get_pixel(c as u32, r as u32).0[0] >= 128)
+        }
+    };
+    // the tie of photo i to the nearest placed photo within reach not tried yet, if any
+    let try_tie = |i: usize,
+                   fits: &[Option<(TerrainFit, &'static str)>],
+                   tried: Option<&str>|
+     -> Result<Option<(String, TieFit)>> {
+        let here = specs[i].camera.position;
+        let anchor = (0..specs.len())
+            .filter(|&j| j != i && Some(specs[j].name.as_str()) != tried)
+            .filter_map(|j| {
+                let (f, _) = fits[j].as_ref()?;
+                f.converged
+                    .then(|| (f.camera.position.distance(here), j, f.camera))
+            })
+            .filter(|(d, ..)| *d <= ties.options.max_distance_m)
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let Some((_, j, anchor)) = anchor else {
+            return Ok(None);
+        };
+        let (a_img, p_img) = (specs[j].load()?.image, specs[i].load()?.image);
+        let terrain = TerrainScene::new(&store, anchor.position)?;
+        let tie = tie_photo(
+            &anchor,
+            &a_img,
+            &p_img,
+            &specs[i].camera,
+            |o, d| terrain.hit(o, d),
+            stable,
+            &ties.options,
+        )
+        .map_err(|e| Error::BadOption(format!("{}: {e}", specs[i].image_path.display())))?;
+        Ok(Some((specs[j].name.clone(), tie)))
+    };
+    for i in 0..specs.len() {
+        if fits[i].is_some() {
+            continue;
+        }
+        if let Some((anchor, tie)) = try_tie(i, &fits, None)? {
+            let accepted = tie.accepted.then(|| {
+                let mut f = given(&tie.camera);
+                f.seconds = tie.seconds;
+                f
+            });
+            tied[i] = Some((anchor, tie));
+            if let Some(f) = accepted {
+                fits[i] = Some((f, "tie"));
+                continue;
+            }
+        }
+        let spec = &specs[i];
         let photo = spec.load()?;
         let terrain = TerrainScene::new(&store, spec.camera.position)?;
         let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
+        fits[i] = Some((fit, "terrain"));
+    }
+    for i in 0..specs.len() {
+        let unplaced = fits[i]
+            .as_ref()
+            .is_some_and(|(f, m)| !f.converged && *m == "terrain");
+        if !unplaced {
+            continue;
+        }
+        let tried = tied[i].as_ref().map(|(a, _)| a.clone());
+        if let Some((anchor, tie)) = try_tie(i, &fits, tried.as_deref())? {
+            if tie.accepted {
+                let mut f = given(&tie.camera);
+                f.seconds = tie.seconds + fits[i].as_ref().map_or(0.0, |(f, _)| f.seconds);
+                fits[i] = Some((f, "tie"));
+            }
+            tied[i] = Some((anchor, tie));
+        }
+    }
+    let fits: Vec<(TerrainFit, &'static str)> = fits
+        .into_iter()
+        .zip(specs)
+        .map(|(f, s)| f.unwrap_or_else(|| (given(&s.camera), "known")))
+        .collect();
+    let mut results = Vec::with_capacity(specs.len());
+    for ((spec, (fit, method)), tie) in specs.iter().zip(fits).zip(tied) {
         if let Some(why) = &fit.reason {
+            let tie_note = match &tie {
+                Some((anchor, t)) => format!(
+                    "; tie to {anchor}: {}",
+                    t.reason.as_deref().unwrap_or("accepted")
+                ),
+                None => String::new(),
+            };
             warn(&format!(
-                "{}: not registered, keeping its given camera: {why}",
+                "{}: not registered, keeping its given camera: {why}{tie_note}",
                 spec.name
             ));
         }
@@ -85,6 +249,8 @@ pub fn register_photos(
             name: spec.name.clone(),
             rough: spec.camera,
             fit,
+            method,
+            tie,
             camera_file,
         });
     }
@@ -110,6 +276,22 @@ pub fn register_photos(
     Ok(results)
 }
 
+/// The fit recorded for a camera taken as it is (known, or from a tie): trusted, no search.
+fn given(camera: &CameraModel) -> TerrainFit {
+    TerrainFit {
+        camera: *camera,
+        found: *camera,
+        converged: true,
+        reason: None,
+        score_start: f64::NAN,
+        score_final: f64::NAN,
+        repeat_px: f64::NAN,
+        evaluations: 0,
+        edges: None,
+        seconds: 0.0,
+    }
+}
+
 /// The report entry of one photo: verdict, scores and each parameter's change.
 fn report_entry(r: &PhotoRegistration) -> Value {
     let a = CameraParams::from_camera(&r.rough);
@@ -120,7 +302,19 @@ fn report_entry(r: &PhotoRegistration) -> Value {
     };
     json!({
         "name": r.name,
+        "method": r.method,
         "converged": r.fit.converged,
+        "tie": r.tie.as_ref().map(|(anchor, t)| json!({
+            "anchor": anchor,
+            "accepted": t.accepted,
+            "reason": t.reason,
+            "matches": t.matches[0],
+            "matches_on_stable_terrain": t.matches[1],
+            "inliers": t.matches[2],
+            "rmse_inliers_px": t.rmse_inliers_px,
+            "turn_deg": t.turn_deg,
+            "seconds": t.seconds,
+        })),
         "reason": r.fit.reason,
         "score_start": r.fit.score_start,
         "score_final": r.fit.score_final,

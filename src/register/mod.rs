@@ -43,6 +43,7 @@ mod pair;
 mod params;
 mod start;
 pub mod terrain;
+mod ties;
 
 pub use exif::{ExifFocal, ExifGps, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
@@ -57,3 +58,4 @@ pub use terrain::{
     EdgeFit, EdgeOptions, TerrainFit, TerrainOptions, TerrainScene, refine_edges,
     register_to_terrain,
 };
+pub use ties::{TieFit, TieOptions, tie_photo};
