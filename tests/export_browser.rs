@@ -3,7 +3,8 @@
 //! Chromium (SwiftShader WebGL, `tools/js/screenshot_tiles.mjs`) from a demo photo's camera,
 //! compared with `cliffmap render --unlit` (best texture) of the same camera on terrain
 //! pixels, and the page's ortho texture mode (`--modes all`, `?mode=ortho`) with
-//! `render --mode ortho`. Chromium,
+//! `render --mode ortho`; the tilesets are split into external child tilesets every 2
+//! levels, which the page follows. Chromium,
 //! CesiumJS and puppeteer-core are installed by `.ci/run`.
 
 mod cli_util;
@@ -88,8 +89,13 @@ fn cesium_page_shows_what_cliffmap_renders() {
         c,
         "--modes",
         "all",
+        // external child tilesets every 2 levels, so that CesiumJS follows them too (the
+        // one-file layout is the default for stores this small)
+        "--subtree-levels",
+        "2",
         "--quiet",
     ]);
+    assert!(out.join("subtrees").exists() && out.join("subtrees_ortho").exists());
     assert!(out.join("tileset_ortho.json").exists() && out.join("tileset_reparam.json").exists());
     assert!(out.join("index.html").exists() && out.join("views/view.json").exists());
     // The tiles carry the photo textures where the store has them.

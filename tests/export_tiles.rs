@@ -368,3 +368,85 @@ fn jpeg_textures_replace_the_pngs_on_request() {
     assert!(psnr > 30.0, "JPEG q90 against the PNG: {psnr:.1} dB");
     cli_util::fails_naming(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--jpeg-quality", "0"], "jpeg-quality");
 }
+
+/// `--subtree-levels N`: the subtree under every cell at a positive multiple of N levels is
+/// its own tileset, referenced from its parent; following the references reaches every
+/// cell's GLB exactly once, at the right depth, with paths relative to each file.
+#[test]
+fn external_child_tilesets_hold_the_deeper_levels() {
+    fn follow(
+        file: &Path,
+        t: &serde_json::Value,
+        depth: usize,
+        glbs: &mut Vec<(std::path::PathBuf, usize)>,
+        files: &mut usize,
+    ) {
+        if let Some(uri) = t["content"]["uri"].as_str() {
+            let target = file.parent().unwrap().join(uri);
+            if uri.ends_with(".json") {
+                *files += 1;
+                let sub: serde_json::Value =
+                    serde_json::from_slice(&std::fs::read(&target).unwrap()).unwrap();
+                assert_eq!(sub["asset"]["version"], "1.1");
+                assert_eq!(sub["root"]["refine"], "REPLACE");
+                assert!(sub["root"].get("transform").is_none(), "one transform, at the root");
+                assert_eq!(sub["root"]["boundingVolume"], t["boundingVolume"]);
+                assert_eq!(sub["root"]["geometricError"], t["geometricError"]);
+                assert!(t.get("children").is_none());
+                // the external root is the same tile: same depth
+                follow(&target, &sub["root"], depth, glbs, files);
+                return;
+            }
+            glbs.push((std::fs::canonicalize(&target).unwrap(), depth));
+        }
+        for c in t["children"].as_array().into_iter().flatten() {
+            follow(file, c, depth + 1, glbs, files);
+        }
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("store");
+    small_store(&dir);
+    let store = Store::open(&dir).unwrap();
+    let levels = store.manifest.quadtree.levels;
+    assert!(levels >= 3, "the test needs a store of 3 levels or more");
+    let out = tmp.path().join("tiles");
+    let o = ok(&[
+        "export-tiles",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--crs",
+        "EPSG:32633",
+        "--subtree-levels",
+        "1",
+    ]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("external child tilesets"));
+    let main = out.join("tileset.json");
+    let ts: serde_json::Value = serde_json::from_slice(&std::fs::read(&main).unwrap()).unwrap();
+    let (mut glbs, mut files) = (Vec::new(), 0);
+    follow(&main, &ts["root"], 0, &mut glbs, &mut files);
+    // every level below 0 with children starts a file: all cells of levels 1..levels-1
+    let expected_files = store
+        .manifest
+        .cells
+        .iter()
+        .filter(|c| c.level >= 1 && c.level + 1 < levels)
+        .count();
+    assert_eq!(files, expected_files);
+    assert_eq!(glbs.len(), store.manifest.cells.len());
+    let mut seen = std::collections::HashSet::new();
+    for (p, depth) in &glbs {
+        assert!(seen.insert(p.clone()), "{p:?} listed twice");
+        let rel = p.strip_prefix(std::fs::canonicalize(&out).unwrap()).unwrap();
+        let level: usize = rel.iter().nth(1).unwrap().to_str().unwrap().parse().unwrap();
+        assert_eq!(*depth, level + 1, "{rel:?}");
+    }
+    // the default for a store this small is one file; 0 forces one file
+    for extra in [&[][..], &["--subtree-levels", "0"][..]] {
+        let out2 = tmp.path().join(format!("one{}", extra.len()));
+        let mut args = vec!["export-tiles", dir.to_str().unwrap(), "--out", out2.to_str().unwrap(), "--crs", "EPSG:32633", "--quiet"];
+        args.extend_from_slice(extra);
+        ok(&args);
+        assert!(!out2.join("subtrees").exists());
+    }
+}

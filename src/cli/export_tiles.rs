@@ -32,6 +32,10 @@ pub struct Args {
     /// docs/export.md).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100))]
     jpeg_quality: Option<u8>,
+    /// External child tilesets every N levels (subtrees/LEVEL/X-Y.json), 0 for one
+    /// tileset.json; default: every 4 levels when the store has more than 2000 cells.
+    #[arg(long)]
+    subtree_levels: Option<u8>,
     /// Camera JSON(s) to write as views for the page (`index.html?camera=views/NAME.json`,
     /// NAME the file's stem); repeatable.
     #[arg(long)]
@@ -66,14 +70,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             geoid_grid: a.geoid,
             extra_modes: a.modes.0,
             jpeg_quality: a.jpeg_quality,
+            subtree_levels: a.subtree_levels,
             views,
         },
     )?;
     if !a.quiet {
         println!(
-            "wrote {} ({} tiles, {} left out where children do not cover their parent; textures: {} photo, {} reparam, {} ortho; {:.1} MB)",
+            "wrote {} ({} tiles, {} external child tilesets, {} left out where children do not cover their parent; textures: {} photo, {} reparam, {} ortho; {:.1} MB)",
             a.out.join("tileset.json").display(),
             r.tiles,
+            r.subtrees,
             r.pruned,
             r.textures[0],
             r.textures[1],

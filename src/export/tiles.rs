@@ -34,10 +34,20 @@ pub struct TilesOptions {
     /// Embed colour textures as JPEG of this quality (1..=100) instead of the store's PNG
     /// bytes (smaller tiles for the web; alpha is not shown by the opaque materials).
     pub jpeg_quality: Option<u8>,
+    /// External child tilesets: the subtree under every cell whose level is a positive
+    /// multiple of `n` is written as its own tileset (`subtrees/LEVEL/X-Y.json`,
+    /// [`subtree_path_for`]) and referenced from its parent, so no tileset file lists more
+    /// than `n` levels. `None`: every 4 levels when the store has more than
+    /// [`SUBTREE_AUTO_CELLS`] cells, else one file; `Some(0)`: one file.
+    pub subtree_levels: Option<u8>,
     /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
     /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
     pub views: Vec<(String, crate::camera::CameraModel)>,
 }
+
+/// Above this many cells a tileset is split into external child tilesets every 4 levels
+/// by default ([`TilesOptions::subtree_levels`]); a 4097² DEM's store has 5 461.
+pub const SUBTREE_AUTO_CELLS: usize = 2000;
 
 /// What [`export_tiles`] wrote.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,6 +61,8 @@ pub struct TilesReport {
     pub textures: [usize; 3],
     /// Bytes of GLB written.
     pub bytes: u64,
+    /// External child tilesets written (per texture mode).
+    pub subtrees: usize,
     /// How heights were made ellipsoidal.
     pub heights: String,
 }
@@ -128,7 +140,13 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         .iter()
         .map(|&m| json!({"mode": m.name(), "tileset": tileset_name(m)}))
         .collect();
-    let ctx = TilesetContext { store: &store, out, to_enu: &to_enu, rot, centre, crs: &crs, heights: &heights, modes: &listing, jpeg_quality: opts.jpeg_quality };
+    let ctx = TilesetContext { store: &store, out, to_enu: &to_enu, rot, centre, crs: &crs, heights: &heights, modes: &listing, jpeg_quality: opts.jpeg_quality,
+        subtree_levels: match opts.subtree_levels {
+            Some(n) => n,
+            None if store.manifest.cells.len() > SUBTREE_AUTO_CELLS => 4,
+            None => 0,
+        },
+    };
     let mut report = None;
     let mut bytes = 0;
     for &m in &modes {
@@ -164,6 +182,8 @@ struct TilesetContext<'a> {
     heights: &'a str,
     modes: &'a [Value],
     jpeg_quality: Option<u8>,
+    /// Levels per tileset file (0: one file).
+    subtree_levels: u8,
 }
 
 /// The tileset file of a texture mode: `tileset.json` for the best texture (photo), else
@@ -219,8 +239,6 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
         .enumerate()
         .map(|(i, c)| ((c.level, c.x, c.y), i))
         .collect();
-    let mut pruned = 0usize;
-    let mut listed = 0usize;
     let top: Vec<usize> = cells
         .iter()
         .enumerate()
@@ -228,16 +246,30 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
         .map(|(i, _)| i)
         .collect();
     let mut children = Vec::new();
+    let mut tree = Tree {
+        mode,
+        store,
+        index: &index,
+        boxes: &boxes,
+        pruned: 0,
+        listed: 0,
+        split: ctx.subtree_levels,
+        external: Vec::new(),
+    };
     for &i in &top {
-        children.push(tile_json(
-            mode,
-            i,
-            store,
-            &index,
-            &boxes,
-            &mut pruned,
-            &mut listed,
-        ));
+        children.push(tree.tile_json(i));
+    }
+    let (pruned, listed) = (tree.pruned, tree.listed);
+    let subtrees = tree.external.len();
+    let asset = json!({"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION"))});
+    for (path, root) in tree.external {
+        let sub = json!({
+            "asset": asset,
+            "geometricError": root["geometricError"],
+            "root": root,
+        });
+        let text = serde_json::to_string(&sub).map_err(|e| Error::BadOption(format!("{path}: {e}")))?;
+        write_atomic(&out.join(&path), text.as_bytes())?;
     }
     let top_error = top.iter().map(|&i| cells[i].max_error).fold(0.0, f64::max);
     let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -267,6 +299,7 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
         pruned,
         textures,
         bytes,
+        subtrees,
         heights: String::new(),
     })
 }
@@ -306,49 +339,82 @@ pub fn tile_path_for(mode: TextureSource, level: u8, x: u32, y: u32) -> String {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn tile_json(
-    mode: TextureSource,
-    i: usize,
-    store: &Store,
-    index: &std::collections::HashMap<(u8, u32, u32), usize>,
-    boxes: &[[DVec3; 2]],
-    pruned: &mut usize,
-    listed: &mut usize,
-) -> Value {
-    let c = &store.manifest.cells[i];
-    *listed += 1;
-    let kids: Vec<usize> = [(0, 0), (1, 0), (0, 1), (1, 1)]
-        .iter()
-        .filter_map(|&(dx, dy)| {
-            index
-                .get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy))
-                .copied()
-        })
-        .collect();
-    // Footprints are the meshes' x-y bounds (a cell's nominal square may reach past the DEM,
-    // where no child exists).
-    let area = |k: usize| {
-        let r = &store.manifest.cells[k];
-        (r.bbox_max[0] - r.bbox_min[0]).max(0.0) * (r.bbox_max[1] - r.bbox_min[1]).max(0.0)
-    };
-    let covered =
-        !kids.is_empty() && kids.iter().map(|&k| area(k)).sum::<f64>() >= area(i) * (1.0 - 1e-6);
-    let mut t = json!({
-        "boundingVolume": {"box": box_json(boxes[i])},
-        "geometricError": c.max_error,
-        "content": {"uri": tile_path_for(mode, c.level, c.x, c.y)},
-    });
-    if covered {
-        let children: Vec<Value> = kids
-            .iter()
-            .map(|&k| tile_json(mode, k, store, index, boxes, pruned, listed))
-            .collect();
-        t["children"] = Value::Array(children);
-    } else if !kids.is_empty() {
-        *pruned += count_subtree(c.level, c.x, c.y, index) - 1;
+/// The external child tileset of cell (level, x, y) in the tileset of texture mode `mode`
+/// (`subtrees/` for the best texture, `subtrees_MODE/` for the others), relative to the
+/// tileset's folder; its GLBs are referenced as `../../tiles/...`.
+pub fn subtree_path_for(mode: TextureSource, level: u8, x: u32, y: u32) -> String {
+    match mode {
+        TextureSource::Photo => format!("subtrees/{level}/{x}-{y}.json"),
+        m => format!("subtrees_{}/{level}/{x}-{y}.json", m.name()),
     }
-    t
+}
+
+/// Builds the explicit tree of one texture mode, collecting external child tilesets.
+struct Tree<'a> {
+    mode: TextureSource,
+    store: &'a Store,
+    index: &'a std::collections::HashMap<(u8, u32, u32), usize>,
+    boxes: &'a [[DVec3; 2]],
+    pruned: usize,
+    listed: usize,
+    /// Levels per tileset file (0: one file).
+    split: u8,
+    /// (path, root tile) of each external tileset, URIs relative to its own folder.
+    external: Vec<(String, Value)>,
+}
+
+impl Tree<'_> {
+    /// The tile of cell `i` with its subtree; a cell at a positive multiple of `split`
+    /// levels with children becomes a reference to its own external tileset.
+    fn tile_json(&mut self, i: usize) -> Value {
+        self.tile_in(i, "")
+    }
+
+    /// [`Tree::tile_json`] with content URIs prefixed by `prefix` (the way from the file
+    /// that lists the tile back to the tileset's folder).
+    fn tile_in(&mut self, i: usize, prefix: &str) -> Value {
+        let (store, index) = (self.store, self.index);
+        let c = &store.manifest.cells[i];
+        self.listed += 1;
+        let kids: Vec<usize> = [(0, 0), (1, 0), (0, 1), (1, 1)]
+            .iter()
+            .filter_map(|&(dx, dy)| index.get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy)).copied())
+            .collect();
+        // Footprints are the meshes' x-y bounds (a cell's nominal square may reach past the
+        // DEM, where no child exists).
+        let area = |k: usize| {
+            let r = &store.manifest.cells[k];
+            (r.bbox_max[0] - r.bbox_min[0]).max(0.0) * (r.bbox_max[1] - r.bbox_min[1]).max(0.0)
+        };
+        let covered = !kids.is_empty()
+            && kids.iter().map(|&k| area(k)).sum::<f64>() >= area(i) * (1.0 - 1e-6);
+        let split_here = covered && self.split > 0 && c.level > 0 && c.level % self.split == 0;
+        // inside an external tileset at subtrees/L/X-Y.json the tileset folder is ../../
+        let own = if split_here { "../../" } else { prefix };
+        let mut t = json!({
+            "boundingVolume": {"box": box_json(self.boxes[i])},
+            "geometricError": c.max_error,
+            "content": {"uri": format!("{own}{}", tile_path_for(self.mode, c.level, c.x, c.y))},
+        });
+        if covered {
+            let children: Vec<Value> = kids.iter().map(|&k| self.tile_in(k, own)).collect();
+            t["children"] = Value::Array(children);
+        } else if !kids.is_empty() {
+            self.pruned += count_subtree(c.level, c.x, c.y, index) - 1;
+        }
+        if !split_here {
+            return t;
+        }
+        t["refine"] = json!("REPLACE");
+        let path = subtree_path_for(self.mode, c.level, c.x, c.y);
+        let reference = json!({
+            "boundingVolume": t["boundingVolume"],
+            "geometricError": c.max_error,
+            "content": {"uri": format!("{prefix}{path}")},
+        });
+        self.external.push((path, t));
+        reference
+    }
 }
 
 /// Cells in the subtree of (level, x, y), itself included.
