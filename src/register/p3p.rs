@@ -14,7 +14,7 @@ use glam::{DMat3, DVec3};
 use nalgebra::Matrix4;
 
 use super::gcp::Gcp;
-use super::start::rotation_from_bearings;
+use super::start::{rotation_from_bearings, search_focal};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 
@@ -193,18 +193,7 @@ pub fn start_from_gcps_p3p(
             let b = t.map(|i| bearing(&gcps[i]));
             let x = t.map(|i| gcps[i].world);
             for (r, c) in p3p(b, x) {
-                let cam = CameraModel {
-                    position: c,
-                    world_to_camera: r,
-                    width,
-                    height,
-                    fx: f,
-                    fy: f,
-                    cx,
-                    cy,
-                    k1: 0.0,
-                    k2: 0.0,
-                };
+                let cam = CameraModel::pinhole(c, r, width, height, f);
                 let (n, s) = score(&cam, gcps, tol);
                 if best
                     .as_ref()
@@ -219,43 +208,12 @@ pub fn start_from_gcps_p3p(
     let best = match focal_px {
         Some(f) => best_at(f),
         None => {
-            let f_of = |k: f64| {
-                let (lo, hi) = (3f64.ln(), 140f64.ln());
-                let fov = (lo + (hi - lo) * k / 64.0).exp();
-                w / 2.0 / (fov.to_radians() / 2.0).tan()
-            };
-            // the cost: fewer inliers first, then the capped error sum
-            let cost = |k: f64| {
-                best_at(f_of(k)).map_or(f64::INFINITY, |(n, s, _)| {
-                    (gcps.len() - n) as f64 * tol * gcps.len() as f64 + s
-                })
-            };
-            let (mut k_best, mut c_best) = (0usize, f64::INFINITY);
-            for k in 0..=64 {
-                let c = cost(k as f64);
-                if c < c_best {
-                    (k_best, c_best) = (k, c);
-                }
-            }
-            let (mut a, mut b) = (
-                (k_best as f64 - 1.0).max(0.0),
-                (k_best as f64 + 1.0).min(64.0),
-            );
-            let g = 0.5 * (5f64.sqrt() - 1.0);
-            for _ in 0..30 {
-                let (c, d) = (b - g * (b - a), a + g * (b - a));
-                if cost(c) < cost(d) {
-                    b = d;
-                } else {
-                    a = c;
-                }
-            }
-            let k = 0.5 * (a + b);
-            if cost(k) <= c_best {
-                best_at(f_of(k))
-            } else {
-                best_at(f_of(k_best as f64))
-            }
+            // fewer inliers first, then the capped error sum
+            let n = gcps.len() as f64;
+            let f = search_focal(w, 64, |f| {
+                best_at(f).map_or(f64::INFINITY, |(k, s, _)| (n - k as f64) * tol * n + s)
+            });
+            best_at(f)
         }
     };
     match best {

@@ -93,18 +93,7 @@ pub fn start_from_position(
             .map(|g| DVec3::new((g.pixel[0] - cx) / f, (g.pixel[1] - cy) / f, 1.0).normalize())
             .collect();
         let r = rotation_from_bearings(&cam, &world, &weights)?;
-        let model = CameraModel {
-            position,
-            world_to_camera: r,
-            width,
-            height,
-            fx: f,
-            fy: f,
-            cx,
-            cy,
-            k1: 0.0,
-            k2: 0.0,
-        };
+        let model = CameraModel::pinhole(position, r, width, height, f);
         let mut e: Vec<f64> = inside
             .iter()
             .map(|g| {
@@ -123,42 +112,53 @@ pub fn start_from_position(
                 "fit-camera: focal length must be positive pixels, got {f}"
             )));
         }
-        None => {
-            let f_of = |fov_deg: f64| w / 2.0 / (fov_deg.to_radians() / 2.0).tan();
-            let (lo, hi) = (3f64.ln(), 140f64.ln());
-            let steps = 96;
-            let fov = |k: f64| (lo + (hi - lo) * k / steps as f64).exp();
-            let cost = |k: f64| camera_at(f_of(fov(k))).map_or(f64::INFINITY, |c| c.1);
-            let mut k_best = 0usize;
-            let mut c_best = f64::INFINITY;
-            for k in 0..=steps {
-                let c = cost(k as f64);
-                if c < c_best {
-                    (k_best, c_best) = (k, c);
-                }
-            }
-            // golden section between the neighbouring steps
-            let (mut a, mut b) = (
-                (k_best as f64 - 1.0).max(0.0),
-                (k_best as f64 + 1.0).min(steps as f64),
-            );
-            let g = 0.5 * (5f64.sqrt() - 1.0);
-            for _ in 0..40 {
-                let (c, d) = (b - g * (b - a), a + g * (b - a));
-                if cost(c) < cost(d) {
-                    b = d;
-                } else {
-                    a = c;
-                }
-            }
-            camera_at(f_of(fov(0.5 * (a + b))))
-        }
+        None => camera_at(search_focal(w, 96, |f| {
+            camera_at(f).map_or(f64::INFINITY, |c| c.1)
+        })),
     };
     best.map(|(m, _)| m).ok_or_else(|| {
         Error::BadOption(
             "fit-camera: the GCPs' bearings give no rotation (all on one line?)".into(),
         )
     })
+}
+
+/// The focal length (pixels, for an image `width` pixels wide) minimising `cost`: the
+/// horizontal field of view over 3°–140° on a log grid of `steps` steps, then golden section
+/// between the best step's neighbours (40 rounds).
+pub(crate) fn search_focal(width: f64, steps: usize, cost: impl Fn(f64) -> f64) -> f64 {
+    let (lo, hi) = (3f64.ln(), 140f64.ln());
+    let f_of = |k: f64| {
+        let fov = (lo + (hi - lo) * k / steps as f64).exp();
+        width / 2.0 / (fov.to_radians() / 2.0).tan()
+    };
+    let cost_k = |k: f64| cost(f_of(k));
+    let (mut k_best, mut c_best) = (0usize, f64::INFINITY);
+    for k in 0..=steps {
+        let c = cost_k(k as f64);
+        if c < c_best {
+            (k_best, c_best) = (k, c);
+        }
+    }
+    let (mut a, mut b) = (
+        (k_best as f64 - 1.0).max(0.0),
+        (k_best as f64 + 1.0).min(steps as f64),
+    );
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..40 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if cost_k(c) < cost_k(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let k = 0.5 * (a + b);
+    if cost_k(k) <= c_best {
+        f_of(k)
+    } else {
+        f_of(k_best as f64)
+    }
 }
 
 /// A start camera for a `width × height` photo from GCPs alone (position unknown): the
