@@ -1,9 +1,9 @@
 //! An indexed max-heap of faces keyed by their worst error.
 //!
 //! Each face index is in the heap at most once and its key is updated in place when the
-//! face is rescanned, so the heap never holds stale entries (spade reuses face indices
-//! after edge flips; every reused index is rescanned). Ties break on the larger face
-//! index, so the order is deterministic.
+//! face is rescanned, so the heap never holds stale entries (edge flips reuse triangle
+//! slots; every reused slot is rescanned). Ties break on the larger face index, so the
+//! order is deterministic.
 
 const ABSENT: u32 = u32::MAX;
 
