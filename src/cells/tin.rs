@@ -118,9 +118,8 @@ struct Greedy<'a> {
     width: usize,
     epsilon: f64,
     mesh: Mesh,
-    /// Per triangle slot: worst non-corner sample `[col, row]`.
-    cand: Vec<[u32; 2]>,
-    face_err: Vec<f64>,
+    /// Per triangle slot: worst non-corner sample `[col, row]` and the triangle's error.
+    cand: Vec<([u32; 2], f64)>,
     heap: FaceHeap,
     dirty: Vec<u32>,
 }
@@ -130,14 +129,12 @@ impl Greedy<'_> {
         let idx = t as usize;
         if idx >= self.cand.len() {
             let n = self.mesh.num_triangles().max(idx + 1);
-            self.cand.resize(n, [0; 2]);
-            self.face_err.resize(n, 0.0);
+            self.cand.resize(n, ([0; 2], 0.0));
         }
         let p = self.mesh.corners(t);
         let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
-        self.face_err[idx] = err.max(0.0);
+        self.cand[idx] = ([col as u32, row as u32], err.max(0.0));
         if err > self.epsilon {
-            self.cand[idx] = [col as u32, row as u32];
             self.heap.set(t, Some(err));
         } else {
             self.heap.set(t, None);
@@ -165,7 +162,7 @@ impl Greedy<'_> {
     fn run(&mut self, lat: &LatticeTiles) {
         while let Some((_, t)) = self.heap.peek() {
             // the candidate lies in the closed triangle and is not one of its corners
-            self.mesh.insert(t, self.cand[t as usize]);
+            self.mesh.insert(t, self.cand[t as usize].0);
             self.rescan_dirty(lat);
         }
     }
@@ -233,7 +230,6 @@ pub fn build_tin(
         epsilon,
         mesh: Mesh::rectangle(rect, &pts),
         cand: Vec::new(),
-        face_err: Vec::new(),
         heap: FaceHeap::default(),
         dirty: Vec::new(),
     };
@@ -267,7 +263,7 @@ pub fn build_tin(
         g.rescan_all(&fine);
         g.run(&fine);
     }
-    let interior_err = g.face_err.iter().copied().fold(0.0f64, f64::max);
+    let interior_err = g.cand.iter().map(|c| c.1).fold(0.0f64, f64::max);
     let max_error = interior_err.max(border_error(dem, rect, &pts));
     let triangles = (0..g.mesh.num_triangles() as u32)
         .map(|t| g.mesh.triangle(t))
