@@ -1,13 +1,17 @@
 //! An indexed max-heap of faces keyed by their worst error.
 //!
 //! Each face index is in the heap at most once and its key is updated in place when the
-//! face is rescanned, so the heap never holds stale entries (spade reuses face indices
-//! after edge flips; every reused index is rescanned). Ties break on the larger face
-//! index, so the order is deterministic.
+//! face is rescanned, so the heap never holds stale entries (edge flips reuse triangle
+//! slots; every reused slot is rescanned). Ties break on the larger face index, so the
+//! order is deterministic.
 
 const ABSENT: u32 = u32::MAX;
 
-/// Max-heap of `(key, face)` with O(log n) insert, update and removal by face index.
+/// Children per node: a node's four children are adjacent (64 bytes), half the depth of a
+/// binary heap.
+const ARITY: usize = 4;
+
+/// 4-ary max-heap of `(key, face)` with O(log n) insert, update and removal by face index.
 #[derive(Default)]
 pub(crate) struct FaceHeap {
     heap: Vec<(f64, u32)>,
@@ -75,7 +79,7 @@ impl FaceHeap {
     fn sift_up(&mut self, mut i: usize) {
         let e = self.heap[i];
         while i > 0 {
-            let parent = (i - 1) / 2;
+            let parent = (i - 1) / ARITY;
             if !Self::above(e, self.heap[parent]) {
                 break;
             }
@@ -91,16 +95,16 @@ impl FaceHeap {
         let n = self.heap.len();
         let e = self.heap[i];
         loop {
-            let l = 2 * i + 1;
-            if l >= n {
+            let first = ARITY * i + 1;
+            if first >= n {
                 break;
             }
-            let r = l + 1;
-            let c = if r < n && Self::above(self.heap[r], self.heap[l]) {
-                r
-            } else {
-                l
-            };
+            let mut c = first;
+            for k in first + 1..(first + ARITY).min(n) {
+                if Self::above(self.heap[k], self.heap[c]) {
+                    c = k;
+                }
+            }
             if !Self::above(self.heap[c], e) {
                 break;
             }

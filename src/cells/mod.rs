@@ -15,6 +15,7 @@
 mod border;
 mod extent;
 mod face_heap;
+mod halfedge;
 pub mod normals;
 mod quadtree;
 mod raster;

@@ -1,8 +1,10 @@
 //! Scan conversion of lattice samples inside triangles with integer vertices.
 //!
-//! Exact integer edge functions: a sample is inside a triangle when it is on the inner
-//! side of, or exactly on, each of its three edges. Per lattice row the inside columns
-//! form one span, found with three integer divisions; no allocation per triangle.
+//! Exact integer scanline: a sample is inside a triangle when it is on the inner side of,
+//! or exactly on, each of its edges. Per lattice row the inside columns form one span,
+//! bounded by the triangle's left and right edges, whose columns are stepped row by row
+//! as integer quotient and remainder (a few divisions per triangle, none per row); no
+//! allocation per triangle.
 
 /// A set of sample positions `(col, row)`: columns `origin_c + k * stride` within
 /// `[c_lo, c_hi]` and rows `origin_r + k * stride` within `[r_lo, r_hi]` (inclusive, any
@@ -40,87 +42,127 @@ fn floor_div(n: i64, d: i64) -> i64 {
     }
 }
 
+/// An edge's column on successive rows, exactly: `floor` and `ceil` of
+/// `p.col + (row - p.row) * (q.col - p.col) / (q.row - p.row)`, kept as an integer quotient
+/// and remainder and stepped `stride` rows at a time without division.
+struct EdgeWalk {
+    x0: i64,
+    q: i64,
+    r: i64,
+    dy: i64,
+    qs: i64,
+    rs: i64,
+}
+
+impl EdgeWalk {
+    /// The edge from `p` to `q` (`p[1] < q[1]`) at row `y`, stepping `s` rows.
+    #[inline]
+    fn new(p: [i64; 2], q: [i64; 2], y: i64, s: i64) -> EdgeWalk {
+        let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+        let num = (y - p[1]) * dx;
+        let qq = num.div_euclid(dy);
+        let step = dx * s;
+        let qs = step.div_euclid(dy);
+        EdgeWalk {
+            x0: p[0],
+            q: qq,
+            r: num - qq * dy,
+            dy,
+            qs,
+            rs: step - qs * dy,
+        }
+    }
+
+    #[inline]
+    fn floor(&self) -> i64 {
+        self.x0 + self.q
+    }
+
+    #[inline]
+    fn ceil(&self) -> i64 {
+        self.x0 + self.q + (self.r != 0) as i64
+    }
+
+    #[inline]
+    fn step(&mut self) {
+        self.q += self.qs;
+        self.r += self.rs;
+        if self.r >= self.dy {
+            self.r -= self.dy;
+            self.q += 1;
+        }
+    }
+}
+
 /// Calls `f(row, j, i0, i1)` for every lattice row that has lattice samples inside the
 /// closed triangle `tri` (`[col, row]` vertices, any orientation): `j` is the row's lattice
 /// index (`row = origin_r + j * stride`) and the inside samples are the lattice columns
 /// `i0..=i1` (`col = origin_c + i * stride`). Rows are visited in increasing order.
-/// Degenerate triangles visit nothing.
+/// Degenerate triangles visit nothing. Exact integer scanline: per row, the columns
+/// between the ceiling of the left edge and the floor of the right edge.
 #[inline]
 pub(crate) fn for_each_span(
     tri: [[i64; 2]; 3],
     lat: &Lattice,
     mut f: impl FnMut(i64, usize, usize, usize),
 ) {
-    let [a, mut b, mut c] = tri;
-    let orient = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-    if orient == 0 {
+    // sort by row: p0 top, p2 bottom; the long edge p0-p2 spans every row
+    let [mut p0, mut p1, mut p2] = tri;
+    if p1[1] < p0[1] {
+        std::mem::swap(&mut p0, &mut p1);
+    }
+    if p2[1] < p1[1] {
+        std::mem::swap(&mut p1, &mut p2);
+    }
+    if p1[1] < p0[1] {
+        std::mem::swap(&mut p0, &mut p1);
+    }
+    let c = (p2[0] - p0[0]) * (p1[1] - p0[1]) - (p2[1] - p0[1]) * (p1[0] - p0[0]);
+    if c == 0 {
         return;
     }
-    if orient < 0 {
-        std::mem::swap(&mut b, &mut c);
-    }
-    // Edge p->q: E(x, y) = (qx-px)(y-py) - (qy-py)(x-px) >= 0 inside.
-    // For a fixed row: E = ax * x + k(y) with ax = -(qy-py), k(y) = (qx-px)(y-py) + (qy-py) px.
-    let edges = [(a, b), (b, c), (c, a)];
+    // c < 0: p1 lies right of the long edge, so the long edge bounds the rows on the left
+    let long_left = c < 0;
     let s = lat.stride;
-    let ymin = a[1].min(b[1]).min(c[1]).max(lat.r_lo);
-    let ymax = a[1].max(b[1]).max(c[1]).min(lat.r_hi);
-    let mut y = snap_up(ymin, lat.origin_r, s);
-    let mut j = ((y - lat.origin_r) / s) as usize;
-    let mut ax = [0i64; 3];
-    let mut k = [0i64; 3];
-    let mut dk = [0i64; 3];
-    for (i, (p, q)) in edges.iter().enumerate() {
-        ax[i] = -(q[1] - p[1]);
-        k[i] = (q[0] - p[0]) * (y - p[1]) + (q[1] - p[1]) * p[0];
-        dk[i] = (q[0] - p[0]) * s;
+    let ymax = p2[1].min(lat.r_hi);
+    let mut y = snap_up(p0[1].max(lat.r_lo), lat.origin_r, s);
+    if y > ymax {
+        return;
     }
-    let inv = ax.map(|a| if a != 0 { 1.0 / a.abs() as f64 } else { 0.0 });
+    let mut j = ((y - lat.origin_r) / s) as usize;
+    // rows before `top_end` are bounded by p0-p1, the others by p1-p2
+    let top_end = if p1[1] == p2[1] { p2[1] + 1 } else { p1[1] };
+    let mut on_top = y < top_end;
+    let mut long = EdgeWalk::new(p0, p2, y, s);
+    let mut short = if on_top {
+        EdgeWalk::new(p0, p1, y, s)
+    } else {
+        EdgeWalk::new(p1, p2, y, s)
+    };
+    let oc = lat.origin_c;
     while y <= ymax {
-        let mut lo = lat.c_lo;
-        let mut hi = lat.c_hi;
-        let mut empty = false;
-        for i in 0..3 {
-            let (axi, ki) = (ax[i], k[i]);
-            // Bound of ax * x + k >= 0, estimated in f64 then made exact in integers.
-            if axi > 0 {
-                let mut x = ((-ki) as f64 * inv[i]) as i64; // truncation, fixed below
-                while axi * x + ki < 0 {
-                    x += 1;
-                }
-                while axi * (x - 1) + ki >= 0 {
-                    x -= 1;
-                }
-                lo = lo.max(x);
-            } else if axi < 0 {
-                let mut x = (ki as f64 * inv[i]) as i64; // truncation, fixed below
-                while axi * x + ki < 0 {
-                    x -= 1;
-                }
-                while axi * (x + 1) + ki >= 0 {
-                    x += 1;
-                }
-                hi = hi.min(x);
-            } else if ki < 0 {
-                empty = true;
-            }
+        if on_top && y >= top_end {
+            short = EdgeWalk::new(p1, p2, y, s);
+            on_top = false;
         }
-        if !empty && lo <= hi {
+        let (lo, hi) = if long_left {
+            (long.ceil(), short.floor())
+        } else {
+            (short.ceil(), long.floor())
+        };
+        let (lo, hi) = (lo.max(lat.c_lo), hi.min(lat.c_hi));
+        if lo <= hi {
             let (i0, i1) = if s == 1 {
-                (lo - lat.origin_c, hi - lat.origin_c)
+                (lo - oc, hi - oc)
             } else {
-                (
-                    ceil_div(lo - lat.origin_c, s),
-                    floor_div(hi - lat.origin_c, s),
-                )
+                (ceil_div(lo - oc, s), floor_div(hi - oc, s))
             };
             if i0 <= i1 {
                 f(y, j, i0 as usize, i1 as usize);
             }
         }
-        for i in 0..3 {
-            k[i] += dk[i];
-        }
+        long.step();
+        short.step();
         y += s;
         j += 1;
     }
@@ -170,8 +212,10 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             ((seed >> 33) % m as u64) as i64
         };
-        for _ in 0..3000 {
-            let tri = [[rnd(30), rnd(30)], [rnd(30), rnd(30)], [rnd(30), rnd(30)]];
+        for case in 0..4000 {
+            // small triangles with many ties and flat edges, then larger ones
+            let m = if case < 3000 { 30 } else { 160 };
+            let tri = [[rnd(m), rnd(m)], [rnd(m), rnd(m)], [rnd(m), rnd(m)]];
             let stride = 1 + rnd(4);
             let (origin_c, origin_r) = (rnd(5), rnd(5));
             let lat = Lattice {
@@ -179,9 +223,9 @@ mod tests {
                 origin_r,
                 stride,
                 c_lo: origin_c + rnd(4),
-                c_hi: 20 + rnd(10),
+                c_hi: m * 2 / 3 + rnd(m / 3),
                 r_lo: origin_r + rnd(4),
-                r_hi: 20 + rnd(10),
+                r_hi: m * 2 / 3 + rnd(m / 3),
             };
             let mut got = Vec::new();
             for_each_span(tri, &lat, |y, j, i0, i1| {

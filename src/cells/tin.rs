@@ -1,24 +1,23 @@
 //! Error-bounded TIN simplification of one cell by greedy insertion (Garland-Heckbert).
 //!
 //! The cell's border vertices (from [`super::border`]) are triangulated first; then the
-//! interior sample with the largest vertical error is inserted into a Delaunay
-//! triangulation (spade) until every sample is within epsilon. Phase 1 uses the level's
-//! lattice (every stride-th sample); phase 2 rescans every triangle against all
-//! full-resolution samples and continues with full-resolution candidates, so the bound
-//! holds for every DEM sample of the cell. Work is in integer grid coordinates, exact for
-//! spade's predicates (spade x = column, spade y = -row, so spade's CCW is world CCW).
-
-use rayon::prelude::*;
-use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
-use spade::{DelaunayTriangulation, Point2, Triangulation};
+//! worst sample of the triangle with the largest vertical error is inserted into that
+//! triangle of a Delaunay triangulation ([`super::halfedge`], no point location), and the
+//! triangles the insertion wrote are rescanned, until every sample is within epsilon.
+//! Phase 1 uses the level's lattice (every stride-th sample); phase 2 rescans every
+//! triangle against all full-resolution samples and continues with full-resolution
+//! candidates, so the bound holds for every DEM sample of the cell. Work is in integer
+//! grid coordinates, with exact predicates.
 
 use super::border::{LevelBorders, border_error, check_epsilon, check_tree, simplify_rect_border};
 use super::face_heap::FaceHeap;
+use super::halfedge::{MAX_COORD, Mesh};
 use super::raster::{Lattice, for_each_span};
 use super::tiles::LatticeTiles;
 use super::{CellKey, Quadtree, SampleRect, Tin};
 use crate::dem::Dem;
 use crate::error::{Error, Result};
+use rayon::prelude::*;
 
 /// The error bound of `level`: `max_error_finest * 2^(finest - level)` (height units).
 pub fn level_epsilon(tree: &Quadtree, level: u8, max_error_finest: f64) -> f64 {
@@ -112,91 +111,59 @@ fn is_corner(p: [[i64; 2]; 3], x: i64, y: i64) -> bool {
     p.iter().any(|q| q[0] == x && q[1] == y)
 }
 
-/// Greedy refinement state: the triangulation and, per spade face index, the face's worst
-/// sample (candidate) and error; faces whose error exceeds epsilon are in `heap`.
+/// Greedy refinement state: the triangulation and, per triangle slot, the triangle's worst
+/// sample (candidate) and error; triangles whose error exceeds epsilon are in `heap`.
 struct Greedy<'a> {
     heights: &'a [f32],
     width: usize,
     epsilon: f64,
-    tri: DelaunayTriangulation<Point2<f64>>,
-    /// Per face index: worst non-corner sample `[col, row]`, and a vertex of the face (hint).
-    cand: Vec<[u32; 3]>,
-    face_err: Vec<f64>,
+    mesh: Mesh,
+    /// Per triangle slot: worst non-corner sample `[col, row]` and the triangle's error.
+    cand: Vec<([u32; 2], f64)>,
     heap: FaceHeap,
-    star: Vec<FixedFaceHandle<InnerTag>>,
+    dirty: Vec<u32>,
 }
 
 impl Greedy<'_> {
-    fn corners(&self, f: FixedFaceHandle<InnerTag>) -> ([[i64; 2]; 3], [u32; 3]) {
-        let face = self.tri.face(f);
-        let vs = face.vertices();
-        let p = vs.map(|v| {
-            let q = v.position();
-            [q.x as i64, -q.y as i64]
-        });
-        (p, vs.map(|v| v.fix().index() as u32))
+    fn rescan(&mut self, t: u32, lat: &LatticeTiles) {
+        let idx = t as usize;
+        if idx >= self.cand.len() {
+            let n = self.mesh.num_triangles().max(idx + 1);
+            self.cand.resize(n, ([0; 2], 0.0));
+        }
+        let p = self.mesh.corners(t);
+        let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
+        self.cand[idx] = ([col as u32, row as u32], err.max(0.0));
+        if err > self.epsilon {
+            self.heap.set(t, Some(err));
+        } else {
+            self.heap.set(t, None);
+        }
     }
 
-    fn rescan(&mut self, f: FixedFaceHandle<InnerTag>, lat: &LatticeTiles) {
-        let idx = f.index();
-        if idx >= self.cand.len() {
-            let n = self.tri.num_all_faces().max(idx + 1);
-            self.cand.resize(n, [0; 3]);
-            self.face_err.resize(n, 0.0);
+    /// Rescans the triangles written since the last rescan.
+    fn rescan_dirty(&mut self, lat: &LatticeTiles) {
+        let mut dirty = std::mem::take(&mut self.dirty);
+        self.mesh.take_dirty(&mut dirty);
+        for &t in &dirty {
+            self.rescan(t, lat);
         }
-        let (p, ids) = self.corners(f);
-        let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
-        self.face_err[idx] = err.max(0.0);
-        if err > self.epsilon {
-            // hint: the face's corner nearest to the candidate, for a short location walk
-            let d2 = |q: [i64; 2]| (q[0] - col).pow(2) + (q[1] - row).pow(2);
-            let k = (0..3).min_by_key(|&k| d2(p[k])).unwrap_or(0);
-            let hint = ids[k];
-            self.cand[idx] = [col as u32, row as u32, hint];
-            self.heap.set(idx as u32, Some(err));
-        } else {
-            self.heap.set(idx as u32, None);
-        }
+        self.dirty = dirty;
     }
 
     fn rescan_all(&mut self, lat: &LatticeTiles) {
         self.heap.clear();
-        let faces: Vec<_> = self.tri.fixed_inner_faces().collect();
-        for f in faces {
-            self.rescan(f, lat);
+        self.mesh.take_dirty(&mut self.dirty);
+        for t in 0..self.mesh.num_triangles() as u32 {
+            self.rescan(t, lat);
         }
     }
 
     fn run(&mut self, lat: &LatticeTiles) {
-        while let Some((_, face)) = self.heap.peek() {
-            let [col, row, hint] = self.cand[face as usize];
-            let point = Point2::new(col as f64, -(row as f64));
-            let before = self.tri.num_vertices();
-            // Integer coordinates are always valid spade input; stop (and report the
-            // measured error honestly) if that ever changes.
-            let Ok(v) = self
-                .tri
-                .insert_with_hint(point, FixedVertexHandle::from_index(hint as usize))
-            else {
-                break;
-            };
-            if self.tri.num_vertices() == before {
-                // Already a vertex (cannot happen: corners are never candidates); drop the
-                // face rather than loop.
-                self.heap.set(face, None);
-                continue;
-            }
-            self.star.clear();
-            for edge in self.tri.vertex(v).out_edges() {
-                if let Some(f) = edge.face().as_inner() {
-                    self.star.push(f.fix());
-                }
-            }
-            let star = std::mem::take(&mut self.star);
-            for &f in &star {
-                self.rescan(f, lat);
-            }
-            self.star = star;
+        while let Some((_, t)) = self.heap.peek() {
+            // the candidate lies in the closed triangle and is not one of its corners
+            self.mesh.insert(t, self.cand[t as usize].0);
+            self.rescan_dirty(lat);
         }
     }
 }
@@ -212,6 +179,11 @@ fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
             dem.width, dem.height
         )));
     }
+    if rect.c1 >= MAX_COORD || rect.r1 >= MAX_COORD {
+        return Err(Error::BadOption(format!(
+            "sample rectangle {rect:?} reaches beyond {MAX_COORD} samples"
+        )));
+    }
     Ok(())
 }
 
@@ -223,7 +195,7 @@ fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
 /// always added); the interior is refined on the `stride` lattice anchored at
 /// `(rect.c0, rect.r0)`, then at full resolution. [`Tin::max_error`] is the measured
 /// maximum over all samples of `rect`. Triangles are CCW in world (x east, y north).
-/// Errors on an empty or out-of-DEM rectangle, stride 0, or a negative / non-finite epsilon.
+/// Errors on an empty or out-of-DEM rectangle (or one reaching 2^30 samples), stride 0, or a negative / non-finite epsilon.
 /// Deterministic.
 pub fn build_tin(
     dem: &Dem,
@@ -252,29 +224,14 @@ pub fn build_tin(
     ]);
     pts.sort_unstable_by_key(|v| (v[1], v[0]));
     pts.dedup();
-    let spade_pts: Vec<Point2<f64>> = pts
-        .iter()
-        .map(|v| Point2::new(v[0] as f64, -(v[1] as f64)))
-        .collect();
-    let tri = match DelaunayTriangulation::bulk_load(spade_pts.clone()) {
-        Ok(t) => t,
-        Err(_) => {
-            let mut t = DelaunayTriangulation::new();
-            for p in spade_pts {
-                let _ = t.insert(p);
-            }
-            t
-        }
-    };
     let mut g = Greedy {
         heights: &dem.heights,
         width: dem.width,
         epsilon,
-        tri,
+        mesh: Mesh::rectangle(rect, &pts),
         cand: Vec::new(),
-        face_err: Vec::new(),
         heap: FaceHeap::default(),
-        star: Vec::new(),
+        dirty: Vec::new(),
     };
     let interior = |s: u32| Lattice {
         origin_c: rect.c0 as i64,
@@ -306,32 +263,16 @@ pub fn build_tin(
         g.rescan_all(&fine);
         g.run(&fine);
     }
-    let interior_err = g
-        .tri
-        .fixed_inner_faces()
-        .map(|f| g.face_err[f.index()])
-        .fold(0.0f64, f64::max);
+    let interior_err = g.cand.iter().map(|c| c.1).fold(0.0f64, f64::max);
     let max_error = interior_err.max(border_error(dem, rect, &pts));
-    Ok(to_tin(&g.tri, max_error))
-}
-
-fn to_tin(tri: &DelaunayTriangulation<Point2<f64>>, max_error: f64) -> Tin {
-    let vertices = tri
-        .vertices()
-        .map(|v| {
-            let p = v.position();
-            [p.x as u32, (-p.y) as u32]
-        })
+    let triangles = (0..g.mesh.num_triangles() as u32)
+        .map(|t| g.mesh.triangle(t))
         .collect();
-    let triangles = tri
-        .inner_faces()
-        .map(|f| f.vertices().map(|v| v.fix().index() as u32))
-        .collect();
-    Tin {
-        vertices,
+    Ok(Tin {
+        vertices: g.mesh.vertices().to_vec(),
         triangles,
         max_error,
-    }
+    })
 }
 
 /// One TIN over the whole DEM within `epsilon` (height units) of every sample, with the
