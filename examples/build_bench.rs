@@ -5,12 +5,16 @@
 //! ```sh
 //! for n in 1025 2049 4097; do cargo run --release --example build_bench -- $n; done
 //! cargo run --release --example build_bench -- 1025 256 fast,balanced   # PNG compression knob
+//! cargo run --release --example build_bench -- 8193 256 fast fractal     # large, quick to generate
 //! ```
 //! Arguments: samples per side (default 1025), texture side (default 256) and a
 //! comma-separated list of `--png-compression` values (default `fast`); the scene is
 //! generated once and built once per value (peak RSS is then the maximum so far). Each row
 //! also gives the bytes of the PNG files written and the seconds spent encoding them
 //! (measured by re-encoding the store's PNGs in this process after the build, one thread).
+//! A fourth argument `fractal` replaces the procedural scene (slow to generate beyond 4097²:
+//! ~22 µs per sample) by the diamond-square fractal DEM of `tin_bench` (10 m spacing, the
+//! side must be 2^k + 1) without an ortho (textures derived from the DEM).
 
 use std::time::Instant;
 
@@ -18,6 +22,9 @@ use clap::ValueEnum;
 use cliffmap::fsutil::{PngCompression, encode_png};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
+
+#[path = "bench_util/mod.rs"]
+mod bench_util;
 
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -50,14 +57,26 @@ fn main() -> anyhow::Result<()> {
             .map(|c| PngCompression::from_str(c, true).map_err(|e| anyhow::anyhow!("{c}: {e}")))
             .collect::<anyhow::Result<_>>()?,
     };
-    let scene = DemoScene {
-        samples,
-        ..DemoScene::default()
-    };
+    let fractal = std::env::args().nth(4).as_deref() == Some("fractal");
     let t0 = Instant::now();
-    let (dem, ortho) = scene.generate()?;
+    let (dem, ortho) = if fractal {
+        anyhow::ensure!(
+            samples >= 3 && (samples - 1).is_power_of_two(),
+            "a fractal DEM needs 2^k + 1 samples per side"
+        );
+        (bench_util::fractal(samples, 42), None)
+    } else {
+        let (dem, ortho) = DemoScene {
+            samples,
+            ..DemoScene::default()
+        }
+        .generate()?;
+        (dem, Some(ortho))
+    };
     let gen_s = t0.elapsed().as_secs_f64();
-    println!("| DEM | samples | levels | cells | triangles | scene gen (s) | PNG compression | build (s) | ns/sample | PNG MB | PNG encode s (1 thread) | peak RSS (MiB) |");
+    println!(
+        "| DEM | samples | levels | cells | triangles | scene gen (s) | PNG compression | build (s) | ns/sample | PNG MB | PNG encode s (1 thread) | peak RSS (MiB) |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for compression in compressions {
         let dir = tempfile::tempdir()?;
@@ -69,8 +88,12 @@ fn main() -> anyhow::Result<()> {
         };
         let inputs = BuildInputs {
             dem: &dem,
-            ortho: Some(&ortho),
-            dem_source: "bench".into(),
+            ortho: ortho.as_ref(),
+            dem_source: if fractal {
+                "fractal".into()
+            } else {
+                "bench".into()
+            },
             ortho_source: None,
             fingerprint: format!("bench-{samples}"),
         };
@@ -94,7 +117,8 @@ fn main() -> anyhow::Result<()> {
         }
         let n = (samples * samples) as f64;
         println!(
-            "| {samples}² | {:.1} M | {} | {} | {} | {:.1} | {compression:?} | {:.2} | {:.0} | {:.1} | {:.2} | {:.0} |",
+            "| {}{samples}² | {:.1} M | {} | {} | {} | {:.1} | {compression:?} | {:.2} | {:.0} | {:.1} | {:.2} | {:.0} |",
+            if fractal { "fractal " } else { "" },
             n / 1e6,
             m.quadtree.levels,
             m.cells.len(),

@@ -10,6 +10,9 @@
 //! `python3 benches/peers/tin_pydelatin.py` (install with benches/peers/setup.sh).
 //! Times are medians of N runs, wall clock and on-CPU time of the calling thread.
 
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
@@ -225,62 +228,6 @@ fn bench_real(
     }
 }
 
-/// Fractal DEM (diamond-square) of `(2^k + 1)^2` samples whose displacement depends only on
-/// the absolute step in samples, so every size has the same local roughness.
-fn fractal(n: usize, seed: u64) -> Dem {
-    let mut s = seed | 1;
-    let mut rnd = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let mut h = vec![0f64; n * n];
-    let amp = |step: usize| 0.4 * (step as f64).powf(0.9);
-    let mut step = n - 1;
-    while step > 1 {
-        let half = step / 2;
-        let a = amp(step);
-        for y in (half..n).step_by(step) {
-            for x in (half..n).step_by(step) {
-                let m = (h[(y - half) * n + x - half]
-                    + h[(y - half) * n + x + half]
-                    + h[(y + half) * n + x - half]
-                    + h[(y + half) * n + x + half])
-                    / 4.0;
-                h[y * n + x] = m + a * rnd();
-            }
-        }
-        for y in (0..n).step_by(half) {
-            let x0 = if (y / half) % 2 == 0 { half } else { 0 };
-            for x in (x0..n).step_by(step) {
-                let mut sum = 0.0;
-                let mut cnt = 0.0;
-                if y >= half {
-                    sum += h[(y - half) * n + x];
-                    cnt += 1.0;
-                }
-                if y + half < n {
-                    sum += h[(y + half) * n + x];
-                    cnt += 1.0;
-                }
-                if x >= half {
-                    sum += h[y * n + x - half];
-                    cnt += 1.0;
-                }
-                if x + half < n {
-                    sum += h[y * n + x + half];
-                    cnt += 1.0;
-                }
-                h[y * n + x] = sum / cnt + a * rnd();
-            }
-        }
-        step = half;
-    }
-    let hs = h.iter().map(|&v| v as f32).collect();
-    Dem::from_heights(n, n, hs, GridGeoref::new(0.0, 0.0, 10.0)).expect("fractal DEM")
-}
-
 fn growth(runs: usize) {
     println!(
         "\n### Growth with DEM size (diamond-square fractal, displacement 0.4 m * step^0.9, 10 m spacing, S = 64, max error 1 m at the finest level, 2 threads)\n"
@@ -295,7 +242,7 @@ fn growth(runs: usize) {
         .expect("thread pool");
     for k in [10, 11, 12] {
         let n = (1usize << k) + 1;
-        let dem = fractal(n, 42);
+        let dem = bench_util::fractal(n, 42);
         let tree = Quadtree::new(n as u32, n as u32, 64);
         let mut per_level = vec![Vec::new(); tree.levels as usize];
         let mut finest_tris = 0;

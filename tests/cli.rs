@@ -437,11 +437,13 @@ fn engabreen_reparam_mixed_mode_and_export() {
         assert_eq!(r.metrics.flipped, 0, "cell {} has flips", c.id);
         // The chart spreads texels more evenly than the ortho map: its worst texel is less
         // stretched. The converged symmetric Dirichlet chart minimises the mean distortion,
-        // not the worst texel: on one of the 106 cells (4-6-7) its worst texel is 1.2 % more
-        // stretched than the ortho map's (6.16 vs 6.08), hence the 2 % tolerance per cell;
-        // over the cells the worst texel is far less stretched (checked below).
+        // not the worst texel: on one of the 106 cells (4-6-7) its worst texel is more
+        // stretched than the ortho map's (6.16 vs 6.08 with spade's TIN, 6.16 vs 5.77 with
+        // the half-edge TIN of 2026-12-04, whose cocircular ties differ), so a cell may
+        // exceed the ortho's worst texel by 10 % and at most two cells may exceed it at
+        // all; over the cells the worst texel is far less stretched (checked below).
         assert!(
-            r.texel_stretch.max < 1.02 * c.stats.texel_stretch.max,
+            r.texel_stretch.max < 1.10 * c.stats.texel_stretch.max,
             "cell {}: {} vs {}",
             c.id,
             r.texel_stretch.max,
@@ -455,6 +457,11 @@ fn engabreen_reparam_mixed_mode_and_export() {
         assert_eq!(tex.width(), 64);
     }
     worst_ratios.sort_by(f64::total_cmp);
+    let above = worst_ratios.iter().filter(|&&r| r > 1.0).count();
+    assert!(
+        above <= 2,
+        "{above} charts with a worse worst texel than the ortho map"
+    );
     let median = worst_ratios[worst_ratios.len() / 2];
     assert!(
         median < 0.8,

@@ -1,4 +1,4 @@
-//! Helpers shared by the parameterization benchmarks (included with `#[path]`).
+//! Helpers shared by the benchmarks (included with `#[path]`).
 #![allow(dead_code)]
 
 use std::io::Write;
@@ -109,4 +109,61 @@ pub fn build_engabreen_store(dir: &Path, fingerprint: &str) -> anyhow::Result<f6
         dir,
     )?;
     Ok(t.elapsed().as_secs_f64())
+}
+
+/// Fractal DEM (diamond-square) of `(2^k + 1)^2` samples whose displacement depends only on
+/// the absolute step in samples, so every size has the same local roughness.
+pub fn fractal(n: usize, seed: u64) -> cliffmap::Dem {
+    let mut s = seed | 1;
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let mut h = vec![0f64; n * n];
+    let amp = |step: usize| 0.4 * (step as f64).powf(0.9);
+    let mut step = n - 1;
+    while step > 1 {
+        let half = step / 2;
+        let a = amp(step);
+        for y in (half..n).step_by(step) {
+            for x in (half..n).step_by(step) {
+                let m = (h[(y - half) * n + x - half]
+                    + h[(y - half) * n + x + half]
+                    + h[(y + half) * n + x - half]
+                    + h[(y + half) * n + x + half])
+                    / 4.0;
+                h[y * n + x] = m + a * rnd();
+            }
+        }
+        for y in (0..n).step_by(half) {
+            let x0 = if (y / half) % 2 == 0 { half } else { 0 };
+            for x in (x0..n).step_by(step) {
+                let mut sum = 0.0;
+                let mut cnt = 0.0;
+                if y >= half {
+                    sum += h[(y - half) * n + x];
+                    cnt += 1.0;
+                }
+                if y + half < n {
+                    sum += h[(y + half) * n + x];
+                    cnt += 1.0;
+                }
+                if x >= half {
+                    sum += h[y * n + x - half];
+                    cnt += 1.0;
+                }
+                if x + half < n {
+                    sum += h[y * n + x + half];
+                    cnt += 1.0;
+                }
+                h[y * n + x] = sum / cnt + a * rnd();
+            }
+        }
+        step = half;
+    }
+    let hs = h.iter().map(|&v| v as f32).collect();
+    cliffmap::Dem::from_heights(n, n, hs, cliffmap::GridGeoref::new(0.0, 0.0, 10.0))
+        .expect("fractal DEM")
 }
