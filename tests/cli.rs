@@ -15,35 +15,6 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
 }
 
-/// `build` arguments for the Engabreen DEM + ortho (1 m error, 64² textures) into `out`.
-fn engabreen_build_args(dem: &Path, ortho: &Path, out: &Path) -> Vec<String> {
-    [
-        "build",
-        "--dem",
-        s(dem),
-        "--width",
-        "507",
-        "--height",
-        "590",
-        "--spacing",
-        "3",
-        "--origin",
-        "445302.17,7396769.45",
-        "--ortho",
-        s(ortho),
-        "--ortho-same-grid",
-        "--max-error",
-        "1.0",
-        "--cell-texels",
-        "64",
-        "--out",
-        s(out),
-        "--quiet",
-    ]
-    .map(String::from)
-    .to_vec()
-}
-
 /// Every file under `dir` (relative name, CRC-32 of its content), sorted by name.
 fn all_files(dir: &Path) -> Vec<(String, u32)> {
     // (.lock holds the pid of the last writer, not store content)
@@ -138,7 +109,7 @@ fn engabreen_build_stats_export_and_resume() {
     let out = t.path().join("eng.store");
     let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
     let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
-    let args = engabreen_build_args(&dem, &ortho, &out);
+    let args = common::engabreen_build_args(&dem, &ortho, &out);
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     ok(&args);
     let st = Store::open(&out).unwrap();
@@ -415,7 +386,7 @@ fn engabreen_reparam_mixed_mode_and_export() {
     let out = t.path().join("eng.store");
     let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
     let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
-    let args = engabreen_build_args(&dem, &ortho, &out);
+    let args = common::engabreen_build_args(&dem, &ortho, &out);
     ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
     ok(&["reparam", s(&out), "--threshold", "1.1", "--quiet"]);
     let st = Store::open(&out).unwrap();
@@ -625,7 +596,7 @@ fn engabreen_photos_project_onto_the_rock_walls() {
     let out = t.path().join("eng.store");
     let dem = real_data("engabreen/engabreen_dem_3m_507x590.f32");
     let ortho = real_data("engabreen/engabreen_ortho_3m_507x590.png");
-    let args = engabreen_build_args(&dem, &ortho, &out);
+    let args = common::engabreen_build_args(&dem, &ortho, &out);
     ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
     ok(&["reparam", s(&out), "--quiet"]);
     // The two ground photos of the README: IMG_8902 with its fitted pose, IMG_8937 with

@@ -268,29 +268,12 @@ fn a_photo_from_the_same_place_is_tied_to_a_known_one() {
     let store = t.path().join("eng.store");
     let dir = common::real_data("engabreen");
     let p = |n: &str| dir.join(n).display().to_string();
-    ok(&[
-        "build",
-        "--dem",
-        &p("engabreen_dem_3m_507x590.f32"),
-        "--width",
-        "507",
-        "--height",
-        "590",
-        "--spacing",
-        "3",
-        "--origin",
-        "445302.17,7396769.45",
-        "--ortho",
-        &p("engabreen_ortho_3m_507x590.png"),
-        "--ortho-same-grid",
-        "--max-error",
-        "1.0",
-        "--cell-texels",
-        "64",
-        "--out",
-        store.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let args = common::engabreen_build_args(
+        &dir.join("engabreen_dem_3m_507x590.f32"),
+        &dir.join("engabreen_ortho_3m_507x590.png"),
+        &store,
+    );
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
     let list = t.path().join("pair.json");
     let cam = p("engabreen_camera_IMG_8902.json");
     std::fs::write(

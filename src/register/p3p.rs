@@ -14,7 +14,7 @@ use glam::{DMat3, DVec3};
 use nalgebra::Matrix4;
 
 use super::gcp::Gcp;
-use super::start::{rotation_from_bearings, search_focal};
+use super::start::{rotation_from_bearings, sample_picker, search_focal};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 
@@ -252,13 +252,7 @@ fn sample_triples(n: usize) -> Vec<[usize; 3]> {
         }
         return out;
     }
-    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = |m: usize| {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed % m as u64) as usize
-    };
+    let mut next = sample_picker(0x9E37_79B9_7F4A_7C15);
     let mut out: Vec<[usize; 3]> = Vec::with_capacity(300);
     while out.len() < 300 {
         let mut t = [next(n), next(n), next(n)];

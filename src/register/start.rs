@@ -123,6 +123,18 @@ pub fn start_from_position(
     })
 }
 
+/// A deterministic pseudo-random index picker (xorshift64 from `seed`, non-zero): each call
+/// `next(n)` gives an index in `0..n` (`n` > 0), for RANSAC samples.
+pub(crate) fn sample_picker(seed: u64) -> impl FnMut(usize) -> usize {
+    let mut s = seed | 1;
+    move |n| {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s % n as u64) as usize
+    }
+}
+
 /// The focal length (pixels, for an image `width` pixels wide) minimising `cost`: the
 /// horizontal field of view over 3°–140° on a log grid of `steps` steps, then golden section
 /// between the best step's neighbours (40 rounds).
@@ -184,13 +196,7 @@ pub fn start_from_gcps(width: u32, height: u32, gcps: &[Gcp]) -> Result<CameraMo
             })
             .collect()
     };
-    let mut seed = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = |n: usize| {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed % n as u64) as usize
-    };
+    let mut next = sample_picker(0x2545_F491_4F6C_DD1D);
     let mut best: Option<(usize, f64, CameraModel)> = None;
     for _ in 0..400 {
         let mut idx: Vec<usize> = Vec::with_capacity(6);

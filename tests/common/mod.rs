@@ -96,3 +96,37 @@ pub fn small_demo_store(dir: &std::path::Path, reparam: bool) {
         .unwrap();
     }
 }
+
+/// `build` arguments for the Engabreen DEM + ortho (1 m error, 64² textures) into `out`.
+pub fn engabreen_build_args(
+    dem: &std::path::Path,
+    ortho: &std::path::Path,
+    out: &std::path::Path,
+) -> Vec<String> {
+    let s = |p: &std::path::Path| p.to_str().expect("utf-8 path").to_string();
+    [
+        "build",
+        "--dem",
+        &s(dem),
+        "--width",
+        "507",
+        "--height",
+        "590",
+        "--spacing",
+        "3",
+        "--origin",
+        "445302.17,7396769.45",
+        "--ortho",
+        &s(ortho),
+        "--ortho-same-grid",
+        "--max-error",
+        "1.0",
+        "--cell-texels",
+        "64",
+        "--out",
+        &s(out),
+        "--quiet",
+    ]
+    .map(String::from)
+    .to_vec()
+}
