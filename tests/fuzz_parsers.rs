@@ -10,7 +10,7 @@ mod fuzz;
 fn no_parser_panics_on_mutated_inputs() {
     let tmp = tempfile::tempdir().unwrap();
     let targets = fuzz::targets(tmp.path());
-    assert_eq!(targets.len(), 10);
+    assert_eq!(targets.len(), 14);
     let mut failures = Vec::new();
     for t in &targets {
         let rep = fuzz::fuzz(t, &fuzz::corpus(t.name), 0x5eed, 400, None, tmp.path());

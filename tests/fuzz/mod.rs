@@ -264,6 +264,126 @@ fn store_seeds(dir: &Path) -> (Vec<u8>, Vec<u8>) {
     (manifest, mesh)
 }
 
+fn tiled_geotiff_seeds(dir: &Path) -> Vec<Vec<u8>> {
+    use super::common::tiffgen::{Geo, Raw, f32_bytes, write_raw};
+    let geo = Geo {
+        scale: (2.0, 2.0),
+        tie: (0.0, 0.0, 500000.0, 7000000.0),
+        pixel_is_point: false,
+        epsg: Some(32633),
+        nodata: Some("-9999".into()),
+    };
+    // 20 x 18 samples in 16 x 16 tiles: partial tiles at the right and the bottom
+    let (w, h) = (20u32, 18u32);
+    let f: Vec<f32> = (0..w * h).map(|i| 100.0 + i as f32 * 0.25).collect();
+    let i16s: Vec<u8> = (0..w * h)
+        .flat_map(|i| (i as i16 * 3 - 200).to_ne_bytes())
+        .collect();
+    let mut out = Vec::new();
+    for (k, (bits, format, bytes)) in [(32u16, 3u16, f32_bytes(&f)), (16, 2, i16s)]
+        .into_iter()
+        .enumerate()
+    {
+        let raw = Raw {
+            width: w,
+            height: h,
+            bits,
+            sample_format: format,
+            samples: 1,
+            photometric: 1,
+            tile: Some((16, 16)),
+            extra_alpha: false,
+        };
+        let p = dir.join(format!("tiled{k}.tif"));
+        write_raw(&p, &raw, &bytes, Some(&geo), false);
+        out.push(std::fs::read(&p).expect("seed written"));
+    }
+    out
+}
+
+/// The DEM the ortho target places its images on: 16 x 12 samples, 2 m apart, from
+/// (500000, 7000000) (as the ortho seeds' georeference).
+fn ortho_dem() -> cliffmap::Dem {
+    cliffmap::Dem::from_heights(
+        16,
+        12,
+        vec![100.0; 16 * 12],
+        cliffmap::GridGeoref::new(500000.0, 7000000.0, 2.0),
+    )
+    .expect("valid dem")
+}
+
+/// Ortho seeds: an RGB GeoTIFF placed by its tags, and a PNG and a JPEG of the DEM's grid.
+fn ortho_seeds(dir: &Path) -> Vec<Vec<u8>> {
+    use super::common::tiffgen::{Geo, write_strips};
+    use tiff::encoder::{Compression, Predictor, colortype};
+    let geo = Geo {
+        scale: (1.0, 1.0),
+        tie: (0.0, 0.0, 499999.0, 7000001.0),
+        pixel_is_point: false,
+        epsg: None,
+        nodata: None,
+    };
+    let rgb: Vec<u8> = (0..32 * 24 * 3).map(|i| (i * 7 % 251) as u8).collect();
+    let p = dir.join("ortho.tif");
+    write_strips::<colortype::RGB8>(
+        &p,
+        32,
+        24,
+        &rgb,
+        Compression::Uncompressed,
+        Predictor::None,
+        Some(&geo),
+    );
+    let mut out = vec![std::fs::read(&p).expect("seed written")];
+    let img = image::RgbImage::from_fn(16, 12, |x, y| {
+        image::Rgb([(x * 15) as u8, (y * 20) as u8, 90])
+    });
+    for format in [image::ImageFormat::Png, image::ImageFormat::Jpeg] {
+        let mut c = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut c, format).expect("image encodes");
+        out.push(c.into_inner());
+    }
+    out
+}
+
+/// Loads an ortho from `b`: a TIFF placed by its tags, a PNG or JPEG (by the first bytes)
+/// on the DEM's grid.
+fn run_ortho(b: &[u8], d: &Path) -> bool {
+    use cliffmap::{OrthoPlacement, load_ortho};
+    let (name, placement) = if b.starts_with(b"II") || b.starts_with(b"MM") {
+        ("o.tif", OrthoPlacement::FromFile)
+    } else if b.starts_with(&[0x89, b'P']) {
+        ("o.png", OrthoPlacement::SameGridAsDem)
+    } else {
+        ("o.jpg", OrthoPlacement::SameGridAsDem)
+    };
+    load_ortho(&write(d, name, b), placement, &ortho_dem(), MAX_MEMORY).is_ok()
+}
+
+const TRANSFORM_JSON: &str = r#"{"scale": 2.5, "rotation": [[0, -1, 0], [1, 0, 0], [0, 0, 1]], "translation": [446000.0, 7396000.0, 120.5]}"#;
+
+/// `bytes` with its manifest checksum recomputed (so that a mutation of the records reaches
+/// their parsing instead of stopping at the checksum), unchanged without a checksum field.
+fn reseal_manifest(bytes: &[u8]) -> Vec<u8> {
+    const KEY: &[u8] = b"\"content_crc32\": \"";
+    let mut b = bytes.to_vec();
+    let Some(at) = b
+        .windows(KEY.len())
+        .rposition(|w| w == KEY)
+        .map(|i| i + KEY.len())
+    else {
+        return b;
+    };
+    if b.len() < at + 9 || b[at + 8] != b'"' {
+        return b;
+    }
+    b[at..at + 8].copy_from_slice(b"00000000");
+    let crc = cliffmap::store::crc32_hex(&b);
+    b[at..at + 8].copy_from_slice(crc.as_bytes());
+    b
+}
+
 /// Every target with its generated seeds (`scratch` holds seed files).
 pub fn targets(scratch: &Path) -> Vec<Target> {
     let (manifest, mesh) = store_seeds(scratch);
@@ -361,11 +481,34 @@ pub fn targets(scratch: &Path) -> Vec<Target> {
         },
         Target {
             name: "manifest",
-            seeds: vec![manifest],
+            seeds: vec![manifest.clone()],
             run: |b, d| {
                 write(d, "manifest.json", b);
                 Manifest::read(d).is_ok()
             },
+        },
+        Target {
+            name: "manifest_resealed",
+            seeds: vec![manifest],
+            run: |b, d| {
+                write(d, "manifest.json", &reseal_manifest(b));
+                Manifest::read(d).is_ok()
+            },
+        },
+        Target {
+            name: "dem_geotiff_tiled",
+            seeds: tiled_geotiff_seeds(scratch),
+            run: |b, d| load_dem(&write(d, "f.tif", b), &dem_opts(None)).is_ok(),
+        },
+        Target {
+            name: "ortho_image",
+            seeds: ortho_seeds(scratch),
+            run: run_ortho,
+        },
+        Target {
+            name: "colmap_transform",
+            seeds: vec![TRANSFORM_JSON.as_bytes().to_vec()],
+            run: |b, d| cliffmap::photo::read_similarity(&write(d, "transform.json", b)).is_ok(),
         },
         Target {
             name: "mesh",
