@@ -379,6 +379,23 @@ impl CellContext {
         (y / s) * self.base_texels as usize + x / s
     }
 
+    /// [`CellContext::base_index`] as a function of `t` for a texture of side `texels`,
+    /// `scale` times the existing one's (by shifts when both are powers of two).
+    #[inline]
+    pub fn base_indexer(&self, texels: u32, scale: u32) -> impl Fn(usize) -> usize + Copy {
+        let (n, s, base) = (
+            texels as usize,
+            scale.max(1) as usize,
+            self.base_texels as usize,
+        );
+        let shifts = (n.is_power_of_two() && s.is_power_of_two())
+            .then(|| (n.trailing_zeros(), s.trailing_zeros()));
+        move |t: usize| match shifts {
+            Some((ln, ls)) => ((t >> ln) >> ls) * base + ((t & (n - 1)) >> ls),
+            None => (t / n / s) * base + (t % n) / s,
+        }
+    }
+
     /// The cosine of the slope at existing texel `b` (1 outside the map).
     #[inline]
     pub fn cos_at(&self, b: usize) -> f32 {
@@ -466,8 +483,9 @@ impl CellAccum {
         let mut best = vec![0u16; merged.len()];
         let label = photo.saturating_add(1);
         let mut written = 0;
+        let base_index = context.base_indexer(texels, scale);
         merged.for_each_mut(|t, s| {
-            match Self::photo_texel(s, &context, t, texels, scale, sharpness) {
+            match Self::photo_texel(s, &context, base_index(t), sharpness) {
                 Some((c, conf, res, w)) => {
                     written += 1;
                     best[t] = label;
@@ -507,15 +525,13 @@ impl CellAccum {
         )
     }
 
-    /// A photo's colour, coverage confidence, resolution and selection weight at texel `t`
-    /// from its sums `s` (`None` without colour).
+    /// A photo's colour, coverage confidence, resolution and selection weight at a texel
+    /// over existing texel `b`, from its sums `s` (`None` without colour).
     #[inline]
     fn photo_texel(
         s: &TexelSums,
         ctx: &CellContext,
-        t: usize,
-        texels: u32,
-        scale: u32,
+        b: usize,
         sharpness: f32,
     ) -> Option<([f32; 3], f32, f32, f32)> {
         if !(s.weight > 0.0) {
@@ -523,7 +539,6 @@ impl CellAccum {
         }
         let c = s.colour.map(|v| (v / s.weight).clamp(0.0, 1.0));
         let conf = (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0);
-        let b = ctx.base_index(t, texels, scale);
         let res = ctx
             .photo_resolution(b, [s.footprint / s.weight, s.grazing / s.weight])
             .max(1e-6);
@@ -548,11 +563,12 @@ impl CellAccum {
             self.mode,
         );
         let (merged, best) = (&mut self.merged, &mut self.best);
+        let base_index = ctx.base_indexer(texels, scale);
         p.sums.for_each(|t, ps| {
             if t >= n {
                 return;
             }
-            let Some((c, conf, res, w)) = Self::photo_texel(ps, ctx, t, texels, scale, sharpness)
+            let Some((c, conf, res, w)) = Self::photo_texel(ps, ctx, base_index(t), sharpness)
             else {
                 return;
             };
@@ -723,26 +739,47 @@ mod tests {
         );
         let grid = |rows: std::ops::Range<u32>, distance: f32| -> Vec<PixelFootprint> {
             rows.flat_map(|r| (0..16u32).map(move |c| (c, r)))
-                .map(|(c, r)| PixelFootprint { distance, ..fp([c, r], square(c as f32, r as f32, 1.0), 1.0) })
+                .map(|(c, r)| PixelFootprint {
+                    distance,
+                    ..fp([c, r], square(c as f32, r as f32, 1.0), 1.0)
+                })
                 .collect()
         };
         let (fa, fb) = (grid(2..8, 10.0), grid(0..8, 15.0));
         let set = crate::photo::FootprintSet {
-            cells: vec![crate::photo::CellFootprints { cell: 0, chunks: vec![fa.clone()] }],
+            cells: vec![crate::photo::CellFootprints {
+                cell: 0,
+                chunks: vec![fa.clone()],
+            }],
             ..crate::photo::FootprintSet::default()
         };
         let map = OcclusionMap::from_footprints(&set, 16, 8, 1.0, 0.1);
         let errors = [0.0f32];
         let merged = |margin: f64, with_b: bool| {
-            let p = ConfidenceParams { occlusion_margin_px: margin, ..params() };
-            let sa = PhotoSamples::new(&red, [1000.0; 2], &ColourTransform::IDENTITY, &p, ColourSpace::Srgb)
-                .with_occlusion(&map, 1.0, 1000.0, &errors, &p);
+            let p = ConfidenceParams {
+                occlusion_margin_px: margin,
+                ..params()
+            };
+            let sa = PhotoSamples::new(
+                &red,
+                [1000.0; 2],
+                &ColourTransform::IDENTITY,
+                &p,
+                ColourSpace::Srgb,
+            )
+            .with_occlusion(&map, 1.0, 1000.0, &errors, &p);
             let mut a = PhotoAccum::new(16);
             a.add_samples(&fa, &sa);
             let ctx = CellContext::flat(16, 0.0, 1.0);
             let (mut acc, _) = CellAccum::from_photo(a, 0, BlendMode::Confidence, ctx, &p);
             if with_b {
-                let sb = PhotoSamples::new(&blue, [1000.0; 2], &ColourTransform::IDENTITY, &p, ColourSpace::Srgb);
+                let sb = PhotoSamples::new(
+                    &blue,
+                    [1000.0; 2],
+                    &ColourTransform::IDENTITY,
+                    &p,
+                    ColourSpace::Srgb,
+                );
                 let mut b = PhotoAccum::new(16);
                 b.add_samples(&fb, &sb);
                 acc.merge(&b, 1);
@@ -1096,5 +1133,13 @@ mod tests {
         assert_eq!(ctx.base_index(7, 8, 4), 1);
         assert_eq!(ctx.base_index(4 * 8 + 3, 8, 4), 2);
         assert_eq!(ctx.base_index(63, 8, 4), 3);
+        // the indexer agrees with base_index, by shifts and by division
+        for (texels, scale, base) in [(8u32, 4u32, 2u32), (12, 3, 4), (16, 1, 16), (10, 2, 5)] {
+            let c = CellContext::flat(base, 0.0, 1.0);
+            let f = c.base_indexer(texels, scale);
+            for t in 0..(texels * texels) as usize {
+                assert_eq!(f(t), c.base_index(t, texels, scale), "{texels} {scale} {t}");
+            }
+        }
     }
 }

@@ -74,7 +74,9 @@ pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
         let r = &lin[y * row_len..][..row_len];
         buf.clear();
         buf.extend(cols.iter().flat_map(|&(x0, x1, fx)| {
-            std::array::from_fn::<f32, 4, _>(|k| r[4 * x0 + k] + (r[4 * x1 + k] - r[4 * x0 + k]) * fx)
+            std::array::from_fn::<f32, 4, _>(|k| {
+                r[4 * x0 + k] + (r[4 * x1 + k] - r[4 * x0 + k]) * fx
+            })
         }));
     };
     let mut out = vec![0u8; ow * rows.len() * 4];
@@ -91,7 +93,11 @@ pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
                         across(y1, bottom);
                         have = (y0, y1);
                     }
-                    for ((px, t), b) in row.chunks_exact_mut(4).zip(top.chunks_exact(4)).zip(bottom.chunks_exact(4)) {
+                    for ((px, t), b) in row
+                        .chunks_exact_mut(4)
+                        .zip(top.chunks_exact(4))
+                        .zip(bottom.chunks_exact(4))
+                    {
                         px[0] = encode_u8(t[0] + (b[0] - t[0]) * fy);
                         px[1] = encode_u8(t[1] + (b[1] - t[1]) * fy);
                         px[2] = encode_u8(t[2] + (b[2] - t[2]) * fy);
@@ -130,11 +136,12 @@ pub fn blend_cell(
         .filter(|(c, s)| **c && **s)
         .count() as u64;
     let (px, cv) = (texture.as_mut(), conf.as_mut());
+    let base_index = ctx.base_indexer(acc.texels, acc.scale);
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
         if t >= n {
             return;
         }
-        let b = ctx.base_index(t, acc.texels, acc.scale);
+        let b = base_index(t);
         let ratio = ctx.existing_resolution(b) as f64 / resolution as f64;
         let beta = params.photo_weight(confidence as f64, ratio);
         if !(beta > 0.0) {
@@ -379,7 +386,12 @@ mod tests {
     #[test]
     fn magnify_is_bilinear_in_linear_light_at_every_texel() {
         let img = RgbaImage::from_fn(5, 3, |x, y| {
-            image::Rgba([(x * 53 + y * 17) as u8, (y * 90) as u8, ((x * y * 31) % 256) as u8, (40 + x * 40) as u8])
+            image::Rgba([
+                (x * 53 + y * 17) as u8,
+                (y * 90) as u8,
+                ((x * y * 31) % 256) as u8,
+                (40 + x * 40) as u8,
+            ])
         });
         for scale in [2u32, 4, 8] {
             let m = magnify(&img, scale);
@@ -398,7 +410,11 @@ mod tests {
                     let top = v(x0, y0) + (v(x1, y0) - v(x0, y0)) * fx;
                     let bottom = v(x0, y1) + (v(x1, y1) - v(x0, y1)) * fx;
                     let l = top + (bottom - top) * fy;
-                    let want = if k == 3 { (l + 0.5) as u8 } else { encode_u8(l) };
+                    let want = if k == 3 {
+                        (l + 0.5) as u8
+                    } else {
+                        encode_u8(l)
+                    };
                     assert_eq!(p.0[k], want, "scale {scale} texel {ox},{oy} channel {k}");
                 }
             }

@@ -146,13 +146,15 @@ impl ConfidenceParams {
     /// above `2^resolution_ramp[1]`; 0 for NaN, 1 for an infinite ratio.
     pub fn resolution_weight(&self, ratio: f64) -> f64 {
         let [lo, hi] = self.resolution_ramp;
-        if ratio.is_nan() || ratio <= lo.exp2() {
+        // (compared in the log domain: one logarithm per texel, no powers)
+        let l = ratio.log2();
+        if l.is_nan() || l <= lo {
             return 0.0;
         }
-        if ratio >= hi.exp2() {
+        if l >= hi {
             return 1.0;
         }
-        smoothstep((ratio.log2() - lo) / (hi - lo))
+        smoothstep((l - lo) / (hi - lo))
     }
 
     /// The photo's weight `β` in [0, 1] on a texel: [`Self::blend_weight`] of its coverage
@@ -208,11 +210,23 @@ mod tests {
     #[test]
     fn occlusion_margin_outside_its_range_is_refused() {
         for m in [-1.0, f64::NAN, 1e4] {
-            let p = ConfidenceParams { occlusion_margin_px: m, ..ConfidenceParams::default() };
-            assert!(p.validate().is_err_and(|e| e.to_string().contains("occlusion margin")), "{m}");
+            let p = ConfidenceParams {
+                occlusion_margin_px: m,
+                ..ConfidenceParams::default()
+            };
+            assert!(
+                p.validate()
+                    .is_err_and(|e| e.to_string().contains("occlusion margin")),
+                "{m}"
+            );
         }
         for m in [0.0, 2.0, 1000.0] {
-            ConfidenceParams { occlusion_margin_px: m, ..ConfidenceParams::default() }.validate().unwrap();
+            ConfidenceParams {
+                occlusion_margin_px: m,
+                ..ConfidenceParams::default()
+            }
+            .validate()
+            .unwrap();
         }
     }
 

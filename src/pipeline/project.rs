@@ -28,9 +28,9 @@ use crate::error::{Error, Result};
 use crate::fsutil::{PngCompression, encode_png};
 use crate::photo::{
     BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform,
-    ConfidenceParams, FootprintBuffers, OcclusionMap, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
-    PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS, SizeRequest,
-    SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
+    ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
+    OcclusionMap, PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS,
+    SizeRequest, SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
     for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
 };
 use crate::stats::texel_stretch;
@@ -1123,10 +1123,11 @@ fn finish_cell(
     let base_covered = covered_mask(store, rec, ctx.base_texels)?;
     let n = acc.texels as usize * acc.texels as usize;
     let (mut covered, mut steep) = (vec![false; n], vec![false; n]);
-    for t in 0..n {
-        let b = ctx.base_index(t, acc.texels, acc.scale);
-        covered[t] = base_covered.get(b).copied().unwrap_or(false);
-        steep[t] = covered[t] && ctx.cos_at(b) < cos_steep;
+    let base_index = ctx.base_indexer(acc.texels, acc.scale);
+    for (t, (c, s)) in covered.iter_mut().zip(steep.iter_mut()).enumerate() {
+        let b = base_index(t);
+        *c = base_covered.get(b).copied().unwrap_or(false);
+        *s = *c && ctx.cos_at(b) < cos_steep;
     }
     let b = blend_cell(
         &existing,
