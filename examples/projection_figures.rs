@@ -98,11 +98,10 @@ fn main() -> anyhow::Result<()> {
     for rec in cells.into_iter().take(n) {
         let Some(photo) = &rec.photo else { continue };
         let before = sa.read_active_texture(rec)?;
-        let after = sa.read_png(&photo.texture)?.to_rgba8();
-        let conf = sa.read_png(&photo.confidence)?.to_luma8();
+        let (after, conf) = sa.read_photo_texture(rec, photo)?;
         let other = sb.cell(&rec.id)?;
         let after_b = match &other.photo {
-            Some(p) => sb.read_png(&p.texture)?.to_rgba8(),
+            Some(p) => sb.read_photo_texture(other, p)?.0,
             None => sb.read_active_texture(other)?,
         };
         let t = before.width();

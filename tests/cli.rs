@@ -644,7 +644,7 @@ fn engabreen_photos_project_onto_the_rock_walls() {
     let mut upsized = 0;
     for c in st.manifest.cells.iter().filter(|c| c.photo.is_some()) {
         let p = c.photo.as_ref().unwrap();
-        let img = st.read_png(&p.texture).unwrap();
+        let img = st.read_photo_texture(c, p).unwrap().0;
         let base = cliffmap::store::active_texels(c);
         assert_eq!((img.width(), img.height()), (p.texels, p.texels));
         assert!(

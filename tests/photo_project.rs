@@ -135,8 +135,7 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
     let mut confident = 0;
     for c in store.manifest.cells.iter().filter(|c| c.photo.is_some()) {
         let rec = c.photo.as_ref().unwrap();
-        let tex = store.read_png(&rec.texture).unwrap().to_rgba8();
-        let conf = store.read_png(&rec.confidence).unwrap().to_luma8();
+        let (tex, conf) = store.read_photo_texture(c, rec).unwrap();
         for (t, s) in tex.pixels().zip(conf.pixels()) {
             if s.0[0] == 255 {
                 confident += 1;
@@ -298,8 +297,30 @@ fn e2e_reparam_drops_photo_textures() {
                 "{} {base}",
                 p.texels
             );
-            let img = store.read_png(&p.texture).unwrap();
+            let (img, conf) = store.read_photo_texture(c, p).unwrap();
             assert_eq!((img.width(), img.height()), (p.texels, p.texels));
+            assert_eq!(conf.dimensions(), img.dimensions());
+            // stored in blocks of photo colour: the atlas holds those blocks only
+            let b = p
+                .blocks
+                .as_ref()
+                .expect("project stores photo textures in blocks");
+            let present = b.present(p.texels).unwrap();
+            let stored = present.iter().filter(|&&v| v).count();
+            assert!(stored > 0);
+            let atlas = store.read_png(&p.texture).unwrap();
+            let (cols, rows) = cliffmap::store::photo_texture::atlas_blocks(stored);
+            assert_eq!(
+                (atlas.width(), atlas.height()),
+                (cols as u32 * b.side, rows as u32 * b.side)
+            );
+            // no block with photo colour is left out
+            let g = cliffmap::store::PhotoBlocks::grid(b.side, p.texels);
+            for (x, y, s) in conf.enumerate_pixels() {
+                if s.0[0] > 0 {
+                    assert!(present[((y / b.side) * g + x / b.side) as usize]);
+                }
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -74,9 +74,16 @@ pub fn read_export_cell(store: &Store, rec: &CellRecord) -> Result<ExportCell> {
 /// As [`read_export_cell`] with the best texture at most `mode` (as `cliffmap render
 /// --mode`): `Photo` = the best the cell has, `Reparam` = reparameterized where the cell has
 /// it, else ortho, `Ortho` = the orthographic mesh and texture everywhere.
-pub fn read_export_cell_as(store: &Store, rec: &CellRecord, mode: TextureSource) -> Result<ExportCell> {
+pub fn read_export_cell_as(
+    store: &Store,
+    rec: &CellRecord,
+    mode: TextureSource,
+) -> Result<ExportCell> {
     let photo = rec.photo.as_ref().filter(|_| mode == TextureSource::Photo);
-    let reparam = rec.reparam.as_ref().filter(|_| mode != TextureSource::Ortho);
+    let reparam = rec
+        .reparam
+        .as_ref()
+        .filter(|_| mode != TextureSource::Ortho);
     let mesh = match reparam {
         Some(r) => store.read_mesh_file(&r.files.mesh)?,
         None => store.read_mesh(rec)?,
@@ -86,7 +93,15 @@ pub fn read_export_cell_as(store: &Store, rec: &CellRecord, mode: TextureSource)
         (None, Some(r)) => (&r.files.texture, TextureSource::Reparam),
         (None, None) => (&rec.files.texture, TextureSource::Ortho),
     };
-    let texture_bytes = store.read_file(file)?;
+    let texture_bytes = match photo {
+        // stored in blocks: the whole texture, encoded again
+        Some(p) if p.blocks.is_some() => crate::fsutil::encode_png(
+            &store.dir.join(&p.texture.path),
+            &store.read_photo_texture(rec, p)?.0,
+            crate::fsutil::PngCompression::default(),
+        )?,
+        _ => store.read_file(file)?,
+    };
     let origin = DVec3::from_array(rec.origin);
     let positions: Vec<DVec3> = mesh
         .positions

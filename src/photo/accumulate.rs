@@ -601,6 +601,12 @@ impl CellAccum {
         written
     }
 
+    /// Per block of `block` texels (row-major over the `⌈texels / block⌉²` grid): whether
+    /// footprints reached it (every texel some photo gave colour lies in such a block).
+    pub fn touched_blocks(&self, block: u32) -> Vec<bool> {
+        self.merged.touched_blocks(block)
+    }
+
     /// Whether some photo gave texel `t` colour.
     #[inline]
     pub fn has_colour(&self, t: usize) -> bool {

@@ -18,17 +18,29 @@ use image::{GrayImage, RgbaImage};
 
 use super::accumulate::{CellAccum, CellContext};
 use super::confidence::ConfidenceParams;
-use rayon::prelude::*;
 
-use crate::colour::{ColourSpace, decode_u8, encode_u8};
+use crate::colour::ColourSpace;
+pub use crate::store::magnify;
+use crate::store::photo_texture::magnify_blocks;
+use crate::store::{PHOTO_BLOCK, PhotoBlocks};
 
 /// A cell's photo-enhanced texture and its statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Blended {
-    /// RGBA8 texture of the accumulator's size, with the existing texture's layout.
+    /// RGBA8 texture of the accumulator's size, with the existing texture's layout, computed
+    /// in the blocks of side `block_side` that footprints reached (`computed`, row-major);
+    /// texels of the other blocks are 0, or the existing ones when the sizes are equal
+    /// (there the texture is the existing one magnified).
     pub texture: RgbaImage,
-    /// Per texel the photo's share `s` of the colour, 0..255.
+    /// Per texel the photo's share `s` of the colour, 0..255 (0 outside `computed`).
     pub confidence: GrayImage,
+    /// Block side (texels) of `computed` and `blocks`.
+    pub block_side: u32,
+    /// The blocks computed (footprints reached them).
+    pub computed: Vec<bool>,
+    /// The blocks where some texel got photo weight `β > 0` (those to store): elsewhere the
+    /// texture equals the existing one magnified.
+    pub blocks: PhotoBlocks,
     /// Covered texels with `s > 0.5`.
     pub photo_texels: u64,
     /// Covered texels marked steep.
@@ -40,80 +52,12 @@ pub struct Blended {
     pub supplied: Vec<u64>,
 }
 
-/// `existing` magnified `scale` times (a power of two) by bilinear interpolation between
-/// texel centres (edges clamped), colour in linear light (as a GPU filters an sRGB texture),
-/// alpha as it is; `scale` 1 returns a copy.
-pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
-    let (w, h) = existing.dimensions();
-    if scale <= 1 || w == 0 || h == 0 {
-        return existing.clone();
-    }
-    let s = scale as f64;
-    // per output column / row: the two source texels and the weight of the second
-    let taps = |n: u32| -> Vec<(usize, usize, f32)> {
-        (0..n * scale)
-            .map(|i| {
-                let u = ((i as f64 + 0.5) / s - 0.5).clamp(0.0, (n - 1) as f64);
-                let i0 = u.floor() as usize;
-                (i0, (i0 + 1).min(n as usize - 1), (u - i0 as f64) as f32)
-            })
-            .collect()
-    };
-    let (cols, rows) = (taps(w), taps(h));
-    let src = existing.as_raw();
-    let lin: Vec<f32> = src
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) })
-        .collect();
-    let ow = (w * scale) as usize;
-    let row_len = w as usize * 4;
-    // Each source row pair serves `scale` output rows: the pair's rows are interpolated
-    // along x once per band of output rows, then each output row along y.
-    let across = |y: usize, buf: &mut Vec<f32>| {
-        let r = &lin[y * row_len..][..row_len];
-        buf.clear();
-        buf.extend(cols.iter().flat_map(|&(x0, x1, fx)| {
-            std::array::from_fn::<f32, 4, _>(|k| {
-                r[4 * x0 + k] + (r[4 * x1 + k] - r[4 * x0 + k]) * fx
-            })
-        }));
-    };
-    let mut out = vec![0u8; ow * rows.len() * 4];
-    let band = scale as usize;
-    out.par_chunks_mut(ow * 4 * band)
-        .zip(rows.par_chunks(band))
-        .for_each_init(
-            || (Vec::new(), Vec::new()),
-            |(top, bottom), (chunk, band_rows)| {
-                let mut have = (usize::MAX, usize::MAX);
-                for (row, &(y0, y1, fy)) in chunk.chunks_exact_mut(ow * 4).zip(band_rows) {
-                    if have != (y0, y1) {
-                        across(y0, top);
-                        across(y1, bottom);
-                        have = (y0, y1);
-                    }
-                    for ((px, t), b) in row
-                        .chunks_exact_mut(4)
-                        .zip(top.chunks_exact(4))
-                        .zip(bottom.chunks_exact(4))
-                    {
-                        px[0] = encode_u8(t[0] + (b[0] - t[0]) * fy);
-                        px[1] = encode_u8(t[1] + (b[1] - t[1]) * fy);
-                        px[2] = encode_u8(t[2] + (b[2] - t[2]) * fy);
-                        px[3] = (t[3] + (b[3] - t[3]) * fy + 0.5) as u8;
-                    }
-                }
-            },
-        );
-    RgbaImage::from_raw(w * scale, h * scale, out).unwrap_or_else(|| existing.clone())
-}
-
 /// Blends `acc` into `existing` (the cell's existing texture, `acc.scale` times smaller than
 /// `acc`) as described in the [module docs](self), mixing in `space` (the space `acc`'s
-/// colours are in). `covered[t]` marks texels on the cell's surface and `steep[t]` those
-/// steeper than the steep threshold (both row-major, of the accumulator's size; shorter
-/// slices count as false).
+/// colours are in), in the blocks of [`PHOTO_BLOCK`] texels (at most the texture's side)
+/// that footprints reached. `covered[b]` marks existing texels on the cell's surface and
+/// `steep[b]` those steeper than the steep threshold (both row-major, of the existing
+/// texture's size; shorter slices count as false).
 pub fn blend_cell(
     existing: &RgbaImage,
     acc: &CellAccum,
@@ -122,19 +66,25 @@ pub fn blend_cell(
     covered: &[bool],
     steep: &[bool],
 ) -> Blended {
-    let mut texture = magnify(existing, acc.scale);
+    let side = PHOTO_BLOCK.min(acc.texels).max(1);
+    let computed = acc.touched_blocks(side);
+    let mut texture = magnify_blocks(existing, acc.scale, Some((side, &computed)));
     let (w, h) = texture.dimensions();
     let ctx: &CellContext = &acc.context;
     let mut conf = GrayImage::new(w, h);
     let (mut photo_texels, mut steep_photo_texels) = (0, 0);
     let mut supplied: Vec<u64> = Vec::new();
     let n = (w as usize * h as usize).min(acc.len());
+    let base_n = ctx.base_texels as usize * ctx.base_texels as usize;
     let steep_texels = covered
         .iter()
         .zip(steep)
-        .take(w as usize * h as usize)
+        .take(base_n)
         .filter(|(c, s)| **c && **s)
-        .count() as u64;
+        .count() as u64
+        * (acc.scale as u64).pow(2);
+    let grid = PhotoBlocks::grid(side, w) as usize;
+    let mut stored = vec![false; grid * grid];
     let (px, cv) = (texture.as_mut(), conf.as_mut());
     let base_index = ctx.base_indexer(acc.texels, acc.scale);
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
@@ -156,10 +106,13 @@ pub fn blend_cell(
         }
         e[3] = e[3].max(crate::fastmath::to_u8(beta * 255.0));
         cv[t] = crate::fastmath::to_u8(s * 255.0);
-        let cov = covered.get(t).copied().unwrap_or(false);
+        // (stored wherever the photo had weight, even a share that rounds to 0)
+        let (x, y) = (t % w as usize, t / w as usize);
+        stored[(y / side as usize) * grid + x / side as usize] = true;
+        let cov = covered.get(b).copied().unwrap_or(false);
         if s > 0.5 && cov {
             photo_texels += 1;
-            steep_photo_texels += steep.get(t).copied().unwrap_or(false) as u64;
+            steep_photo_texels += steep.get(b).copied().unwrap_or(false) as u64;
             if let Some(i) = best.map(usize::from) {
                 if supplied.len() <= i {
                     supplied.resize(i + 1, 0);
@@ -171,6 +124,9 @@ pub fn blend_cell(
     Blended {
         texture,
         confidence: conf,
+        block_side: side,
+        computed,
+        blocks: PhotoBlocks::new(side, &stored),
         photo_texels,
         steep_texels,
         steep_photo_texels,
@@ -381,66 +337,5 @@ mod tests {
                 "scale {scale}: mean share {mean} < {mean1}"
             );
         }
-    }
-
-    #[test]
-    fn magnify_is_bilinear_in_linear_light_at_every_texel() {
-        let img = RgbaImage::from_fn(5, 3, |x, y| {
-            image::Rgba([
-                (x * 53 + y * 17) as u8,
-                (y * 90) as u8,
-                ((x * y * 31) % 256) as u8,
-                (40 + x * 40) as u8,
-            ])
-        });
-        for scale in [2u32, 4, 8] {
-            let m = magnify(&img, scale);
-            for (ox, oy, p) in m.enumerate_pixels() {
-                let at = |o: u32, n: u32| {
-                    let u = ((o as f64 + 0.5) / scale as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-                    let i = u.floor() as u32;
-                    (i, (i + 1).min(n - 1), (u - i as f64) as f32)
-                };
-                let ((x0, x1, fx), (y0, y1, fy)) = (at(ox, 5), at(oy, 3));
-                for k in 0..4 {
-                    let v = |x, y| {
-                        let b = img.get_pixel(x, y).0[k];
-                        if k == 3 { b as f32 } else { decode_u8(b) }
-                    };
-                    let top = v(x0, y0) + (v(x1, y0) - v(x0, y0)) * fx;
-                    let bottom = v(x0, y1) + (v(x1, y1) - v(x0, y1)) * fx;
-                    let l = top + (bottom - top) * fy;
-                    let want = if k == 3 {
-                        (l + 0.5) as u8
-                    } else {
-                        encode_u8(l)
-                    };
-                    assert_eq!(p.0[k], want, "scale {scale} texel {ox},{oy} channel {k}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn magnify_keeps_constants_and_centres() {
-        let img = RgbaImage::from_fn(4, 4, |x, y| {
-            image::Rgba([(x * 60) as u8, (y * 60) as u8, 7, 255])
-        });
-        assert_eq!(magnify(&img, 1), img);
-        let m = magnify(&img, 2);
-        assert_eq!(m.dimensions(), (8, 8));
-        // corners clamp to the corner texels; between centres it interpolates in linear light
-        assert_eq!(m.get_pixel(0, 0).0, [0, 0, 7, 255]);
-        assert_eq!(m.get_pixel(7, 7).0, [180, 180, 7, 255]);
-        let lin = |v: u8| decode_u8(v);
-        assert_eq!(
-            m.get_pixel(1, 0).0[0],
-            encode_u8(0.75 * lin(0) + 0.25 * lin(60))
-        );
-        assert_eq!(
-            m.get_pixel(2, 0).0[0],
-            encode_u8(0.25 * lin(0) + 0.75 * lin(60))
-        );
-        assert!(m.pixels().all(|p| p.0[2] == 7 && p.0[3] == 255));
     }
 }

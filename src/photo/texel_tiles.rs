@@ -132,6 +132,32 @@ impl TexelTiles {
         Some(&mut self.data[k as usize * TILE_TEXELS + within])
     }
 
+    /// Per block of the row-major grid of `⌈side / block⌉²` blocks of `block` texels: whether
+    /// an allocated tile overlaps it.
+    pub fn touched_blocks(&self, block: u32) -> Vec<bool> {
+        let block = block.max(1) as usize;
+        let n = self.side as usize;
+        let g = n.div_ceil(block);
+        let mut out = vec![false; g * g];
+        for (tile, &k) in self.index.iter().enumerate() {
+            if k == NONE {
+                continue;
+            }
+            let t = TILE as usize;
+            let (x0, y0) = (
+                (tile % self.tiles_x as usize) * t,
+                (tile / self.tiles_x as usize) * t,
+            );
+            let (x1, y1) = ((x0 + t).min(n), (y0 + t).min(n));
+            for by in y0 / block..=(y1 - 1) / block {
+                for bx in x0 / block..=(x1 - 1) / block {
+                    out[by * g + bx] = true;
+                }
+            }
+        }
+        out
+    }
+
     /// Calls `f(t, sums)` for every texel of every allocated tile (texels outside the grid's
     /// last partial tiles skipped), tiles in row-major tile order, texels row-major within
     /// a tile.
@@ -219,5 +245,16 @@ mod tests {
         let mut g = TexelTiles::new(1024);
         g.get_mut(1024 * 1024 - 1).unwrap().coverage = 1.0;
         assert_eq!(g.allocated(), (TILE * TILE) as usize);
+        // ... in the last block of 64 texels
+        let b = g.touched_blocks(64);
+        assert_eq!(b.len(), 256);
+        assert_eq!(b.iter().position(|&t| t), Some(255));
+        assert_eq!(b.iter().filter(|&&t| t).count(), 1);
+        // a tile (texels 32..48 each way) across the lines of blocks of 40 texels: 4 blocks
+        let mut g = TexelTiles::new(100);
+        g.get_mut(40 * 100 + 40).unwrap().coverage = 1.0;
+        let b = g.touched_blocks(40);
+        let on: Vec<usize> = (0..9).filter(|&i| b[i]).collect();
+        assert_eq!(on, vec![0, 1, 3, 4]);
     }
 }

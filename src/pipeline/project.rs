@@ -34,6 +34,7 @@ use crate::photo::{
     for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
 };
 use crate::stats::texel_stretch;
+use crate::store::photo_texture::pack;
 use crate::store::{
     BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
     PhotoSettings, Store, active_texels, cell_stem, texcoord,
@@ -1118,17 +1119,14 @@ fn finish_cell(
         existing.dimensions(),
         (ctx.base_texels, ctx.base_texels),
     )?;
-    // (the active texture's masks looked up for the photo texture's texels: these masks only
+    // (the active texture's masks, looked up for the photo texture's texels: these masks only
     // feed the texel counts)
-    let base_covered = covered_mask(store, rec, ctx.base_texels)?;
-    let n = acc.texels as usize * acc.texels as usize;
-    let (mut covered, mut steep) = (vec![false; n], vec![false; n]);
-    let base_index = ctx.base_indexer(acc.texels, acc.scale);
-    for (t, (c, s)) in covered.iter_mut().zip(steep.iter_mut()).enumerate() {
-        let b = base_index(t);
-        *c = base_covered.get(b).copied().unwrap_or(false);
-        *s = *c && ctx.cos_at(b) < cos_steep;
-    }
+    let covered = covered_mask(store, rec, ctx.base_texels)?;
+    let steep: Vec<bool> = covered
+        .iter()
+        .enumerate()
+        .map(|(b, &c)| c && ctx.cos_at(b) < cos_steep)
+        .collect();
     let b = blend_cell(
         &existing,
         acc,
@@ -1139,7 +1137,11 @@ fn finish_cell(
     );
     let area = (acc.scale as u64).pow(2);
     let steep_texels = b.steep_texels / area;
-    if b.confidence.pixels().all(|p| p.0[0] == 0) {
+    let present = b
+        .blocks
+        .present(acc.texels)
+        .map_err(|e| Error::store(&store.dir, e))?;
+    if !present.contains(&true) {
         return Ok(CellOutcome {
             record: None,
             steep_texels,
@@ -1155,19 +1157,20 @@ fn finish_cell(
             writer,
             &store.dir,
             &format!("{stem}.photo.png"),
-            &b.texture,
+            &pack(&b.texture, b.block_side, &present),
             opts.png_compression,
         )?,
         confidence: submit_png(
             writer,
             &store.dir,
             &format!("{stem}.photo.conf.png"),
-            &b.confidence,
+            &pack(&b.confidence, b.block_side, &present),
             opts.png_compression,
         )?,
         photo_texels: b.photo_texels,
         steep_texels: b.steep_texels,
         steep_photo_texels: b.steep_photo_texels,
+        blocks: Some(b.blocks),
     };
     Ok(CellOutcome {
         record: Some(record),

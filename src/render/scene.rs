@@ -171,11 +171,10 @@ impl TerrainScene {
             let bytes = st.read_file(&files.mesh)?;
             let mesh = CellMesh::from_bytes(&bytes, &st.dir.join(&files.mesh.path))?;
             // The photo-enhanced texture has the layout of the active (reparam or ortho) one.
-            let texture = match (&rec.photo, mode) {
-                (Some(p), UvMode::Photo) => &p.texture,
-                _ => &files.texture,
+            let mut colour = match (&rec.photo, mode) {
+                (Some(p), UvMode::Photo) => st.read_photo_texture(rec, p)?.0,
+                _ => st.read_png(&files.texture)?.to_rgba8(),
             };
-            let mut colour = st.read_png(texture)?.to_rgba8();
             if overlay == Overlay::Stretch {
                 colour = stretch_heatmap(rec, &mesh, colour.width().max(colour.height()));
             }

@@ -133,7 +133,7 @@ pub fn texel_truth(store: &Store, scene: &DemoScene, which: TextureChoice) -> Re
             .as_ref()
             .map_or(&rec.files.texture, |r| &r.files.texture);
         match (&rec.photo, which) {
-            (Some(p), TextureChoice::Photo) => Ok(store.read_png(&p.texture)?.to_rgba8()),
+            (Some(p), TextureChoice::Photo) => Ok(store.read_photo_texture(rec, p)?.0),
             (Some(p), TextureChoice::Active) => {
                 // on the photo texture's texels, so that both choices score the same points
                 let img = store.read_png(active)?.to_rgba8();
@@ -169,10 +169,12 @@ pub fn texel_truth_covered(store: &Store, scene: &DemoScene) -> Result<(TruthRep
                 img.pixels_mut().for_each(|px| px[3] = 0);
                 return Ok(img);
             };
-            let mut img = store
-                .read_png(if photo { &p.texture } else { active })?
-                .to_rgba8();
-            let conf = store.read_png(&p.confidence)?.to_luma8();
+            let (photo_texture, conf) = store.read_photo_texture(rec, p)?;
+            let mut img = if photo {
+                photo_texture
+            } else {
+                store.read_png(active)?.to_rgba8()
+            };
             if !photo
                 && conf.width() > img.width()
                 && img.width() > 0

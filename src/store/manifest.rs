@@ -111,6 +111,11 @@ pub struct PhotoCellRecord {
     pub steep_texels: u64,
     /// Steep texels whose colour now comes mainly from photos (photo texture's texels).
     pub steep_photo_texels: u64,
+    /// When present, `texture` and `confidence` hold only these blocks of the texture (an
+    /// atlas, [`super::photo_texture`]); the rest is the active texture magnified, with
+    /// confidence 0. Read the whole texture with [`super::Store::read_photo_texture`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blocks: Option<super::PhotoBlocks>,
 }
 
 /// A cell's reparameterized variant: mesh with texture coordinates, resampled texture and

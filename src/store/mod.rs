@@ -12,8 +12,9 @@
 //! STORE/cells/{level}/{x}-{y}.png         RGBA8 colour texture
 //! STORE/cells/{level}/{x}-{y}.normal.png  RGB8 normal map
 //! STORE/cells/{level}/{x}-{y}.json        CellRecord of a finished cell (resume marker)
-//! STORE/cells/{level}/{x}-{y}.photo.png       RGBA8 photo-enhanced texture (`cliffmap project`)
-//! STORE/cells/{level}/{x}-{y}.photo.conf.png  L8 photo share per texel
+//! STORE/cells/{level}/{x}-{y}.photo.png       RGBA8 photo-enhanced texture (`cliffmap project`;
+//!                                             the atlas of its blocks, see `photo_texture`)
+//! STORE/cells/{level}/{x}-{y}.photo.conf.png  L8 photo share per texel (likewise)
 //! ```
 //! Every file is written atomically; every cell file's size and CRC-32 are recorded and
 //! verified on read.
@@ -23,6 +24,7 @@ mod lock;
 mod manifest;
 mod mesh;
 mod obj;
+pub mod photo_texture;
 mod writer;
 
 use std::path::{Path, PathBuf};
@@ -36,6 +38,7 @@ pub use manifest::{
 };
 pub use mesh::CellMesh;
 pub use obj::obj_text;
+pub use photo_texture::{PHOTO_BLOCK, PhotoBlocks, magnify};
 pub use writer::BackgroundWriter;
 
 use crate::error::{Error, Result};
@@ -126,6 +129,35 @@ impl Store {
     /// Reads and verifies a cell's normal map.
     pub fn read_normal_map(&self, rec: &CellRecord) -> Result<image::RgbImage> {
         self.read_png(&rec.files.normal).map(|i| i.to_rgb8())
+    }
+
+    /// Reads and verifies a cell's photo-enhanced texture and its confidence map (photo
+    /// share per texel), whole (`p.texels` square) whether stored dense or in blocks
+    /// ([`photo_texture`]).
+    pub fn read_photo_texture(
+        &self,
+        rec: &CellRecord,
+        p: &PhotoCellRecord,
+    ) -> Result<(image::RgbaImage, image::GrayImage)> {
+        let texture = self.read_png(&p.texture)?.to_rgba8();
+        let confidence = self.read_png(&p.confidence)?.to_luma8();
+        let Some(blocks) = &p.blocks else {
+            return Ok((texture, confidence));
+        };
+        let active = self.read_active_texture(rec)?;
+        let path = self.dir.join(&p.texture.path);
+        let (w, h) = active.dimensions();
+        if w != h || w == 0 || p.texels % w != 0 || !(p.texels / w).is_power_of_two() {
+            return Err(Error::store(
+                path,
+                format!(
+                    "photo texture of {} texels does not enlarge the cell's {w}x{h} active texture by a power of two",
+                    p.texels
+                ),
+            ));
+        }
+        photo_texture::compose(&active, p.texels / w, blocks, &texture, &confidence)
+            .map_err(|e| Error::store(path, e))
     }
 
     /// Reads and verifies one of the store's files by its record.

@@ -4,6 +4,7 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use super::{Finding, Layer, VerifyReport};
+use crate::store::photo_texture::atlas_blocks;
 use crate::store::{CellMesh, CellRecord, FileRef, Manifest, crc32_hex};
 
 /// Checks the store in `dir` (see the module documentation). Never modifies anything.
@@ -74,8 +75,26 @@ pub fn verify_store(dir: &Path) -> VerifyReport {
             check_png(dir, c, &r.files.normal, Layer::Reparam, r.texels, &mut rep);
         }
         if let Some(p) = &c.photo {
-            check_png(dir, c, &p.texture, Layer::Photo, p.texels, &mut rep);
-            check_png(dir, c, &p.confidence, Layer::Photo, p.texels, &mut rep);
+            // stored in blocks: an atlas of the blocks the mask marks
+            let size = match &p.blocks {
+                None => Ok((p.texels, p.texels)),
+                Some(b) => b.present(p.texels).map(|present| {
+                    let (cols, rows) = atlas_blocks(present.iter().filter(|&&v| v).count());
+                    (cols as u32 * b.side, rows as u32 * b.side)
+                }),
+            };
+            match size {
+                Ok(size) => {
+                    check_png_size(dir, c, &p.texture, Layer::Photo, size, &mut rep);
+                    check_png_size(dir, c, &p.confidence, Layer::Photo, size, &mut rep);
+                }
+                Err(problem) => rep.findings.push(Finding {
+                    cell: Some(c.id.clone()),
+                    file: p.texture.path.clone(),
+                    layer: Layer::Photo,
+                    problem,
+                }),
+            }
         }
     }
     rep
@@ -218,6 +237,18 @@ fn check_png(
     side: u32,
     rep: &mut VerifyReport,
 ) {
+    check_png_size(dir, c, f, layer, (side, side), rep)
+}
+
+/// [`check_png`] of an image of `size` (width, height).
+fn check_png_size(
+    dir: &Path,
+    c: &CellRecord,
+    f: &FileRef,
+    layer: Layer,
+    size: (u32, u32),
+    rep: &mut VerifyReport,
+) {
     let Some(bytes) = read_checked(dir, c, f, layer, rep) else {
         return;
     };
@@ -225,8 +256,9 @@ fn check_png(
         .map(|i| (i.width(), i.height()));
     let problem = match decoded {
         Err(e) => Some(format!("cannot decode PNG: {e}")),
-        Ok((w, h)) if (w, h) != (side, side) => Some(format!(
-            "texture is {w}x{h}, the manifest records {side}x{side}"
+        Ok((w, h)) if (w, h) != size => Some(format!(
+            "texture is {w}x{h}, the manifest records {}x{}",
+            size.0, size.1
         )),
         Ok(_) => None,
     };
