@@ -87,13 +87,15 @@ pub fn blend_cell(
     let mut stored = vec![false; grid * grid];
     let (px, cv) = (texture.as_mut(), conf.as_mut());
     let base_index = ctx.base_indexer(acc.texels, acc.scale);
+    let resolution_weight = params.resolution_weight_fn();
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
         if t >= n {
             return;
         }
         let b = base_index(t);
         let ratio = ctx.existing_resolution(b) as f64 / resolution as f64;
-        let beta = params.photo_weight(confidence as f64, ratio);
+        // (= params.photo_weight(confidence, ratio))
+        let beta = params.blend_weight(confidence as f64) * resolution_weight(ratio);
         if !(beta > 0.0) {
             return;
         }

@@ -145,16 +145,23 @@ impl ConfidenceParams {
     /// smooth and non-decreasing in the ratio, 0 at or below `2^resolution_ramp[0]`, 1 at or
     /// above `2^resolution_ramp[1]`; 0 for NaN, 1 for an infinite ratio.
     pub fn resolution_weight(&self, ratio: f64) -> f64 {
+        self.resolution_weight_fn()(ratio)
+    }
+
+    /// [`Self::resolution_weight`] as a function with the ramp's ends computed once (for
+    /// loops over texels; the same values bit for bit).
+    pub fn resolution_weight_fn(&self) -> impl Fn(f64) -> f64 + Copy {
         let [lo, hi] = self.resolution_ramp;
-        // (compared in the log domain: one logarithm per texel, no powers)
-        let l = ratio.log2();
-        if l.is_nan() || l <= lo {
-            return 0.0;
+        let (rlo, rhi) = (lo.exp2(), hi.exp2());
+        move |ratio: f64| {
+            if ratio.is_nan() || ratio <= rlo {
+                return 0.0;
+            }
+            if ratio >= rhi {
+                return 1.0;
+            }
+            smoothstep((ratio.log2() - lo) / (hi - lo))
         }
-        if l >= hi {
-            return 1.0;
-        }
-        smoothstep((l - lo) / (hi - lo))
     }
 
     /// The photo's weight `β` in [0, 1] on a texel: [`Self::blend_weight`] of its coverage
