@@ -39,25 +39,42 @@ pub fn fails_naming(args: &[&str], needle: &str) {
     );
 }
 
-/// Runs the Khronos glTF validator (tools/js, installed by `.ci/run` with `npm ci --prefix
-/// tools/js`) on `files` and fails the test unless every file has 0 errors. Fails, saying
-/// how to install it, when the validator is missing.
-pub fn validate_gltf(files: &[&std::path::Path]) {
-    let tools = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/js");
+/// Runs `tools/validate/validate.mjs` (the Khronos glTF validator and the 3D Tiles 1.1 JSON
+/// schemas; installed by `.ci/run` with `npm ci --prefix tools/validate`) on `paths` (glTF
+/// files, tileset JSON files or directories) and returns its exit code and its JSON summary
+/// (`{"tools", "files": [{"file", "kind", "numErrors", "numWarnings", "numInfos", "numHints",
+/// "issues": {CODE: {"severity", "count"}}, "messages"}], "totals"}`). Fails, saying how to
+/// install it, when the validator is missing.
+pub fn validate_export(paths: &[&std::path::Path]) -> (i32, serde_json::Value) {
+    let tools = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/validate");
     assert!(
-        tools.join("node_modules/gltf-validator").exists(),
-        "the glTF validator is not installed: run `npm ci --prefix tools/js` (as .ci/run does)"
+        tools.join("node_modules/gltf-validator").exists()
+            && tools.join("node_modules/ajv").exists(),
+        "the validators are not installed: run `npm ci --prefix tools/validate` (as .ci/run does)"
     );
     let o = Command::new("node")
-        .arg(tools.join("validate_gltf.mjs"))
-        .args(files)
+        .arg(tools.join("validate.mjs"))
+        .args(paths)
         .output()
-        .expect("cannot start node");
+        .expect("cannot start node (.ci/run installs it)");
+    let summary = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!(
+            "validate.mjs gave no JSON summary ({e}):\n{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    (o.status.code().unwrap_or(-1), summary)
+}
+
+/// Validates glTF `files` with the Khronos glTF validator ([`validate_export`]) and fails
+/// the test unless every file has 0 errors and 0 warnings.
+pub fn validate_gltf(files: &[&std::path::Path]) {
+    let (code, summary) = validate_export(files);
+    let t = &summary["totals"];
     assert!(
-        o.status.success(),
-        "glTF validation failed:\n{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
+        code == 0 && t["numErrors"] == 0 && t["numWarnings"] == 0 && t["gltf"] == files.len(),
+        "glTF validation failed (exit {code}):\n{summary:#}"
     );
 }
 
