@@ -20,7 +20,8 @@
 //! optionally with the photo texture sizes `fixed` (the cells' own sizes,
 //! `--fixed-photo-texels`) or `tpdN` (`--max-texels-per-photo-pixel N`); default
 //! `grid,bvh:fast` (photo-driven sizes, the defaults of `cliffmap project`). The table also
-//! gives the photo texture memory each variant wrote.
+//! gives the photo texture memory each variant wrote (GPU, RGBA8 with mips) and the bytes
+//! of its photo texture files.
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;
@@ -102,6 +103,7 @@ fn main() -> anyhow::Result<()> {
     let mut wall = vec![Vec::new(); n];
     let mut cpu = vec![Vec::new(); n];
     let mut bytes = vec![0u64; n];
+    let mut disk = vec![0u64; n];
     let mut stages: Vec<Vec<Vec<(String, f64)>>> = vec![Vec::new(); n];
     for run in 0..runs {
         for (k, (_, accel, texture)) in variants.iter().enumerate() {
@@ -124,18 +126,28 @@ fn main() -> anyhow::Result<()> {
                 .map(|l| l.photo_texture_bytes)
                 .sum();
             stages[k].push(report.stage_seconds);
+            disk[k] = cliffmap::store::Store::open(&work)?
+                .manifest
+                .cells
+                .iter()
+                .filter_map(|c| c.photo.as_ref())
+                .map(|p| p.texture.bytes + p.confidence.bytes)
+                .sum();
         }
     }
     let base = median(wall[0].clone());
-    println!("| variant | wall s (median) | CPU s (median) | wall × first | photo textures MB |");
-    println!("|---|---|---|---|---|");
+    println!(
+        "| variant | wall s (median) | CPU s (median) | wall × first | photo textures GPU MB | photo files on disk MB |"
+    );
+    println!("|---|---|---|---|---|---|");
     for (k, (name, ..)) in variants.iter().enumerate() {
         let m = median(wall[k].clone());
         println!(
-            "| {name} | {m:.2} | {:.2} | {:.2} | {:.0} |",
+            "| {name} | {m:.2} | {:.2} | {:.2} | {:.0} | {:.0} |",
             median(cpu[k].clone()),
             m / base,
-            bytes[k] as f64 / 1e6
+            bytes[k] as f64 / 1e6,
+            disk[k] as f64 / 1e6
         );
     }
     println!("\nStage wall seconds (medians; - where a variant has no such stage):\n");
