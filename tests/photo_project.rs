@@ -321,6 +321,13 @@ fn e2e_reparam_drops_photo_textures() {
                     assert!(present[((y / b.side) * g + x / b.side) as usize]);
                 }
             }
+            // the exporters embed the whole texture, pixel for pixel
+            let e = cliffmap::export::read_export_cell(&store, c).unwrap();
+            let embedded =
+                image::load_from_memory_with_format(&e.texture_bytes, image::ImageFormat::Png)
+                    .unwrap()
+                    .to_rgba8();
+            assert!(embedded == img, "{}: exported texture differs", c.id);
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
