@@ -19,8 +19,8 @@
 use image::RgbImage;
 
 use super::PixelFootprint;
+use super::colour_transform::ColourTransform;
 use super::confidence::{BorderFeather, ConfidenceParams};
-use super::level::ColourTransform;
 use super::occlusion::{OcclusionMap, occlusion_weight};
 use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
 pub use super::texel_tiles::{TexelSums, TexelTiles};

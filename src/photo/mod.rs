@@ -32,6 +32,7 @@ mod accumulate;
 mod blend;
 mod bvh;
 mod colmap;
+mod colour_transform;
 mod confidence;
 mod corners;
 mod footprint;
@@ -53,7 +54,6 @@ pub use accumulate::{
     BlendMode, CellAccum, CellContext, MIN_COS_SLOPE, PhotoAccum, PhotoSamples, TexelSums,
 };
 pub use blend::{Blended, blend_cell, magnify};
-pub use occlusion::{OcclusionMap, occlusion_weight};
 pub use bvh::{BvhQuality, TriHit, TriangleBvh, nearest_brute_force};
 pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
@@ -69,6 +69,7 @@ pub use level::{
     ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
     normal_cos_slope,
 };
+pub use occlusion::{OcclusionMap, occlusion_weight};
 pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
 pub use scene::{LevelScene, SceneCell};
 pub use sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};

@@ -134,9 +134,7 @@ fn distance_transform(seeds: &[bool], w: usize, h: usize) -> Vec<f32> {
         edt_1d(row, &mut out[..w], &mut buf);
         row.copy_from_slice(&out[..w]);
     }
-    g.into_iter()
-        .map(|v| (v.sqrt() as f32).min(CAP))
-        .collect()
+    g.into_iter().map(|v| (v.sqrt() as f32).min(CAP)).collect()
 }
 
 /// `out[q] = min_p (q − p)² + f[p]` (the lower envelope of parabolas); `f` finite.
@@ -205,7 +203,11 @@ mod tests {
     fn distances_to_the_sky_and_to_depth_jumps() {
         // sky above row 10, terrain at 100 m below, a near rock (50 m) in columns 30..40
         let fs = set(64, 48, |c, r| {
-            (r >= 10).then_some(if (30..40).contains(&c) && r >= 30 { 50.0 } else { 100.0 })
+            (r >= 10).then_some(if (30..40).contains(&c) && r >= 30 {
+                50.0
+            } else {
+                100.0
+            })
         });
         let m = OcclusionMap::from_footprints(&fs, 64, 48, 2.0, 0.1);
         // the first terrain row touches the sky: seeds there; full-resolution pixels are
@@ -231,9 +233,14 @@ mod tests {
             for c in 0..64u32 {
                 let bf = seeds
                     .iter()
-                    .map(|&(x, y)| ((x as f32 - c as f32).powi(2) + (y as f32 - r as f32).powi(2)).sqrt())
+                    .map(|&(x, y)| {
+                        ((x as f32 - c as f32).powi(2) + (y as f32 - r as f32).powi(2)).sqrt()
+                    })
                     .fold(f32::INFINITY, f32::min);
-                assert!((m.distance_px([c, r], 2.0) / 2.0 - bf).abs() < 1e-3, "{c},{r}");
+                assert!(
+                    (m.distance_px([c, r], 2.0) / 2.0 - bf).abs() < 1e-3,
+                    "{c},{r}"
+                );
             }
         }
     }

@@ -710,7 +710,10 @@ mod tests {
         // accumulation, partly outside the texture on every side
         for n in 0..1500 {
             let big = if n % 3 == 0 { 22.0 } else { 0.0 };
-            let c = [rnd() * 14.0 - 1.0 - big / 2.0, rnd() * 14.0 - 1.0 - big / 2.0];
+            let c = [
+                rnd() * 14.0 - 1.0 - big / 2.0,
+                rnd() * 14.0 - 1.0 - big / 2.0,
+            ];
             let s = 0.3 + rnd() * 8.0 + big;
             let q: [[f32; 2]; 4] =
                 std::array::from_fn(|_| [(c[0] + s * rnd()) as f32, (c[1] + s * rnd()) as f32]);

@@ -1,8 +1,8 @@
 //! The GPU distortion pass: resamples a frame's pinhole image (see [`super::distortion`])
 //! into the output target through the camera's radial distortion (`shaders/distort.wgsl`).
 
+use super::context::GpuContext;
 use super::distortion::{DistortedView, NEWTON_STEPS};
-use super::gpu::GpuContext;
 use super::target::{OPAQUE_TARGET, RenderTarget};
 
 /// Pipeline, sampler and uniform buffer of the distortion pass.

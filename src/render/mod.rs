@@ -34,6 +34,8 @@ pub use stream::{DrawList, Streamer, resolve_draw_list};
 pub use supersample::downsample_rgba;
 
 pub mod accuracy;
+mod cell_data;
+mod context;
 pub mod gpu;
 mod scene;
 

@@ -36,6 +36,7 @@ mod footprint;
 mod kernel;
 mod raster;
 mod subtexel;
+mod texel;
 
 use std::time::{Duration, Instant};
 

@@ -10,7 +10,7 @@
 
 use super::SrcView;
 use super::footprint::{Affine2, Param, Shape, inside};
-use super::kernel::{AreaSum, Scratch, TexelColour, bilinear_at};
+use super::texel::{AreaSum, Scratch, TexelColour, bilinear_at};
 use crate::fastmath::{ceil_f, floor_f, floor_i};
 
 /// Largest accepted subtexel count per axis.
@@ -252,7 +252,7 @@ mod tests {
                 m: [[a[0], b[0], p0[0]], [a[1], b[1], p0[1]]],
             };
             let n = [1, 2, 3, 4, 8][trial % 5];
-            let shape = Shape::new(&map, super::super::kernel::MIN_FOOTPRINT_AREA);
+            let shape = Shape::new(&map, super::super::texel::MIN_FOOTPRINT_AREA);
             let fast = texel_colour(&src, &map, shape.as_ref(), 0, 0, n, &mut scratch);
             let slow = kernel::texel_colour(
                 &src,
