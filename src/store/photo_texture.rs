@@ -105,6 +105,34 @@ fn block_rect(i: usize, side: u32, texels: u32) -> (usize, usize, usize, usize) 
     (x0, y0, s.min(n - x0), s.min(n - y0))
 }
 
+/// Calls `copy(texture_offset, atlas_offset, len)` (in texels) for every row of every block
+/// marked in `present` of a texture of side `texels`, in the atlas of [`atlas_blocks`] blocks
+/// per row (the `k`-th marked block at atlas block `k`, row-major, atlas width `aw`).
+fn block_rows(
+    present: &[bool],
+    side: u32,
+    texels: u32,
+    cols: usize,
+    aw: usize,
+    mut copy: impl FnMut(usize, usize, usize),
+) {
+    let blocks = present.iter().enumerate().filter(|p| *p.1).map(|p| p.0);
+    for (k, i) in blocks.enumerate() {
+        let (x0, y0, w, h) = block_rect(i, side, texels);
+        let (ax, ay) = ((k % cols) * side as usize, (k / cols) * side as usize);
+        for r in 0..h {
+            copy((y0 + r) * texels as usize + x0, (ay + r) * aw + ax, w);
+        }
+    }
+}
+
+/// The atlas blocks per row and the atlas size (texels) for the blocks `present` marks.
+fn atlas_layout(present: &[bool], side: u32) -> (usize, usize, usize, usize) {
+    let count = present.iter().filter(|&&p| p).count();
+    let (cols, rows) = atlas_blocks(count);
+    (count, cols, cols * side as usize, rows * side as usize)
+}
+
 /// The blocks of `full` marked in `present` packed into an atlas ([`atlas_blocks`] blocks of
 /// `side²` texels, the `k`-th marked block at atlas block `k`, row-major; texels past a cut
 /// block 0).
@@ -113,28 +141,13 @@ pub fn pack<P: Pixel<Subpixel = u8>>(
     side: u32,
     present: &[bool],
 ) -> ImageBuffer<P, Vec<u8>> {
-    let texels = full.width();
-    let count = present.iter().filter(|&&p| p).count();
-    let (cols, rows) = atlas_blocks(count);
-    let (aw, ah) = (cols * side as usize, rows * side as usize);
+    let (_, cols, aw, ah) = atlas_layout(present, side);
     let ch = P::CHANNEL_COUNT as usize;
     let mut atlas = vec![0u8; aw * ah * ch];
     let src = full.as_raw();
-    for (k, i) in present
-        .iter()
-        .enumerate()
-        .filter(|p| *p.1)
-        .map(|p| p.0)
-        .enumerate()
-    {
-        let (x0, y0, w, h) = block_rect(i, side, texels);
-        let (ax, ay) = ((k % cols) * side as usize, (k / cols) * side as usize);
-        for r in 0..h {
-            let s = ((y0 + r) * texels as usize + x0) * ch;
-            let d = ((ay + r) * aw + ax) * ch;
-            atlas[d..d + w * ch].copy_from_slice(&src[s..s + w * ch]);
-        }
-    }
+    block_rows(present, side, full.width(), cols, aw, |t, a, n| {
+        atlas[a * ch..(a + n) * ch].copy_from_slice(&src[t * ch..(t + n) * ch]);
+    });
     ImageBuffer::from_raw(aw as u32, ah as u32, atlas).unwrap_or_else(|| ImageBuffer::new(0, 0))
 }
 
@@ -146,10 +159,7 @@ pub fn unpack<P: Pixel<Subpixel = u8>>(
     side: u32,
     present: &[bool],
 ) -> Result<(), String> {
-    let texels = full.width();
-    let count = present.iter().filter(|&&p| p).count();
-    let (cols, rows) = atlas_blocks(count);
-    let (aw, ah) = (cols * side as usize, rows * side as usize);
+    let (count, cols, aw, ah) = atlas_layout(present, side);
     if (atlas.width() as usize, atlas.height() as usize) != (aw, ah) || count == 0 {
         return Err(format!(
             "photo texture atlas is {}x{}, its {count} blocks of {side} texels need {aw}x{ah}",
@@ -158,22 +168,11 @@ pub fn unpack<P: Pixel<Subpixel = u8>>(
         ));
     }
     let ch = P::CHANNEL_COUNT as usize;
+    let texels = full.width();
     let (src, dst) = (atlas.as_raw(), &mut **full);
-    for (k, i) in present
-        .iter()
-        .enumerate()
-        .filter(|p| *p.1)
-        .map(|p| p.0)
-        .enumerate()
-    {
-        let (x0, y0, w, h) = block_rect(i, side, texels);
-        let (ax, ay) = ((k % cols) * side as usize, (k / cols) * side as usize);
-        for r in 0..h {
-            let d = ((y0 + r) * texels as usize + x0) * ch;
-            let s = ((ay + r) * aw + ax) * ch;
-            dst[d..d + w * ch].copy_from_slice(&src[s..s + w * ch]);
-        }
-    }
+    block_rows(present, side, texels, cols, aw, |t, a, n| {
+        dst[t * ch..(t + n) * ch].copy_from_slice(&src[a * ch..(a + n) * ch]);
+    });
     Ok(())
 }
 

@@ -159,16 +159,22 @@ fn terrain_rgb_seed() -> Vec<u8> {
     c.into_inner()
 }
 
-fn geotiff_seeds(dir: &Path) -> Vec<Vec<u8>> {
-    use super::common::tiffgen::{Geo, write_strips};
-    use tiff::encoder::{Compression, Predictor, colortype};
-    let geo = Geo {
+/// The georeference of the DEM seeds: 2 m samples from (500000, 7000000), UTM 33N,
+/// no-data -9999.
+fn dem_geo() -> super::common::tiffgen::Geo {
+    super::common::tiffgen::Geo {
         scale: (2.0, 2.0),
         tie: (0.0, 0.0, 500000.0, 7000000.0),
         pixel_is_point: false,
         epsg: Some(32633),
         nodata: Some("-9999".into()),
-    };
+    }
+}
+
+fn geotiff_seeds(dir: &Path) -> Vec<Vec<u8>> {
+    use super::common::tiffgen::write_strips;
+    use tiff::encoder::{Compression, Predictor, colortype};
+    let geo = dem_geo();
     let data: Vec<f32> = (0..8 * 6).map(|i| 100.0 + i as f32 * 0.5).collect();
     let mut out = Vec::new();
     for (k, comp) in [
@@ -265,14 +271,8 @@ fn store_seeds(dir: &Path) -> (Vec<u8>, Vec<u8>) {
 }
 
 fn tiled_geotiff_seeds(dir: &Path) -> Vec<Vec<u8>> {
-    use super::common::tiffgen::{Geo, Raw, f32_bytes, write_raw};
-    let geo = Geo {
-        scale: (2.0, 2.0),
-        tie: (0.0, 0.0, 500000.0, 7000000.0),
-        pixel_is_point: false,
-        epsg: Some(32633),
-        nodata: Some("-9999".into()),
-    };
+    use super::common::tiffgen::{Raw, f32_bytes, write_raw};
+    let geo = dem_geo();
     // 20 x 18 samples in 16 x 16 tiles: partial tiles at the right and the bottom
     let (w, h) = (20u32, 18u32);
     let f: Vec<f32> = (0..w * h).map(|i| 100.0 + i as f32 * 0.25).collect();
