@@ -1,0 +1,137 @@
+//! What a reader pays for photo textures stored in blocks (docs/projection.md, "Photo
+//! textures in blocks"): projects IMG_8902 onto a copy of the reparameterized Engabreen store
+//! (STORE_DIR, as for `project_bench`), then, per photo cell, times
+//! `Store::read_photo_texture` (decode the block atlases and the active texture, magnify it,
+//! paste the blocks) against decoding the same whole texture and confidence map stored as
+//! dense PNGs (encoded once beforehand with the store's default PNG compression). Both are
+//! timed in the same run, interleaved cell by cell, RUNS times; prints the medians of the
+//! totals and the bytes each layout keeps on disk.
+//!
+//! ```sh
+//! cargo run --release --example photo_read_bench -- [STORE_DIR] [RUNS]
+//! ```
+
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use bench_util::{median, shared_data};
+use cliffmap::fsutil::{PngCompression, encode_png};
+use cliffmap::photo::read_photo_list;
+use cliffmap::pipeline::{ProjectOptions, project_store};
+use cliffmap::store::Store;
+
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    for e in std::fs::read_dir(from)? {
+        let e = e?;
+        let dest = to.join(e.file_name());
+        if e.file_type()?.is_dir() {
+            copy_dir(&e.path(), &dest)?;
+        } else {
+            std::fs::copy(e.path(), dest)?;
+        }
+    }
+    Ok(())
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let tmp = tempfile::tempdir()?;
+    let dir = args
+        .get(1)
+        .map_or_else(|| tmp.path().join("store"), PathBuf::from);
+    let runs: usize = args
+        .get(2)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(3)
+        .max(1);
+    if !dir.join("manifest.json").is_file() {
+        bench_util::build_engabreen_store(&dir, "photo-read-bench")?;
+        cliffmap::pipeline::reparam_store(
+            &dir,
+            &cliffmap::pipeline::ReparamOptions {
+                quiet: true,
+                ..Default::default()
+            },
+        )?;
+    }
+    let work = tmp.path().join("work");
+    copy_dir(&dir, &work)?;
+    let list = tmp.path().join("photos.json");
+    let data = shared_data("engabreen");
+    std::fs::write(
+        &list,
+        serde_json::json!({"photos": [{"image": data.join("IMG_8902.jpg"), "imgraft": data.join("engabreen_camera_IMG_8902.json")}]})
+            .to_string(),
+    )?;
+    let photos = read_photo_list(&list)?;
+    project_store(
+        &work,
+        &photos,
+        &ProjectOptions {
+            quiet: true,
+            ..ProjectOptions::default()
+        },
+    )?;
+    let store = Store::open(&work)?;
+    let cells: Vec<_> = store
+        .manifest
+        .cells
+        .iter()
+        .filter(|c| c.photo.is_some())
+        .collect();
+    // the dense layout of the same textures, encoded once
+    let mut dense = Vec::with_capacity(cells.len());
+    let (mut dense_bytes, mut block_bytes, mut texels) = (0u64, 0u64, 0u64);
+    for c in &cells {
+        let Some(p) = &c.photo else { continue };
+        let (t, conf) = store.read_photo_texture(c, p)?;
+        let path = work.join(&p.texture.path);
+        let a = encode_png(&path, &t, PngCompression::default())?;
+        let b = encode_png(&path, &conf, PngCompression::default())?;
+        dense_bytes += (a.len() + b.len()) as u64;
+        block_bytes += p.texture.bytes + p.confidence.bytes;
+        texels += p.texels as u64 * p.texels as u64;
+        dense.push((a, b));
+    }
+    let (mut blocks_s, mut dense_s) = (Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let (mut tb, mut td) = (0.0, 0.0);
+        for (c, (a, b)) in cells.iter().zip(&dense) {
+            let Some(p) = &c.photo else { continue };
+            let t0 = Instant::now();
+            let got = store.read_photo_texture(c, p)?;
+            tb += t0.elapsed().as_secs_f64();
+            let t0 = Instant::now();
+            let ta = image::load_from_memory_with_format(a, image::ImageFormat::Png)?.to_rgba8();
+            let tc = image::load_from_memory_with_format(b, image::ImageFormat::Png)?.to_luma8();
+            td += t0.elapsed().as_secs_f64();
+            anyhow::ensure!(ta == got.0 && tc == got.1, "{}: layouts differ", c.id);
+        }
+        blocks_s.push(tb);
+        dense_s.push(td);
+    }
+    println!(
+        "Engabreen + IMG_8902: {} photo cells, {:.0} M texels, {} threads, {runs} runs\n",
+        cells.len(),
+        texels as f64 / 1e6,
+        rayon::current_num_threads()
+    );
+    println!("| layout | read all photo cells, s (median) | × dense | files on disk, MB |");
+    println!("|---|---|---|---|");
+    let (mb, md) = (median(blocks_s), median(dense_s));
+    println!(
+        "| blocks (`read_photo_texture`) | {mb:.2} | {:.2} | {:.0} |",
+        mb / md,
+        block_bytes as f64 / 1e6
+    );
+    println!(
+        "| dense PNG (decode) | {md:.2} | 1.00 | {:.0} |",
+        dense_bytes as f64 / 1e6
+    );
+    Ok(())
+}
