@@ -21,6 +21,10 @@ pub struct Args {
     /// Only cells meeting the rectangle "X0,Y0,X1,Y1" (world metres, the store's CRS).
     #[arg(long, allow_hyphen_values = true)]
     region: Option<String>,
+    /// Lit materials: the normal maps in tangent space with NORMAL and TANGENT attributes,
+    /// instead of unlit ones (KHR_materials_unlit) showing the texture as it is.
+    #[arg(long)]
+    lit: bool,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
@@ -51,6 +55,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             region,
         },
         &a.out,
+        a.lit,
     )?;
     if !a.quiet {
         println!(

@@ -40,6 +40,10 @@ pub struct Args {
     /// NAME the file's stem); repeatable.
     #[arg(long)]
     view: Vec<PathBuf>,
+    /// Lit materials: the normal maps in tangent space with NORMAL and TANGENT attributes,
+    /// instead of unlit ones (KHR_materials_unlit) showing the texture as it is.
+    #[arg(long)]
+    lit: bool,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
@@ -70,6 +74,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             geoid_grid: a.geoid,
             extra_modes: a.modes.0,
             jpeg_quality: a.jpeg_quality,
+            lit: a.lit,
             subtree_levels: a.subtree_levels,
             views,
         },
@@ -103,7 +108,11 @@ fn parse_modes(s: &str) -> Result<Modes, String> {
             "reparam" => &[TextureSource::Reparam],
             "ortho" => &[TextureSource::Ortho],
             "all" => &[TextureSource::Reparam, TextureSource::Ortho],
-            _ => return Err(format!("unknown texture mode {m:?}: expected photo, reparam, ortho or all")),
+            _ => {
+                return Err(format!(
+                    "unknown texture mode {m:?}: expected photo, reparam, ortho or all"
+                ));
+            }
         };
         for t in list {
             if !out.contains(t) {

@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::error::{Error, Result};
-use crate::store::{CellRecord, Store, texcoord};
+use crate::store::{CellRecord, FileRef, Store, texcoord};
 
 /// Which texture a cell exports: the best it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +62,11 @@ pub struct ExportCell {
     pub texture: TextureSource,
     /// The cell's geometric error (metres).
     pub max_error: f64,
+    /// The normal map of the mesh's texture layout (object space, the store's file).
+    pub normal_file: FileRef,
+    /// For the lit variant ([`ExportCell::make_lit`]): the normal map in tangent space as
+    /// PNG bytes ([`super::normals`]); `None`: unlit.
+    pub normal_png: Option<Vec<u8>>,
 }
 
 /// Reads a cell for export: the mesh its best texture belongs to (the reparameterized one
@@ -88,6 +93,9 @@ pub fn read_export_cell_as(
         Some(r) => store.read_mesh_file(&r.files.mesh)?,
         None => store.read_mesh(rec)?,
     };
+    let normal_file = reparam
+        .map_or(&rec.files.normal, |r| &r.files.normal)
+        .clone();
     let (file, texture) = match (photo, reparam) {
         (Some(p), _) => (&p.texture, TextureSource::Photo),
         (None, Some(r)) => (&r.files.texture, TextureSource::Reparam),
@@ -129,10 +137,26 @@ pub fn read_export_cell_as(
         texture_mime: "image/png",
         texture,
         max_error: rec.max_error,
+        normal_file,
+        normal_png: None,
     })
 }
 
 impl ExportCell {
+    /// Prepares the lit variant: the cell's normal map (read from `store`, verified) baked
+    /// into the tangent space of its surface's vertex frames ([`super::normals`]), as PNG.
+    pub fn make_lit(&mut self, store: &Store) -> Result<()> {
+        let map = store.read_png(&self.normal_file)?.to_rgb8();
+        let frames = super::normals::vertex_frames(&self.positions, &self.uvs, &self.surface);
+        let baked = super::normals::bake_tangent_normals(&map, &self.uvs, &self.surface, &frames);
+        self.normal_png = Some(crate::fsutil::encode_png(
+            &store.dir.join(&self.normal_file.path),
+            &baked,
+            crate::fsutil::PngCompression::default(),
+        )?);
+        Ok(())
+    }
+
     /// Re-encodes the colour texture as a baseline JPEG of `quality` (1..=100) from its RGB;
     /// alpha is dropped (the exported materials are opaque, so it is never shown). Errors
     /// name the cell.

@@ -43,14 +43,33 @@ impl GeoidGrid {
                 "extent x {x0}..{x1}, y {y0}..{y1} is not in degrees of longitude/latitude (no georeference?)"
             )));
         }
-        Ok(GeoidGrid { dem, path: path.to_path_buf() })
+        Ok(GeoidGrid {
+            dem,
+            path: path.to_path_buf(),
+        })
     }
 
     /// A grid from samples (row-major, north row first) with sample (0, 0) at
     /// (`lon0`, `lat0`) degrees and spacings `dlon`, `dlat` > 0 (rows run south).
-    pub fn from_samples(width: usize, height: usize, values: Vec<f32>, lon0: f64, lat0: f64, dlon: f64, dlat: f64) -> Result<GeoidGrid> {
-        let georef = crate::georef::GridGeoref { origin_x: lon0, origin_y: lat0, spacing_x: dlon, spacing_y: dlat };
-        Ok(GeoidGrid { dem: Dem::from_heights(width, height, values, georef)?, path: PathBuf::from("(samples)") })
+    pub fn from_samples(
+        width: usize,
+        height: usize,
+        values: Vec<f32>,
+        lon0: f64,
+        lat0: f64,
+        dlon: f64,
+        dlat: f64,
+    ) -> Result<GeoidGrid> {
+        let georef = crate::georef::GridGeoref {
+            origin_x: lon0,
+            origin_y: lat0,
+            spacing_x: dlon,
+            spacing_y: dlat,
+        };
+        Ok(GeoidGrid {
+            dem: Dem::from_heights(width, height, values, georef)?,
+            path: PathBuf::from("(samples)"),
+        })
     }
 
     /// The file the grid was read from.
@@ -79,13 +98,17 @@ impl GeoidGrid {
                 self.path.display()
             )));
         }
-        let (c0, r0) = ((col.floor() as usize).min(w - 2), (row.floor() as usize).min(h - 2));
+        let (c0, r0) = (
+            (col.floor() as usize).min(w - 2),
+            (row.floor() as usize).min(h - 2),
+        );
         let (fc, fr) = (col - c0 as f64, row - r0 as f64);
         let mut v = [[0.0f64; 2]; 2];
         for dr in 0..2 {
             for dc in 0..2 {
                 let i = (r0 + dr) * w + c0 + dc;
-                let weight = if dr == 0 { 1.0 - fr } else { fr } * if dc == 0 { 1.0 - fc } else { fc };
+                let weight =
+                    if dr == 0 { 1.0 - fr } else { fr } * if dc == 0 { 1.0 - fc } else { fc };
                 if weight > 0.0 && self.dem.void[i] {
                     return Err(Error::BadOption(format!(
                         "geoid grid {}: no data next to longitude {lon:.6}°, latitude {lat:.6}°",
@@ -97,7 +120,11 @@ impl GeoidGrid {
         }
         // Lerp form: exact for a constant grid.
         let lerp = |a: f64, b: f64, t: f64| a + t * (b - a);
-        Ok(lerp(lerp(v[0][0], v[0][1], fc), lerp(v[1][0], v[1][1], fc), fr))
+        Ok(lerp(
+            lerp(v[0][0], v[0][1], fc),
+            lerp(v[1][0], v[1][1], fc),
+            fr,
+        ))
     }
 }
 
@@ -109,7 +136,11 @@ mod tests {
     fn plane() -> GeoidGrid {
         let (w, h) = (11, 11);
         let v: Vec<f32> = (0..h)
-            .flat_map(|r| (0..w).map(move |c| (20.0 + 0.5 * (10.0 + c as f64) - 0.25 * (70.0 - r as f64)) as f32))
+            .flat_map(|r| {
+                (0..w).map(move |c| {
+                    (20.0 + 0.5 * (10.0 + c as f64) - 0.25 * (70.0 - r as f64)) as f32
+                })
+            })
             .collect();
         GeoidGrid::from_samples(w, h, v, 10.0, 70.0, 1.0, 1.0).unwrap()
     }
@@ -119,7 +150,10 @@ mod tests {
         let g = plane();
         for (lon, lat) in [(10.0, 60.0), (13.7, 66.25), (20.0, 70.0), (14.01, 61.99)] {
             let want = 20.0 + 0.5 * lon - 0.25 * lat;
-            assert!((g.undulation(lon, lat).unwrap() - want).abs() < 1e-5, "{lon} {lat}");
+            assert!(
+                (g.undulation(lon, lat).unwrap() - want).abs() < 1e-5,
+                "{lon} {lat}"
+            );
             assert!((g.undulation(lon - 360.0, lat).unwrap() - want).abs() < 1e-5);
         }
     }

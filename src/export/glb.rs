@@ -1,6 +1,8 @@
 //! One binary glTF (GLB) of export cells: a node and mesh per cell with two primitives
 //! (surface, skirt) over shared positions and texture coordinates, the cell's texture
-//! embedded as stored, an unlit material (`KHR_materials_unlit`).
+//! embedded as stored, an unlit material (`KHR_materials_unlit`); cells prepared with
+//! [`ExportCell::make_lit`] get a lit material instead: `NORMAL` and `TANGENT` from the
+//! exported positions ([`super::normals::vertex_frames`]) and the tangent-space normal map.
 
 use std::collections::BTreeMap;
 
@@ -23,7 +25,9 @@ pub fn write_glb(
 ) -> Result<Vec<u8>> {
     let mut root = json::Root::default();
     root.asset.generator = Some(format!("cliffmap {}", env!("CARGO_PKG_VERSION")));
-    root.extensions_used.push("KHR_materials_unlit".into());
+    if cells.iter().any(|c| c.normal_png.is_none()) {
+        root.extensions_used.push("KHR_materials_unlit".into());
+    }
     let mut bin: Vec<u8> = Vec::new();
     let sampler = root.push(json::texture::Sampler {
         mag_filter: Some(Valid(json::texture::MagFilter::Linear)),
@@ -79,6 +83,68 @@ pub fn write_glb(
             json::accessor::Type::Vec2,
             None,
         ));
+        // the lit variant: vertex frames of the exported positions and the baked normal map
+        let mut lit = None;
+        if let Some(png) = &cell.normal_png {
+            let p: Vec<glam::DVec3> = local
+                .iter()
+                .map(|q| glam::DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64))
+                .collect();
+            let f = super::normals::vertex_frames(&p, &cell.uvs, &cell.surface);
+            let normals: Vec<f32> = f
+                .normals
+                .iter()
+                .flat_map(|n| n.to_array().map(|v| v as f32))
+                .collect();
+            let tangents: Vec<f32> = f
+                .tangents
+                .iter()
+                .flat_map(|t| t.map(|v| v as f32))
+                .collect();
+            let nv = push_view(
+                &mut root,
+                &mut bin,
+                bytes_of_f32(normals.iter()),
+                Some(json::buffer::Target::ArrayBuffer),
+            );
+            let tv = push_view(
+                &mut root,
+                &mut bin,
+                bytes_of_f32(tangents.iter()),
+                Some(json::buffer::Target::ArrayBuffer),
+            );
+            let normal = root.push(accessor(
+                nv,
+                f.normals.len(),
+                json::accessor::ComponentType::F32,
+                json::accessor::Type::Vec3,
+                None,
+            ));
+            let tangent = root.push(accessor(
+                tv,
+                f.tangents.len(),
+                json::accessor::ComponentType::F32,
+                json::accessor::Type::Vec4,
+                None,
+            ));
+            let view = push_view(&mut root, &mut bin, png.clone(), None);
+            let image = root.push(json::Image {
+                buffer_view: Some(view),
+                mime_type: Some(json::image::MimeType("image/png".into())),
+                name: Some(format!("{} normal (tangent space)", cell.id)),
+                uri: None,
+                extensions: None,
+                extras: Default::default(),
+            });
+            let texture = root.push(json::Texture {
+                name: None,
+                sampler: Some(sampler),
+                source: image,
+                extensions: None,
+                extras: Default::default(),
+            });
+            lit = Some((normal, tangent, texture));
+        }
         let image_view = push_view(&mut root, &mut bin, cell.texture_bytes.clone(), None);
         let image = root.push(json::Image {
             buffer_view: Some(image_view),
@@ -108,7 +174,14 @@ pub fn write_glb(
                 roughness_factor: json::material::StrengthFactor(1.0),
                 ..Default::default()
             },
-            extensions: Some(json::extensions::material::Material {
+            normal_texture: lit.map(|(_, _, index)| json::material::NormalTexture {
+                index,
+                scale: 1.0,
+                tex_coord: 0,
+                extensions: None,
+                extras: Default::default(),
+            }),
+            extensions: lit.is_none().then(|| json::extensions::material::Material {
                 unlit: Some(json::extensions::material::Unlit {}),
                 ..Default::default()
             }),
@@ -140,6 +213,10 @@ pub fn write_glb(
             let mut attributes = BTreeMap::new();
             attributes.insert(Valid(json::mesh::Semantic::Positions), pos);
             attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
+            if let Some((normal, tangent, _)) = lit {
+                attributes.insert(Valid(json::mesh::Semantic::Normals), normal);
+                attributes.insert(Valid(json::mesh::Semantic::Tangents), tangent);
+            }
             primitives.push(json::mesh::Primitive {
                 attributes,
                 extensions: None,

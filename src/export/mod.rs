@@ -13,6 +13,7 @@ mod cells;
 mod ecef;
 mod geoid;
 mod glb;
+pub mod normals;
 mod tiles;
 
 use std::path::Path;
@@ -27,9 +28,7 @@ pub use cells::{
 pub use ecef::{ToEcef, ecef_to_enu, proj_string};
 pub use geoid::GeoidGrid;
 pub use glb::write_glb;
-pub use tiles::{
-    TilesOptions, TilesReport, export_tiles, tile_path, tile_path_for, tileset_name,
-};
+pub use tiles::{TilesOptions, TilesReport, export_tiles, tile_path, tile_path_for, tileset_name};
 
 use crate::error::Result;
 use crate::store::Store;
@@ -59,13 +58,19 @@ pub fn local_y_up(origin: DVec3, p: DVec3) -> [f64; 3] {
 /// Writes the cells `sel` picks from the store in `dir` as one GLB at `out` (atomically):
 /// positions in [`local_y_up`] around the centre of the cells' bounding box (rounded to the
 /// metre), and in the glTF's `extras`: `{"cliffmap": {"crs", "origin", "axes", "cells",
-/// "level"}}`.
-pub fn export_glb(dir: &Path, sel: &CellSelection, out: &Path) -> Result<GlbReport> {
+/// "level"}}`; `lit`: the lit variant ([`ExportCell::make_lit`]) instead of unlit materials.
+pub fn export_glb(dir: &Path, sel: &CellSelection, out: &Path, lit: bool) -> Result<GlbReport> {
     let store = Store::open(dir)?;
     let picked = select_cells(&store, sel)?;
     let cells: Vec<ExportCell> = picked
         .par_iter()
-        .map(|&i| read_export_cell(&store, &store.manifest.cells[i]))
+        .map(|&i| {
+            let mut c = read_export_cell(&store, &store.manifest.cells[i])?;
+            if lit {
+                c.make_lit(&store)?;
+            }
+            Ok(c)
+        })
         .collect::<Result<_>>()?;
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for &i in &picked {

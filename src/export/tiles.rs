@@ -34,6 +34,10 @@ pub struct TilesOptions {
     /// Embed colour textures as JPEG of this quality (1..=100) instead of the store's PNG
     /// bytes (smaller tiles for the web; alpha is not shown by the opaque materials).
     pub jpeg_quality: Option<u8>,
+    /// The lit variant: materials shaded by the cells' normal maps in tangent space, with
+    /// `NORMAL` and `TANGENT` attributes ([`super::ExportCell::make_lit`]), instead of
+    /// `KHR_materials_unlit`.
+    pub lit: bool,
     /// External child tilesets: the subtree under every cell whose level is a positive
     /// multiple of `n` is written as its own tileset (`subtrees/LEVEL/X-Y.json`,
     /// [`subtree_path_for`]) and referenced from its parent, so no tileset file lists more
@@ -140,7 +144,17 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         .iter()
         .map(|&m| json!({"mode": m.name(), "tileset": tileset_name(m)}))
         .collect();
-    let ctx = TilesetContext { store: &store, out, to_enu: &to_enu, rot, centre, crs: &crs, heights: &heights, modes: &listing, jpeg_quality: opts.jpeg_quality,
+    let ctx = TilesetContext {
+        store: &store,
+        out,
+        to_enu: &to_enu,
+        rot,
+        centre,
+        crs: &crs,
+        heights: &heights,
+        modes: &listing,
+        jpeg_quality: opts.jpeg_quality,
+        lit: opts.lit,
         subtree_levels: match opts.subtree_levels {
             Some(n) => n,
             None if store.manifest.cells.len() > SUBTREE_AUTO_CELLS => 4,
@@ -182,6 +196,7 @@ struct TilesetContext<'a> {
     heights: &'a str,
     modes: &'a [Value],
     jpeg_quality: Option<u8>,
+    lit: bool,
     /// Levels per tileset file (0: one file).
     subtree_levels: u8,
 }
@@ -206,6 +221,9 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
         .map(|i| {
             let rec = &cells[i];
             let mut cell: ExportCell = read_export_cell_as(store, rec, mode)?;
+            if ctx.lit {
+                cell.make_lit(store)?;
+            }
             if let Some(q) = ctx.jpeg_quality {
                 cell.texture_to_jpeg(q)?;
             }
@@ -261,14 +279,16 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
     }
     let (pruned, listed) = (tree.pruned, tree.listed);
     let subtrees = tree.external.len();
-    let asset = json!({"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION"))});
+    let asset =
+        json!({"version": "1.1", "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION"))});
     for (path, root) in tree.external {
         let sub = json!({
             "asset": asset,
             "geometricError": root["geometricError"],
             "root": root,
         });
-        let text = serde_json::to_string(&sub).map_err(|e| Error::BadOption(format!("{path}: {e}")))?;
+        let text =
+            serde_json::to_string(&sub).map_err(|e| Error::BadOption(format!("{path}: {e}")))?;
         write_atomic(&out.join(&path), text.as_bytes())?;
     }
     let top_error = top.iter().map(|&i| cells[i].max_error).fold(0.0, f64::max);
@@ -378,7 +398,11 @@ impl Tree<'_> {
         self.listed += 1;
         let kids: Vec<usize> = [(0, 0), (1, 0), (0, 1), (1, 1)]
             .iter()
-            .filter_map(|&(dx, dy)| index.get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy)).copied())
+            .filter_map(|&(dx, dy)| {
+                index
+                    .get(&(c.level + 1, 2 * c.x + dx, 2 * c.y + dy))
+                    .copied()
+            })
             .collect();
         // Footprints are the meshes' x-y bounds (a cell's nominal square may reach past the
         // DEM, where no child exists).
