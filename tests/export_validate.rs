@@ -266,6 +266,7 @@ fn demo_exports_pass_the_gltf_validator_and_the_3d_tiles_schemas() {
         s(&glb0),
         "--level",
         "0",
+        "--lit",
         "--quiet",
     ]);
     ok(&[
@@ -292,8 +293,26 @@ fn demo_exports_pass_the_gltf_validator_and_the_3d_tiles_schemas() {
         "35",
         "--jpeg-quality",
         "85",
+        "--lit",
         "--quiet",
     ]);
+    // (`glb0` and `jpeg` are the lit variant: normal maps in tangent space, NORMAL and
+    // TANGENT, which the glTF validator checks for unit length and handedness)
+    for f in [&glb0, &jpeg.join(cliffmap::export::tile_path(0, 0, 0))] {
+        let doc = gltf::Gltf::from_slice(&std::fs::read(f).unwrap()).unwrap();
+        for m in doc.materials() {
+            assert!(m.normal_texture().is_some() && !m.unlit(), "{f:?}: not lit");
+        }
+        for m in doc.meshes() {
+            for p in m.primitives() {
+                assert!(
+                    p.get(&gltf::Semantic::Normals).is_some()
+                        && p.get(&gltf::Semantic::Tangents).is_some(),
+                    "{f:?}: no NORMAL or TANGENT"
+                );
+            }
+        }
+    }
     let (code, summary) = validate_export(&[&glb, &glb0, &all, &jpeg]);
     let (gltf, tilesets) = assert_clean(code, &summary);
     // Every tile of every tileset was reached and validated, plus the two GLBs.
