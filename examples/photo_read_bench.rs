@@ -23,20 +23,6 @@ use cliffmap::photo::read_photo_list;
 use cliffmap::pipeline::{ProjectOptions, project_store};
 use cliffmap::store::Store;
 
-fn copy_dir(from: &std::path::Path, to: &std::path::Path) -> std::io::Result<()> {
-    std::fs::create_dir_all(to)?;
-    for e in std::fs::read_dir(from)? {
-        let e = e?;
-        let dest = to.join(e.file_name());
-        if e.file_type()?.is_dir() {
-            copy_dir(&e.path(), &dest)?;
-        } else {
-            std::fs::copy(e.path(), dest)?;
-        }
-    }
-    Ok(())
-}
-
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let tmp = tempfile::tempdir()?;
@@ -50,17 +36,10 @@ fn main() -> anyhow::Result<()> {
         .unwrap_or(3)
         .max(1);
     if !dir.join("manifest.json").is_file() {
-        bench_util::build_engabreen_store(&dir, "photo-read-bench")?;
-        cliffmap::pipeline::reparam_store(
-            &dir,
-            &cliffmap::pipeline::ReparamOptions {
-                quiet: true,
-                ..Default::default()
-            },
-        )?;
+        bench_util::build_engabreen_reparam_store(&dir, "photo-read-bench")?;
     }
     let work = tmp.path().join("work");
-    copy_dir(&dir, &work)?;
+    bench_util::copy_dir(&dir, &work)?;
     let list = tmp.path().join("photos.json");
     let data = shared_data("engabreen");
     std::fs::write(

@@ -26,40 +26,12 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use bench_util::{cpu_seconds, median, shared_data};
 use cliffmap::photo::{RayAccel, read_photo_list};
-use cliffmap::pipeline::{
-    PhotoTextureOptions, ProjectOptions, ReparamOptions, project_store, reparam_store,
-};
-
-fn engabreen_store(dir: &Path) -> anyhow::Result<()> {
-    bench_util::build_engabreen_store(dir, "project-bench")?;
-    reparam_store(
-        dir,
-        &ReparamOptions {
-            quiet: true,
-            ..ReparamOptions::default()
-        },
-    )?;
-    Ok(())
-}
-
-fn copy_dir(from: &Path, to: &Path) -> std::io::Result<()> {
-    std::fs::create_dir_all(to)?;
-    for e in std::fs::read_dir(from)? {
-        let e = e?;
-        let dest = to.join(e.file_name());
-        if e.file_type()?.is_dir() {
-            copy_dir(&e.path(), &dest)?;
-        } else {
-            std::fs::copy(e.path(), dest)?;
-        }
-    }
-    Ok(())
-}
+use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -80,7 +52,7 @@ fn main() -> anyhow::Result<()> {
         .map(parse_variant)
         .collect::<anyhow::Result<_>>()?;
     if !dir.join("manifest.json").is_file() {
-        engabreen_store(&dir)?;
+        bench_util::build_engabreen_reparam_store(&dir, "project-bench")?;
     }
     let list = tmp.path().join("photos.json");
     let data = shared_data("engabreen");
@@ -108,7 +80,7 @@ fn main() -> anyhow::Result<()> {
     for run in 0..runs {
         for (k, (_, accel, texture)) in variants.iter().enumerate() {
             let work = tmp.path().join(format!("run{run}-{k}"));
-            copy_dir(&dir, &work)?;
+            bench_util::copy_dir(&dir, &work)?;
             let opts = ProjectOptions {
                 ray: *accel,
                 texture: *texture,

@@ -8,10 +8,11 @@
 //! CesiumJS and puppeteer-core are installed by `.ci/run`.
 
 mod cli_util;
+mod common;
 
 use cli_util::ok;
 use cliffmap::camera::camera_to_json;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, build_store, project_store};
+use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
 
 #[test]
@@ -43,27 +44,7 @@ fn cesium_page_shows_what_cliffmap_renders() {
         &store,
     )
     .unwrap();
-    let list = scene
-        .write_demo_photos(
-            &dem,
-            &tmp.path().join("photos"),
-            &cliffmap::scene::DemoPhotoOptions {
-                width: 800,
-                height: 600,
-                supersample: 1,
-            },
-        )
-        .unwrap();
-    let photos = cliffmap::photo::read_photo_list(&list).unwrap();
-    project_store(
-        &store,
-        &photos,
-        &ProjectOptions {
-            quiet: true,
-            ..ProjectOptions::default()
-        },
-    )
-    .unwrap();
+    common::project_demo_photos(&store, &scene, &dem, &tmp.path().join("photos"), (800, 600));
     let (w, h) = (640u32, 480u32);
     let cam = scene.photo_shots()[0].camera.resized(w, h);
     let cam_file = tmp.path().join("view.json");
@@ -127,8 +108,16 @@ fn cesium_page_shows_what_cliffmap_renders() {
     // The best texture (default page) against `cliffmap render`, then the ortho mode of the
     // page's toggle against `render --mode ortho`.
     for mode in [None, Some("ortho")] {
-        let shot = tmp.path().join(format!("cesium_{}.png", mode.unwrap_or("best")));
-        let mut args = vec![o.to_string(), "views/view.json".into(), shot.to_str().unwrap().into(), w.to_string(), h.to_string()];
+        let shot = tmp
+            .path()
+            .join(format!("cesium_{}.png", mode.unwrap_or("best")));
+        let mut args = vec![
+            o.to_string(),
+            "views/view.json".into(),
+            shot.to_str().unwrap().into(),
+            w.to_string(),
+            h.to_string(),
+        ];
         args.extend(mode.map(String::from));
         let status = std::process::Command::new("node")
             .arg(tools.join("screenshot_tiles.mjs"))
@@ -136,22 +125,52 @@ fn cesium_page_shows_what_cliffmap_renders() {
             .status()
             .expect("cannot start node");
         assert!(status.success(), "the browser screenshot failed ({mode:?})");
-        let ours = tmp.path().join(format!("cliffmap_{}.png", mode.unwrap_or("best")));
+        let ours = tmp
+            .path()
+            .join(format!("cliffmap_{}.png", mode.unwrap_or("best")));
         // `--camera` takes a pinhole view; the demo's first photo has no distortion.
         let size = format!("{w}x{h}");
-        let mut r = vec!["render", s, "--camera", c, "--size", &size, "--unlit", "--out", ours.to_str().unwrap()];
+        let mut r = vec![
+            "render",
+            s,
+            "--camera",
+            c,
+            "--size",
+            &size,
+            "--unlit",
+            "--out",
+            ours.to_str().unwrap(),
+        ];
         if let Some(m) = mode {
             r.extend(["--mode", m]);
         }
         ok(&r);
         let (psnr, share) = terrain_psnr(&shot, &ours, w, h);
-        eprintln!("Cesium vs cliffmap render ({mode:?}): {psnr:.1} dB on {:.0} % terrain pixels", 100.0 * share);
-        assert!(share > 0.3, "only {:.0} % of the pixels are terrain in both images ({mode:?})", 100.0 * share);
-        assert!(psnr >= 28.0, "Cesium's view differs from cliffmap's render ({mode:?}): {psnr:.1} dB");
+        eprintln!(
+            "Cesium vs cliffmap render ({mode:?}): {psnr:.1} dB on {:.0} % terrain pixels",
+            100.0 * share
+        );
+        assert!(
+            share > 0.3,
+            "only {:.0} % of the pixels are terrain in both images ({mode:?})",
+            100.0 * share
+        );
+        assert!(
+            psnr >= 28.0,
+            "Cesium's view differs from cliffmap's render ({mode:?}): {psnr:.1} dB"
+        );
     }
     // The two modes show different textures (the photo detail is in the best one only).
-    let (between, _) = terrain_psnr(&tmp.path().join("cesium_best.png"), &tmp.path().join("cesium_ortho.png"), w, h);
-    assert!(between < 40.0, "the ortho and photo modes look the same ({between:.1} dB)");
+    let (between, _) = terrain_psnr(
+        &tmp.path().join("cesium_best.png"),
+        &tmp.path().join("cesium_ortho.png"),
+        w,
+        h,
+    );
+    assert!(
+        between < 40.0,
+        "the ortho and photo modes look the same ({between:.1} dB)"
+    );
 }
 
 /// PSNR (dB) of two renders on the pixels that are terrain in both (neither cliffmap's sky
@@ -163,12 +182,19 @@ fn terrain_psnr(a: &std::path::Path, b: &std::path::Path, w: u32, h: u32) -> (f6
     let sky = [170i32, 200, 235];
     let (mut se, mut n) = (0.0f64, 0usize);
     for (pa, pb) in a.pixels().zip(b.pixels()) {
-        let is_sky = |p: &image::Rgb<u8>| (0..3).map(|k| (p[k] as i32 - sky[k]).abs()).sum::<i32>() <= 6;
+        let is_sky =
+            |p: &image::Rgb<u8>| (0..3).map(|k| (p[k] as i32 - sky[k]).abs()).sum::<i32>() <= 6;
         let is_background = |p: &image::Rgb<u8>| p.0.iter().map(|&v| v as i32).sum::<i32>() <= 6;
         if !is_sky(pb) && !is_sky(pa) && !is_background(pa) && !is_background(pb) {
-            se += (0..3).map(|k| (pa[k] as f64 - pb[k] as f64).powi(2)).sum::<f64>() / 3.0;
+            se += (0..3)
+                .map(|k| (pa[k] as f64 - pb[k] as f64).powi(2))
+                .sum::<f64>()
+                / 3.0;
             n += 1;
         }
     }
-    (10.0 * (255.0f64.powi(2) / (se / n.max(1) as f64)).log10(), n as f64 / (w * h) as f64)
+    (
+        10.0 * (255.0f64.powi(2) / (se / n.max(1) as f64)).log10(),
+        n as f64 / (w * h) as f64,
+    )
 }

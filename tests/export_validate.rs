@@ -209,7 +209,6 @@ fn copy_dir(from: &Path, to: &Path) {
 /// The small demo store with the demo's ground photos projected, so that the exports carry
 /// all three texture sources.
 fn demo_store_with_photos(tmp: &Path) -> PathBuf {
-    use cliffmap::pipeline::{ProjectOptions, project_store};
     let store = tmp.join("store");
     common::small_demo_store(&store, true);
     // the scene of small_demo_store; its photos from the usual aims at 320 × 240
@@ -219,24 +218,7 @@ fn demo_store_with_photos(tmp: &Path) -> PathBuf {
         ..cliffmap::scene::DemoScene::default()
     };
     let (dem, _) = scene.generate().unwrap();
-    let opts = cliffmap::scene::DemoPhotoOptions {
-        width: 320,
-        height: 240,
-        supersample: 1,
-    };
-    let list = scene
-        .write_demo_photos(&dem, &tmp.join("photos"), &opts)
-        .unwrap();
-    let photos = cliffmap::photo::read_photo_list(&list).unwrap();
-    project_store(
-        &store,
-        &photos,
-        &ProjectOptions {
-            quiet: true,
-            ..ProjectOptions::default()
-        },
-    )
-    .unwrap();
+    common::project_demo_photos(&store, &scene, &dem, &tmp.join("photos"), (320, 240));
     store
 }
 

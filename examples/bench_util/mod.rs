@@ -167,3 +167,31 @@ pub fn fractal(n: usize, seed: u64) -> cliffmap::Dem {
     cliffmap::Dem::from_heights(n, n, hs, cliffmap::GridGeoref::new(0.0, 0.0, 10.0))
         .expect("fractal DEM")
 }
+
+/// Copies the directory tree `from` into `to` (created).
+pub fn copy_dir(from: &Path, to: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    for e in std::fs::read_dir(from)? {
+        let e = e?;
+        let dest = to.join(e.file_name());
+        if e.file_type()?.is_dir() {
+            copy_dir(&e.path(), &dest)?;
+        } else {
+            std::fs::copy(e.path(), dest)?;
+        }
+    }
+    Ok(())
+}
+
+/// [`build_engabreen_store`] followed by `cliffmap reparam` with the default options.
+pub fn build_engabreen_reparam_store(dir: &Path, fingerprint: &str) -> anyhow::Result<()> {
+    build_engabreen_store(dir, fingerprint)?;
+    cliffmap::pipeline::reparam_store(
+        dir,
+        &cliffmap::pipeline::ReparamOptions {
+            quiet: true,
+            ..Default::default()
+        },
+    )?;
+    Ok(())
+}

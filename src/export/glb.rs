@@ -127,40 +127,24 @@ pub fn write_glb(
                 json::accessor::Type::Vec4,
                 None,
             ));
-            let view = push_view(&mut root, &mut bin, png.clone(), None);
-            let image = root.push(json::Image {
-                buffer_view: Some(view),
-                mime_type: Some(json::image::MimeType("image/png".into())),
-                name: Some(format!("{} normal (tangent space)", cell.id)),
-                uri: None,
-                extensions: None,
-                extras: Default::default(),
-            });
-            let texture = root.push(json::Texture {
-                name: None,
-                sampler: Some(sampler),
-                source: image,
-                extensions: None,
-                extras: Default::default(),
-            });
+            let texture = push_texture(
+                &mut root,
+                &mut bin,
+                png.clone(),
+                "image/png",
+                format!("{} normal (tangent space)", cell.id),
+                sampler,
+            );
             lit = Some((normal, tangent, texture));
         }
-        let image_view = push_view(&mut root, &mut bin, cell.texture_bytes.clone(), None);
-        let image = root.push(json::Image {
-            buffer_view: Some(image_view),
-            mime_type: Some(json::image::MimeType(cell.texture_mime.into())),
-            name: Some(format!("{} {}", cell.id, cell.texture.name())),
-            uri: None,
-            extensions: None,
-            extras: Default::default(),
-        });
-        let texture = root.push(json::Texture {
-            name: None,
-            sampler: Some(sampler),
-            source: image,
-            extensions: None,
-            extras: Default::default(),
-        });
+        let texture = push_texture(
+            &mut root,
+            &mut bin,
+            cell.texture_bytes.clone(),
+            cell.texture_mime,
+            format!("{} {}", cell.id, cell.texture.name()),
+            sampler,
+        );
         let material = root.push(json::Material {
             name: Some(cell.id.clone()),
             pbr_metallic_roughness: json::material::PbrMetallicRoughness {
@@ -274,6 +258,33 @@ pub fn write_glb(
     };
     glb.to_vec()
         .map_err(|e| Error::BadOption(format!("GLB: {e}")))
+}
+
+/// Embeds the image `bytes` (media type `mime`) and adds a texture of it with `sampler`.
+fn push_texture(
+    root: &mut json::Root,
+    bin: &mut Vec<u8>,
+    bytes: Vec<u8>,
+    mime: &str,
+    name: String,
+    sampler: json::Index<json::texture::Sampler>,
+) -> json::Index<json::Texture> {
+    let view = push_view(root, bin, bytes, None);
+    let image = root.push(json::Image {
+        buffer_view: Some(view),
+        mime_type: Some(json::image::MimeType(mime.into())),
+        name: Some(name),
+        uri: None,
+        extensions: None,
+        extras: Default::default(),
+    });
+    root.push(json::Texture {
+        name: None,
+        sampler: Some(sampler),
+        source: image,
+        extensions: None,
+        extras: Default::default(),
+    })
 }
 
 /// Appends `bytes` (padded to 4 bytes) to the binary chunk as a new buffer view.

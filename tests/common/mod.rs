@@ -57,6 +57,35 @@ pub fn engabreen_ortho(dem: &Dem) -> Ortho {
     o
 }
 
+/// Writes the ground photos of `scene` (over its DEM `dem`) at `w × h`, without
+/// supersampling, into `dir`, and projects them into the store `store` with the default
+/// options.
+pub fn project_demo_photos(
+    store: &std::path::Path,
+    scene: &cliffmap::scene::DemoScene,
+    dem: &Dem,
+    dir: &std::path::Path,
+    (w, h): (u32, u32),
+) {
+    use cliffmap::pipeline::{ProjectOptions, project_store};
+    let opts = cliffmap::scene::DemoPhotoOptions {
+        width: w,
+        height: h,
+        supersample: 1,
+    };
+    let list = scene.write_demo_photos(dem, dir, &opts).unwrap();
+    let photos = cliffmap::photo::read_photo_list(&list).unwrap();
+    project_store(
+        store,
+        &photos,
+        &ProjectOptions {
+            quiet: true,
+            ..ProjectOptions::default()
+        },
+    )
+    .unwrap();
+}
+
 /// A small store of the demo scene (129 × 129 samples at 4 m, max error 0.5 m, 32-interval
 /// cells with 64² textures) in `dir`, reparameterized when `reparam`.
 pub fn small_demo_store(dir: &std::path::Path, reparam: bool) {
