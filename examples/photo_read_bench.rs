@@ -17,9 +17,8 @@ mod bench_util;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bench_util::{median, shared_data};
+use bench_util::median;
 use cliffmap::fsutil::{PngCompression, encode_png};
-use cliffmap::photo::read_photo_list;
 use cliffmap::pipeline::{ProjectOptions, project_store};
 use cliffmap::store::Store;
 
@@ -29,25 +28,13 @@ fn main() -> anyhow::Result<()> {
     let dir = args
         .get(1)
         .map_or_else(|| tmp.path().join("store"), PathBuf::from);
-    let runs: usize = args
-        .get(2)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(3)
-        .max(1);
+    let runs = bench_util::runs_arg(&args, 2, 3)?;
     if !dir.join("manifest.json").is_file() {
         bench_util::build_engabreen_reparam_store(&dir, "photo-read-bench")?;
     }
     let work = tmp.path().join("work");
     bench_util::copy_dir(&dir, &work)?;
-    let list = tmp.path().join("photos.json");
-    let data = shared_data("engabreen");
-    std::fs::write(
-        &list,
-        serde_json::json!({"photos": [{"image": data.join("IMG_8902.jpg"), "imgraft": data.join("engabreen_camera_IMG_8902.json")}]})
-            .to_string(),
-    )?;
-    let photos = read_photo_list(&list)?;
+    let photos = bench_util::img8902_photos(tmp.path())?;
     project_store(
         &work,
         &photos,

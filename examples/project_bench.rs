@@ -29,8 +29,8 @@ mod bench_util;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bench_util::{cpu_seconds, median, shared_data};
-use cliffmap::photo::{RayAccel, read_photo_list};
+use bench_util::{cpu_seconds, median};
+use cliffmap::photo::RayAccel;
 use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
 
 fn main() -> anyhow::Result<()> {
@@ -39,12 +39,7 @@ fn main() -> anyhow::Result<()> {
     let dir = args
         .get(1)
         .map_or_else(|| tmp.path().join("store"), PathBuf::from);
-    let runs: usize = args
-        .get(2)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(3)
-        .max(1);
+    let runs = bench_util::runs_arg(&args, 2, 3)?;
     let variants: Vec<(String, RayAccel, PhotoTextureOptions)> = args
         .get(3)
         .map_or("grid,bvh:fast", String::as_str)
@@ -54,15 +49,8 @@ fn main() -> anyhow::Result<()> {
     if !dir.join("manifest.json").is_file() {
         bench_util::build_engabreen_reparam_store(&dir, "project-bench")?;
     }
-    let list = tmp.path().join("photos.json");
-    let data = shared_data("engabreen");
-    std::fs::write(
-        &list,
-        serde_json::json!({"photos": [{"image": data.join("IMG_8902.jpg"), "imgraft": data.join("engabreen_camera_IMG_8902.json")}]})
-            .to_string(),
-    )?;
     let t = Instant::now();
-    let photos = read_photo_list(&list)?;
+    let photos = bench_util::img8902_photos(tmp.path())?;
     let decode = t.elapsed().as_secs_f64();
     let (w, h) = photos[0].image.dimensions();
     println!(

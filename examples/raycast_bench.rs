@@ -175,12 +175,7 @@ fn agreement(a: &Hits, b: &Hits) -> (f64, f64, f64) {
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let runs: usize = args
-        .get(2)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(3)
-        .max(1);
+    let runs = bench_util::runs_arg(&args, 2, 3)?;
     small_mesh_table();
 
     let tmp = tempfile::tempdir()?;

@@ -195,3 +195,26 @@ pub fn build_engabreen_reparam_store(dir: &Path, fingerprint: &str) -> anyhow::R
     )?;
     Ok(())
 }
+
+/// Argument `i` as the number of runs (at least 1), `default` when absent.
+pub fn runs_arg(args: &[String], i: usize, default: usize) -> anyhow::Result<usize> {
+    Ok(args
+        .get(i)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(default)
+        .max(1))
+}
+
+/// A `photos.json` in `dir` naming IMG_8902 with ImGRAFT's Engabreen camera (the shared
+/// data), read and decoded.
+pub fn img8902_photos(dir: &Path) -> anyhow::Result<Vec<cliffmap::photo::PhotoInput>> {
+    let list = dir.join("photos.json");
+    let data = shared_data("engabreen");
+    std::fs::write(
+        &list,
+        serde_json::json!({"photos": [{"image": data.join("IMG_8902.jpg"), "imgraft": data.join("engabreen_camera_IMG_8902.json")}]})
+            .to_string(),
+    )?;
+    Ok(cliffmap::photo::read_photo_list(&list)?)
+}
