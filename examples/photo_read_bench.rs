@@ -14,7 +14,6 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use bench_util::median;
@@ -25,9 +24,7 @@ use cliffmap::store::Store;
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let tmp = tempfile::tempdir()?;
-    let dir = args
-        .get(1)
-        .map_or_else(|| tmp.path().join("store"), PathBuf::from);
+    let dir = bench_util::store_arg(&args, tmp.path());
     let runs = bench_util::runs_arg(&args, 2, 3)?;
     if !dir.join("manifest.json").is_file() {
         bench_util::build_engabreen_reparam_store(&dir, "photo-read-bench")?;

@@ -26,7 +26,6 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use bench_util::{cpu_seconds, median};
@@ -36,9 +35,7 @@ use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let tmp = tempfile::tempdir()?;
-    let dir = args
-        .get(1)
-        .map_or_else(|| tmp.path().join("store"), PathBuf::from);
+    let dir = bench_util::store_arg(&args, tmp.path());
     let runs = bench_util::runs_arg(&args, 2, 3)?;
     let variants: Vec<(String, RayAccel, PhotoTextureOptions)> = args
         .get(3)

@@ -218,3 +218,8 @@ pub fn img8902_photos(dir: &Path) -> anyhow::Result<Vec<cliffmap::photo::PhotoIn
     )?;
     Ok(cliffmap::photo::read_photo_list(&list)?)
 }
+
+/// Argument 1 as the store directory, else `tmp/store`.
+pub fn store_arg(args: &[String], tmp: &Path) -> PathBuf {
+    args.get(1).map_or_else(|| tmp.join("store"), PathBuf::from)
+}
