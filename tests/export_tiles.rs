@@ -262,6 +262,9 @@ fn a_geoid_grid_replaces_the_constant_offset() {
     assert!(files.len() > 3);
     for f in files {
         let rel = f.strip_prefix(&a).unwrap();
+        if rel == Path::new(cliffmap::export::EXPORT_KEY_FILE) {
+            continue; // (records the options, which differ)
+        }
         if rel == Path::new("tileset.json") {
             let ta: serde_json::Value = serde_json::from_slice(&std::fs::read(&f).unwrap()).unwrap();
             let tb: serde_json::Value = serde_json::from_slice(&std::fs::read(b.join(rel)).unwrap()).unwrap();
@@ -449,4 +452,79 @@ fn external_child_tilesets_hold_the_deeper_levels() {
         ok(&args);
         assert!(!out2.join("subtrees").exists());
     }
+}
+
+/// An export interrupted after some GLBs (simulated by deleting the others and the tileset
+/// files) resumes on the same command: the GLBs left are kept, the rest written, and every
+/// file ends byte-identical to an uninterrupted export; another option starts afresh.
+#[test]
+fn an_interrupted_export_resumes_to_the_same_files() {
+    use cliffmap::export::{EXPORT_KEY_FILE, TextureSource, TilesOptions, export_tiles};
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("store");
+    common::small_demo_store(&dir, true);
+    let out = tmp.path().join("tiles");
+    let opts = TilesOptions {
+        crs: Some("EPSG:32633".into()),
+        extra_modes: vec![TextureSource::Ortho],
+        subtree_levels: Some(1),
+        quiet: true,
+        ..TilesOptions::default()
+    };
+    let first = export_tiles(&dir, &out, &opts).unwrap();
+    assert_eq!(first.resumed, 0);
+    let files = |d: &Path| -> Vec<(std::path::PathBuf, Vec<u8>)> {
+        let mut v: Vec<_> = cli_util::files_under(d)
+            .into_iter()
+            .map(|p| {
+                (
+                    p.strip_prefix(d).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let whole = files(&out);
+    assert!(whole.iter().any(|(p, _)| p.ends_with(EXPORT_KEY_FILE)));
+    // "interrupted": every other GLB and every tileset file gone
+    let glbs: Vec<_> = whole
+        .iter()
+        .filter(|(p, _)| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    let mut removed = 0;
+    for (k, (p, _)) in glbs.iter().enumerate() {
+        if k % 2 == 0 {
+            std::fs::remove_file(out.join(p)).unwrap();
+            removed += 1;
+        }
+    }
+    for (p, _) in &whole {
+        if p.extension().is_some_and(|e| e == "json")
+            && !p.ends_with(EXPORT_KEY_FILE)
+            && !p.starts_with("views")
+        {
+            std::fs::remove_file(out.join(p)).unwrap();
+        }
+    }
+    let again = export_tiles(&dir, &out, &opts).unwrap();
+    assert_eq!(again.resumed, glbs.len() - removed);
+    assert_eq!(
+        (again.tiles, again.bytes, again.textures),
+        (first.tiles, first.bytes, first.textures)
+    );
+    assert!(
+        files(&out) == whole,
+        "the resumed export differs from the whole one"
+    );
+    // another option: nothing is kept, and no file of the earlier export is left over
+    let lit = TilesOptions {
+        lit: true,
+        extra_modes: vec![],
+        ..opts.clone()
+    };
+    let r = export_tiles(&dir, &out, &lit).unwrap();
+    assert_eq!(r.resumed, 0);
+    assert!(!out.join("tileset_ortho.json").exists() && !out.join("tiles_ortho").exists());
 }

@@ -76,6 +76,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             jpeg_quality: a.jpeg_quality,
             lit: a.lit,
             subtree_levels: a.subtree_levels,
+            quiet: a.quiet,
             views,
         },
     )?;
@@ -92,6 +93,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             r.bytes as f64 / 1e6
         );
         println!("heights: {}", r.heights);
+        if r.resumed > 0 {
+            println!(
+                "resumed: {} GLBs kept from the interrupted run of this export",
+                r.resumed
+            );
+        }
     }
     Ok(())
 }

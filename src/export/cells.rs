@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::error::{Error, Result};
-use crate::store::{CellRecord, FileRef, Store, texcoord};
+use crate::store::{CellMesh, CellRecord, FileRef, Store, texcoord};
 
 /// Which texture a cell exports: the best it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,10 +89,7 @@ pub fn read_export_cell_as(
         .reparam
         .as_ref()
         .filter(|_| mode != TextureSource::Ortho);
-    let mesh = match reparam {
-        Some(r) => store.read_mesh_file(&r.files.mesh)?,
-        None => store.read_mesh(rec)?,
-    };
+    let mesh = export_mesh(store, rec, mode)?;
     let normal_file = reparam
         .map_or(&rec.files.normal, |r| &r.files.normal)
         .clone();
@@ -110,12 +107,7 @@ pub fn read_export_cell_as(
         )?,
         _ => store.read_file(file)?,
     };
-    let origin = DVec3::from_array(rec.origin);
-    let positions: Vec<DVec3> = mesh
-        .positions
-        .iter()
-        .map(|p| origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
-        .collect();
+    let positions = world_positions(rec, &mesh);
     let uvs: Vec<[f32; 2]> = (0..mesh.positions.len())
         .map(|i| texcoord(rec, &mesh, i))
         .collect();
@@ -140,6 +132,44 @@ pub fn read_export_cell_as(
         normal_file,
         normal_png: None,
     })
+}
+
+/// The mesh a cell is exported with in `mode` (the reparameterized one where the cell has it
+/// and `mode` is not `Ortho`, else the orthographic one), verified.
+fn export_mesh(store: &Store, rec: &CellRecord, mode: TextureSource) -> Result<CellMesh> {
+    match rec
+        .reparam
+        .as_ref()
+        .filter(|_| mode != TextureSource::Ortho)
+    {
+        Some(r) => store.read_mesh_file(&r.files.mesh),
+        None => store.read_mesh(rec),
+    }
+}
+
+/// The world positions (the store's CRS, f64) of `mesh`, a mesh of cell `rec`.
+fn world_positions(rec: &CellRecord, mesh: &CellMesh) -> Vec<DVec3> {
+    let origin = DVec3::from_array(rec.origin);
+    mesh.positions
+        .iter()
+        .map(|p| origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect()
+}
+
+/// The world positions of the mesh [`read_export_cell_as`] exports for `rec` in `mode`, and
+/// the texture source it would embed, without reading the texture.
+pub fn read_export_positions(
+    store: &Store,
+    rec: &CellRecord,
+    mode: TextureSource,
+) -> Result<(Vec<DVec3>, TextureSource)> {
+    let mesh = export_mesh(store, rec, mode)?;
+    let source = match (&rec.photo, &rec.reparam, mode) {
+        (Some(_), _, TextureSource::Photo) => TextureSource::Photo,
+        (_, Some(_), TextureSource::Photo | TextureSource::Reparam) => TextureSource::Reparam,
+        _ => TextureSource::Ortho,
+    };
+    Ok((world_positions(rec, &mesh), source))
 }
 
 impl ExportCell {

@@ -23,12 +23,16 @@ use rayon::prelude::*;
 use serde_json::json;
 
 pub use cells::{
-    CellSelection, ExportCell, TextureSource, read_export_cell, read_export_cell_as, select_cells,
+    CellSelection, ExportCell, TextureSource, read_export_cell, read_export_cell_as,
+    read_export_positions, select_cells,
 };
 pub use ecef::{ToEcef, ecef_to_enu, proj_string};
 pub use geoid::GeoidGrid;
 pub use glb::write_glb;
-pub use tiles::{TilesOptions, TilesReport, export_tiles, tile_path, tile_path_for, tileset_name};
+pub use tiles::{
+    EXPORT_KEY_FILE, TilesOptions, TilesReport, export_tiles, tile_path, tile_path_for,
+    tileset_name,
+};
 
 use crate::error::Result;
 use crate::store::Store;

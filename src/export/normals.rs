@@ -219,7 +219,10 @@ mod tests {
             let tv = DVec3::new(tg[0], tg[1], tg[2]);
             assert!(tv.dot(*n).abs() < 1e-12 && (tv.length() - 1.0).abs() < 1e-12);
             // u runs east: the tangent is the plane's direction over +x
-            assert!((tv - DVec3::new(1.0, 0.0, 0.5).normalize()).length() < 1e-12, "{tv}");
+            assert!(
+                (tv - DVec3::new(1.0, 0.0, 0.5).normalize()).length() < 1e-12,
+                "{tv}"
+            );
             // B = cross(N, T)·w points to decreasing v, north over the plane here
             let b = n.cross(tv) * tg[3];
             assert!(b.dot(DVec3::new(0.0, 1.0, -0.25)) > 0.9, "{b} w {}", tg[3]);

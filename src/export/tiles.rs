@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde_json::{Value, json};
 
 use super::ecef::{ToEcef, ecef_to_enu};
-use super::{ExportCell, TextureSource, read_export_cell_as, write_glb};
+use super::{ExportCell, TextureSource, read_export_cell_as, read_export_positions, write_glb};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::store::Store;
@@ -44,6 +44,8 @@ pub struct TilesOptions {
     /// than `n` levels. `None`: every 4 levels when the store has more than
     /// [`SUBTREE_AUTO_CELLS`] cells, else one file; `Some(0)`: one file.
     pub subtree_levels: Option<u8>,
+    /// No progress bar.
+    pub quiet: bool,
     /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
     /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
     pub views: Vec<(String, crate::camera::CameraModel)>,
@@ -69,7 +71,14 @@ pub struct TilesReport {
     pub subtrees: usize,
     /// How heights were made ellipsoidal.
     pub heights: String,
+    /// GLBs kept from an earlier, interrupted run of the same export (all modes).
+    pub resumed: usize,
 }
+
+/// The file in the output folder that records what an export writes (the store's manifest
+/// checksum and every option that changes a file), so that a rerun of the same export
+/// resumes: GLBs already there are kept.
+pub const EXPORT_KEY_FILE: &str = ".cliffmap-export.json";
 
 /// Writes `out/tileset.json` and `out/tiles/LEVEL/X-Y.glb` for every cell of the store in
 /// `dir` (module docs). Positions are transformed vertex by vertex in f64 to ECEF and then
@@ -144,6 +153,42 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         .iter()
         .map(|&m| json!({"mode": m.name(), "tileset": tileset_name(m)}))
         .collect();
+    // Resuming: the same store and options as the run that left the folder; otherwise the
+    // earlier run's outputs are removed before anything is written.
+    let subtree_levels = match opts.subtree_levels {
+        Some(n) => n,
+        None if store.manifest.cells.len() > SUBTREE_AUTO_CELLS => 4,
+        None => 0,
+    };
+    let key = json!({
+        "format": "cliffmap-export-tiles",
+        "generator": format!("cliffmap {}", env!("CARGO_PKG_VERSION")),
+        "store": store.manifest.content_crc32,
+        "crs": crs,
+        "heights": heights,
+        "geoid_grid_bytes": opts.geoid_grid.as_ref().and_then(|p| std::fs::metadata(p).ok()).map(|m| m.len()),
+        "modes": listing,
+        "jpeg_quality": opts.jpeg_quality,
+        "lit": opts.lit,
+        "subtree_levels": subtree_levels,
+    });
+    let key_path = out.join(EXPORT_KEY_FILE);
+    let resume = store.manifest.content_crc32.is_some()
+        && std::fs::read(&key_path)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
+            .is_some_and(|k| k == key);
+    if !resume {
+        remove_earlier_export(out)?;
+        let text = serde_json::to_string_pretty(&key)
+            .map_err(|e| Error::BadOption(format!("{EXPORT_KEY_FILE}: {e}")))?;
+        write_atomic(&key_path, text.as_bytes())?;
+    }
+    let progress = crate::pipeline::progress_bar(
+        (store.manifest.cells.len() * modes.len()) as u64,
+        "export-tiles",
+        opts.quiet,
+    );
     let ctx = TilesetContext {
         store: &store,
         out,
@@ -155,19 +200,19 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         modes: &listing,
         jpeg_quality: opts.jpeg_quality,
         lit: opts.lit,
-        subtree_levels: match opts.subtree_levels {
-            Some(n) => n,
-            None if store.manifest.cells.len() > SUBTREE_AUTO_CELLS => 4,
-            None => 0,
-        },
+        subtree_levels,
+        resume,
+        progress: &progress,
     };
     let mut report = None;
-    let mut bytes = 0;
+    let (mut bytes, mut resumed) = (0, 0);
     for &m in &modes {
         let r = write_tileset(&ctx, m)?;
         bytes += r.bytes;
+        resumed += r.resumed;
         report.get_or_insert(r);
     }
+    progress.finish_and_clear();
     for (name, cam) in &opts.views {
         let v = view_json(&to_ecef, cam)?;
         write_atomic(
@@ -181,6 +226,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
     )?;
     let mut r = report.ok_or_else(|| Error::BadOption("no texture mode to export".into()))?;
     r.bytes = bytes;
+    r.resumed = resumed;
     r.heights = heights;
     Ok(r)
 }
@@ -199,6 +245,32 @@ struct TilesetContext<'a> {
     lit: bool,
     /// Levels per tileset file (0: one file).
     subtree_levels: u8,
+    /// Keep GLBs an earlier run of the same export wrote.
+    resume: bool,
+    progress: &'a indicatif::ProgressBar,
+}
+
+/// Removes what an earlier export wrote into `out` (tileset files, `tiles*/`, `subtrees/`,
+/// `views/`, the key file); other files are left alone.
+fn remove_earlier_export(out: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Ok(());
+    };
+    for e in entries {
+        let e = e.map_err(|err| Error::io(out, err))?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        let path = e.path();
+        let ours_dir =
+            name == "tiles" || name.starts_with("tiles_") || name == "subtrees" || name == "views";
+        let ours_file =
+            (name.starts_with("tileset") && name.ends_with(".json")) || name == EXPORT_KEY_FILE;
+        if ours_dir && path.is_dir() {
+            std::fs::remove_dir_all(&path).map_err(|err| Error::io(&path, err))?;
+        } else if ours_file && path.is_file() {
+            std::fs::remove_file(&path).map_err(|err| Error::io(&path, err))?;
+        }
+    }
+    Ok(())
 }
 
 /// The tileset file of a texture mode: `tileset.json` for the best texture (photo), else
@@ -216,10 +288,26 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
     let (store, out) = (ctx.store, ctx.out);
     let cells = &store.manifest.cells;
     // GLBs in parallel (one cell at a time in memory per thread), bounding boxes back.
-    let results: Vec<(usize, [DVec3; 2], TextureSource, u64)> = (0..cells.len())
+    let results: Vec<(usize, [DVec3; 2], TextureSource, u64, bool)> = (0..cells.len())
         .into_par_iter()
         .map(|i| {
             let rec = &cells[i];
+            let path = out.join(tile_path_for(mode, rec.level, rec.x, rec.y));
+            ctx.progress.inc(1);
+            if ctx.resume {
+                if let Ok(m) = std::fs::metadata(&path) {
+                    // written by the interrupted run (GLBs are written atomically): only its
+                    // bounding box is needed
+                    let (positions, source) = read_export_positions(store, rec, mode)?;
+                    let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                    for &p in &positions {
+                        let q = (ctx.to_enu)(p)?;
+                        a = a.min(q);
+                        b = b.max(q);
+                    }
+                    return Ok((i, [a, b], source, m.len(), true));
+                }
+            }
             let mut cell: ExportCell = read_export_cell_as(store, rec, mode)?;
             if ctx.lit {
                 cell.make_lit(store)?;
@@ -239,14 +327,15 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
                 &|_, v| [enu[v].x, enu[v].z, -enu[v].y],
                 &extras,
             )?;
-            write_atomic(&out.join(tile_path_for(mode, rec.level, rec.x, rec.y)), &bytes)?;
-            Ok((i, [a, b], cell.texture, bytes.len() as u64))
+            write_atomic(&path, &bytes)?;
+            Ok((i, [a, b], cell.texture, bytes.len() as u64, false))
         })
         .collect::<Result<_>>()?;
     let mut boxes = vec![[DVec3::ZERO; 2]; cells.len()];
     let mut textures = [0usize; 3];
-    let mut bytes = 0;
-    for (i, bx, t, n) in results {
+    let (mut bytes, mut resumed) = (0, 0);
+    for (i, bx, t, n, kept) in results {
+        resumed += usize::from(kept);
         boxes[i] = bx;
         textures[t.index()] += 1;
         bytes += n;
@@ -321,6 +410,7 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
         bytes,
         subtrees,
         heights: String::new(),
+        resumed,
     })
 }
 
