@@ -14,7 +14,8 @@
 //! (measured by re-encoding the store's PNGs in this process after the build, one thread).
 //! A fourth argument `fractal` replaces the procedural scene (slow to generate beyond 4097²:
 //! ~22 µs per sample) by the diamond-square fractal DEM of `tin_bench` (10 m spacing, the
-//! side must be 2^k + 1) without an ortho (textures derived from the DEM).
+//! side must be 2^k + 1) without an ortho (textures derived from the DEM). A fifth argument
+//! names a folder to build into and keep (e.g. for timing `export-tiles` on the store).
 
 use std::time::Instant;
 
@@ -78,8 +79,11 @@ fn main() -> anyhow::Result<()> {
         "| DEM | samples | levels | cells | triangles | scene gen (s) | PNG compression | build (s) | ns/sample | PNG MB | PNG encode s (1 thread) | peak RSS (MiB) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    // a fifth argument: build into that folder and keep the (last) store there
+    let keep = std::env::args().nth(5).map(std::path::PathBuf::from);
     for compression in compressions {
-        let dir = tempfile::tempdir()?;
+        let tmp = tempfile::tempdir()?;
+        let dir = keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
         let opts = BuildOptions {
             quiet: true,
             cell_texels: texels,
@@ -98,13 +102,13 @@ fn main() -> anyhow::Result<()> {
             fingerprint: format!("bench-{samples}"),
         };
         let t1 = Instant::now();
-        let m = build_store(&inputs, &opts, dir.path())?;
+        let m = build_store(&inputs, &opts, &dir)?;
         let build_s = t1.elapsed().as_secs_f64();
         let tris: u64 = m.cells.iter().map(|c| c.triangles as u64).sum();
         let (mut png_bytes, mut enc_s) = (0u64, 0.0f64);
         for c in &m.cells {
             for f in [&c.files.texture, &c.files.normal] {
-                let path = dir.path().join(&f.path);
+                let path = dir.join(&f.path);
                 png_bytes += std::fs::metadata(&path)?.len();
                 let img = image::open(&path)?;
                 let t = Instant::now();

@@ -95,7 +95,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         println!("heights: {}", r.heights);
         if r.resumed > 0 {
             println!(
-                "resumed: {} GLBs kept from the interrupted run of this export",
+                "resumed: {} GLBs kept from an earlier run of this export",
                 r.resumed
             );
         }
