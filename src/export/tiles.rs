@@ -179,7 +179,11 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
             .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
             .is_some_and(|k| k == key);
     if !resume {
-        remove_earlier_export(out)?;
+        // (only what an earlier export of this kind wrote, known by its key file: a folder
+        // that never held one keeps its files, as before resuming existed)
+        if key_path.is_file() {
+            remove_earlier_export(out)?;
+        }
         let text = serde_json::to_string_pretty(&key)
             .map_err(|e| Error::BadOption(format!("{EXPORT_KEY_FILE}: {e}")))?;
         write_atomic(&key_path, text.as_bytes())?;
