@@ -74,17 +74,6 @@ impl LatticeTiles {
             .then(|| self.tiles[(j >> 2) * self.tiles_x + (i >> 2)].0[(j & 3) * 4 + (i & 3)])
     }
 
-    /// The tiles of lattice row `j` and the offset of that row within each tile: the height
-    /// of lattice column `i` is `tiles[i >> 2].0[offset + (i & 3)]`.
-    #[inline]
-    pub fn tile_row(&self, j: usize) -> (&[Tile], usize) {
-        let tj = j >> 2;
-        (
-            &self.tiles[tj * self.tiles_x..(tj + 1) * self.tiles_x],
-            (j & 3) * 4,
-        )
-    }
-
     /// Calls `f(i, h)` for the lattice columns `i0..=i1` (lattice indices) of lattice row
     /// `j`, in increasing order, with their heights.
     #[inline]

@@ -81,88 +81,6 @@ fn worst_sample(
     };
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
     let lat = &grid.lat;
-    if lat.stride == 1 {
-        let x0 = p[0][0].min(p[1][0]).min(p[2][0]).max(lat.c_lo);
-        let x1 = p[0][0].max(p[1][0]).max(p[2][0]).min(lat.c_hi);
-        let y0 = p[0][1].min(p[1][1]).min(p[2][1]).max(lat.r_lo);
-        let y1 = p[0][1].max(p[1][1]).max(p[2][1]).min(lat.r_hi);
-        if x0 > x1 || y0 > y1 {
-            return (-1.0, -1, -1);
-        }
-        if (x1 - x0 + 1) * (y1 - y0 + 1) <= BOX_SAMPLES {
-            return worst_in_box(&plane, p, grid, [x0, x1, y0, y1]);
-        }
-    }
-    worst_by_spans(&plane, p, grid)
-}
-
-/// Triangles whose clipped bounding box holds at most this many samples are scanned by
-/// [`worst_in_box`] (stride 1 only), larger ones by [`worst_by_spans`].
-const BOX_SAMPLES: i64 = 48;
-
-/// [`worst_sample`] of a small triangle on a stride-1 lattice: every sample of the clipped
-/// bounding box `[x0, x1, y0, y1]` is evaluated and kept only when it is inside the closed
-/// triangle (exact integer edge functions, stepped per sample) and not a corner, without
-/// branches per sample. Same samples, order, arithmetic and tie-break (first largest in
-/// row-major order) as [`worst_by_spans`], so the result is identical.
-#[inline]
-fn worst_in_box(
-    plane: &Plane,
-    p: [[i64; 2]; 3],
-    grid: &LatticeTiles,
-    [x0, x1, y0, y1]: [i64; 4],
-) -> (f64, i64, i64) {
-    let lat = &grid.lat;
-    let (oc, or) = (lat.origin_c, lat.origin_r);
-    // edge k from p[k] to p[k + 1]: e_k(x, y) = dx * (y - a_y) - dy * (x - a_x), signed so
-    // that the inside is >= 0
-    let o = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
-    if o == 0 {
-        return (-1.0, -1, -1);
-    }
-    let sg = if o < 0 { -1 } else { 1 };
-    let mut ex = [0i64; 3];
-    let mut ey = [0i64; 3];
-    let mut e0 = [0i64; 3];
-    for k in 0..3 {
-        let (a, b) = (p[k], p[(k + 1) % 3]);
-        ex[k] = -sg * (b[1] - a[1]);
-        ey[k] = sg * (b[0] - a[0]);
-        e0[k] = ey[k] * (y0 - a[1]) + ex[k] * (x0 - a[0]);
-    }
-    let (mut err, mut fx, mut fy) = (-1.0f64, -1i64, -1i64);
-    for y in y0..=y1 {
-        let (base, a) = plane.row(y);
-        let (base_i, a_i) = (base + a * oc as f64, a * 1.0);
-        let cx = p.map(|q| if q[1] == y { q[0] } else { -1 });
-        let (row, rj) = grid.tile_row((y - or) as usize);
-        let mut e = e0;
-        for x in x0..=x1 {
-            let i = (x - oc) as usize;
-            let h = row[i >> 2].0[rj + (i & 3)];
-            let v = (h as f64 - (base_i + a_i * (i as u32) as f64)).abs();
-            let inside = (e[0] | e[1] | e[2]) >= 0 && x != cx[0] && x != cx[1] && x != cx[2];
-            let v = if inside { v } else { -1.0 };
-            if v > err {
-                err = v;
-                fx = x;
-                fy = y;
-            }
-            for k in 0..3 {
-                e[k] += ex[k];
-            }
-        }
-        for k in 0..3 {
-            e0[k] += ey[k];
-        }
-    }
-    (err, fx, fy)
-}
-
-/// [`worst_sample`] by exact integer scanline spans, any stride.
-#[inline]
-fn worst_by_spans(plane: &Plane, p: [[i64; 2]; 3], grid: &LatticeTiles) -> (f64, i64, i64) {
-    let lat = &grid.lat;
     let (oc, s) = (lat.origin_c, lat.stride);
     let mut best = (-1.0f64, -1i64, -1i64);
     for_each_span(p, lat, |y, j, i0, i1| {
@@ -379,8 +297,7 @@ fn greedy_tin(
 /// One TIN over the whole DEM within `epsilon` (height units) of every sample, the DEM's
 /// outer edge included. As Delatin, it starts from the four corners and refines the outer
 /// edge greedily with the interior (a boundary sample is a candidate like any other).
-/// Deterministic. Errors on a negative or
-/// non-finite epsilon.
+/// Deterministic. Errors on a negative or non-finite epsilon.
 pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
     check_epsilon(epsilon)?;
     let rect = SampleRect {
@@ -474,65 +391,5 @@ pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
         worst
     } else {
         f64::INFINITY
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The bounding-box scan and the scanline scan pick the same sample with the same error.
-    #[test]
-    fn box_scan_matches_span_scan() {
-        let (w, h) = (40usize, 36usize);
-        let mut seed = 4242u64;
-        let mut rnd = |m: u64| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) % m
-        };
-        // coarse heights so that ties between samples are common
-        let heights: Vec<f32> = (0..w * h).map(|_| rnd(7) as f32 * 0.5).collect();
-        let lat = Lattice {
-            origin_c: 2,
-            origin_r: 1,
-            stride: 1,
-            c_lo: 3,
-            c_hi: 36,
-            r_lo: 2,
-            r_hi: 33,
-        };
-        let grid = LatticeTiles::new(&heights, w, lat, 37, 34);
-        let mut boxed = 0;
-        for case in 0..20000 {
-            let m = if case % 2 == 0 { 8 } else { 38 };
-            let (bx, by) = (rnd(w as u64 - m) as i64, rnd(h as u64 - m) as i64);
-            let mut p = [[0i64; 2]; 3];
-            for q in &mut p {
-                *q = [bx + rnd(m) as i64, by + rnd(m) as i64];
-            }
-            let hz = |q: [i64; 2]| heights[q[1] as usize * w + q[0] as usize] as f64;
-            let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
-            let want = worst_by_spans(&plane, p, &grid);
-            let x0 = p.iter().map(|q| q[0]).min().unwrap().max(lat.c_lo);
-            let x1 = p.iter().map(|q| q[0]).max().unwrap().min(lat.c_hi);
-            let y0 = p.iter().map(|q| q[1]).min().unwrap().max(lat.r_lo);
-            let y1 = p.iter().map(|q| q[1]).max().unwrap().min(lat.r_hi);
-            if x0 <= x1 && y0 <= y1 {
-                boxed += 1;
-                let got = worst_in_box(&plane, p, &grid, [x0, x1, y0, y1]);
-                assert_eq!(got.1, want.1, "{p:?}");
-                assert_eq!(got.2, want.2, "{p:?}");
-                assert_eq!(got.0.to_bits(), want.0.to_bits(), "{p:?}");
-            } else {
-                assert_eq!(want.0, -1.0);
-            }
-            assert_eq!(
-                worst_sample(&heights, w, p, &grid).0.to_bits(),
-                want.0.to_bits()
-            );
-        }
-        assert!(boxed > 10000);
     }
 }
