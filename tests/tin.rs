@@ -197,6 +197,30 @@ proptest! {
     }
 
     #[test]
+    fn whole_dem_tin_is_within_epsilon_of_every_sample(
+        w in 2usize..90, h in 2usize..90, kind in 0u8..7, seed in any::<u64>(),
+        eps_i in 0usize..5,
+    ) {
+        // the whole-DEM TIN refines its outer edge greedily (no pre-simplified border)
+        let d = dem(w, h, field(w, h, kind, seed));
+        let eps = [0.0, 0.05, 1.0, 7.5, 60.0][eps_i];
+        let rect = SampleRect { c0: 0, r0: 0, c1: w as u32 - 1, r1: h as u32 - 1 };
+        let tin = build_dem_tin(&d, eps).unwrap();
+        check_topology(rect, &tin);
+        let brute = brute_force_error(&d, rect, &tin);
+        prop_assert!(brute <= eps + 1e-6, "brute-force error {brute} > eps {eps}");
+        prop_assert!(tin.max_error <= eps, "reported {} > eps {eps}", tin.max_error);
+        prop_assert!((brute - tin.max_error).abs() <= 1e-6, "reported {} vs brute {brute}", tin.max_error);
+        prop_assert!((measure_max_error(&d, rect, &tin) - brute).abs() <= 1e-6);
+        let again = build_dem_tin(&d, eps).unwrap();
+        prop_assert_eq!(&again.vertices, &tin.vertices);
+        prop_assert_eq!(&again.triangles, &tin.triangles);
+        if kind == 4 || (kind == 5 && eps > 0.0) {
+            prop_assert_eq!(tin.triangles.len(), 2);
+        }
+    }
+
+    #[test]
     fn neighbouring_cells_share_border_vertices(
         w in 3usize..110, h in 3usize..110, kind in 0u8..7, seed in any::<u64>(),
         s_exp in 1u32..4, eps_i in 0usize..4,

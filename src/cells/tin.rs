@@ -9,7 +9,7 @@
 //! candidates, so the bound holds for every DEM sample of the cell. Work is in integer
 //! grid coordinates, with exact predicates.
 
-use super::border::{LevelBorders, border_error, check_epsilon, check_tree, simplify_rect_border};
+use super::border::{LevelBorders, border_error, check_epsilon, check_tree};
 use super::face_heap::FaceHeap;
 use super::halfedge::{MAX_COORD, Mesh};
 use super::raster::{Lattice, for_each_span};
@@ -81,9 +81,8 @@ fn worst_sample(
     };
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
     let lat = &grid.lat;
-    let (oc, or, s) = (lat.origin_c, lat.origin_r, lat.stride);
+    let (oc, s) = (lat.origin_c, lat.stride);
     let mut best = (-1.0f64, -1i64, -1i64);
-    let _ = or;
     for_each_span(p, lat, |y, j, i0, i1| {
         let (base, a) = plane.row(y);
         // z at lattice column index i: base + a * (oc + i * s)
@@ -190,7 +189,7 @@ fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
 /// Simplifies the samples of `rect` into a TIN whose vertical distance to every
 /// full-resolution DEM sample in `rect` is at most `epsilon` (height units), provided the
 /// border polylines are within `epsilon` (as [`LevelBorders`] and
-/// [`simplify_rect_border`] guarantee). `border` lists boundary samples `[col, row]` that
+/// [`super::simplify_rect_border`] guarantee). `border` lists boundary samples `[col, row]` that
 /// must be vertices (points off the rectangle's boundary are ignored; the four corners are
 /// always added); the interior is refined on the `stride` lattice anchored at
 /// `(rect.c0, rect.r0)`, then at full resolution. [`Tin::max_error`] is the measured
@@ -209,6 +208,20 @@ pub fn build_tin(
     if stride == 0 {
         return Err(Error::BadOption("TIN lattice stride must be >= 1".into()));
     }
+    Ok(greedy_tin(dem, rect, stride, epsilon, border, false))
+}
+
+/// [`build_tin`] after its checks. With `refine_boundary`, the rectangle's boundary
+/// samples are candidates too (inserted greedily like interior ones, splitting a boundary
+/// edge), so `border` needs only the corners and the bound covers the boundary itself.
+fn greedy_tin(
+    dem: &Dem,
+    rect: SampleRect,
+    stride: u32,
+    epsilon: f64,
+    border: &[[u32; 2]],
+    refine_boundary: bool,
+) -> Tin {
     let on_boundary = |v: &[u32; 2]| {
         let (c, r) = (v[0], v[1]);
         (rect.c0..=rect.c1).contains(&c)
@@ -233,14 +246,15 @@ pub fn build_tin(
         heap: FaceHeap::default(),
         dirty: Vec::new(),
     };
+    let inner = if refine_boundary { 0 } else { 1 };
     let interior = |s: u32| Lattice {
         origin_c: rect.c0 as i64,
         origin_r: rect.r0 as i64,
         stride: s as i64,
-        c_lo: rect.c0 as i64 + 1,
-        c_hi: rect.c1 as i64 - 1,
-        r_lo: rect.r0 as i64 + 1,
-        r_hi: rect.r1 as i64 - 1,
+        c_lo: rect.c0 as i64 + inner,
+        c_hi: rect.c1 as i64 - inner,
+        r_lo: rect.r0 as i64 + inner,
+        r_hi: rect.r1 as i64 - inner,
     };
     let coarse = LatticeTiles::new(
         &dem.heights,
@@ -264,20 +278,26 @@ pub fn build_tin(
         g.run(&fine);
     }
     let interior_err = g.cand.iter().map(|c| c.1).fold(0.0f64, f64::max);
-    let max_error = interior_err.max(border_error(dem, rect, &pts));
+    // with `refine_boundary` the scanned lattice holds every sample of `rect`
+    let max_error = if refine_boundary {
+        interior_err
+    } else {
+        interior_err.max(border_error(dem, rect, &pts))
+    };
     let triangles = (0..g.mesh.num_triangles() as u32)
         .map(|t| g.mesh.triangle(t))
         .collect();
-    Ok(Tin {
+    Tin {
         vertices: g.mesh.vertices().to_vec(),
         triangles,
         max_error,
-    })
+    }
 }
 
-/// One TIN over the whole DEM within `epsilon` (height units) of every sample, with the
-/// DEM's outer edge simplified to the same bound. Deterministic. Errors on a negative or
-/// non-finite epsilon.
+/// One TIN over the whole DEM within `epsilon` (height units) of every sample, the DEM's
+/// outer edge included. As Delatin, it starts from the four corners and refines the outer
+/// edge greedily with the interior (a boundary sample is a candidate like any other).
+/// Deterministic. Errors on a negative or non-finite epsilon.
 pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
     check_epsilon(epsilon)?;
     let rect = SampleRect {
@@ -286,8 +306,11 @@ pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
         c1: dem.width as u32 - 1,
         r1: dem.height as u32 - 1,
     };
-    let border = simplify_rect_border(dem, rect, 1, epsilon);
-    build_tin(dem, rect, 1, epsilon, &border)
+    check_rect(dem, rect)?;
+    // as Delatin: start from the four corners and refine the outer edge greedily with the
+    // interior (pre-inserting a simplified outer edge instead makes long slivers across
+    // the whole DEM, which the first insertions rescan again and again)
+    Ok(greedy_tin(dem, rect, 1, epsilon, &[], true))
 }
 
 /// TINs of every cell of `level`, in [`Quadtree::cells`] order, each within
