@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use cliffmap::export::{CellSelection, export_glb};
+use cliffmap::export::{CellSelection, GlbOptions, export_glb};
 
 /// Flags of `cliffmap export-glb`.
 #[derive(clap::Args, Debug)]
@@ -25,6 +25,9 @@ pub struct Args {
     /// instead of unlit ones (KHR_materials_unlit) showing the texture as it is.
     #[arg(long)]
     lit: bool,
+    /// Per-texel stretch and photo share as EXT_structural_metadata property textures.
+    #[arg(long)]
+    metadata: bool,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
@@ -55,7 +58,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             region,
         },
         &a.out,
-        a.lit,
+        &GlbOptions {
+            lit: a.lit,
+            metadata: a.metadata,
+        },
     )?;
     if !a.quiet {
         println!(

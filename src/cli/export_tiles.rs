@@ -44,6 +44,9 @@ pub struct Args {
     /// instead of unlit ones (KHR_materials_unlit) showing the texture as it is.
     #[arg(long)]
     lit: bool,
+    /// Per-texel stretch and photo share as EXT_structural_metadata property textures.
+    #[arg(long)]
+    metadata: bool,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
@@ -75,6 +78,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             extra_modes: a.modes.0,
             jpeg_quality: a.jpeg_quality,
             lit: a.lit,
+            metadata: a.metadata,
             subtree_levels: a.subtree_levels,
             quiet: a.quiet,
             views,

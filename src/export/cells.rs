@@ -67,6 +67,9 @@ pub struct ExportCell {
     /// For the lit variant ([`ExportCell::make_lit`]): the normal map in tangent space as
     /// PNG bytes ([`super::normals`]); `None`: unlit.
     pub normal_png: Option<Vec<u8>>,
+    /// Per-texel metadata as property textures ([`ExportCell::make_metadata`]); `None`:
+    /// none.
+    pub metadata: Option<super::metadata::CellMetadata>,
 }
 
 /// Reads a cell for export: the mesh its best texture belongs to (the reparameterized one
@@ -131,6 +134,7 @@ pub fn read_export_cell_as(
         max_error: rec.max_error,
         normal_file,
         normal_png: None,
+        metadata: None,
     })
 }
 
@@ -173,6 +177,47 @@ pub fn read_export_positions(
 }
 
 impl ExportCell {
+    /// Prepares the per-texel metadata ([`super::metadata`]) of cell `rec` exported in
+    /// `mode` (the mode this cell was read with): the stretch of its mesh's texture layout
+    /// and, when it carries its photo texture, the photo share.
+    pub fn make_metadata(
+        &mut self,
+        store: &Store,
+        rec: &CellRecord,
+        mode: TextureSource,
+    ) -> Result<()> {
+        let mesh = export_mesh(store, rec, mode)?;
+        let texels = match rec
+            .reparam
+            .as_ref()
+            .filter(|_| mode != TextureSource::Ortho)
+        {
+            Some(r) => r.texels,
+            None => rec.texels,
+        };
+        let stretch = crate::stats::cell_texel_stretch(rec, &mesh, texels);
+        let path = store.dir.join(&self.normal_file.path);
+        let png = crate::fsutil::PngCompression::default();
+        let stretch_png = crate::fsutil::encode_png(
+            &path,
+            &super::metadata::stretch_image(&stretch, texels),
+            png,
+        )?;
+        let share_png = match (&rec.photo, self.texture) {
+            (Some(p), TextureSource::Photo) => Some(crate::fsutil::encode_png(
+                &path,
+                &store.read_photo_texture(rec, p)?.1,
+                png,
+            )?),
+            _ => None,
+        };
+        self.metadata = Some(super::metadata::CellMetadata {
+            stretch_png,
+            share_png,
+        });
+        Ok(())
+    }
+
     /// Prepares the lit variant: the cell's normal map (read from `store`, verified) baked
     /// into the tangent space of its surface's vertex frames ([`super::normals`]), as PNG.
     pub fn make_lit(&mut self, store: &Store) -> Result<()> {

@@ -36,6 +36,20 @@ pub fn write_glb(
         wrap_t: Valid(json::texture::WrappingMode::ClampToEdge),
         ..Default::default()
     });
+    // property textures are sampled without filtering (a texel's bytes form one value)
+    // (only when some cell has metadata: an unused sampler is reported by validators)
+    let nearest = if cells.iter().any(|c| c.metadata.is_some()) {
+        root.push(json::texture::Sampler {
+            mag_filter: Some(Valid(json::texture::MagFilter::Nearest)),
+            min_filter: Some(Valid(json::texture::MinFilter::Nearest)),
+            wrap_s: Valid(json::texture::WrappingMode::ClampToEdge),
+            wrap_t: Valid(json::texture::WrappingMode::ClampToEdge),
+            ..Default::default()
+        })
+    } else {
+        sampler
+    };
+    let mut property_textures: Vec<serde_json::Value> = Vec::new();
     let mut nodes = Vec::with_capacity(cells.len());
     for (ci, cell) in cells.iter().enumerate() {
         let local: Vec<[f32; 3]> = (0..cell.positions.len())
@@ -171,8 +185,32 @@ pub fn write_glb(
             }),
             ..Default::default()
         });
+        // per-texel metadata: this cell's property texture
+        let property_texture = cell.metadata.as_ref().map(|m| {
+            let stretch = push_texture(
+                &mut root,
+                &mut bin,
+                m.stretch_png.clone(),
+                "image/png",
+                format!("{} stretch", cell.id),
+                nearest,
+            );
+            let share = m.share_png.as_ref().map(|png| {
+                push_texture(
+                    &mut root,
+                    &mut bin,
+                    png.clone(),
+                    "image/png",
+                    format!("{} photo share", cell.id),
+                    nearest,
+                )
+                .value()
+            });
+            property_textures.push(super::metadata::property_texture(stretch.value(), share));
+            property_textures.len() - 1
+        });
         let mut primitives = Vec::new();
-        for tris in [&cell.surface, &cell.skirt] {
+        for (k, tris) in [&cell.surface, &cell.skirt].into_iter().enumerate() {
             if tris.is_empty() {
                 continue;
             }
@@ -201,9 +239,18 @@ pub fn write_glb(
                 attributes.insert(Valid(json::mesh::Semantic::Normals), normal);
                 attributes.insert(Valid(json::mesh::Semantic::Tangents), tangent);
             }
+            // (the surface primitive carries the metadata)
+            let extensions = property_texture.filter(|_| k == 0).map(|i| {
+                let mut e = json::extensions::mesh::Primitive::default();
+                e.others.insert(
+                    "EXT_structural_metadata".into(),
+                    serde_json::json!({"propertyTextures": [i]}),
+                );
+                e
+            });
             primitives.push(json::mesh::Primitive {
                 attributes,
-                extensions: None,
+                extensions,
                 extras: Default::default(),
                 indices: Some(indices),
                 material: Some(material),
@@ -231,6 +278,18 @@ pub fn write_glb(
         nodes,
     });
     root.scene = Some(scene);
+    if !property_textures.is_empty() {
+        root.extensions_used.push("EXT_structural_metadata".into());
+        let mut e = json::extensions::root::Root::default();
+        e.others.insert(
+            "EXT_structural_metadata".into(),
+            serde_json::json!({
+                "schema": super::metadata::schema(),
+                "propertyTextures": property_textures,
+            }),
+        );
+        root.extensions = Some(e);
+    }
     root.buffers.push(json::Buffer {
         byte_length: USize64(bin.len() as u64),
         extensions: None,

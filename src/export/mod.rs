@@ -13,6 +13,7 @@ mod cells;
 mod ecef;
 mod geoid;
 mod glb;
+pub mod metadata;
 pub mod normals;
 mod tiles;
 
@@ -36,6 +37,16 @@ pub use tiles::{
 
 use crate::error::Result;
 use crate::store::Store;
+
+/// Variants of [`export_glb`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GlbOptions {
+    /// Lit materials ([`ExportCell::make_lit`]) instead of unlit ones.
+    pub lit: bool,
+    /// Per-texel stretch and photo share as `EXT_structural_metadata` property textures
+    /// ([`ExportCell::make_metadata`]).
+    pub metadata: bool,
+}
 
 /// What [`export_glb`] wrote.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,16 +73,25 @@ pub fn local_y_up(origin: DVec3, p: DVec3) -> [f64; 3] {
 /// Writes the cells `sel` picks from the store in `dir` as one GLB at `out` (atomically):
 /// positions in [`local_y_up`] around the centre of the cells' bounding box (rounded to the
 /// metre), and in the glTF's `extras`: `{"cliffmap": {"crs", "origin", "axes", "cells",
-/// "level"}}`; `lit`: the lit variant ([`ExportCell::make_lit`]) instead of unlit materials.
-pub fn export_glb(dir: &Path, sel: &CellSelection, out: &Path, lit: bool) -> Result<GlbReport> {
+/// "level"}}`; options: the lit variant and per-texel metadata ([`GlbOptions`]).
+pub fn export_glb(
+    dir: &Path,
+    sel: &CellSelection,
+    out: &Path,
+    opts: &GlbOptions,
+) -> Result<GlbReport> {
     let store = Store::open(dir)?;
     let picked = select_cells(&store, sel)?;
     let cells: Vec<ExportCell> = picked
         .par_iter()
         .map(|&i| {
-            let mut c = read_export_cell(&store, &store.manifest.cells[i])?;
-            if lit {
+            let rec = &store.manifest.cells[i];
+            let mut c = read_export_cell(&store, rec)?;
+            if opts.lit {
                 c.make_lit(&store)?;
+            }
+            if opts.metadata {
+                c.make_metadata(&store, rec, TextureSource::Photo)?;
             }
             Ok(c)
         })

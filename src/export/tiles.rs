@@ -38,6 +38,9 @@ pub struct TilesOptions {
     /// `NORMAL` and `TANGENT` attributes ([`super::ExportCell::make_lit`]), instead of
     /// `KHR_materials_unlit`.
     pub lit: bool,
+    /// Per-texel stretch and photo share as `EXT_structural_metadata` property textures
+    /// ([`super::ExportCell::make_metadata`]).
+    pub metadata: bool,
     /// External child tilesets: the subtree under every cell whose level is a positive
     /// multiple of `n` is written as its own tileset (`subtrees/LEVEL/X-Y.json`,
     /// [`subtree_path_for`]) and referenced from its parent, so no tileset file lists more
@@ -170,6 +173,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         "modes": listing,
         "jpeg_quality": opts.jpeg_quality,
         "lit": opts.lit,
+        "metadata": opts.metadata,
         "subtree_levels": subtree_levels,
     });
     let key_path = out.join(EXPORT_KEY_FILE);
@@ -204,6 +208,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         modes: &listing,
         jpeg_quality: opts.jpeg_quality,
         lit: opts.lit,
+        metadata: opts.metadata,
         subtree_levels,
         resume,
         progress: &progress,
@@ -247,6 +252,7 @@ struct TilesetContext<'a> {
     modes: &'a [Value],
     jpeg_quality: Option<u8>,
     lit: bool,
+    metadata: bool,
     /// Levels per tileset file (0: one file).
     subtree_levels: u8,
     /// Keep GLBs an earlier run of the same export wrote.
@@ -315,6 +321,9 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
             let mut cell: ExportCell = read_export_cell_as(store, rec, mode)?;
             if ctx.lit {
                 cell.make_lit(store)?;
+            }
+            if ctx.metadata {
+                cell.make_metadata(store, rec, mode)?;
             }
             if let Some(q) = ctx.jpeg_quality {
                 cell.texture_to_jpeg(q)?;

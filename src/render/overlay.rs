@@ -1,7 +1,7 @@
 //! Overlay textures: the per-texel stretch of a cell's parameterization as a heat map.
 
-use crate::stats::texel_stretch;
-use crate::store::{CellMesh, CellRecord, texcoord};
+use crate::stats::cell_texel_stretch;
+use crate::store::{CellMesh, CellRecord};
 
 /// What is drawn over the terrain.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -43,26 +43,11 @@ pub fn heat_colour(stretch: f32) -> [u8; 4] {
 }
 
 /// The per-texel stretch heat map of a cell drawn with `mesh` (its surface triangles and
-/// texture coordinates from [`texcoord`]) on a `texels × texels` texture budgeted for the
+/// texture coordinates from [`crate::store::texcoord`]) on a `texels × texels` texture budgeted for the
 /// cell's nominal square (stretch as in [`crate::stats::texel_stretch`]).
 pub fn stretch_heatmap(rec: &CellRecord, mesh: &CellMesh, texels: u32) -> image::RgbaImage {
-    let n = mesh.surface_vertices as usize;
-    let positions: Vec<[f64; 3]> = mesh.positions[..n.min(mesh.positions.len())]
-        .iter()
-        .map(|p| p.map(f64::from))
-        .collect();
-    let uvs: Vec<[f64; 2]> = (0..positions.len())
-        .map(|i| texcoord(rec, mesh, i).map(f64::from))
-        .collect();
-    let tris: Vec<[u32; 3]> = mesh
-        .surface()
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&k| (k as usize) < positions.len()))
-        .collect();
-    let base_area = (rec.extent.width() * rec.extent.height()).abs();
     let t = texels.max(1);
-    let s = texel_stretch(&positions, &tris, &uvs, t, base_area);
+    let s = cell_texel_stretch(rec, mesh, t);
     image::RgbaImage::from_fn(t, t, |x, y| {
         image::Rgba(heat_colour(s[(y * t + x) as usize]))
     })
