@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::error::{Error, Result};
-use crate::store::{CellMesh, CellRecord, FileRef, Store, texcoord};
+use crate::store::{CellMesh, CellRecord, FileRef, ReparamRecord, Store, texcoord};
 
 /// Which texture a cell exports: the best it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,18 +88,16 @@ pub fn read_export_cell_as(
     mode: TextureSource,
 ) -> Result<ExportCell> {
     let photo = rec.photo.as_ref().filter(|_| mode == TextureSource::Photo);
-    let reparam = rec
-        .reparam
-        .as_ref()
-        .filter(|_| mode != TextureSource::Ortho);
+    let reparam = layout_reparam(rec, mode);
     let mesh = export_mesh(store, rec, mode)?;
     let normal_file = reparam
         .map_or(&rec.files.normal, |r| &r.files.normal)
         .clone();
-    let (file, texture) = match (photo, reparam) {
-        (Some(p), _) => (&p.texture, TextureSource::Photo),
-        (None, Some(r)) => (&r.files.texture, TextureSource::Reparam),
-        (None, None) => (&rec.files.texture, TextureSource::Ortho),
+    let texture = export_source(rec, mode);
+    let file = match (photo, reparam) {
+        (Some(p), _) => &p.texture,
+        (None, Some(r)) => &r.files.texture,
+        (None, None) => &rec.files.texture,
     };
     let texture_bytes = match photo {
         // stored in blocks: the whole texture, encoded again
@@ -141,13 +139,28 @@ pub fn read_export_cell_as(
 /// The mesh a cell is exported with in `mode` (the reparameterized one where the cell has it
 /// and `mode` is not `Ortho`, else the orthographic one), verified.
 fn export_mesh(store: &Store, rec: &CellRecord, mode: TextureSource) -> Result<CellMesh> {
-    match rec
-        .reparam
-        .as_ref()
-        .filter(|_| mode != TextureSource::Ortho)
-    {
+    match layout_reparam(rec, mode) {
         Some(r) => store.read_mesh_file(&r.files.mesh),
         None => store.read_mesh(rec),
+    }
+}
+
+/// The reparameterized variant whose mesh and texture layout a cell is exported with in
+/// `mode`: the cell's, unless it has none or `mode` is `Ortho`.
+fn layout_reparam(rec: &CellRecord, mode: TextureSource) -> Option<&ReparamRecord> {
+    rec.reparam
+        .as_ref()
+        .filter(|_| mode != TextureSource::Ortho)
+}
+
+/// The texture a cell is exported with in `mode`: its photo texture when it has one and
+/// `mode` is `Photo`, else its reparameterized one where [`layout_reparam`] gives one, else
+/// the orthographic one.
+fn export_source(rec: &CellRecord, mode: TextureSource) -> TextureSource {
+    match (&rec.photo, layout_reparam(rec, mode), mode) {
+        (Some(_), _, TextureSource::Photo) => TextureSource::Photo,
+        (_, Some(_), _) => TextureSource::Reparam,
+        _ => TextureSource::Ortho,
     }
 }
 
@@ -168,12 +181,7 @@ pub fn read_export_positions(
     mode: TextureSource,
 ) -> Result<(Vec<DVec3>, TextureSource)> {
     let mesh = export_mesh(store, rec, mode)?;
-    let source = match (&rec.photo, &rec.reparam, mode) {
-        (Some(_), _, TextureSource::Photo) => TextureSource::Photo,
-        (_, Some(_), TextureSource::Photo | TextureSource::Reparam) => TextureSource::Reparam,
-        _ => TextureSource::Ortho,
-    };
-    Ok((world_positions(rec, &mesh), source))
+    Ok((world_positions(rec, &mesh), export_source(rec, mode)))
 }
 
 impl ExportCell {
@@ -187,14 +195,7 @@ impl ExportCell {
         mode: TextureSource,
     ) -> Result<()> {
         let mesh = export_mesh(store, rec, mode)?;
-        let texels = match rec
-            .reparam
-            .as_ref()
-            .filter(|_| mode != TextureSource::Ortho)
-        {
-            Some(r) => r.texels,
-            None => rec.texels,
-        };
+        let texels = layout_reparam(rec, mode).map_or(rec.texels, |r| r.texels);
         let stretch = crate::stats::cell_texel_stretch(rec, &mesh, texels);
         let path = store.dir.join(&self.normal_file.path);
         let png = crate::fsutil::PngCompression::default();
@@ -206,7 +207,7 @@ impl ExportCell {
         let share_png = match (&rec.photo, self.texture) {
             (Some(p), TextureSource::Photo) => Some(crate::fsutil::encode_png(
                 &path,
-                &store.read_photo_texture(rec, p)?.1,
+                &store.read_photo_confidence(p)?,
                 png,
             )?),
             _ => None,

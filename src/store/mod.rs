@@ -160,6 +160,17 @@ impl Store {
             .map_err(|e| Error::store(path, e))
     }
 
+    /// The confidence map of [`Store::read_photo_texture`] alone (the colour texture is not
+    /// read or rebuilt).
+    pub fn read_photo_confidence(&self, p: &PhotoCellRecord) -> Result<image::GrayImage> {
+        let confidence = self.read_png(&p.confidence)?.to_luma8();
+        match &p.blocks {
+            None => Ok(confidence),
+            Some(blocks) => photo_texture::compose_confidence(p.texels, blocks, &confidence)
+                .map_err(|e| Error::store(self.dir.join(&p.confidence.path), e)),
+        }
+    }
+
     /// Reads and verifies one of the store's files by its record.
     pub fn read_file(&self, f: &FileRef) -> Result<Vec<u8>> {
         read_verified(&self.dir, f)

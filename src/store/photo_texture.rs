@@ -190,9 +190,23 @@ pub fn compose(
     let texels = texture.width();
     let present = blocks.present(texels)?;
     unpack(texture_atlas, &mut texture, blocks.side, &present)?;
+    Ok((
+        texture,
+        compose_confidence(texels, blocks, confidence_atlas)?,
+    ))
+}
+
+/// The whole confidence map of side `texels` from its stored atlas: the blocks pasted over
+/// 0 ([`compose`] without the colour texture).
+pub fn compose_confidence(
+    texels: u32,
+    blocks: &PhotoBlocks,
+    confidence_atlas: &GrayImage,
+) -> Result<GrayImage, String> {
+    let present = blocks.present(texels)?;
     let mut confidence = GrayImage::new(texels, texels);
     unpack(confidence_atlas, &mut confidence, blocks.side, &present)?;
-    Ok((texture, confidence))
+    Ok(confidence)
 }
 
 /// `existing` magnified `scale` times (a power of two) by bilinear interpolation between
