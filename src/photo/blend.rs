@@ -28,16 +28,14 @@ use crate::store::{PHOTO_BLOCK, PhotoBlocks};
 #[derive(Clone, Debug, PartialEq)]
 pub struct Blended {
     /// RGBA8 texture of the accumulator's size, with the existing texture's layout, computed
-    /// in the blocks of side `block_side` that footprints reached (`computed`, row-major);
+    /// in the blocks of side `block_side` that footprints reached;
     /// texels of the other blocks are 0, or the existing ones when the sizes are equal
     /// (there the texture is the existing one magnified).
     pub texture: RgbaImage,
-    /// Per texel the photo's share `s` of the colour, 0..255 (0 outside `computed`).
+    /// Per texel the photo's share `s` of the colour, 0..255 (0 outside those blocks).
     pub confidence: GrayImage,
-    /// Block side (texels) of `computed` and `blocks`.
+    /// Block side (texels) of `blocks`.
     pub block_side: u32,
-    /// The blocks computed (footprints reached them).
-    pub computed: Vec<bool>,
     /// The blocks where some texel got photo weight `β > 0` (those to store): elsewhere the
     /// texture equals the existing one magnified.
     pub blocks: PhotoBlocks,
@@ -127,7 +125,6 @@ pub fn blend_cell(
         texture,
         confidence: conf,
         block_side: side,
-        computed,
         blocks: PhotoBlocks::new(side, &stored),
         photo_texels,
         steep_texels,
