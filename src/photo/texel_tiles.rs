@@ -6,6 +6,14 @@
 //! Texels are addressed by their row-major index `t = y · side + x`, as the splatter gives
 //! them. Tiles are appended in the order of their first write; two grids written in the same
 //! order compare equal (the accumulators write in footprint order, whatever the threads).
+//!
+//! Tiles live in chunks of [`CHUNK_TILES`] tiles that are never reallocated (a growing grid
+//! adds a chunk, it does not copy), and a dropped grid gives its chunks to a process-wide
+//! spare list (at most [`SPARE_BYTES_MAX`]) that later grids take from before asking the
+//! allocator: a 12-MP photo fills ~0.7 GB of records, and fresh pages from the kernel
+//! (zeroed on first touch) and the copies of a doubling vector took about a fifth of the
+//! projection's CPU time (docs/projection.md, "Splatting cost"). A tile is zeroed when it is
+//! allocated, so what a grid holds never depends on a chunk's past.
 
 /// The per-texel accumulator record (see [`super::accumulate`]); all zero is the empty texel.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -30,17 +38,72 @@ pub const TILE: u32 = 16;
 const TILE_TEXELS: usize = (TILE * TILE) as usize;
 const NONE: u32 = u32::MAX;
 
+/// Tiles per chunk of storage (128 KiB of records).
+pub const CHUNK_TILES: usize = 16;
+const CHUNK_LEN: usize = CHUNK_TILES * TILE_TEXELS;
+/// The most bytes of dropped chunks kept for reuse.
+pub const SPARE_BYTES_MAX: usize = 1 << 30;
+const SPARE_MAX: usize = SPARE_BYTES_MAX / (CHUNK_LEN * std::mem::size_of::<TexelSums>());
+
+/// Chunks given back by dropped grids, for the next ones.
+static SPARE: std::sync::Mutex<Vec<Box<[TexelSums]>>> = std::sync::Mutex::new(Vec::new());
+
+/// A chunk from the spare list, else a new one (contents unspecified: tiles are zeroed as
+/// they are allocated).
+fn take_chunk() -> Box<[TexelSums]> {
+    let spare = SPARE.lock().ok().and_then(|mut s| s.pop());
+    spare.unwrap_or_else(|| vec![ZERO; CHUNK_LEN].into_boxed_slice())
+}
+
 /// A `side × side` grid of [`TexelSums`], zero where never written.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug)]
 pub struct TexelTiles {
     side: u32,
     tiles_x: u32,
     /// log2 of `side` when it is a power of two (index split by shifts).
     shift: Option<u32>,
-    /// Per tile (row-major over tiles): its position in `data`, or `NONE`.
+    /// Per tile (row-major over tiles): its number among the allocated tiles, or `NONE`.
     index: Vec<u32>,
-    /// The allocated tiles, `TILE²` records each, row-major within the tile.
-    data: Vec<TexelSums>,
+    /// Allocated tiles.
+    tiles: u32,
+    /// The storage: tile `k` is records `(k % CHUNK_TILES) · TILE²..` of chunk
+    /// `k / CHUNK_TILES`, row-major within the tile.
+    chunks: Vec<Box<[TexelSums]>>,
+}
+
+impl Drop for TexelTiles {
+    fn drop(&mut self) {
+        if self.chunks.is_empty() {
+            return;
+        }
+        if let Ok(mut spare) = SPARE.lock() {
+            let room = SPARE_MAX.saturating_sub(spare.len());
+            let n = self.chunks.len().min(room);
+            spare.extend(self.chunks.drain(..n));
+        }
+    }
+}
+
+impl Clone for TexelTiles {
+    fn clone(&self) -> Self {
+        TexelTiles {
+            side: self.side,
+            tiles_x: self.tiles_x,
+            shift: self.shift,
+            index: self.index.clone(),
+            tiles: self.tiles,
+            chunks: self.chunks.clone(),
+        }
+    }
+}
+
+impl PartialEq for TexelTiles {
+    /// Same size, same tiles allocated in the same order, same records in them.
+    fn eq(&self, other: &Self) -> bool {
+        self.side == other.side
+            && self.index == other.index
+            && (0..self.tiles as usize).all(|k| self.tile(k) == other.tile(k))
+    }
 }
 
 const ZERO: TexelSums = TexelSums {
@@ -61,7 +124,8 @@ impl TexelTiles {
             tiles_x,
             shift: side.is_power_of_two().then(|| side.trailing_zeros()),
             index: vec![NONE; tiles_x as usize * tiles_x as usize],
-            data: Vec::new(),
+            tiles: 0,
+            chunks: Vec::new(),
         }
     }
 
@@ -82,7 +146,31 @@ impl TexelTiles {
 
     /// Texels held by allocated tiles (a multiple of `TILE²`).
     pub fn allocated(&self) -> usize {
-        self.data.len()
+        self.tiles as usize * TILE_TEXELS
+    }
+
+    /// The records of allocated tile `k`.
+    #[inline]
+    fn tile(&self, k: usize) -> &[TexelSums] {
+        &self.chunks[k / CHUNK_TILES][(k % CHUNK_TILES) * TILE_TEXELS..][..TILE_TEXELS]
+    }
+
+    /// The records of allocated tile `k`, for writing.
+    #[inline]
+    fn tile_mut(&mut self, k: usize) -> &mut [TexelSums] {
+        &mut self.chunks[k / CHUNK_TILES][(k % CHUNK_TILES) * TILE_TEXELS..][..TILE_TEXELS]
+    }
+
+    /// Allocates a zeroed tile and returns its number.
+    #[cold]
+    fn new_tile(&mut self) -> u32 {
+        let k = self.tiles;
+        if k as usize == self.chunks.len() * CHUNK_TILES {
+            self.chunks.push(take_chunk());
+        }
+        self.tiles += 1;
+        self.tile_mut(k as usize).fill(ZERO);
+        k
     }
 
     /// The tile number and the position within the tile of texel `t` (`t < len()`).
@@ -108,7 +196,7 @@ impl TexelTiles {
         let (tile, within) = self.locate(t);
         match self.index[tile] {
             NONE => &ZERO,
-            k => &self.data[k as usize * TILE_TEXELS + within],
+            k => &self.tile(k as usize)[within],
         }
     }
 
@@ -122,14 +210,13 @@ impl TexelTiles {
         let (tile, within) = self.locate(t);
         let k = match self.index[tile] {
             NONE => {
-                let k = (self.data.len() / TILE_TEXELS) as u32;
-                self.data.resize(self.data.len() + TILE_TEXELS, ZERO);
+                let k = self.new_tile();
                 self.index[tile] = k;
                 k
             }
             k => k,
         };
-        Some(&mut self.data[k as usize * TILE_TEXELS + within])
+        Some(&mut self.tile_mut(k as usize)[within])
     }
 
     /// Per block of the row-major grid of `⌈side / block⌉²` blocks of `block` texels: whether
@@ -166,9 +253,10 @@ impl TexelTiles {
             side: self.side as usize,
             tiles_x: self.tiles_x as usize,
         };
-        for (tile, &k) in self.index.iter().enumerate() {
+        for tile in 0..self.index.len() {
+            let k = self.index[tile];
             if k != NONE {
-                let block = &mut self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
+                let block = self.tile_mut(k as usize);
                 walk.texels(tile, |w, t| f(t, &mut block[w]));
             }
         }
@@ -182,7 +270,7 @@ impl TexelTiles {
         };
         for (tile, &k) in self.index.iter().enumerate() {
             if k != NONE {
-                let block = &self.data[k as usize * TILE_TEXELS..][..TILE_TEXELS];
+                let block = self.tile(k as usize);
                 walk.texels(tile, |w, t| f(t, &block[w]));
             }
         }
@@ -256,5 +344,51 @@ mod tests {
         let b = g.touched_blocks(40);
         let on: Vec<usize> = (0..9).filter(|&i| b[i]).collect();
         assert_eq!(on, vec![0, 1, 3, 4]);
+    }
+
+    #[test]
+    fn reused_chunks_start_zero_and_grids_compare_by_content() {
+        // fill many tiles with non-zero records and drop the grid: its chunks go spare
+        let mut g = TexelTiles::new(256);
+        for t in 0..g.len() {
+            let s = g.get_mut(t).unwrap();
+            s.coverage = 1.0 + t as f32;
+            s.colour = [2.0; 3];
+        }
+        assert_eq!(g.allocated(), 256 * 256);
+        drop(g);
+        // new grids (likely on those chunks) read zero wherever they were not written
+        let mut a = TexelTiles::new(256);
+        let mut b = TexelTiles::new(256);
+        for t in [5usize, 40_000, 65_535] {
+            a.get_mut(t).unwrap().weight = 3.0;
+            b.get_mut(t).unwrap().weight = 3.0;
+        }
+        a.for_each(|t, s| {
+            let want = if [5, 40_000, 65_535].contains(&t) {
+                3.0
+            } else {
+                0.0
+            };
+            assert_eq!(
+                (s.weight, s.coverage, s.colour),
+                (want, 0.0, [0.0; 3]),
+                "texel {t}"
+            );
+        });
+        assert_eq!(a, b);
+        assert_eq!(a.clone(), b);
+        b.get_mut(6).unwrap().clear = 1.0;
+        assert_ne!(a, b);
+        // more tiles than one chunk holds
+        let mut c = TexelTiles::new(1024);
+        for t in (0..c.len()).step_by(16) {
+            c.get_mut(t).unwrap().footprint = t as f32;
+        }
+        assert_eq!(c.allocated(), c.len());
+        for t in (0..c.len()).step_by(16) {
+            assert_eq!(c.get(t).footprint, t as f32);
+            assert_eq!(c.get(t + 1).footprint, 0.0);
+        }
     }
 }
