@@ -7,6 +7,7 @@ mod common;
 use cli_util::{cliffmap, ok};
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::register::{PixelOrigin, read_gcps};
+use common::exif::{ascii, exif_field, jpeg_with_exif, rationals};
 
 fn path(rel: &str) -> String {
     common::real_data(rel).display().to_string()
@@ -304,52 +305,6 @@ fn img_8937_registers_to_img_8902_on_stable_ground() {
         (dy - 0.12633).abs() < 0.005 && (dp - 0.017584).abs() < 0.005,
         "{dy} {dp}"
     );
-}
-
-/// A small JPEG with the EXIF `fields` in an APP1 segment.
-fn jpeg_with_exif(path: &std::path::Path, fields: &[exif::Field]) {
-    let mut w = exif::experimental::Writer::new();
-    for f in fields {
-        w.push_field(f);
-    }
-    let mut blob = std::io::Cursor::new(Vec::new());
-    w.write(&mut blob, false).unwrap();
-    let blob = blob.into_inner();
-    let mut jpeg = Vec::new();
-    image::RgbImage::new(8, 8)
-        .write_to(
-            &mut std::io::Cursor::new(&mut jpeg),
-            image::ImageFormat::Jpeg,
-        )
-        .unwrap();
-    let mut out = jpeg[..2].to_vec();
-    out.extend([0xFF, 0xE1]);
-    out.extend(((blob.len() + 8) as u16).to_be_bytes());
-    out.extend(b"Exif\0\0");
-    out.extend(&blob);
-    out.extend(&jpeg[2..]);
-    std::fs::write(path, out).unwrap();
-}
-
-fn exif_field(tag: exif::Tag, value: exif::Value) -> exif::Field {
-    exif::Field {
-        tag,
-        ifd_num: exif::In::PRIMARY,
-        value,
-    }
-}
-
-/// Rationals `num/denom`.
-fn rationals(v: &[(u32, u32)]) -> exif::Value {
-    exif::Value::Rational(
-        v.iter()
-            .map(|&(num, denom)| exif::Rational { num, denom })
-            .collect(),
-    )
-}
-
-fn ascii(s: &str) -> exif::Value {
-    exif::Value::Ascii(vec![s.as_bytes().to_vec()])
 }
 
 #[test]

@@ -150,6 +150,110 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     );
 }
 
+/// A photo with only a rough pose in the list (`"rough"`): the focal length from its EXIF
+/// data, the heading and tilt as a compass and a level give them, the position given; the
+/// camera is made and registered. The height of a photographer on the ground comes from the
+/// store's terrain.
+#[test]
+fn register_starts_from_a_rough_pose_and_exif() {
+    use common::exif::{exif_field, insert_exif, rationals};
+    let tmp = tempfile::tempdir().unwrap();
+    scene_with_photos(tmp.path());
+    let photos = tmp.path().join("photos");
+    let truth = camera_from_json_file(&photos.join("plateau_east.json"), (800, 600)).unwrap();
+    // EXIF: a 10-mm lens on a sensor whose resolution gives the true focal length + 2 %
+    let jpeg = std::fs::read(photos.join("plateau_east.jpg")).unwrap();
+    let px_per_mm = truth.fx * 1.02 / 10.0;
+    let with_exif = insert_exif(
+        &jpeg,
+        &[
+            exif_field(exif::Tag::FocalLength, rationals(&[(10, 1)])),
+            exif_field(
+                exif::Tag::FocalPlaneXResolution,
+                rationals(&[((px_per_mm * 1000.0).round() as u32, 1000)]),
+            ),
+            exif_field(
+                exif::Tag::FocalPlaneResolutionUnit,
+                exif::Value::Short(vec![4]),
+            ),
+            exif_field(exif::Tag::PixelXDimension, exif::Value::Long(vec![800])),
+            exif_field(exif::Tag::PixelYDimension, exif::Value::Long(vec![600])),
+        ],
+    );
+    std::fs::write(photos.join("east_exif.jpg"), with_exif).unwrap();
+    let (yaw, pitch, roll) = yaw_pitch_roll_from_rotation(&truth.world_to_camera);
+    let heading = 90.0 - yaw.to_degrees() - 1.6;
+    let p = truth.position;
+    let list = photos.join("rough_pose.json");
+    std::fs::write(
+        &list,
+        format!(
+            r#"{{"photos": [{{"image": "east_exif.jpg", "rough": {{"position": [{}, {}, {}], "heading_deg": {heading}, "pitch_deg": {}, "roll_deg": {}}}}}]}}"#,
+            p.x,
+            p.y,
+            p.z,
+            pitch.to_degrees() - 0.9,
+            roll.to_degrees() + 0.7
+        ),
+    )
+    .unwrap();
+    let out = tmp.path().join("out").join("registered.json");
+    let o = ok(&[
+        "register",
+        tmp.path().join("store").to_str().unwrap(),
+        "--photos",
+        list.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("east_exif.jpg: rough focal length"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("from EXIF"), "{stderr}");
+    let specs = cliffmap::photo::read_photo_specs(&out).unwrap();
+    let a = yaw_pitch_roll_from_rotation(&specs[0].camera.world_to_camera);
+    let errs = [
+        angle_diff_deg(a.0, yaw),
+        angle_diff_deg(a.1, pitch),
+        angle_diff_deg(a.2, roll),
+    ];
+    assert!(
+        errs.iter().all(|&e| e < 0.1),
+        "angle errors after register {errs:?}\n{stderr}"
+    );
+    assert!((specs[0].camera.fx / truth.fx - 1.0).abs() < 0.01);
+
+    // without a height: the terrain under the position (the store's TIN, 0.25 m) plus
+    // the height above ground asked for
+    let (dem, _) = DemoScene::default().generate().unwrap();
+    let (r, c) = dem.georef.grid(p.x, p.y);
+    let ground = dem.bilinear(r, c);
+    std::fs::write(
+        &list,
+        format!(
+            r#"{{"photos": [{{"image": "east_exif.jpg", "rough": {{"position": [{}, {}], "height_above_ground_m": 2.5, "heading_deg": 10}}}}]}}"#,
+            p.x, p.y
+        ),
+    )
+    .unwrap();
+    let entries = cliffmap::photo::read_photo_entries(&list).unwrap();
+    let mut notes = Vec::new();
+    let specs = cliffmap::pipeline::resolve_photo_entries(
+        &tmp.path().join("store"),
+        entries,
+        &mut |n, l| notes.push(format!("{n}: {l}")),
+    )
+    .unwrap();
+    let z = specs[0].camera.position.z;
+    assert!(
+        (z - (ground + 2.5)).abs() < 0.3,
+        "{z} vs {ground} + 2.5; {notes:?}"
+    );
+    assert!(notes.iter().any(|n| n.contains("the terrain")), "{notes:?}");
+}
+
 #[test]
 fn register_refuses_bad_input_naming_it() {
     let tmp = tempfile::tempdir().unwrap();

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use cliffmap::pipeline::{TieSettings, register_photos_with};
+use cliffmap::pipeline::{TieSettings, register_photos_with, resolve_photo_entries};
 use cliffmap::register::{TerrainOptions, TieOptions, parse_free};
 
 /// Flags of `cliffmap register`.
@@ -10,7 +10,9 @@ use cliffmap::register::{TerrainOptions, TieOptions, parse_free};
 pub struct Args {
     /// The cell store.
     store: PathBuf,
-    /// Photo list with rough cameras (`photos.json` format, as for `project`).
+    /// Photo list with rough cameras (`photos.json` format, as for `project`), or entries
+    /// with `"rough"` poses made from EXIF GPS, compass heading and focal length
+    /// (docs/formats.md).
     #[arg(long)]
     photos: PathBuf,
     /// Output photo list (same format); camera files and a report are written beside it.
@@ -93,7 +95,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
         moving_mask,
     };
-    let specs = cliffmap::photo::read_photo_specs(&a.photos)?;
+    let entries = cliffmap::photo::read_photo_entries(&a.photos)?;
+    let quiet = a.quiet;
+    let specs = resolve_photo_entries(&a.store, entries, &mut |name, line| {
+        if !quiet {
+            eprintln!("{name}: rough {line}");
+        }
+    })?;
     let mut warn = |s: &str| eprintln!("warning: {s}");
     let results = register_photos_with(&a.store, &specs, &a.out, &opts, &ties, &mut warn)?;
     if !a.quiet {

@@ -3,7 +3,10 @@
 //!
 //! `photos.json` (docs/formats.md): `{"photos": [{"image": "a.jpg", "camera": "a.json"},
 //! {"image": "b.jpg", "imgraft": "b_imgraft.json", "rotation_delta_deg": [dyaw, dpitch,
-//! droll]}]}`; relative paths resolve against the list's folder.
+//! droll]}, {"image": "c.jpg", "rough": {"heading_deg": 250}}]}`; relative paths resolve
+//! against the list's folder. A `"rough"` entry has no fitted camera, only what the photo's
+//! EXIF data and the photographer give ([`RoughPose`]): `cliffmap register` makes its camera
+//! ([`crate::register::rough_camera`]); [`read_photo_specs`] refuses it.
 
 use std::path::{Path, PathBuf};
 
@@ -139,12 +142,8 @@ fn spec_for_size(
 ) -> Result<PhotoSpec> {
     let camera = fit_camera_to_image(camera, size, camera_source, image_path)?;
     validate_camera(&camera, camera_source)?;
-    let name = image_path.file_name().map_or_else(
-        || image_path.display().to_string(),
-        |n| n.to_string_lossy().into(),
-    );
     Ok(PhotoSpec {
-        name,
+        name: file_name(image_path),
         image_path: image_path.to_path_buf(),
         camera,
     })
@@ -166,16 +165,155 @@ struct Entry {
     imgraft: Option<PathBuf>,
     #[serde(default)]
     rotation_delta_deg: Option<[f64; 3]>,
+    #[serde(default)]
+    rough: Option<RoughPose>,
+}
+
+/// A photo's rough pose as a photographer knows it (a `"rough"` entry of `photos.json`):
+/// every field is optional, and what is missing comes from the photo's EXIF data. World
+/// coordinates are the store's (its CRS, metres); angles in degrees.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoughPose {
+    /// CRS of the store's coordinates (`EPSG:CODE` or a PROJ string) for an EXIF GPS fix;
+    /// default: the store's own CRS.
+    pub crs: Option<String>,
+    /// Camera position `[x, y]` or `[x, y, z]` in the store's frame, instead of EXIF GPS.
+    pub position: Option<Vec<f64>>,
+    /// Height of the camera above the terrain under it (metres) when `position` has no z:
+    /// default 1.6 (a photographer standing on the ground).
+    pub height_above_ground_m: Option<f64>,
+    /// Take z from the EXIF GPS altitude rather than from the terrain (GPS heights are often
+    /// tens of metres off; default false).
+    #[serde(default)]
+    pub use_gps_altitude: bool,
+    /// Compass heading of the view, clockwise from true north; default EXIF
+    /// `GPSImgDirection`.
+    pub heading_deg: Option<f64>,
+    /// Magnetic declination (east positive) added to a magnetic EXIF heading.
+    pub declination_deg: Option<f64>,
+    /// Pitch (ImGRAFT: positive looking down), default 0.
+    #[serde(default)]
+    pub pitch_deg: f64,
+    /// Roll (ImGRAFT), default 0.
+    #[serde(default)]
+    pub roll_deg: f64,
+    /// Focal length in pixels of the image; default from EXIF.
+    pub focal_px: Option<f64>,
+    /// Sensor width (mm) for EXIF data that gives the focal length in mm alone.
+    pub sensor_width_mm: Option<f64>,
+}
+
+impl RoughPose {
+    /// The first problem of the given values (non-finite numbers, a position of neither 2
+    /// nor 3 values, a negative focal length or sensor width, angles beyond ±360°).
+    pub fn problem(&self) -> Option<String> {
+        let finite = |v: f64| v.is_finite();
+        if let Some(p) = &self.position {
+            if !(p.len() == 2 || p.len() == 3) || !p.iter().all(|v| finite(*v)) {
+                return Some(format!(
+                    "\"position\" must be [x, y] or [x, y, z], finite, got {p:?}"
+                ));
+            }
+        }
+        for (name, v) in [
+            ("heading_deg", self.heading_deg),
+            ("declination_deg", self.declination_deg),
+            ("pitch_deg", Some(self.pitch_deg)),
+            ("roll_deg", Some(self.roll_deg)),
+        ] {
+            if let Some(v) = v
+                && !(finite(v) && v.abs() <= 360.0)
+            {
+                return Some(format!(
+                    "\"{name}\" must be a finite angle within ±360, got {v}"
+                ));
+            }
+        }
+        for (name, v) in [
+            ("focal_px", self.focal_px),
+            ("sensor_width_mm", self.sensor_width_mm),
+        ] {
+            if let Some(v) = v
+                && !(finite(v) && v > 0.0)
+            {
+                return Some(format!("\"{name}\" must be positive, got {v}"));
+            }
+        }
+        if let Some(h) = self.height_above_ground_m
+            && !(finite(h) && h.abs() <= 10_000.0)
+        {
+            return Some(format!(
+                "\"height_above_ground_m\" must be finite (within ±10 km), got {h}"
+            ));
+        }
+        None
+    }
+}
+
+/// One entry of a photo list: a photo with its camera, or with a rough pose only.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PhotoEntry {
+    /// A photo with a camera (`"camera"` or `"imgraft"`).
+    Fitted(PhotoSpec),
+    /// A photo with a rough pose only (`"rough"`).
+    Rough {
+        /// Short name (the image's file name).
+        name: String,
+        /// The image file.
+        image_path: PathBuf,
+        /// The image's size in pixels.
+        size: (u32, u32),
+        /// What the list gives.
+        pose: RoughPose,
+    },
+}
+
+impl PhotoEntry {
+    /// The photo's short name.
+    pub fn name(&self) -> &str {
+        match self {
+            PhotoEntry::Fitted(s) => &s.name,
+            PhotoEntry::Rough { name, .. } => name,
+        }
+    }
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into(),
+    )
 }
 
 /// Reads `photos.json` and every camera it names, without decoding the images; see
-/// [`read_photo_list`].
+/// [`read_photo_list`]. An entry with a rough pose only is an error (it needs
+/// `cliffmap register` first; [`read_photo_entries`] reads it).
 pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
+    read_photo_entries(path)?
+        .into_iter()
+        .enumerate()
+        .map(|(i, e)| match e {
+            PhotoEntry::Fitted(s) => Ok(s),
+            PhotoEntry::Rough { image_path, .. } => Err(Error::bad_input(
+                path,
+                format!(
+                    "photo {i} ({}) has a rough pose only (\"rough\"): run `cliffmap register` first, which writes a list with cameras",
+                    image_path.display()
+                ),
+            )),
+        })
+        .collect()
+}
+
+/// Reads `photos.json` like [`read_photo_specs`], keeping entries with a rough pose only
+/// (their image size read, their values checked).
+pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let list: ListFile = serde_json::from_str(&text).map_err(|e| {
         Error::bad_input(
             path,
-            format!("invalid photo list: {e} (expected {{\"photos\": [{{\"image\": ..., \"camera\" or \"imgraft\": ...}}]}})"),
+            format!("invalid photo list: {e} (expected {{\"photos\": [{{\"image\": ..., \"camera\", \"imgraft\" or \"rough\": ...}}]}})"),
         )
     })?;
     if list.photos.is_empty() {
@@ -185,13 +323,37 @@ pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
     let mut out = Vec::with_capacity(list.photos.len());
     for (i, e) in list.photos.iter().enumerate() {
         let image = base.join(&e.image);
-        let cam_file = match (&e.camera, &e.imgraft) {
-            (Some(c), None) | (None, Some(c)) => base.join(c),
+        let cam_file = match (&e.camera, &e.imgraft, &e.rough) {
+            (Some(c), None, None) | (None, Some(c), None) => base.join(c),
+            (None, None, Some(pose)) => {
+                if let Some(msg) = pose.problem() {
+                    return Err(Error::bad_input(
+                        path,
+                        format!("photo {i} ({}): {msg}", e.image.display()),
+                    ));
+                }
+                if e.rotation_delta_deg.is_some() {
+                    return Err(Error::bad_input(
+                        path,
+                        format!(
+                            "photo {i} ({}): \"rotation_delta_deg\" needs a camera, not a rough pose",
+                            e.image.display()
+                        ),
+                    ));
+                }
+                out.push(PhotoEntry::Rough {
+                    name: file_name(&image),
+                    size: image_size(&image)?,
+                    image_path: image,
+                    pose: pose.clone(),
+                });
+                continue;
+            }
             _ => {
                 return Err(Error::bad_input(
                     path,
                     format!(
-                        "photo {i} ({}): give exactly one of \"camera\" and \"imgraft\"",
+                        "photo {i} ({}): give exactly one of \"camera\", \"imgraft\" and \"rough\"",
                         e.image.display()
                     ),
                 ));
@@ -212,7 +374,9 @@ pub fn read_photo_specs(path: &Path) -> Result<Vec<PhotoSpec>> {
         if let Some(d) = e.rotation_delta_deg {
             cam = apply_rotation_delta(&cam, d);
         }
-        out.push(spec_for_size(&image, size, cam, &cam_file)?);
+        out.push(PhotoEntry::Fitted(spec_for_size(
+            &image, size, cam, &cam_file,
+        )?));
     }
     Ok(out)
 }

@@ -62,8 +62,8 @@ pub use footprint::{
     photo_footprints, photo_footprints_in,
 };
 pub use input::{
-    PhotoSpec, apply_rotation_delta, fit_camera_to_image, image_size, photo_spec, read_photo_list,
-    read_photo_specs, validate_camera,
+    PhotoEntry, PhotoSpec, RoughPose, apply_rotation_delta, fit_camera_to_image, image_size,
+    photo_spec, read_photo_entries, read_photo_list, read_photo_specs, validate_camera,
 };
 pub use level::{
     ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,

@@ -24,7 +24,9 @@ pub use progress::progress_bar;
 pub use project::{
     PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store,
 };
-pub use register::{PhotoRegistration, TieSettings, register_photos, register_photos_with};
+pub use register::{
+    PhotoRegistration, TieSettings, register_photos, register_photos_with, resolve_photo_entries,
+};
 pub use reparam::{
     ReparamOptions, TextureMemory, recorded_reparam_options, redo_reparam_cells, reparam_store,
     texture_memory,

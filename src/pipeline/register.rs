@@ -20,10 +20,10 @@ use serde_json::{Value, json};
 use crate::camera::{CameraModel, camera_to_json};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::photo::PhotoSpec;
+use crate::photo::{PhotoEntry, PhotoSpec};
 use crate::register::{
     CameraParams, Param, TerrainFit, TerrainOptions, TerrainScene, TieFit, TieOptions,
-    register_to_terrain, tie_photo,
+    register_to_terrain, rough_camera, tie_photo,
 };
 use crate::store::Store;
 
@@ -55,6 +55,64 @@ pub struct TieSettings {
     /// Moving surfaces to leave out of the ties' matches (e.g. a glacier between time-lapse
     /// shots): a grey raster on the store's DEM grid, values ≥ 128 moving.
     pub moving_mask: Option<image::GrayImage>,
+}
+
+/// The photos of a list with cameras: entries with a camera as they are, entries with a
+/// rough pose only ([`PhotoEntry::Rough`]) given a rough camera by [`rough_camera`] from
+/// their EXIF data, the store's CRS and its terrain (the finest level's TIN, for the height
+/// of a photographer on the ground); `note(name, line)` gets where each rough value came
+/// from. Errors name the image and the value missing.
+pub fn resolve_photo_entries(
+    store_dir: &Path,
+    entries: Vec<PhotoEntry>,
+    note: &mut dyn FnMut(&str, &str),
+) -> Result<Vec<PhotoSpec>> {
+    if entries.iter().all(|e| matches!(e, PhotoEntry::Fitted(_))) {
+        return Ok(entries
+            .into_iter()
+            .filter_map(|e| match e {
+                PhotoEntry::Fitted(s) => Some(s),
+                PhotoEntry::Rough { .. } => None,
+            })
+            .collect());
+    }
+    let store = Store::open(store_dir)?;
+    let m = &store.manifest;
+    let (cx, cy) = m.georef.world(
+        (m.dem.height as f64 - 1.0) / 2.0,
+        (m.dem.width as f64 - 1.0) / 2.0,
+    );
+    let near = glam::DVec3::new(cx, cy, (m.dem.height_min + m.dem.height_max) / 2.0);
+    let terrain = TerrainScene::new(&store, near)?;
+    let top = terrain.top_z().max(m.dem.height_max) + 100.0;
+    let ground = |x: f64, y: f64| {
+        terrain
+            .hit(glam::DVec3::new(x, y, top), glam::DVec3::NEG_Z)
+            .map(|p| p.z)
+    };
+    let mut out = Vec::with_capacity(entries.len());
+    for e in entries {
+        match e {
+            PhotoEntry::Fitted(s) => out.push(s),
+            PhotoEntry::Rough {
+                name,
+                image_path,
+                size,
+                pose,
+            } => {
+                let r = rough_camera(&image_path, size, &pose, m.crs.as_deref(), &ground)?;
+                for line in &r.notes {
+                    note(&name, line);
+                }
+                out.push(PhotoSpec {
+                    name,
+                    image_path,
+                    camera: r.camera,
+                });
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// [`register_photos_with`] without known photos, ties on by default.

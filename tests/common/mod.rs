@@ -1,6 +1,7 @@
 //! Shared helpers for integration tests.
 #![allow(dead_code)]
 
+pub mod exif;
 pub mod tiffgen;
 
 use std::path::PathBuf;

@@ -1,0 +1,181 @@
+//! A rough camera from what a photographer has: the photo's EXIF data (GPS fix, compass
+//! heading, focal length) and the values of a `"rough"` entry of `photos.json`
+//! ([`RoughPose`]), for `cliffmap register` to refine.
+//!
+//! In order of preference, each value from the entry, else from EXIF:
+//! - x, y: `position`, else the EXIF GPS fix (WGS 84) projected into `crs` (default: the
+//!   store's CRS) with [`crate::crs::from_lon_lat`];
+//! - z: the third value of `position`, else the EXIF GPS altitude when `use_gps_altitude`,
+//!   else the terrain under (x, y) plus `height_above_ground_m` (default 1.6 m: a
+//!   photographer on the ground; phone GPS heights are often tens of metres off, so the
+//!   terrain is the better guess, and the report gives the GPS altitude's difference);
+//! - view direction: `heading_deg` (clockwise from true north), else EXIF
+//!   `GPSImgDirection` (a magnetic one corrected by `declination_deg`, with a note when no
+//!   declination is given); pitch and roll from the entry (default 0, level);
+//! - focal length: `focal_px`, else EXIF ([`exif_focal_px`], `sensor_width_mm` for
+//!   cameras that record the focal length in mm alone).
+//!
+//! The principal point is the image centre, no distortion. A value that is nowhere to be
+//! found is an error naming the image and the field to add.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::exif::{exif_focal_px, exif_gps};
+use crate::camera::{CameraModel, rotation_from_yaw_pitch_roll};
+use crate::error::{Error, Result};
+use crate::photo::{RoughPose, validate_camera};
+
+/// Camera height above the terrain when nothing else gives it, metres.
+pub const DEFAULT_HEIGHT_ABOVE_GROUND_M: f64 = 1.6;
+
+/// A rough camera and where each of its values came from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughCamera {
+    /// The camera (world frame of the store, image size of the photo).
+    pub camera: CameraModel,
+    /// One line per value: its source (e.g. "position from EXIF GPS ... in EPSG:32633").
+    pub notes: Vec<String>,
+}
+
+/// The rough camera of the `size` image at `image` from `pose` and the image's EXIF data
+/// (module docs). `store_crs` is the store's CRS (for a GPS fix when `pose.crs` is not
+/// given); `ground(x, y)` is the terrain height under a point, `None` outside the terrain.
+/// Errors name the image and the missing or wrong value.
+pub fn rough_camera(
+    image: &Path,
+    size: (u32, u32),
+    pose: &RoughPose,
+    store_crs: Option<&str>,
+    ground: &dyn Fn(f64, f64) -> Option<f64>,
+) -> Result<RoughCamera> {
+    let bad = |msg: String| Error::bad_input(image, msg);
+    if let Some(msg) = pose.problem() {
+        return Err(bad(msg));
+    }
+    let mut notes = Vec::new();
+    let needs_gps = pose.position.is_none()
+        || pose.heading_deg.is_none()
+        || (pose.use_gps_altitude && pose.position.as_ref().is_none_or(|p| p.len() < 3));
+    let gps = if needs_gps { exif_gps(image)? } else { None };
+
+    // x, y
+    let xy = match (&pose.position, &gps) {
+        (Some(p), _) => {
+            notes.push(format!("position {:.2}, {:.2} given", p[0], p[1]));
+            [p[0], p[1]]
+        }
+        (None, Some(g)) => {
+            let crs = pose.crs.as_deref().or(store_crs).ok_or_else(|| {
+                bad("the EXIF GPS fix needs a CRS: the store has none, give \"crs\" (e.g. \"EPSG:32633\") or \"position\"".into())
+            })?;
+            let p = crate::crs::from_lon_lat(crs, g.lon_deg, g.lat_deg, 0.0)?;
+            notes.push(format!(
+                "position from EXIF GPS ({:.6}°, {:.6}°): {:.2}, {:.2} in {crs}",
+                g.lat_deg, g.lon_deg, p.x, p.y
+            ));
+            [p.x, p.y]
+        }
+        (None, None) => {
+            return Err(bad(
+                "no position: the photo has no EXIF GPS fix, give \"position\": [x, y] in the store's frame".into(),
+            ));
+        }
+    };
+
+    // z
+    let ground_z = ground(xy[0], xy[1]);
+    let gps_alt = gps.as_ref().and_then(|g| g.altitude_m);
+    let z = match (&pose.position, pose.use_gps_altitude) {
+        (Some(p), _) if p.len() == 3 => {
+            notes.push(format!("height {:.2} given", p[2]));
+            p[2]
+        }
+        (_, true) => {
+            let a = gps_alt.ok_or_else(|| {
+                bad("\"use_gps_altitude\" is set but the photo's EXIF GPS has no altitude".into())
+            })?;
+            notes.push(format!("height {a:.1} from the EXIF GPS altitude"));
+            a
+        }
+        _ => {
+            let g = ground_z.ok_or_else(|| {
+                bad(format!(
+                    "the position {:.1}, {:.1} is not over the store's terrain, so its height is unknown: give \"position\": [x, y, z]",
+                    xy[0], xy[1]
+                ))
+            })?;
+            let h = pose
+                .height_above_ground_m
+                .unwrap_or(DEFAULT_HEIGHT_ABOVE_GROUND_M);
+            let z = g + h;
+            let mut note = format!("height {z:.2}: the terrain {g:.2} + {h} m");
+            if let Some(a) = gps_alt {
+                note += &format!(" (the EXIF GPS altitude {a:.1} differs by {:+.1} m)", a - z);
+            }
+            notes.push(note);
+            z
+        }
+    };
+
+    // view direction
+    let heading = match (pose.heading_deg, &gps) {
+        (Some(h), _) => {
+            notes.push(format!("heading {h:.2}° given"));
+            h
+        }
+        (None, Some(g)) if g.direction_deg.is_some() => {
+            let d = g.direction_deg.unwrap_or_default();
+            if g.direction_magnetic {
+                let decl = pose.declination_deg.unwrap_or(0.0);
+                if pose.declination_deg.is_none() {
+                    notes.push(format!(
+                        "heading {d:.2}° from EXIF, from magnetic north, used as true (give \"declination_deg\" to correct it)"
+                    ));
+                } else {
+                    notes.push(format!(
+                        "heading {:.2}° from EXIF ({d:.2}° magnetic, declination {decl:+.2}°)",
+                        d + decl
+                    ));
+                }
+                d + decl
+            } else {
+                notes.push(format!("heading {d:.2}° from EXIF (true north)"));
+                d
+            }
+        }
+        _ => {
+            return Err(bad(
+                "no view direction: the photo's EXIF has no GPSImgDirection, give \"heading_deg\" (clockwise from north)".into(),
+            ));
+        }
+    };
+    let yaw = (90.0 - heading).rem_euclid(360.0);
+    let r = rotation_from_yaw_pitch_roll(
+        yaw.to_radians(),
+        pose.pitch_deg.to_radians(),
+        pose.roll_deg.to_radians(),
+    );
+
+    // focal length
+    let focal = match pose.focal_px {
+        Some(f) => {
+            notes.push(format!("focal length {f:.1} px given"));
+            f
+        }
+        None => {
+            let f = exif_focal_px(image, size.0, size.1, pose.sensor_width_mm)?.ok_or_else(|| {
+                bad("no focal length: the EXIF data gives none, give \"focal_px\" (or \"sensor_width_mm\" if EXIF has the focal length in mm)".into())
+            })?;
+            notes.push(format!(
+                "focal length {:.1} px from EXIF ({})",
+                f.focal_px, f.source
+            ));
+            f.focal_px
+        }
+    };
+    let camera = CameraModel::pinhole(DVec3::new(xy[0], xy[1], z), r, size.0, size.1, focal);
+    validate_camera(&camera, image)?;
+    Ok(RoughCamera { camera, notes })
+}
