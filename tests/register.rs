@@ -254,6 +254,114 @@ fn register_starts_from_a_rough_pose_and_exif() {
     assert!(notes.iter().any(|n| n.contains("the terrain")), "{notes:?}");
 }
 
+/// A photo taken 12° around the target from a known photo's place, its rough camera metres
+/// and degrees off: `register --known` resects it against the known photo. With the focal
+/// length free, 800 × 600 photos do not pin the distance along the view down, and the
+/// resection says so rather than accept a wrong position; from the same camera body (EXIF
+/// make and model), the anchor's intrinsics are used and the position is found.
+#[test]
+fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
+    use common::exif::{ascii, exif_field, insert_exif};
+    let tmp = tempfile::tempdir().unwrap();
+    scene_with_photos(tmp.path());
+    let photos = tmp.path().join("photos");
+    let scene = DemoScene::default();
+    let (dem, _) = scene.generate().unwrap();
+    let second = scene
+        .second_shots(12.0, 1.15)
+        .into_iter()
+        .find(|s| s.name == "plateau_south_second")
+        .unwrap();
+    let truth = second.camera.resized(800, 600);
+    scene
+        .render_truth_photo(&dem, &truth, 1)
+        .unwrap()
+        .save(photos.join("south_second.jpg"))
+        .unwrap();
+    let mut p = CameraParams::from_camera(&truth);
+    p.angles[0] += 2.0f64.to_radians();
+    p.angles[1] -= 1.0f64.to_radians();
+    p.angles[2] += 0.8f64.to_radians();
+    p.focal = [p.focal[0] * 1.02, p.focal[1] * 1.02];
+    p.position += glam::DVec3::new(3.0, -2.5, 1.0);
+    std::fs::write(
+        photos.join("second_rough.json"),
+        serde_json::to_string(&camera_to_json(&p.camera())).unwrap(),
+    )
+    .unwrap();
+    let list = photos.join("two_places.json");
+    std::fs::write(
+        &list,
+        r#"{"photos": [{"image": "plateau_south.jpg", "camera": "plateau_south.json"}, {"image": "south_second.jpg", "camera": "second_rough.json"}]}"#,
+    )
+    .unwrap();
+    let run = |name: &str| {
+        let out = tmp.path().join(name).join("registered.json");
+        ok(&[
+            "register",
+            tmp.path().join("store").to_str().unwrap(),
+            "--photos",
+            list.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--known",
+            "plateau_south.jpg",
+        ]);
+        let report: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
+        )
+        .unwrap();
+        let cam = cliffmap::photo::read_photo_specs(&out).unwrap()[1].camera;
+        (report["photos"][1].clone(), cam)
+    };
+    // focal length free: refused, with the reason
+    let (r, _) = run("free");
+    assert_eq!(r["resection"]["anchor"], "plateau_south.jpg", "{r}");
+    assert_eq!(r["resection"]["focal_fitted"], true);
+    assert_eq!(r["resection"]["accepted"], false, "{r}");
+    let why = r["resection"]["reason"].as_str().unwrap();
+    assert!(
+        why.contains("not pinned down") && why.contains("focal"),
+        "{why}"
+    );
+    assert_ne!(r["method"], "resection");
+
+    // the same camera body as the anchor
+    let body = [
+        exif_field(exif::Tag::Make, ascii("Demo")),
+        exif_field(exif::Tag::Model, ascii("Pinhole 1600")),
+    ];
+    for f in ["plateau_south.jpg", "south_second.jpg"] {
+        let bytes = std::fs::read(photos.join(f)).unwrap();
+        std::fs::write(photos.join(f), insert_exif(&bytes, &body)).unwrap();
+    }
+    let (r, cam) = run("same_body");
+    assert_eq!(r["method"], "resection", "{r}");
+    assert_eq!(r["resection"]["focal_fitted"], false);
+    assert!(r["resection"]["inliers"].as_u64().unwrap() >= 100, "{r}");
+    let off = cam.position.distance(truth.position);
+    let (a, b) = (
+        yaw_pitch_roll_from_rotation(&cam.world_to_camera),
+        yaw_pitch_roll_from_rotation(&truth.world_to_camera),
+    );
+    let errs = [
+        angle_diff_deg(a.0, b.0),
+        angle_diff_deg(a.1, b.1),
+        angle_diff_deg(a.2, b.2),
+    ];
+    assert!(
+        off < 0.5 && errs.iter().all(|&e| e < 0.05),
+        "position {off:.2} m off, angles {errs:?} (start 4.1 m, 2°, 1°, 0.8°)\n{r}"
+    );
+    // the anchor's focal length, not the rough one
+    assert!(
+        (cam.fx / truth.fx - 1.0).abs() < 1e-9,
+        "{} {}",
+        cam.fx,
+        truth.fx
+    );
+}
+
 #[test]
 fn register_refuses_bad_input_naming_it() {
     let tmp = tempfile::tempdir().unwrap();

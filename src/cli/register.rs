@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use cliffmap::pipeline::{TieSettings, register_photos_with, resolve_photo_entries};
-use cliffmap::register::{TerrainOptions, TieOptions, parse_free};
+use cliffmap::register::{ResectOptions, TerrainOptions, TieOptions, parse_free};
 
 /// Flags of `cliffmap register`.
 #[derive(clap::Args, Debug)]
@@ -18,9 +18,10 @@ pub struct Args {
     /// Output photo list (same format); camera files and a report are written beside it.
     #[arg(long)]
     out: PathBuf,
-    /// Parameters to refine: yaw, pitch, roll, f (or fx, fy). The position stays as given
-    /// (refining it against the terrain is not reliable yet: docs/registration.md,
-    /// "Position").
+    /// Parameters the terrain search refines: yaw, pitch, roll, f (or fx, fy). It keeps the
+    /// position (refining it against the terrain alone is not reliable yet:
+    /// docs/registration.md, "Position"); a resection against a placed photo fits the
+    /// position too.
     #[arg(long, default_value = "yaw,pitch,roll,f")]
     free: String,
     /// Half-widths of the coarse search over yaw, pitch and roll, degrees "Y,P,R".
@@ -40,6 +41,14 @@ pub struct Args {
     /// Most RMSE (pixels) of a tie's inlier matches.
     #[arg(long, default_value_t = 1.0)]
     tie_rmse_px: f64,
+    /// A photo not placed by a tie is resected (position included) against the nearest
+    /// photo with a trusted position (known, or resected) given within this many metres
+    /// of it: its pixels put on the terrain and found in the photo; 0 turns it off.
+    #[arg(long, default_value_t = 1000.0)]
+    resect_distance_m: f64,
+    /// Most RMSE (pixels) of a resection's inlier matches.
+    #[arg(long, default_value_t = 1.5)]
+    resect_rmse_px: f64,
     /// Surfaces that moved between photos (a glacier), left out of the ties' matches: a
     /// grey PNG on the store's DEM grid, values >= 128 moving.
     #[arg(long)]
@@ -81,6 +90,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
+    if !(a.resect_distance_m.is_finite() && a.resect_distance_m >= 0.0) {
+        anyhow::bail!(
+            "--resect-distance-m must be >= 0, got {}",
+            a.resect_distance_m
+        );
+    }
+    if !(a.resect_rmse_px.is_finite() && a.resect_rmse_px > 0.0) {
+        anyhow::bail!(
+            "--resect-rmse-px must be positive, got {}",
+            a.resect_rmse_px
+        );
+    }
     let ties = TieSettings {
         known: a
             .known
@@ -94,6 +115,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ..TieOptions::default()
         },
         moving_mask,
+        resect_distance_m: a.resect_distance_m,
+        resection: ResectOptions {
+            max_rmse_px: a.resect_rmse_px,
+            ..ResectOptions::default()
+        },
     };
     let entries = cliffmap::photo::read_photo_entries(&a.photos)?;
     let quiet = a.quiet;
@@ -126,7 +152,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                         format!("tie {anchor}"),
                         format!("{:.2}px", t.rmse_inliers_px),
                     ),
-                    _ => ("-".into(), "-".into()),
+                    _ => match &r.resection {
+                        Some((anchor, f)) if f.accepted => (
+                            format!("resect {anchor}"),
+                            format!("{:.2}px", f.rmse_inliers_px),
+                        ),
+                        _ => ("-".into(), "-".into()),
+                    },
                 }
             };
             println!(

@@ -1,12 +1,15 @@
 //! `register`: every photo of a list refined against a store's terrain, then a new photo
 //! list with the refined cameras and a report.
 //!
-//! Three ways a photo gets its camera, in this order: **known** photos (named in
-//! [`TieSettings::known`], e.g. fitted with GCPs) keep theirs; every other photo is
-//! registered against the **terrain** ([`register_to_terrain`]); a photo the terrain does not
-//! place is then **tied** ([`tie_photo`]) to the nearest known or registered photo taken
-//! within [`TieOptions::max_distance_m`] of it, if the tie passes its checks. A photo none of
-//! them places keeps its given camera, with a warning.
+//! Four ways a photo gets its camera: **known** photos (named in [`TieSettings::known`],
+//! e.g. fitted with GCPs) keep theirs; every other photo, in list order, is first **tied**
+//! ([`tie_photo`]) to the nearest placed photo taken within [`TieOptions::max_distance_m`]
+//! of it (same place: rotation only), else **resected** ([`resect_photo`], position
+//! included) against the nearest photo whose position is trusted (known, resected, or tied
+//! to such a photo) within [`TieSettings::resect_distance_m`], else registered against the
+//! **terrain** ([`register_to_terrain`], the position kept). Photos still unplaced then try
+//! ties and resections against photos placed after them. A photo none of them places keeps
+//! its given camera, with a warning.
 //!
 //! Output files (all written atomically, the list last): `OUT` (the same format as
 //! `photos.json`, image paths relative to its folder), `OUT_STEM.NAME.camera.json` per photo
@@ -22,8 +25,8 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{PhotoEntry, PhotoSpec};
 use crate::register::{
-    CameraParams, Param, TerrainFit, TerrainOptions, TerrainScene, TieFit, TieOptions,
-    register_to_terrain, rough_camera, tie_photo,
+    CameraParams, Param, ResectFit, ResectOptions, TerrainFit, TerrainOptions, TerrainScene,
+    TieFit, TieOptions, register_to_terrain, resect_photo, rough_camera, tie_photo,
 };
 use crate::store::Store;
 
@@ -37,16 +40,18 @@ pub struct PhotoRegistration {
     /// The terrain fit (its `camera` is the one written; for a known or tied photo a fit
     /// of that camera with no search: scores NaN, no evaluations).
     pub fit: TerrainFit,
-    /// How the camera was found: "terrain", "known" or "tie".
+    /// How the camera was found: "terrain", "known", "tie" or "resection".
     pub method: &'static str,
     /// The tie tried after the terrain failed, if any (accepted or not), and its anchor.
     pub tie: Option<(String, TieFit)>,
+    /// The resection tried, if any (accepted or not), and its anchor.
+    pub resection: Option<(String, ResectFit)>,
     /// The camera file written.
     pub camera_file: PathBuf,
 }
 
 /// Known photos and photo-to-photo ties for [`register_photos_with`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct TieSettings {
     /// Names of photos whose given cameras are trusted (kept, and anchors for ties).
     pub known: Vec<String>,
@@ -55,6 +60,23 @@ pub struct TieSettings {
     /// Moving surfaces to leave out of the ties' matches (e.g. a glacier between time-lapse
     /// shots): a grey raster on the store's DEM grid, values ≥ 128 moving.
     pub moving_mask: Option<image::GrayImage>,
+    /// Most distance (metres) from a photo's given position to an anchor it may be resected
+    /// against ([`resect_photo`]); 0 turns resection off.
+    pub resect_distance_m: f64,
+    /// How a resection matches and when it is accepted.
+    pub resection: ResectOptions,
+}
+
+impl Default for TieSettings {
+    fn default() -> Self {
+        TieSettings {
+            known: Vec::new(),
+            options: TieOptions::default(),
+            moving_mask: None,
+            resect_distance_m: 1000.0,
+            resection: ResectOptions::default(),
+        }
+    }
 }
 
 /// The photos of a list with cameras: entries with a camera as they are, entries with a
@@ -228,6 +250,77 @@ pub fn register_photos_with(
         .map_err(|e| Error::BadOption(format!("{}: {e}", specs[i].image_path.display())))?;
         Ok(Some((specs[j].name.clone(), tie)))
     };
+    // photo i resected against the nearest photo with a trusted position within reach, not
+    // `tried` already
+    let try_resect = |i: usize,
+                      fits: &[Option<(TerrainFit, &'static str)>],
+                      trusted: &[bool],
+                      tried: Option<&str>|
+     -> Result<Option<(String, ResectFit)>> {
+        if !(ties.resect_distance_m > 0.0) {
+            return Ok(None);
+        }
+        let here = specs[i].camera.position;
+        let anchor = (0..specs.len())
+            .filter(|&j| j != i && trusted[j] && Some(specs[j].name.as_str()) != tried)
+            .filter_map(|j| {
+                let (f, _) = fits[j].as_ref()?;
+                Some((f.camera.position.distance(here), j, f.camera))
+            })
+            .filter(|(d, ..)| *d <= ties.resect_distance_m)
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let Some((_, j, anchor)) = anchor else {
+            return Ok(None);
+        };
+        let (a_img, p_img) = (specs[j].load()?.image, specs[i].load()?.image);
+        let terrain = TerrainScene::new(&store, anchor.position)?;
+        // the same camera body (EXIF make, model, serial, lens, focal length) and image
+        // size: the anchor's intrinsics, the focal length not fitted (it would trade
+        // against the distance along the view)
+        let body = |k: usize| crate::register::exif_camera_body(&specs[k].image_path);
+        let same_body = (anchor.width, anchor.height)
+            == (specs[i].camera.width, specs[i].camera.height)
+            && matches!((body(i)?, body(j)?), (Some(a), Some(b)) if a == b);
+        let (rough, mut resect_opts) = (specs[i].camera, ties.resection.clone());
+        // the terrain the points are put on: the finest level, within its error bound
+        resect_opts.surface_error_m = store.manifest.max_error;
+        let rough = if same_body {
+            resect_opts
+                .free
+                .retain(|p| !matches!(p, Param::F | Param::Fx | Param::Fy));
+            CameraModel {
+                fx: anchor.fx,
+                fy: anchor.fy,
+                cx: anchor.cx,
+                cy: anchor.cy,
+                k1: anchor.k1,
+                k2: anchor.k2,
+                ..rough
+            }
+        } else {
+            rough
+        };
+        let fit = resect_photo(
+            &anchor,
+            &a_img,
+            &p_img,
+            &rough,
+            |o, d| terrain.hit(o, d),
+            stable,
+            &resect_opts,
+        )
+        .map_err(|e| Error::BadOption(format!("{}: {e}", specs[i].image_path.display())))?;
+        Ok(Some((specs[j].name.clone(), fit)))
+    };
+    let mut resected: Vec<Option<(String, ResectFit)>> = vec![None; specs.len()];
+    // whose position may anchor a resection: known, resected, or tied to such a photo
+    let mut trusted: Vec<bool> = fits.iter().map(|f| f.is_some()).collect();
+    let trusted_anchor = |anchor: &str, trusted: &[bool]| {
+        specs
+            .iter()
+            .position(|s| s.name == anchor)
+            .is_some_and(|j| trusted[j])
+    };
     for i in 0..specs.len() {
         if fits[i].is_some() {
             continue;
@@ -238,9 +331,23 @@ pub fn register_photos_with(
                 f.seconds = tie.seconds;
                 f
             });
+            trusted[i] = accepted.is_some() && trusted_anchor(&anchor, &trusted);
             tied[i] = Some((anchor, tie));
             if let Some(f) = accepted {
                 fits[i] = Some((f, "tie"));
+                continue;
+            }
+        }
+        if let Some((anchor, r)) = try_resect(i, &fits, &trusted, None)? {
+            let accepted = r.accepted.then(|| {
+                let mut f = given(&r.camera);
+                f.seconds = r.seconds;
+                f
+            });
+            resected[i] = Some((anchor, r));
+            if let Some(f) = accepted {
+                fits[i] = Some((f, "resection"));
+                trusted[i] = true;
                 continue;
             }
         }
@@ -258,12 +365,26 @@ pub fn register_photos_with(
         if !unplaced {
             continue;
         }
+        let earlier = fits[i].as_ref().map_or(0.0, |(f, _)| f.seconds);
+        let tried = resected[i].as_ref().map(|(a, _)| a.clone());
+        if let Some((anchor, r)) = try_resect(i, &fits, &trusted, tried.as_deref())? {
+            if r.accepted {
+                let mut f = given(&r.camera);
+                f.seconds = r.seconds + earlier;
+                fits[i] = Some((f, "resection"));
+                trusted[i] = true;
+                resected[i] = Some((anchor, r));
+                continue;
+            }
+            resected[i] = Some((anchor, r));
+        }
         let tried = tied[i].as_ref().map(|(a, _)| a.clone());
         if let Some((anchor, tie)) = try_tie(i, &fits, tried.as_deref())? {
             if tie.accepted {
                 let mut f = given(&tie.camera);
-                f.seconds = tie.seconds + fits[i].as_ref().map_or(0.0, |(f, _)| f.seconds);
+                f.seconds = tie.seconds + earlier;
                 fits[i] = Some((f, "tie"));
+                trusted[i] = trusted_anchor(&anchor, &trusted);
             }
             tied[i] = Some((anchor, tie));
         }
@@ -274,15 +395,22 @@ pub fn register_photos_with(
         .map(|(f, s)| f.unwrap_or_else(|| (given(&s.camera), "known")))
         .collect();
     let mut results = Vec::with_capacity(specs.len());
-    for ((spec, (fit, method)), tie) in specs.iter().zip(fits).zip(tied) {
+    for (((spec, (fit, method)), tie), resection) in specs.iter().zip(fits).zip(tied).zip(resected)
+    {
         if let Some(why) = &fit.reason {
-            let tie_note = match &tie {
+            let mut tie_note = match &tie {
                 Some((anchor, t)) => format!(
                     "; tie to {anchor}: {}",
                     t.reason.as_deref().unwrap_or("accepted")
                 ),
                 None => String::new(),
             };
+            if let Some((anchor, r)) = &resection {
+                tie_note += &format!(
+                    "; resection against {anchor}: {}",
+                    r.reason.as_deref().unwrap_or("accepted")
+                );
+            }
             warn(&format!(
                 "{}: not registered, keeping its given camera: {why}{tie_note}",
                 spec.name
@@ -309,6 +437,7 @@ pub fn register_photos_with(
             fit,
             method,
             tie,
+            resection,
             camera_file,
         });
     }
@@ -372,6 +501,20 @@ fn report_entry(r: &PhotoRegistration) -> Value {
             "rmse_inliers_px": t.rmse_inliers_px,
             "turn_deg": t.turn_deg,
             "seconds": t.seconds,
+        })),
+        "resection": r.resection.as_ref().map(|(anchor, f)| json!({
+            "anchor": anchor,
+            "accepted": f.accepted,
+            "reason": f.reason,
+            "terrain_points": f.counts[0],
+            "coarse_matches": f.counts[1],
+            "fine_matches": f.counts[2],
+            "inliers": f.counts[3],
+            "rmse_inliers_px": f.rmse_inliers_px,
+            "sigma_position_m": f.sigma_position_m,
+            "moved_m": f.moved_m,
+            "focal_fitted": f.focal_fitted,
+            "seconds": f.seconds,
         })),
         "reason": r.fit.reason,
         "score_start": r.fit.score_start,

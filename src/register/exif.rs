@@ -106,6 +106,31 @@ pub fn exif_focal_px(
     Ok(None)
 }
 
+/// The camera body and lens setting a photo was taken with, from EXIF: `Make`, `Model`,
+/// `BodySerialNumber`, `LensModel` and `FocalLength` joined, or `None` when EXIF has no
+/// `Make` and `Model`. Two photos with the same key and image size share their intrinsics
+/// (a fixed-lens or same-zoom camera); errors only for malformed EXIF.
+pub fn exif_camera_body(path: &Path) -> Result<Option<String>> {
+    let Some(data) = read_exif(path)? else {
+        return Ok(None);
+    };
+    let text = |t: Tag| -> String {
+        data.get_field(t, In::PRIMARY)
+            .map(|f| f.display_value().to_string().trim().to_string())
+            .unwrap_or_default()
+    };
+    let (make, model) = (text(Tag::Make), text(Tag::Model));
+    if make.is_empty() && model.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(format!(
+        "{make}|{model}|{}|{}|{}",
+        text(Tag::BodySerialNumber),
+        text(Tag::LensModel),
+        text(Tag::FocalLength)
+    )))
+}
+
 /// A photo's GPS fix and heading from EXIF (see the [module docs](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExifGps {

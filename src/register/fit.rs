@@ -218,6 +218,17 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
     })
 }
 
+/// [`fit_camera`] from `start` alone, without the second start from the GCPs' own pose:
+/// for callers whose start is already close (and whose points may lie on one plane, where
+/// the direct linear transform has no unique answer).
+pub(crate) fn fit_camera_local(
+    start: &CameraModel,
+    gcps: &[Gcp],
+    opts: &FitOptions,
+) -> Result<CameraFit> {
+    fit_from(start, gcps, opts)
+}
+
 fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<CameraFit> {
     if opts.free.is_empty() {
         return Err(Error::BadOption("fit-camera: no free parameters".into()));
@@ -280,8 +291,16 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             free: &opts.free,
             points: points_of(&rho),
         };
-        let (Lsq { problem: solved, x: sx }, report) =
-            solver.minimize(Lsq { problem, x: x.clone() });
+        let (
+            Lsq {
+                problem: solved,
+                x: sx,
+            },
+            report,
+        ) = solver.minimize(Lsq {
+            problem,
+            x: x.clone(),
+        });
         if report.termination.was_usage_issue() || !sx.iter().all(|v| v.is_finite()) {
             return Err(Error::BadOption(format!(
                 "fit-camera: the solver failed ({:?})",

@@ -39,20 +39,22 @@ mod gcp;
 mod grey;
 mod lsq;
 mod p3p;
-mod rough;
 mod pair;
 mod params;
+mod resection;
+mod rough;
 mod start;
 pub mod terrain;
 mod ties;
 
-pub use exif::{ExifFocal, ExifGps, exif_focal_px, exif_gps};
+pub use exif::{ExifFocal, ExifGps, exif_camera_body, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
 pub use p3p::{p3p, start_from_gcps_p3p};
-pub use rough::{DEFAULT_HEIGHT_ABOVE_GROUND_M, RoughCamera, rough_camera};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
+pub use resection::{ResectFit, ResectOptions, resect_photo};
+pub use rough::{DEFAULT_HEIGHT_ABOVE_GROUND_M, RoughCamera, rough_camera};
 pub use start::{
     rotation_from_bearings, start_from_gcps, start_from_position, start_without_position,
 };

@@ -202,6 +202,73 @@ impl DemoScene {
         shots
     }
 
+    /// Second photos of the demo photos' targets taken elsewhere, for placing a photo from a
+    /// placed one (docs/registration.md, "Ties between different places"): per photo of
+    /// [`DemoScene::photo_shots`], a camera turned `turn_deg` around its target (either
+    /// side, the first with a clear line of sight) at `distance_ratio` × the photo's
+    /// horizontal distance, standing [`EYE_HEIGHT`] above the ground; inside the canyon
+    /// `distance_ratio` × the distance up-canyon on its floor instead (a move along the
+    /// view). Aimed at a point 5 m off the target, the photo's size and field of view, no
+    /// distortion; named `"<photo>_second"`. Deterministic.
+    pub fn second_shots(&self, turn_deg: f64, distance_ratio: f64) -> Vec<PhotoShot> {
+        let n = self.noises();
+        let l = self.size_m();
+        let margin = 0.02 * l;
+        let inside = |e: f64, s: f64| {
+            (margin..=l - margin).contains(&e) && (margin..=l - margin).contains(&s)
+        };
+        let photos = self.photo_shots();
+        let mut out = Vec::new();
+        for aim in self.aims(&n) {
+            let Some(photo) = photos.iter().find(|p| p.name == aim.name) else {
+                continue;
+            };
+            let t = aim.target;
+            let tw = self.world(t[0], t[1], t[2]);
+            let d = (photo.camera.position - tw).truncate().length() * distance_ratio;
+            let mut candidates = Vec::new();
+            if aim.name == "canyon" {
+                let s = t[1] - d;
+                candidates.push([self.canyon_axis(s), s]);
+            } else {
+                for sign in [1.0, -1.0] {
+                    let (sn, cs) = (sign * turn_deg).to_radians().sin_cos();
+                    let o = [
+                        cs * aim.outward[0] - sn * aim.outward[1],
+                        sn * aim.outward[0] + cs * aim.outward[1],
+                    ];
+                    candidates.push([t[0] + d * o[0], t[1] + d * o[1]]);
+                }
+            }
+            let look = [t[0] + 4.0, t[1] - 3.0, t[2] + 2.0];
+            for [e, s] in candidates {
+                if !inside(e, s) {
+                    continue;
+                }
+                let eye = [e, s, self.height_local(&n, e, s) + EYE_HEIGHT];
+                if !self.line_of_sight(&n, eye, look, 3.0) {
+                    continue;
+                }
+                let pos = self.world(eye[0], eye[1], eye[2]);
+                let Some(rot) = rotation_look_at(pos, self.world(look[0], look[1], look[2])) else {
+                    continue;
+                };
+                out.push(PhotoShot {
+                    name: format!("{}_second", aim.name),
+                    camera: CameraModel::with_fov(
+                        pos,
+                        rot,
+                        PHOTO_SIZE.0,
+                        PHOTO_SIZE.1,
+                        PHOTO_FOV_Y_DEG.to_radians(),
+                    ),
+                });
+                break;
+            }
+        }
+        out
+    }
+
     /// Novel views for render-space evaluation (docs/evaluation.md): per photo target, a
     /// `width × height` pinhole view with a 35° vertical field of view that looks at the same
     /// point from elsewhere: turned 25–40° around the target (either side) at 0.6–1.0 × the

@@ -58,7 +58,12 @@ pub fn contour(
     let (w, h) = (cam.width as f64, cam.height as f64);
     let nu = ((w - 2.0 * margin) / step).floor().max(0.0) as usize;
     let nv = ((h - 2.0 * margin) / step).floor().max(0.0) as usize;
-    let at = |i: usize, j: usize| [margin + (i as f64 + 0.5) * step, margin + (j as f64 + 0.5) * step];
+    let at = |i: usize, j: usize| {
+        [
+            margin + (i as f64 + 0.5) * step,
+            margin + (j as f64 + 0.5) * step,
+        ]
+    };
     let caster = cam.ray_caster();
     let end = |p: [f64; 2]| -> Option<RayEnd> {
         let dir = caster.ray(p[0], p[1])?;
@@ -78,9 +83,12 @@ pub fn contour(
     for j in 0..nv {
         for i in 0..nu {
             let k = j * nu + i;
-            for n in [(i + 1 < nu).then_some(k + 1), (j + 1 < nv).then_some(k + nu)]
-                .into_iter()
-                .flatten()
+            for n in [
+                (i + 1 < nu).then_some(k + 1),
+                (j + 1 < nv).then_some(k + nu),
+            ]
+            .into_iter()
+            .flatten()
             {
                 if occludes(&grid[k], &grid[n]) {
                     pairs.push((k, n));
@@ -112,7 +120,11 @@ pub fn contour(
                 }
             }
             let axis = [(pb[0] - pa[0]).signum(), (pb[1] - pa[1]).signum()];
-            let axis = if pb[0] != pa[0] { [axis[0], 0.0] } else { [0.0, axis[1]] };
+            let axis = if pb[0] != pa[0] {
+                [axis[0], 0.0]
+            } else {
+                [0.0, axis[1]]
+            };
             Some((xa, [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])], axis))
         })
         .collect();
@@ -151,7 +163,11 @@ pub fn contour(
                 // principal direction of the positions: the tangent
                 let theta = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
                 let nrm = [-theta.sin(), theta.cos()];
-                let s = if nrm[0] * axis[0] + nrm[1] * axis[1] < 0.0 { -1.0 } else { 1.0 };
+                let s = if nrm[0] * axis[0] + nrm[1] * axis[1] < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
                 normal = [s * nrm[0], s * nrm[1]];
             }
             ContourPoint {
@@ -176,9 +192,16 @@ impl EdgeImage {
     pub fn from_photo(photo: &RgbImage, factor: u32) -> EdgeImage {
         let Grey { w, h, v: luma } = Grey::of(photo).reduced(factor.max(1) as usize);
         if w == 0 || h == 0 {
-            return EdgeImage { width: 0, height: 0, gx: Vec::new(), gy: Vec::new() };
+            return EdgeImage {
+                width: 0,
+                height: 0,
+                gx: Vec::new(),
+                gy: Vec::new(),
+            };
         }
-        let k: Vec<f32> = (-3..=3).map(|i: i32| (-(i * i) as f32 / 2.0).exp()).collect();
+        let k: Vec<f32> = (-3..=3)
+            .map(|i: i32| (-(i * i) as f32 / 2.0).exp())
+            .collect();
         let ks: f32 = k.iter().sum();
         let blur = |src: &[f32], dx: usize, dy: usize| -> Vec<f32> {
             let mut out = vec![0.0f32; w * h];
@@ -197,7 +220,9 @@ impl EdgeImage {
             out
         };
         let b = blur(&blur(&luma, 1, 0), 0, 1);
-        let at = |x: isize, y: isize| b[(y.clamp(0, h as isize - 1) as usize) * w + x.clamp(0, w as isize - 1) as usize];
+        let at = |x: isize, y: isize| {
+            b[(y.clamp(0, h as isize - 1) as usize) * w + x.clamp(0, w as isize - 1) as usize]
+        };
         let mut gx = vec![0.0f32; w * h];
         let mut gy = vec![0.0f32; w * h];
         for y in 0..h as isize {
@@ -227,7 +252,8 @@ impl EdgeImage {
         if self.width == 0 || self.height == 0 {
             return None;
         }
-        if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64) {
+        if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64)
+        {
             return None;
         }
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
@@ -246,7 +272,13 @@ impl EdgeImage {
     /// The strongest edge across `normal` within `range` pixels of `p`: the offset along the
     /// normal (sub-pixel) and its strength (luma levels per pixel), if it stands out (at
     /// least `min_strength`, and 1.25× any other maximum farther than 2 px from it).
-    fn edge_along(&self, p: [f64; 2], normal: [f64; 2], range: f64, min_strength: f64) -> Option<(f64, f64)> {
+    fn edge_along(
+        &self,
+        p: [f64; 2],
+        normal: [f64; 2],
+        range: f64,
+        min_strength: f64,
+    ) -> Option<(f64, f64)> {
         let n = (2.0 * range / 0.5).round() as usize + 1;
         let g: Vec<f64> = (0..n)
             .map(|k| {
@@ -270,7 +302,11 @@ impl EdgeImage {
         }
         let (a, c) = (g[best - 1], g[best + 1]);
         let den = a - 2.0 * gb + c;
-        let frac = if den < 0.0 { (0.5 * (a - c) / den).clamp(-0.5, 0.5) } else { 0.0 };
+        let frac = if den < 0.0 {
+            (0.5 * (a - c) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
         Some((-range + 0.5 * (best as f64 + frac), gb))
     }
 }
@@ -293,7 +329,15 @@ pub struct EdgeOptions {
 impl Default for EdgeOptions {
     fn default() -> Self {
         EdgeOptions {
-            free: vec![Param::Yaw, Param::Pitch, Param::Roll, Param::F, Param::X, Param::Y, Param::Z],
+            free: vec![
+                Param::Yaw,
+                Param::Pitch,
+                Param::Roll,
+                Param::F,
+                Param::X,
+                Param::Y,
+                Param::Z,
+            ],
             position_sigma_m: 5.0,
             focal_sigma: 0.03,
             factors: vec![4, 2, 1],
@@ -350,7 +394,12 @@ pub fn refine_edges(
                 .par_iter()
                 .filter_map(|c| {
                     let (t, s) = edges.edge_along(c.pixel, c.normal, opts.search_px, 2.0)?;
-                    Some((c.point, [c.pixel[0] + t * c.normal[0], c.pixel[1] + t * c.normal[1]], c.normal, s))
+                    Some((
+                        c.point,
+                        [c.pixel[0] + t * c.normal[0], c.pixel[1] + t * c.normal[1]],
+                        c.normal,
+                        s,
+                    ))
                 })
                 .collect();
             if matches.len() < 4 * opts.free.len() {
@@ -476,7 +525,10 @@ fn fit_matches(
         let med = median(&d);
         let scale = (1.4826 * med).max(0.3);
         let delta = 1.345 * scale;
-        problem.sw = d.iter().map(|&v| if v <= delta { 1.0 } else { (delta / v).sqrt() }).collect();
+        problem.sw = d
+            .iter()
+            .map(|&v| if v <= delta { 1.0 } else { (delta / v).sqrt() })
+            .collect();
         problem.prior_weight = (matches.len() as f64 / 16.0).sqrt() * scale.max(0.5);
         let (solved, report) = LevenbergMarquardt::new().minimize(Lsq { problem, x });
         (problem, x) = (solved.problem, solved.x);
@@ -498,7 +550,12 @@ fn fit_matches(
             }
         }
     }
-    Ok((params_at(&problem.base, problem.free, &x), med, 1.4826 * med, sigma))
+    Ok((
+        params_at(&problem.base, problem.free, &x),
+        med,
+        1.4826 * med,
+        sigma,
+    ))
 }
 
 fn median(v: &[f64]) -> f64 {

@@ -34,8 +34,8 @@ use std::time::Instant;
 use glam::DVec3;
 use image::RgbImage;
 
-pub use mi::{GreyImage, nmi};
 pub use edges::{ContourPoint, EdgeFit, EdgeImage, EdgeOptions, contour, refine_edges};
+pub use mi::{GreyImage, nmi};
 pub use view::{LABELS, RayEnd, SKY, Sample, SampleAt, TerrainScene};
 
 use super::params::{CameraParams, Param};
@@ -370,7 +370,11 @@ pub fn register_to_terrain(
     let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
     let mut repeat: f64 = 0.0;
     // (with the position free the edge stage restarts instead)
-    let kicks: &[[f64; 2]] = if opts.position_free() { &[] } else { &[[3.0, -3.0], [-3.0, 3.0]] };
+    let kicks: &[[f64; 2]] = if opts.position_free() {
+        &[]
+    } else {
+        &[[3.0, -3.0], [-3.0, 3.0]]
+    };
     for kick in kicks {
         let mut c = cam;
         let f = scaled(&cam.camera(), &grey).fx;
@@ -440,7 +444,15 @@ fn finish_with_edges(
         ..EdgeOptions::default()
     };
     let not_fitted = |why: String| {
-        TerrainFit::judged(rough, *mi, Some(why), (score_start, score, evals), f64::NAN, None, t0)
+        TerrainFit::judged(
+            rough,
+            *mi,
+            Some(why),
+            (score_start, score, evals),
+            f64::NAN,
+            None,
+            t0,
+        )
     };
     // (an edge fit that cannot be made, e.g. too few silhouettes matched, is a verdict)
     let first = match refine_edges(terrain, photo, mi, rough, &eopts) {
@@ -460,7 +472,8 @@ fn finish_with_edges(
             Ok(f) => f,
             Err(e) => return Ok(not_fitted(format!("restart: {e}"))),
         };
-        position_repeat_m = position_repeat_m.max((found.position - again.camera.position).length());
+        position_repeat_m =
+            position_repeat_m.max((found.position - again.camera.position).length());
         repeat = repeat.max(pixel_distance(&found, &again.camera, depth));
     }
     let space = Space {
