@@ -20,27 +20,17 @@
 //! `--same-body`: the second photo is taken with the anchor's camera (the same focal length,
 //! known), so the focal length is not fitted.
 
-use std::path::PathBuf;
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
+use bench_util::scene_args::{Rng, SceneArgs};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::register::{CameraParams, Param, ResectOptions, TerrainScene, resect_photo};
-use cliffmap::scene::{DemoPhotoOptions, DemoScene};
+use cliffmap::scene::DemoPhotoOptions;
 use glam::DVec3;
-
-/// Deterministic uniform numbers in [-1, 1] (SplitMix64).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
 
 fn angle_diff_deg(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
@@ -56,23 +46,9 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let out = PathBuf::from(
-        args.first()
-            .ok_or_else(|| anyhow::anyhow!("usage: register_resection OUT [options]"))?,
-    );
-    let flag = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .map(|s| s.as_str())
-    };
-    let has = |name: &str| args.iter().any(|a| a == name);
-    let scene = match flag("--scene").unwrap_or("demo") {
-        "demo" => DemoScene::default(),
-        "tall" => DemoScene::tall_walls(),
-        s => anyhow::bail!("unknown --scene {s}"),
-    };
+    let a = SceneArgs::from_env("register_resection OUT [options]")?;
+    let (out, flag, has) = (a.out.clone(), |n: &str| a.flag(n), |n: &str| a.has(n));
+    let scene = a.scene()?;
     let starts: usize = flag("--starts").unwrap_or("5").parse()?;
     let turn: f64 = flag("--turn-deg").unwrap_or("12").parse()?;
     let ratio: f64 = flag("--distance-ratio").unwrap_or("1.15").parse()?;

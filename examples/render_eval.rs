@@ -27,6 +27,10 @@
 //! OUT/views/VIEW_side_by_side.png (ortho | reparam | photo | truth) and OUT/eval.json, and
 //! prints the table of gains. `--reuse` keeps an existing OUT/store and OUT/photos.
 
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
+use bench_util::scene_args::SceneArgs;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -37,26 +41,12 @@ use cliffmap::pipeline::{
     BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store,
     reparam_store,
 };
-use cliffmap::scene::{DemTracer, DemoPhotoOptions, DemoScene};
+use cliffmap::scene::{DemTracer, DemoPhotoOptions};
 
 fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let out = PathBuf::from(
-        args.first()
-            .ok_or_else(|| anyhow::anyhow!("usage: render_eval OUT [options]"))?,
-    );
-    let flag = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .map(|s| s.as_str())
-    };
-    let has = |name: &str| args.iter().any(|a| a == name);
-    let scene = match flag("--scene").unwrap_or("demo") {
-        "demo" => DemoScene::default(),
-        "tall" => DemoScene::tall_walls(),
-        s => anyhow::bail!("unknown --scene {s} (demo or tall)"),
-    };
+    let a = SceneArgs::from_env("render_eval OUT [options]")?;
+    let (out, flag, has) = (a.out.clone(), |n: &str| a.flag(n), |n: &str| a.has(n));
+    let scene = a.scene()?;
     let max_error: f64 = flag("--max-error").unwrap_or("0.5").parse()?;
     let cell_texels: u32 = flag("--cell-texels").unwrap_or("256").parse()?;
     let photo_width: u32 = flag("--photo-width").unwrap_or("1600").parse()?;
@@ -127,9 +117,12 @@ fn main() -> anyhow::Result<()> {
             )?;
             let exact = cliffmap::photo::read_photo_specs(&list)?;
             for (r, e) in regs.iter().zip(&exact) {
-                let (ya, pa, ra) = cliffmap::camera::yaw_pitch_roll_from_rotation(&r.fit.camera.world_to_camera);
-                let (yb, pb, rb) = cliffmap::camera::yaw_pitch_roll_from_rotation(&e.camera.world_to_camera);
-                let (y0, p0, r0) = cliffmap::camera::yaw_pitch_roll_from_rotation(&r.rough.world_to_camera);
+                let (ya, pa, ra) =
+                    cliffmap::camera::yaw_pitch_roll_from_rotation(&r.fit.camera.world_to_camera);
+                let (yb, pb, rb) =
+                    cliffmap::camera::yaw_pitch_roll_from_rotation(&e.camera.world_to_camera);
+                let (y0, p0, r0) =
+                    cliffmap::camera::yaw_pitch_roll_from_rotation(&r.rough.world_to_camera);
                 let d = |a: f64, b: f64| {
                     let d = (a - b).rem_euclid(std::f64::consts::TAU);
                     d.min(std::f64::consts::TAU - d).to_degrees()
@@ -138,9 +131,13 @@ fn main() -> anyhow::Result<()> {
                     "register {}: converged {}; error before yaw/pitch/roll {:.3}/{:.3}/{:.3} deg, f {:+.2} %; after {:.4}/{:.4}/{:.4} deg, f {:+.3} %",
                     r.name,
                     r.fit.converged,
-                    d(y0, yb), d(p0, pb), d(r0, rb),
+                    d(y0, yb),
+                    d(p0, pb),
+                    d(r0, rb),
                     (r.rough.fx / e.camera.fx - 1.0) * 100.0,
-                    d(ya, yb), d(pa, pb), d(ra, rb),
+                    d(ya, yb),
+                    d(pa, pb),
+                    d(ra, rb),
                     (r.fit.camera.fx / e.camera.fx - 1.0) * 100.0,
                 );
             }
@@ -263,7 +260,10 @@ fn rewrite_cameras(
         let mut cam = cliffmap::camera::camera_from_json_file(&dir.join(&name), (0, 0))?;
         change(&mut cam);
         let out = format!("{}.{tag}.json", name.trim_end_matches(".json"));
-        std::fs::write(dir.join(&out), cliffmap::camera::camera_to_json(&cam).to_string())?;
+        std::fs::write(
+            dir.join(&out),
+            cliffmap::camera::camera_to_json(&cam).to_string(),
+        )?;
         entry["camera"] = serde_json::json!(out);
     }
     let out = dir.join(format!("photos_{tag}.json"));

@@ -53,6 +53,22 @@ fn scene_with_photos(dir: &Path) -> std::path::PathBuf {
         .unwrap()
 }
 
+/// `cliffmap register` on the store in `dir` with the photo list `list`, writing `out`, with
+/// `extra` flags; fails the test if the command fails.
+fn register(dir: &Path, list: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let store = dir.join("store");
+    let mut args = vec![
+        "register",
+        store.to_str().unwrap(),
+        "--photos",
+        list.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    ok(&args)
+}
+
 #[test]
 fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     let tmp = tempfile::tempdir().unwrap();
@@ -90,14 +106,7 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     .unwrap();
     let _ = list;
     let out = tmp.path().join("out").join("registered.json");
-    let o = ok(&[
-        "register",
-        tmp.path().join("store").to_str().unwrap(),
-        "--photos",
-        rough_list.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = register(tmp.path(), &rough_list, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     let report_text =
         std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap();
@@ -198,14 +207,7 @@ fn register_starts_from_a_rough_pose_and_exif() {
     )
     .unwrap();
     let out = tmp.path().join("out").join("registered.json");
-    let o = ok(&[
-        "register",
-        tmp.path().join("store").to_str().unwrap(),
-        "--photos",
-        list.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = register(tmp.path(), &list, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
         stderr.contains("east_exif.jpg: rough focal length"),
@@ -297,16 +299,7 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
     .unwrap();
     let run = |name: &str| {
         let out = tmp.path().join(name).join("registered.json");
-        ok(&[
-            "register",
-            tmp.path().join("store").to_str().unwrap(),
-            "--photos",
-            list.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--known",
-            "plateau_south.jpg",
-        ]);
+        register(tmp.path(), &list, &out, &["--known", "plateau_south.jpg"]);
         let report: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
         )

@@ -1,6 +1,8 @@
 //! Helpers shared by the benchmarks (included with `#[path]`).
 #![allow(dead_code)]
 
+pub mod scene_args;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

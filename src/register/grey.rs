@@ -136,6 +136,24 @@ impl Grey {
         Some(a + (b - a) * fx + (c - a) * fy + (a - b - c + d) * fx * fy)
     }
 
+    /// The sub-pixel position of the NCC peak of the zero-mean template `t` (norm `tn`, half
+    /// size `r`) found at the integer centre `(x, y)` with score `s`: a parabola through the
+    /// neighbours in each axis, then [`Grey::refine`]; `None` at the image's edge or if the
+    /// refinement fails.
+    pub(crate) fn peak_sub_pixel(
+        &self,
+        t: &[f32],
+        tn: f32,
+        (x, y): (i64, i64),
+        s: f64,
+        r: i64,
+    ) -> Option<[f64; 2]> {
+        let at = |dx: i64, dy: i64| self.ncc(t, tn, x + dx, y + dy, r);
+        let (l, rr, u, d) = (at(-1, 0)?, at(1, 0)?, at(0, -1)?, at(0, 1)?);
+        let start = [x as f64 + parabola(l, s, rr), y as f64 + parabola(u, s, d)];
+        self.refine(t, tn, start, r)
+    }
+
     /// Lucas-Kanade refinement of the position `p` in this image of the zero-mean template
     /// `t` (half size `r`): Gauss-Newton on the translation, both patches normalised to zero
     /// mean and unit norm (so gain and offset do not matter); `None` if it leaves the image

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use super::fit::{CameraFit, FitOptions, fit_camera};
 use super::gcp::Gcp;
-use super::grey::{Grey, parabola};
+use super::grey::Grey;
 use super::params::Param;
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -119,10 +119,7 @@ pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<V
             if edge || s < opts.min_ncc {
                 return None;
             }
-            let at = |dx: i64, dy: i64| gb.ncc(&t, tn, fx + dx, fy + dy, half);
-            let (l, r, u, d) = (at(-1, 0)?, at(1, 0)?, at(0, -1)?, at(0, 1)?);
-            let start = [fx as f64 + parabola(l, s, r), fy as f64 + parabola(u, s, d)];
-            let b = gb.refine(&t, tn, start, half)?;
+            let b = gb.peak_sub_pixel(&t, tn, (fx, fy), s, half)?;
             Some(PatchMatch {
                 a: [x as f64, y as f64],
                 b,

@@ -46,7 +46,7 @@ use rayon::prelude::*;
 
 use super::fit::{FitOptions, GcpStatus, fit_camera_local};
 use super::gcp::Gcp;
-use super::grey::{Grey, parabola};
+use super::grey::Grey;
 use super::p3p::start_from_gcps_p3p;
 use super::params::Param;
 use crate::camera::CameraModel;
@@ -271,10 +271,7 @@ pub fn resect_photo(
                 if edge || s < opts.min_ncc {
                     return None;
                 }
-                let at = |dx: i64, dy: i64| gb.ncc(&t, tn, x + dx, y + dy, half);
-                let (l, r, u, d) = (at(-1, 0)?, at(1, 0)?, at(0, -1)?, at(0, 1)?);
-                let q = [x as f64 + parabola(l, s, r), y as f64 + parabola(u, s, d)];
-                let q = gb.refine(&t, tn, q, half)?;
+                let q = gb.peak_sub_pixel(&t, tn, (x, y), s, half)?;
                 Some(Gcp {
                     name: String::new(),
                     world: p.world,

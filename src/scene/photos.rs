@@ -73,6 +73,25 @@ struct Aim {
 }
 
 impl DemoScene {
+    /// Whether scene-local (east, south) lies at least 2 % of the scene's side inside it.
+    fn inside_margin(&self, e: f64, s: f64) -> bool {
+        let l = self.size_m();
+        let m = 0.02 * l;
+        (m..=l - m).contains(&e) && (m..=l - m).contains(&s)
+    }
+
+    /// The aims that [`DemoScene::photo_shots`] found a place for, with that photo.
+    fn aims_with_photos(&self, n: &Noises) -> Vec<(Aim, PhotoShot)> {
+        let photos = self.photo_shots();
+        self.aims(n)
+            .into_iter()
+            .filter_map(|aim| {
+                let p = photos.iter().find(|p| p.name == aim.name)?.clone();
+                Some((aim, p))
+            })
+            .collect()
+    }
+
     /// World position of scene-local (east, south, up).
     fn world(&self, e: f64, s: f64, z: f64) -> DVec3 {
         DVec3::new(self.origin_x + e, self.origin_y - s, z)
@@ -159,7 +178,6 @@ impl DemoScene {
     /// pixels, 40° vertical field of view. Deterministic for a scene.
     pub fn photo_shots(&self) -> Vec<PhotoShot> {
         let n = self.noises();
-        let l = self.size_m();
         let mut shots = Vec::new();
         for aim in self.aims(&n) {
             for &d in aim.distances {
@@ -171,8 +189,7 @@ impl DemoScene {
                     s = aim.target[1] - d;
                     e = self.canyon_axis(s);
                 }
-                let margin = 0.02 * l;
-                if !(margin..=l - margin).contains(&e) || !(margin..=l - margin).contains(&s) {
+                if !self.inside_margin(e, s) {
                     continue;
                 }
                 let eye = [e, s, self.height_local(&n, e, s) + EYE_HEIGHT];
@@ -212,17 +229,8 @@ impl DemoScene {
     /// distortion; named `"<photo>_second"`. Deterministic.
     pub fn second_shots(&self, turn_deg: f64, distance_ratio: f64) -> Vec<PhotoShot> {
         let n = self.noises();
-        let l = self.size_m();
-        let margin = 0.02 * l;
-        let inside = |e: f64, s: f64| {
-            (margin..=l - margin).contains(&e) && (margin..=l - margin).contains(&s)
-        };
-        let photos = self.photo_shots();
         let mut out = Vec::new();
-        for aim in self.aims(&n) {
-            let Some(photo) = photos.iter().find(|p| p.name == aim.name) else {
-                continue;
-            };
+        for (aim, photo) in self.aims_with_photos(&n) {
             let t = aim.target;
             let tw = self.world(t[0], t[1], t[2]);
             let d = (photo.camera.position - tw).truncate().length() * distance_ratio;
@@ -242,7 +250,7 @@ impl DemoScene {
             }
             let look = [t[0] + 4.0, t[1] - 3.0, t[2] + 2.0];
             for [e, s] in candidates {
-                if !inside(e, s) {
+                if !self.inside_margin(e, s) {
                     continue;
                 }
                 let eye = [e, s, self.height_local(&n, e, s) + EYE_HEIGHT];
@@ -276,17 +284,8 @@ impl DemoScene {
     /// above its floor), the first candidate with a clear line of sight. Deterministic.
     pub fn novel_views(&self, width: u32, height: u32) -> Vec<PhotoShot> {
         let n = self.noises();
-        let l = self.size_m();
-        let margin = 0.02 * l;
-        let inside = |e: f64, s: f64| {
-            (margin..=l - margin).contains(&e) && (margin..=l - margin).contains(&s)
-        };
-        let photos = self.photo_shots();
         let mut views = Vec::new();
-        for aim in self.aims(&n) {
-            let Some(photo) = photos.iter().find(|p| p.name == aim.name) else {
-                continue;
-            };
+        for (aim, photo) in self.aims_with_photos(&n) {
             let t = self.world(aim.target[0], aim.target[1], aim.target[2]);
             let d = (photo.camera.position - t).truncate().length();
             let mut candidates = Vec::new();
@@ -305,14 +304,16 @@ impl DemoScene {
                             sn * aim.outward[0] + cs * aim.outward[1],
                         ];
                         let (e, s) = (aim.target[0] + k * d * o[0], aim.target[1] + k * d * o[1]);
-                        if inside(e, s) {
+                        if self.inside_margin(e, s) {
                             candidates.push([e, s, self.height_local(&n, e, s) + 12.0]);
                         }
                     }
                 }
             }
             for eye in candidates {
-                if !inside(eye[0], eye[1]) || !self.line_of_sight(&n, eye, aim.target, 3.0) {
+                if !self.inside_margin(eye[0], eye[1])
+                    || !self.line_of_sight(&n, eye, aim.target, 3.0)
+                {
                     continue;
                 }
                 let pos = self.world(eye[0], eye[1], eye[2]);

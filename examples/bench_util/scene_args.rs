@@ -1,0 +1,69 @@
+//! Command lines of the generated-scene benchmarks (`OUT [--flag value] [--switch]`) and
+//! their deterministic random numbers.
+
+use std::path::PathBuf;
+
+use cliffmap::scene::DemoScene;
+
+/// The arguments after the program name: the output folder first, then flags.
+pub struct SceneArgs {
+    /// The output folder (first argument).
+    pub out: PathBuf,
+    args: Vec<String>,
+}
+
+impl SceneArgs {
+    /// Reads the process arguments; `usage` is the error without an output folder.
+    pub fn from_env(usage: &str) -> anyhow::Result<SceneArgs> {
+        let args: Vec<String> = std::env::args().skip(1).collect();
+        let out = PathBuf::from(
+            args.first()
+                .ok_or_else(|| anyhow::anyhow!("usage: {usage}"))?,
+        );
+        Ok(SceneArgs { out, args })
+    }
+
+    /// The value after `--name`, if given.
+    pub fn flag(&self, name: &str) -> Option<&str> {
+        self.args
+            .iter()
+            .position(|a| a == name)
+            .and_then(|i| self.args.get(i + 1))
+            .map(String::as_str)
+    }
+
+    /// Whether the switch `--name` is given.
+    pub fn has(&self, name: &str) -> bool {
+        self.args.iter().any(|a| a == name)
+    }
+
+    /// `--scene demo|tall` (default demo).
+    pub fn scene(&self) -> anyhow::Result<DemoScene> {
+        match self.flag("--scene").unwrap_or("demo") {
+            "demo" => Ok(DemoScene::default()),
+            "tall" => Ok(DemoScene::tall_walls()),
+            s => anyhow::bail!("unknown --scene {s} (demo or tall)"),
+        }
+    }
+}
+
+/// Deterministic uniform numbers in [-1, 1] (SplitMix64).
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next number.
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
+/// The smaller angle between two angles, radians.
+pub fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
