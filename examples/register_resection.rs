@@ -103,7 +103,7 @@ fn main() -> anyhow::Result<()> {
         flag("--scene").unwrap_or("demo")
     );
     println!(
-        "| anchor | baseline m | start | start error: angles ° / position m / focal % | after: angles ° (yaw, pitch, roll) / position m / focal % | points / coarse / fine / inliers | RMSE px | σ position m | accepted | s |"
+        "| anchor | baseline m | start | start error: angles ° / position m / focal % / px median, 90 % | after: angles ° (yaw, pitch, roll) / position m / focal % / px median, 90 % | points / coarse / fine / inliers | RMSE px | σ position m | accepted | s |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut summary = Vec::new();
@@ -116,10 +116,44 @@ fn main() -> anyhow::Result<()> {
         };
         let truth = second.camera.resized(width, width / 4 * 3);
         let img = scene.render_truth_photo(&dem, &truth, 2)?;
+        // terrain points the photo shows (a 40-px grid of the true camera's rays), to score a
+        // camera by where it puts them: RMS pixel error, what the projection feels
+        let mut shown = Vec::new();
+        for v in (20..truth.height).step_by(40) {
+            for u in (20..truth.width).step_by(40) {
+                if let Some(p) = truth
+                    .pixel_ray(u as f64, v as f64)
+                    .and_then(|d| terrain.hit(truth.position, d))
+                {
+                    shown.push((p, [u as f64, v as f64]));
+                }
+            }
+        }
+        // median and 90th percentile of the pixel errors (the near ground at the image's
+        // foot moves most with the position)
+        let px_err = |cam: &CameraModel| {
+            let mut e: Vec<f64> = shown
+                .iter()
+                .map(|(p, q)| {
+                    cam.project(*p)
+                        .map_or(1e6, |r| (r[0] - q[0]).hypot(r[1] - q[1]))
+                })
+                .collect();
+            e.sort_by(f64::total_cmp);
+            let at = |f: f64| e.get((f * (e.len() as f64 - 1.0)) as usize).copied();
+            (at(0.5).unwrap_or(f64::NAN), at(0.9).unwrap_or(f64::NAN))
+        };
         let baseline = truth.position.distance(a.camera.position);
         let tp = CameraParams::from_camera(&truth);
-        let (mut ok, mut goal, mut times, mut pos_errs, mut ang_errs) =
-            (0, 0, Vec::new(), Vec::new(), Vec::new());
+        let (mut ok, mut goal, mut times, mut pos_errs, mut ang_errs, mut px_errs, mut px90_errs) = (
+            0,
+            0,
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+        );
         for s in 0..starts {
             let mut c = tp;
             c.angles[0] += (3.0 * rng.next()).to_radians();
@@ -157,8 +191,11 @@ fn main() -> anyhow::Result<()> {
             };
             let (a0, p0, f0, _) = errs(&rough);
             let (a1, p1, f1, each) = errs(&fit.found);
+            let (px0, px1) = (px_err(&rough), px_err(&fit.found));
             if fit.accepted {
                 ok += 1;
+                px_errs.push(px1.0);
+                px90_errs.push(px1.1);
                 times.push(secs);
                 pos_errs.push(p1);
                 ang_errs.push(a1);
@@ -167,11 +204,15 @@ fn main() -> anyhow::Result<()> {
                 }
             }
             println!(
-                "| {} | {baseline:.0} | {s} | {a0:.2} / {p0:.2} / {f0:+.2} | {a1:.3} ({:.3}, {:.3}, {:.3}) / {p1:.2} / {f1:+.2} | {} / {} / {} / {} | {:.2} | {:.2}, {:.2}, {:.2} | {} | {secs:.1} |",
+                "| {} | {baseline:.0} | {s} | {a0:.2} / {p0:.2} / {f0:+.2} / {:.1}, {:.1} | {a1:.3} ({:.3}, {:.3}, {:.3}) / {p1:.2} / {f1:+.2} / {:.2}, {:.2} | {} / {} / {} / {} | {:.2} | {:.2}, {:.2}, {:.2} | {} | {secs:.1} |",
                 a.name,
+                px0.0,
+                px0.1,
                 each[0],
                 each[1],
                 each[2],
+                px1.0,
+                px1.1,
                 fit.counts[0],
                 fit.counts[1],
                 fit.counts[2],
@@ -195,14 +236,18 @@ fn main() -> anyhow::Result<()> {
             median(&mut ang_errs),
             median(&mut pos_errs),
             median(&mut times),
+            median(&mut px_errs),
+            median(&mut px90_errs),
         ));
     }
     println!(
-        "\n| anchor | baseline m | starts | accepted | within 0.02° and 0.3 m | median angle error ° | median position error m | median s |"
+        "\n| anchor | baseline m | starts | accepted | within 0.02° and 0.3 m | median angle error ° | median position error m | px error on the terrain, median / 90 % (median of starts) | median s |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
-    for (name, b, ok, goal, ang, pos, t) in summary {
-        println!("| {name} | {b:.0} | {starts} | {ok} | {goal} | {ang:.3} | {pos:.2} | {t:.1} |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (name, b, ok, goal, ang, pos, t, px, px90) in summary {
+        println!(
+            "| {name} | {b:.0} | {starts} | {ok} | {goal} | {ang:.3} | {pos:.2} | {px:.2} / {px90:.2} | {t:.1} |"
+        );
     }
     Ok(())
 }
