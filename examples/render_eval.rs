@@ -11,8 +11,14 @@
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
-//!     [--occlusion-margin PX] [--rough SEED [--register]]
+//!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--register]]
+//!     [--second-photos TURN_DEG,DISTANCE_RATIO]
 //! ```
+//! `--second-photos` projects and scores second photos of the demo photos' targets taken
+//! elsewhere (`DemoScene::second_shots`) instead of the demo photos; with `--register` the
+//! demo photos (exact) are `--known` anchors the second photos are resected against.
+//! `--rough-position M` also moves each rough camera by up to ±M m horizontally and ±0.4 M
+//! vertically.
 //! `--rough SEED` projects with every camera turned and zoomed at random inside what a phone's
 //! compass and EXIF give (yaw ±3°, pitch and roll ±1.5°, focal length ±3 %; seeded);
 //! `--register` first refines those cameras with `cliffmap register` (prints the errors
@@ -66,7 +72,22 @@ fn main() -> anyhow::Result<()> {
     let (dem, ortho) = scene.generate()?;
     let store = out.join("store");
     let photos_dir = out.join("photos");
-    let list = photos_dir.join("photos.json");
+    // with --second-photos, the photos projected and scored are second photos of the demo
+    // photos' targets from elsewhere; the demo photos are then anchors for `register`
+    let second: Option<(f64, f64)> = match flag("--second-photos") {
+        Some(v) => {
+            let (t, r) = v
+                .split_once(',')
+                .ok_or_else(|| anyhow::anyhow!("--second-photos TURN_DEG,DISTANCE_RATIO"))?;
+            Some((t.parse()?, r.parse()?))
+        }
+        None => None,
+    };
+    let anchors = photos_dir.join("photos.json");
+    let list = match second {
+        Some(_) => photos_dir.join("seconds.json"),
+        None => anchors.clone(),
+    };
     if !(has("--reuse") && store.join("manifest.json").exists() && list.exists()) {
         let inputs = BuildInputs {
             dem: &dem,
@@ -97,26 +118,82 @@ fn main() -> anyhow::Result<()> {
             supersample: photo_ss,
         };
         scene.write_demo_photos(&dem, &photos_dir, &popts)?;
+        if let Some((turn, ratio)) = second {
+            let mut entries = Vec::new();
+            for shot in scene.second_shots(turn, ratio) {
+                let cam = shot.camera.resized(popts.width, popts.height);
+                let img = scene.render_truth_photo(&dem, &cam, photo_ss)?;
+                img.save(photos_dir.join(format!("{}.jpg", shot.name)))?;
+                std::fs::write(
+                    photos_dir.join(format!("{}.json", shot.name)),
+                    cliffmap::camera::camera_to_json(&cam).to_string(),
+                )?;
+                entries.push(serde_json::json!({
+                    "image": format!("{}.jpg", shot.name),
+                    "camera": format!("{}.json", shot.name),
+                }));
+            }
+            std::fs::write(&list, serde_json::json!({ "photos": entries }).to_string())?;
+        }
         eprintln!("store and photos: {:.1} s", t0.elapsed().as_secs_f64());
         // projection with perturbed poses (the truth, the oracle and the scores keep the exact ones)
         let mut project_list =
             perturbed_list(&list, flag("--perturb-yaw"), flag("--perturb-position"))?;
         if let Some(seed) = flag("--rough") {
-            project_list = rough_list(&project_list, seed.parse()?)?;
+            let position: f64 = flag("--rough-position").unwrap_or("0").parse()?;
+            project_list = rough_list(&project_list, seed.parse()?, position)?;
         }
         if has("--register") {
-            let specs = cliffmap::photo::read_photo_specs(&project_list)?;
+            let mut specs = cliffmap::photo::read_photo_specs(&project_list)?;
+            let mut ties = cliffmap::pipeline::TieSettings::default();
+            if second.is_some() {
+                // the demo photos, exact, are the known anchors the second photos are
+                // resected against
+                let known = cliffmap::photo::read_photo_specs(&anchors)?;
+                ties.known = known.iter().map(|k| k.name.clone()).collect();
+                specs.splice(0..0, known);
+            }
             let out = project_list.with_file_name("photos_registered.json");
             let t = Instant::now();
-            let regs = cliffmap::pipeline::register_photos(
+            let all = cliffmap::pipeline::register_photos_with(
                 &store,
                 &specs,
                 &out,
                 &cliffmap::register::TerrainOptions::default(),
+                &ties,
                 &mut |w| eprintln!("warning: {w}"),
             )?;
+            let regs: Vec<_> = all
+                .into_iter()
+                .filter(|r| !ties.known.contains(&r.name))
+                .collect();
+            if second.is_some() {
+                // project the second photos alone, with their registered cameras
+                let dir = out.parent().unwrap_or(std::path::Path::new("."));
+                let entries: Vec<serde_json::Value> = regs
+                    .iter()
+                    .map(|r| {
+                        serde_json::json!({
+                            "image": r.name,
+                            "camera": r.camera_file.file_name().map(|n| n.to_string_lossy().into_owned()),
+                        })
+                    })
+                    .collect();
+                std::fs::write(
+                    dir.join("photos_registered_seconds.json"),
+                    serde_json::json!({ "photos": entries }).to_string(),
+                )?;
+            }
             let exact = cliffmap::photo::read_photo_specs(&list)?;
             for (r, e) in regs.iter().zip(&exact) {
+                eprintln!(
+                    "register {}: {} ({}), position error before {:.2} m, after {:.2} m",
+                    r.name,
+                    r.method,
+                    r.fit.converged,
+                    r.rough.position.distance(e.camera.position),
+                    r.fit.camera.position.distance(e.camera.position)
+                );
                 let (ya, pa, ra) =
                     cliffmap::camera::yaw_pitch_roll_from_rotation(&r.fit.camera.world_to_camera);
                 let (yb, pb, rb) =
@@ -142,7 +219,10 @@ fn main() -> anyhow::Result<()> {
                 );
             }
             eprintln!("register: {:.1} s", t.elapsed().as_secs_f64());
-            project_list = out;
+            project_list = match second {
+                Some(_) => out.with_file_name("photos_registered_seconds.json"),
+                None => out,
+            };
         }
         let photos = cliffmap::photo::read_photo_list(&project_list)?;
         let t = Instant::now();
@@ -295,7 +375,7 @@ fn perturbed_list(
 
 /// Every camera of `list` turned and zoomed at random (seed `seed`): yaw ±3°, pitch and roll
 /// ±1.5°, focal length ±3 % (uniform), position kept; written beside it.
-fn rough_list(list: &std::path::Path, seed: u64) -> anyhow::Result<PathBuf> {
+fn rough_list(list: &std::path::Path, seed: u64, position_m: f64) -> anyhow::Result<PathBuf> {
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5DEE_CE66_D;
     let mut rnd = move || {
         state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -315,5 +395,12 @@ fn rough_list(list: &std::path::Path, seed: u64) -> anyhow::Result<PathBuf> {
         let k = 1.0 + 0.03 * rnd();
         cam.fx *= k;
         cam.fy *= k;
+        if position_m > 0.0 {
+            cam.position += glam::DVec3::new(
+                position_m * rnd(),
+                position_m * rnd(),
+                0.4 * position_m * rnd(),
+            );
+        }
     })
 }
