@@ -23,11 +23,10 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{Rng, SceneArgs};
+use bench_util::scene_args::{Rng, SceneArgs, build_scene_store};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::register::{CameraParams, Param, ResectOptions, TerrainScene, resect_photo};
 use cliffmap::scene::DemoPhotoOptions;
 use glam::DVec3;
@@ -58,22 +57,13 @@ fn main() -> anyhow::Result<()> {
     let store_dir = out.join("store");
     let list = out.join("photos").join("photos.json");
     if !(has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
-        let inputs = BuildInputs {
-            dem: &dem,
-            ortho: Some(&ortho),
-            dem_source: "register_resection".into(),
-            ortho_source: Some("register_resection".into()),
-            fingerprint: format!("register_resection:{scene:?}"),
-        };
-        build_store(
-            &inputs,
-            &BuildOptions {
-                max_error,
-                quiet: true,
-                force: true,
-                ..BuildOptions::default()
-            },
+        build_scene_store(
+            &scene,
+            &dem,
+            &ortho,
+            max_error,
             &store_dir,
+            "register_resection",
         )?;
         scene.write_demo_photos(
             &dem,

@@ -13,11 +13,11 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{Rng, SceneArgs, angle_diff};
+use bench_util::scene_args::{Rng, SceneArgs, angle_diff, build_scene_store};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
+use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
     CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
 };
@@ -45,23 +45,14 @@ fn main() -> anyhow::Result<()> {
     let list = out.join("photos").join("photos.json");
     if !(has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
         let t = Instant::now();
-        let inputs = BuildInputs {
-            dem: &dem,
-            ortho: Some(&ortho),
-            dem_source: "register_synthetic".into(),
-            ortho_source: Some("register_synthetic".into()),
-            fingerprint: format!("register_synthetic:{scene:?}"),
-        };
         let max_error: f64 = flag("--max-error").unwrap_or("0.5").parse()?;
-        build_store(
-            &inputs,
-            &BuildOptions {
-                max_error,
-                quiet: true,
-                force: true,
-                ..BuildOptions::default()
-            },
+        build_scene_store(
+            &scene,
+            &dem,
+            &ortho,
+            max_error,
             &store_dir,
+            "register_synthetic",
         )?;
         reparam_store(
             &store_dir,

@@ -17,6 +17,19 @@ fn angle_diff_deg(a: f64, b: f64) -> f64 {
     d.min(std::f64::consts::TAU - d).to_degrees()
 }
 
+/// Yaw, pitch and roll differences (degrees) between two cameras.
+fn angle_errors(a: &cliffmap::camera::CameraModel, b: &cliffmap::camera::CameraModel) -> [f64; 3] {
+    let (a, b) = (
+        yaw_pitch_roll_from_rotation(&a.world_to_camera),
+        yaw_pitch_roll_from_rotation(&b.world_to_camera),
+    );
+    [
+        angle_diff_deg(a.0, b.0),
+        angle_diff_deg(a.1, b.1),
+        angle_diff_deg(a.2, b.2),
+    ]
+}
+
 /// The demo scene's store and 800 × 600 photos with exact cameras in `dir`; returns the
 /// photo list.
 fn scene_with_photos(dir: &Path) -> std::path::PathBuf {
@@ -121,15 +134,7 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     // The output list reads back like photos.json, images found.
     let specs = cliffmap::photo::read_photo_specs(&out).unwrap();
     assert_eq!(specs.len(), 2);
-    let (a, b) = (
-        yaw_pitch_roll_from_rotation(&specs[0].camera.world_to_camera),
-        yaw_pitch_roll_from_rotation(&truth.world_to_camera),
-    );
-    let errs = [
-        angle_diff_deg(a.0, b.0),
-        angle_diff_deg(a.1, b.1),
-        angle_diff_deg(a.2, b.2),
-    ];
+    let errs = angle_errors(&specs[0].camera, &truth);
     assert!(
         errs.iter().all(|&e| e < 0.1),
         "angle errors after register {errs:?} (start 1.6, 0.9, 0.7)"
@@ -333,15 +338,7 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
     assert_eq!(r["resection"]["focal_fitted"], false);
     assert!(r["resection"]["inliers"].as_u64().unwrap() >= 100, "{r}");
     let off = cam.position.distance(truth.position);
-    let (a, b) = (
-        yaw_pitch_roll_from_rotation(&cam.world_to_camera),
-        yaw_pitch_roll_from_rotation(&truth.world_to_camera),
-    );
-    let errs = [
-        angle_diff_deg(a.0, b.0),
-        angle_diff_deg(a.1, b.1),
-        angle_diff_deg(a.2, b.2),
-    ];
+    let errs = angle_errors(&cam, &truth);
     assert!(
         off < 0.5 && errs.iter().all(|&e| e < 0.05),
         "position {off:.2} m off, angles {errs:?} (start 4.1 m, 2°, 1°, 0.8°)\n{r}"

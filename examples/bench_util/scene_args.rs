@@ -1,8 +1,9 @@
 //! Command lines of the generated-scene benchmarks (`OUT [--flag value] [--switch]`) and
 //! their deterministic random numbers.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
 
 /// The arguments after the program name: the output folder first, then flags.
@@ -66,4 +67,34 @@ impl Rng {
 pub fn angle_diff(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
     d.min(std::f64::consts::TAU - d)
+}
+
+/// Builds the store of a generated scene (its DEM and ortho) into `dir` with `max_error`,
+/// quietly and from scratch; `tag` names the source in the manifest.
+pub fn build_scene_store(
+    scene: &DemoScene,
+    dem: &cliffmap::dem::Dem,
+    ortho: &cliffmap::ortho::Ortho,
+    max_error: f64,
+    dir: &Path,
+    tag: &str,
+) -> anyhow::Result<()> {
+    let inputs = BuildInputs {
+        dem,
+        ortho: Some(ortho),
+        dem_source: tag.into(),
+        ortho_source: Some(tag.into()),
+        fingerprint: format!("{tag}:{scene:?}"),
+    };
+    build_store(
+        &inputs,
+        &BuildOptions {
+            max_error,
+            quiet: true,
+            force: true,
+            ..BuildOptions::default()
+        },
+        dir,
+    )?;
+    Ok(())
 }

@@ -223,3 +223,20 @@ pub(crate) fn parabola(a: f64, b: f64, c: f64) -> f64 {
         0.0
     }
 }
+
+/// Centres of a square grid of `spacing` pixels over a `w × h` image, `margin` pixels from its
+/// edges, row by row.
+pub(crate) fn grid_centres(w: usize, h: usize, margin: i64, spacing: i64) -> Vec<(i64, i64)> {
+    let (w, h, spacing) = (w as i64, h as i64, spacing.max(1));
+    let mut centres = Vec::new();
+    let mut y = margin;
+    while y < h - margin {
+        let mut x = margin;
+        while x < w - margin {
+            centres.push((x, y));
+            x += spacing;
+        }
+        y += spacing;
+    }
+    centres
+}

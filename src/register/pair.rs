@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use super::fit::{CameraFit, FitOptions, fit_camera};
 use super::gcp::Gcp;
-use super::grey::Grey;
+use super::grey::{Grey, grid_centres};
 use super::params::Param;
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -80,18 +80,7 @@ pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<V
     let (ca, cb) = (ga.reduced(k), gb.reduced(k));
     let (half, radius) = (opts.half.max(2) as i64, opts.radius as i64);
     let margin = half + radius + 8;
-    let spacing = opts.spacing.max(1) as i64;
-    let (w, h) = (ga.w as i64, ga.h as i64);
-    let mut centres = Vec::new();
-    let mut y = margin;
-    while y < h - margin {
-        let mut x = margin;
-        while x < w - margin {
-            centres.push((x, y));
-            x += spacing;
-        }
-        y += spacing;
-    }
+    let centres = grid_centres(ga.w, ga.h, margin, opts.spacing as i64);
     let coarse_half = (half / k as i64).max(4);
     let coarse_rad = radius / k as i64 + 2;
     let found: Vec<Option<PatchMatch>> = centres

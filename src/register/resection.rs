@@ -46,7 +46,7 @@ use rayon::prelude::*;
 
 use super::fit::{FitOptions, GcpStatus, fit_camera_local};
 use super::gcp::Gcp;
-use super::grey::Grey;
+use super::grey::{Grey, grid_centres};
 use super::p3p::start_from_gcps_p3p;
 use super::params::Param;
 use crate::camera::CameraModel;
@@ -467,18 +467,7 @@ fn terrain_points(
     surface: &(impl Fn(DVec3, DVec3) -> Option<DVec3> + Sync),
     stable: &(impl Fn(DVec3) -> bool + Sync),
 ) -> Vec<Point> {
-    let margin = half + 2;
-    let (w, h) = (ga.w as i64, ga.h as i64);
-    let mut centres = Vec::new();
-    let mut y = margin;
-    while y < h - margin {
-        let mut x = margin;
-        while x < w - margin {
-            centres.push((x, y));
-            x += spacing as i64;
-        }
-        y += spacing as i64;
-    }
+    let centres = grid_centres(ga.w, ga.h, half + 2, spacing as i64);
     let hit = |x: f64, y: f64| {
         let d = anchor.pixel_ray(x, y)?;
         surface(anchor.position, d)
