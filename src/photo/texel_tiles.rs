@@ -56,7 +56,7 @@ fn take_chunk() -> Box<[TexelSums]> {
 }
 
 /// A `side × side` grid of [`TexelSums`], zero where never written.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct TexelTiles {
     side: u32,
     tiles_x: u32,
@@ -80,19 +80,6 @@ impl Drop for TexelTiles {
             let room = SPARE_MAX.saturating_sub(spare.len());
             let n = self.chunks.len().min(room);
             spare.extend(self.chunks.drain(..n));
-        }
-    }
-}
-
-impl Clone for TexelTiles {
-    fn clone(&self) -> Self {
-        TexelTiles {
-            side: self.side,
-            tiles_x: self.tiles_x,
-            shift: self.shift,
-            index: self.index.clone(),
-            tiles: self.tiles,
-            chunks: self.chunks.clone(),
         }
     }
 }

@@ -44,11 +44,11 @@ use glam::DVec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
-use super::fit::{FitOptions, GcpStatus, fit_camera_local};
+use super::fit::{CameraFit, FitOptions, GcpStatus, fit_camera_local};
 use super::gcp::Gcp;
 use super::grey::{Grey, grid_centres};
 use super::p3p::start_from_gcps_p3p;
-use super::params::Param;
+use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
 use crate::error::Result;
 
@@ -139,6 +139,9 @@ pub struct ResectFit {
     /// Seconds spent.
     pub seconds: f64,
 }
+
+/// One run of the fine stage: the camera it ended at, its last fit, its match count.
+type FineRun = (CameraModel, Option<CameraFit>, usize);
 
 /// A terrain point seen by the anchor: where, and the surface's unit normal (towards the
 /// anchor).
@@ -256,7 +259,6 @@ pub fn resect_photo(
         free: opts.free.clone(),
         ..FitOptions::default()
     };
-    let cam = start;
     // fine: full-resolution templates from the current camera, twice; from the coarse
     // camera and from it turned by 2 px each way in yaw and pitch (matches of a texture
     // that repeats within the search can hold a pose a pixel off), the fit with the most
@@ -281,8 +283,8 @@ pub fn resect_photo(
             })
             .collect()
     };
-    let fine_from = |start: CameraModel| -> (CameraModel, Option<super::fit::CameraFit>, usize) {
-        let (mut cam, mut last, mut n) = (start, None, 0);
+    let fine_from = |from: CameraModel| -> FineRun {
+        let (mut cam, mut last, mut n) = (from, None, 0);
         for _ in 0..2 {
             let fine = matches(&cam);
             n = fine.len();
@@ -299,14 +301,16 @@ pub fn resect_photo(
         }
         (cam, last, n)
     };
-    let inliers_of = |f: &super::fit::CameraFit| {
+    let inliers_of = |f: &CameraFit| {
         f.gcps
             .iter()
             .filter(|g| g.status == GcpStatus::Inlier)
             .count()
     };
-    let turn = 2.0 / cam.fx;
-    let mut best: Option<(CameraModel, Option<super::fit::CameraFit>, usize)> = None;
+    // (inliers, −RMSE) of a run's final fit: larger is better
+    let key = |r: &FineRun| r.1.as_ref().map(|f| (inliers_of(f), -f.rmse_inliers_px));
+    let turn = 2.0 / start.fx;
+    let mut best: Option<FineRun> = None;
     for (dy, dp) in [
         (0.0, 0.0),
         (turn, 0.0),
@@ -314,13 +318,10 @@ pub fn resect_photo(
         (0.0, turn),
         (0.0, -turn),
     ] {
-        let mut p = super::params::CameraParams::from_camera(&cam);
+        let mut p = CameraParams::from_camera(&start);
         p.angles[0] += dy;
         p.angles[1] += dp;
         let r = fine_from(p.camera());
-        let key = |r: &(CameraModel, Option<super::fit::CameraFit>, usize)| {
-            r.1.as_ref().map(|f| (inliers_of(f), -f.rmse_inliers_px))
-        };
         let better = match (&best, key(&r)) {
             (None, _) => true,
             (Some(b), Some((n, e))) => key(b).is_none_or(|(bn, be)| n > bn || (n == bn && e > be)),
@@ -330,7 +331,7 @@ pub fn resect_photo(
             best = Some(r);
         }
     }
-    let (cam, last, n_fine) = best.unwrap_or((cam, None, 0));
+    let (cam, last, n_fine) = best.unwrap_or((start, None, 0));
     out.counts[2] = n_fine;
     out.found = cam;
     out.moved_m = cam.position.distance(rough.position);
