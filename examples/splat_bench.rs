@@ -1,7 +1,9 @@
 //! Splatting throughput: footprints per second deposited by `photo::PhotoAccum::add_all`
 //! (one thread, one 256² cell) for footprints of different sizes relative to a texel, with
 //! the bilinear-only deposit of the same footprints (centre point, collapsed path) as the
-//! peer measured in the same run. Prints a Markdown table (medians of 5 runs).
+//! peer measured in the same run. Prints two Markdown tables (medians of 5 runs): square
+//! footprints of a given side, and long thin oblique ones (foreshortened wall pixels in the
+//! enlarged photo textures, the common case of a real projection).
 //!
 //! Run: `cargo run --release --example splat_bench`
 
@@ -16,7 +18,31 @@ use image::RgbImage;
 /// A grid of `n × n` slightly rotated and sheared pixel footprints of side `s` texels,
 /// starting at texel (1, 1) of a 256² texture (wrapped to stay inside).
 fn footprints(n: u32, s: f32, collapse: bool) -> Vec<PixelFootprint> {
-    let (a, b) = ([s * 0.98, s * 0.17], [-s * 0.12, s * 1.01]);
+    footprints_shaped(n, [s * 0.98, s * 0.17], [-s * 0.12, s * 1.01], collapse)
+}
+
+/// Footprints of sides `short × long` texels, the long side at `angle_deg` from the texel
+/// rows (the long, thin, oblique footprints of foreshortened wall pixels in enlarged photo
+/// textures), otherwise as [`footprints`].
+fn thin_footprints(
+    n: u32,
+    short: f32,
+    long: f32,
+    angle_deg: f32,
+    collapse: bool,
+) -> Vec<PixelFootprint> {
+    let (sin, cos) = angle_deg.to_radians().sin_cos();
+    footprints_shaped(
+        n,
+        [long * cos, long * sin],
+        [-short * sin, short * cos],
+        collapse,
+    )
+}
+
+/// A grid of `n × n` footprints with sides `a` and `b` (texels), each starting where the
+/// lattice `c·a + r·b` puts it, wrapped into a 256² texture from texel (1, 1).
+fn footprints_shaped(n: u32, a: [f32; 2], b: [f32; 2], collapse: bool) -> Vec<PixelFootprint> {
     let span = 250.0;
     (0..n)
         .flat_map(|r| (0..n).map(move |c| (c, r)))
@@ -60,20 +86,46 @@ fn main() {
     );
     println!("|---|---|---|---|");
     for s in [0.1f32, 0.35, 0.7, 1.5, 4.0, 8.0, 16.0] {
-        let time = |collapse: bool| {
-            let fps = footprints(n, s, collapse);
-            let runs: Vec<f64> = (0..5)
-                .map(|_| {
-                    let mut acc = PhotoAccum::new(256);
-                    let t = Instant::now();
-                    acc.add_all(&fps, &img, [1000.0; 2], &ColourTransform::IDENTITY, &params);
-                    std::hint::black_box(&acc);
-                    fps.len() as f64 / t.elapsed().as_secs_f64() / 1e6
-                })
-                .collect();
-            bench_util::median(runs)
-        };
+        let time = |collapse: bool| throughput(&footprints(n, s, collapse), &img, &params);
         let (exact, bil) = (time(false), time(true));
         println!("| {s} | {exact:.2} | {bil:.2} | {:.2} |", bil / exact);
     }
+    println!();
+    println!(
+        "| thin footprint, short × long side (texels) at angle | exact splat, Mfootprints/s | bilinear peer, Mfootprints/s | ratio |"
+    );
+    println!("|---|---|---|---|");
+    for (short, long, angle) in [
+        (0.8f32, 2.5f32, 35.0f32),
+        (1.0, 3.0, 35.0),
+        (1.2, 5.0, 25.0),
+        (2.0, 8.0, 15.0),
+    ] {
+        let (exact, bil) = (
+            throughput(
+                &thin_footprints(n, short, long, angle, false),
+                &img,
+                &params,
+            ),
+            throughput(&thin_footprints(n, short, long, angle, true), &img, &params),
+        );
+        println!(
+            "| {short} × {long} at {angle}° | {exact:.2} | {bil:.2} | {:.2} |",
+            bil / exact
+        );
+    }
+}
+
+/// Median over 5 runs of footprints deposited per second (millions) into a fresh 256² cell.
+fn throughput(fps: &[PixelFootprint], img: &RgbImage, params: &ConfidenceParams) -> f64 {
+    let runs: Vec<f64> = (0..5)
+        .map(|_| {
+            let mut acc = PhotoAccum::new(256);
+            let t = Instant::now();
+            acc.add_all(fps, img, [1000.0; 2], &ColourTransform::IDENTITY, params);
+            std::hint::black_box(&acc);
+            fps.len() as f64 / t.elapsed().as_secs_f64() / 1e6
+        })
+        .collect();
+    bench_util::median(runs)
 }

@@ -22,7 +22,9 @@ use super::PixelFootprint;
 use super::colour_transform::ColourTransform;
 use super::confidence::{BorderFeather, ConfidenceParams};
 use super::occlusion::{OcclusionMap, occlusion_weight};
-use super::splat::{MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited};
+use super::splat::{
+    Deposit, MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited,
+};
 pub use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::colour::ColourSpace;
 
@@ -209,21 +211,16 @@ impl PhotoAccum {
             fp.corners.map(|c| [c[0] * sc, c[1] * sc])
         };
         let shape = footprint_shape(&corners);
-        let sums = &mut self.sums;
         let q = feather;
-        let (qr, qg, qo) = (q * footprint_m, q * grazing, q * clear);
-        let deposit = |i: usize, w: f64| {
-            let w = w as f32;
-            let Some(s) = sums.get_mut(i) else { return };
-            s.coverage += w;
-            let wq = w * q;
-            s.weight += wq;
-            for k in 0..3 {
-                s.colour[k] += wq * rgb[k];
-            }
-            s.footprint += w * qr;
-            s.grazing += w * qg;
-            s.clear += w * qo;
+        let deposit = SumsDeposit {
+            sums: &mut self.sums,
+            pixel: PixelSums {
+                rgb,
+                q,
+                qr: q * footprint_m,
+                qg: q * grazing,
+                qo: q * clear,
+            },
         };
         let bbox = MAX_SPLAT_BBOX * (self.scale as f64 * self.scale as f64);
         let s = match shape {
@@ -311,6 +308,74 @@ impl PhotoAccum {
     pub fn footprint_at(&self, t: usize) -> [f32; 2] {
         let s = self.sums.get(t);
         [s.footprint / s.weight, s.grazing / s.weight]
+    }
+}
+
+/// One pixel's contribution per texel² of its footprint to a [`TexelSums`] record.
+#[derive(Clone, Copy)]
+struct PixelSums {
+    rgb: [f32; 3],
+    /// Feather, and the feather times the footprint (metres), `1 / cos_view` and occlusion
+    /// weight.
+    q: f32,
+    qr: f32,
+    qg: f32,
+    qo: f32,
+}
+
+impl PixelSums {
+    /// Adds the pixel's sums over `w` texels² of its footprint to `s`.
+    #[inline(always)]
+    fn add_to(&self, s: &mut TexelSums, w: f64) {
+        let w = w as f32;
+        s.coverage += w;
+        let wq = w * self.q;
+        s.weight += wq;
+        for k in 0..3 {
+            s.colour[k] += wq * self.rgb[k];
+        }
+        s.footprint += w * self.qr;
+        s.grazing += w * self.qg;
+        s.clear += w * self.qo;
+    }
+}
+
+/// A pixel's [`Deposit`] into a cell's texel sums: single texels by lookup, runs of a texel
+/// row one tile row at a time.
+struct SumsDeposit<'a> {
+    sums: &'a mut TexelTiles,
+    pixel: PixelSums,
+}
+
+impl Deposit for SumsDeposit<'_> {
+    #[inline(always)]
+    fn texel(&mut self, t: usize, w: f64) {
+        if let Some(s) = self.sums.get_mut(t) {
+            self.pixel.add_to(s, w);
+        }
+    }
+
+    #[inline]
+    fn run(&mut self, t: usize, ws: &[f64]) {
+        let mut k = 0;
+        while k < ws.len() {
+            let n = self.sums.run_len(t + k, ws.len() - k);
+            if n == 0 {
+                return;
+            }
+            let part = &ws[k..k + n];
+            // (a tile is allocated only for a positive weight, as by single texels)
+            if part.iter().any(|&w| w > 0.0) {
+                if let Some(records) = self.sums.run_mut(t + k, n) {
+                    for (s, &w) in records.iter_mut().zip(part) {
+                        if w > 0.0 {
+                            self.pixel.add_to(s, w);
+                        }
+                    }
+                }
+            }
+            k += n;
+        }
     }
 }
 
@@ -969,6 +1034,66 @@ mod tests {
         let mut n = 0;
         scaled.sums.for_each(|_, t| n += (t.weight > 0.0) as usize);
         assert!(n > 100);
+    }
+
+    #[test]
+    fn large_footprints_deposit_row_runs_as_single_texels() {
+        // footprints of 5 to 30 texels, partly outside the texture: the rasterizer's row runs
+        // give the same records as depositing every texel's piece on its own
+        let img = RgbImage::from_fn(8, 8, |x, y| {
+            image::Rgb([(x * 31) as u8, (y * 29) as u8, 77])
+        });
+        let s = srgb_samples(&img);
+        let fps: Vec<PixelFootprint> = (0..8)
+            .flat_map(|r| (0..8).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                let (x, y) = (9.0 * c as f32 - 7.3, 8.0 * r as f32 - 5.1);
+                let (u, v) = (5.0 + 3.0 * (c % 4) as f32, 2.5 + 4.0 * (r % 3) as f32);
+                fp(
+                    [c, r],
+                    [
+                        [x, y],
+                        [x + u, y + 0.4 * v],
+                        [x + 0.7 * u, y + v],
+                        [x - 0.2 * u, y + 0.8 * v],
+                    ],
+                    0.8,
+                )
+            })
+            .collect();
+        let mut acc = PhotoAccum::new(64);
+        acc.add_samples(&fps, &s);
+        let mut single = TexelTiles::new(64);
+        for f in &fps {
+            let [c, r] = f.pixel;
+            let o = 3 * (r as usize * 8 + c as usize);
+            let raw = s.image.as_raw();
+            let pixel = PixelSums {
+                rgb: [0, 1, 2].map(|k| s.lut[k][raw[o + k] as usize]),
+                q: s.feather.at(f.pixel) as f32,
+                qr: 0.0,
+                qg: 0.0,
+                qo: 0.0,
+            };
+            let grazing = 1.0 / f.cos_view.max(MIN_COS_VIEW);
+            let footprint = f.distance * s.pixel_angle * grazing;
+            let pixel = PixelSums {
+                qr: pixel.q * footprint,
+                qg: pixel.q * grazing,
+                qo: pixel.q * s.occlusion_weight(f),
+                ..pixel
+            };
+            let kind = crate::photo::splat_footprint(&f.corners, 64, |t, w| {
+                if let Some(rec) = single.get_mut(t) {
+                    pixel.add_to(rec, w);
+                }
+            });
+            assert_eq!(kind.kind, SplatKind::Exact);
+        }
+        assert_eq!(acc.sums, single);
+        let mut n = 0;
+        acc.sums.for_each(|_, t| n += (t.weight > 0.0) as usize);
+        assert!(n > 1500, "{n} texels");
     }
 
     #[test]

@@ -54,6 +54,32 @@ pub struct Splat {
     pub kind: SplatKind,
 }
 
+/// Where a splat puts its pieces: [`Deposit::texel`] adds weight `w` (texels², > 0) to texel
+/// `t` (row-major index), [`Deposit::run`] the weights `ws` to texels `t, t + 1, …` of one
+/// texel row (a weight of 0 adds nothing). Every `FnMut(usize, f64)` is one, its `run`
+/// calling it for each positive weight; an accumulator can take a run in one slice.
+pub(crate) trait Deposit {
+    /// Adds `w` (> 0) to texel `t`.
+    fn texel(&mut self, t: usize, w: f64);
+
+    /// Adds `ws[k]` to texel `t + k` for every positive `ws[k]` (texels of one row).
+    #[inline]
+    fn run(&mut self, t: usize, ws: &[f64]) {
+        for (k, &w) in ws.iter().enumerate() {
+            if w > 0.0 {
+                self.texel(t + k, w);
+            }
+        }
+    }
+}
+
+impl<F: FnMut(usize, f64)> Deposit for F {
+    #[inline(always)]
+    fn texel(&mut self, t: usize, w: f64) {
+        self(t, w)
+    }
+}
+
 /// Twice the signed area of triangle `a, b, c`.
 #[inline(always)]
 fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
@@ -151,7 +177,7 @@ pub(crate) fn splat_polygon_limited(
     area: f64,
     texels: u32,
     max_bbox: f64,
-    mut deposit: impl FnMut(usize, f64),
+    mut deposit: impl Deposit,
 ) -> Splat {
     if texels == 0 {
         return SKIP;
@@ -184,7 +210,7 @@ pub(crate) fn splat_polygon_limited(
     if nx == 1.0 && ny == 1.0 && inside {
         // wholly inside one texel: no clipping needed
         // (in [0, t): signed conversions, one instruction each on x86-64)
-        deposit(cj0 as i64 as usize * n + ci0 as i64 as usize, area);
+        deposit.texel(cj0 as i64 as usize * n + ci0 as i64 as usize, area);
         return Splat {
             area,
             kind: SplatKind::Exact,
@@ -218,14 +244,14 @@ fn texel_pieces(
     area: f64,
     texels: u32,
     inside: bool,
-    mut deposit: impl FnMut(usize, f64),
+    mut deposit: impl Deposit,
 ) -> impl FnMut(f64, f64, f64) {
     let (t, n) = (texels as f64, texels as usize);
     let min_piece = 1e-9 * area;
     move |i, j, w| {
         if w > min_piece && (inside || (i >= 0.0 && j >= 0.0 && i < t && j < t)) {
             // (in [0, t): signed conversions, one instruction each on x86-64)
-            deposit(j as i64 as usize * n + i as i64 as usize, w);
+            deposit.texel(j as i64 as usize * n + i as i64 as usize, w);
         }
     }
 }
@@ -233,12 +259,7 @@ fn texel_pieces(
 /// [`splat_polygon`] of a collapsed footprint (area below [`MIN_SPLAT_AREA`]): its area at
 /// its centre, with bilinear weights.
 #[inline(never)]
-fn splat_collapsed(
-    q: &[[f64; 2]; 4],
-    area: f64,
-    texels: u32,
-    mut deposit: impl FnMut(usize, f64),
-) -> Splat {
+fn splat_collapsed(q: &[[f64; 2]; 4], area: f64, texels: u32, mut deposit: impl Deposit) -> Splat {
     let (t, n) = (texels as f64, texels as usize);
     if area > 0.0 {
         let c = [
@@ -255,7 +276,7 @@ fn splat_collapsed(
         ] {
             let (i, j) = (i0 + di, j0 + dj);
             if w > 0.0 && i >= 0.0 && j >= 0.0 && i < t && j < t {
-                deposit(j as usize * n + i as usize, w * area);
+                deposit.texel(j as usize * n + i as usize, w * area);
             }
         }
     }
@@ -273,7 +294,7 @@ fn splat_large(
     area: f64,
     texels: u32,
     lines: [f64; 4],
-    deposit: impl FnMut(usize, f64),
+    deposit: impl Deposit,
 ) -> Splat {
     let [ci0, ci1, cj0, cj1] = lines;
     let t = texels as f64;
@@ -306,7 +327,9 @@ fn splat_large(
         [ci0, cj0],
         nx as i64 as usize,
         [j0 - cj0, j1 - cj0],
-        texel_pieces(area, texels, false, deposit),
+        area,
+        texels,
+        deposit,
     );
     Splat {
         area,
@@ -314,15 +337,25 @@ fn splat_large(
     }
 }
 
-thread_local! {
-    /// Scratch rows of [`raster_splat`] (reused; a footprint of the largest allowed box
-    /// needs a few megabytes once per thread).
-    static RASTER_ROWS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+/// Scratch of [`raster_splat`]: the rows' signed areas, all zero between calls (a call
+/// clears what it wrote), and per row the columns it wrote.
+#[derive(Default)]
+struct RasterScratch {
+    cells: Vec<f64>,
+    spans: Vec<[usize; 2]>,
 }
 
-/// Exact pieces of a simple polygon whose bounding box starts at texel `c` and spans `nx`
-/// texels in x, for the box rows `rows[0]..rows[1]` (the texture's): `put(i, j, area)` for
-/// every texel of those rows.
+thread_local! {
+    /// [`raster_splat`]'s scratch (reused; a footprint of the largest allowed box needs a
+    /// few megabytes once per thread).
+    static RASTER: std::cell::RefCell<RasterScratch> = std::cell::RefCell::new(RasterScratch::default());
+}
+
+/// Exact pieces of a simple polygon of area `area` whose bounding box starts at texel `c`
+/// and spans `nx` texels in x, for the box rows `rows[0]..rows[1]` (inside the `texels ×
+/// texels` texture): one [`Deposit::run`] per row over the columns the polygon's edges reach
+/// or enclose, inside the texture, with pieces under a billionth of `area` (rounding noise)
+/// set to 0.
 ///
 /// Signed-area accumulation, as in font rasterizers: within each texel row, every edge's
 /// part is cut at the integer x lines; a piece of signed height `dy` (its `y` extent, signed
@@ -330,24 +363,32 @@ thread_local! {
 /// `i` (the trapezoid between the piece and the column's right side) and `dy·m` to column
 /// `i + 1`, so that a running sum along the row gives every texel the area of the polygon's
 /// part in it (the winding number integrated over the texel: ±area for a simple polygon,
-/// either orientation). Work grows with the perimeter and the box, not with clipping per
-/// texel.
+/// either orientation). The running sum is taken only over the columns some piece wrote
+/// (outside them it is 0 before the first and returns to 0 after the last, the edges of a
+/// closed polygon adding up to no height), so work grows with the perimeter and the texels
+/// covered, not with the bounding box.
 #[inline(never)]
 fn raster_splat(
     poly: &[[f64; 2]; 4],
     c: [f64; 2],
     nx: usize,
     rows: [f64; 2],
-    mut put: impl FnMut(f64, f64, f64),
+    area: f64,
+    texels: u32,
+    mut deposit: impl Deposit,
 ) {
     let (r0, r1) = (rows[0].max(0.0) as usize, rows[1].max(0.0) as usize);
     if r1 <= r0 || nx == 0 {
         return;
     }
     let w = nx + 1;
-    RASTER_ROWS.with_borrow_mut(|acc| {
-        acc.clear();
-        acc.resize(w * (r1 - r0), 0.0);
+    RASTER.with_borrow_mut(|scratch| {
+        let RasterScratch { cells, spans } = scratch;
+        if cells.len() < w * (r1 - r0) {
+            cells.resize(w * (r1 - r0), 0.0);
+        }
+        spans.clear();
+        spans.resize(r1 - r0, [usize::MAX, 0]);
         let p = poly.map(|v| [v[0] - c[0], v[1] - c[1]]);
         let xmax = nx as f64;
         for k in 0..4 {
@@ -359,8 +400,8 @@ fn raster_splat(
             let sign = dy_edge.signum();
             let slope = (b[0] - a[0]) / dy_edge;
             let (ylo, yhi) = (a[1].min(b[1]), a[1].max(b[1]));
-            let first = (ylo.floor().max(r0 as f64)) as usize;
-            let last = (yhi.ceil().min(r1 as f64)) as usize;
+            let first = (floor_f(ylo).max(r0 as f64)) as usize;
+            let last = (ceil_f(yhi).min(r1 as f64)) as usize;
             for j in first..last {
                 let (y0, y1) = (ylo.max(j as f64), yhi.min(j as f64 + 1.0));
                 if !(y1 > y0) {
@@ -369,10 +410,14 @@ fn raster_splat(
                 let dy = sign * (y1 - y0);
                 let xa = (a[0] + (y0 - a[1]) * slope).clamp(0.0, xmax);
                 let xb = (a[0] + (y1 - a[1]) * slope).clamp(0.0, xmax);
-                let row = &mut acc[(j - r0) * w..][..w];
+                let row = &mut cells[(j - r0) * w..][..w];
                 let (xl, xr) = (xa.min(xb), xa.max(xb));
-                let il = (xl.floor() as usize).min(nx - 1);
-                let ir = (xr.ceil() as usize).max(il + 1).min(nx);
+                // (xl >= 0: truncation is the floor)
+                let il = (xl as usize).min(nx - 1);
+                let ir = (ceil_f(xr) as usize).max(il + 1).min(nx);
+                let span = &mut spans[j - r0];
+                span[0] = span[0].min(il);
+                span[1] = span[1].max(ir + 1);
                 if ir - il == 1 {
                     let m = (0.5 * (xl + xr) - il as f64).clamp(0.0, 1.0);
                     row[il] += dy * (1.0 - m);
@@ -393,16 +438,28 @@ fn raster_splat(
                 }
             }
         }
-        for j in r0..r1 {
-            let row = &acc[(j - r0) * w..][..w];
-            let mut s = 0.0;
-            for (i, v) in row[..nx].iter().enumerate() {
-                s += v;
-                let a = s.abs();
-                if a > 0.0 {
-                    put(c[0] + i as f64, c[1] + j as f64, a.min(1.0));
-                }
+        let min_piece = 1e-9 * area;
+        let n = texels as usize;
+        // the texture's columns among the box's: c[0] + i in [0, texels)
+        let (ci, t) = (c[0] as i64, texels as i64);
+        let (i_min, i_max) = ((-ci).max(0) as usize, (t - ci).clamp(0, nx as i64) as usize);
+        for (jr, &[lo, hi]) in spans.iter().enumerate() {
+            if lo >= hi {
+                continue;
             }
+            let row = &mut cells[jr * w..][lo..hi];
+            let mut s = 0.0;
+            for v in row.iter_mut() {
+                s += *v;
+                let a = s.abs();
+                *v = if a > min_piece { a.min(1.0) } else { 0.0 };
+            }
+            let (a, b) = (lo.max(i_min), hi.min(i_max));
+            if a < b {
+                let y = (c[1] as i64 + (r0 + jr) as i64) as usize;
+                deposit.run(y * n + (ci + a as i64) as usize, &row[a - lo..b - lo]);
+            }
+            row.fill(0.0);
         }
     });
 }

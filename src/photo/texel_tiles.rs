@@ -206,6 +206,41 @@ impl TexelTiles {
         Some(&mut self.tile_mut(k as usize)[within])
     }
 
+    /// How many of the texels `t, t + 1, …, t + len − 1` (one texel row) lie in `t`'s tile
+    /// and the grid: the length of [`TexelTiles::run_mut`]'s slice (0 outside the grid).
+    #[inline]
+    pub fn run_len(&self, t: usize, len: usize) -> usize {
+        if t >= self.len() {
+            return 0;
+        }
+        let x = match self.shift {
+            Some(s) => t & ((1usize << s) - 1),
+            None => t % self.side as usize,
+        };
+        let tile_end = (x / TILE as usize + 1) * TILE as usize;
+        len.min(tile_end.min(self.side as usize) - x)
+    }
+
+    /// The records of texels `t .. t + n` for writing, `n` at most [`TexelTiles::run_len`]
+    /// (`t`'s tile allocated, zeroed, on first use); `None` outside the grid or for an empty
+    /// or longer run.
+    #[inline]
+    pub fn run_mut(&mut self, t: usize, n: usize) -> Option<&mut [TexelSums]> {
+        if n == 0 || n > self.run_len(t, n) {
+            return None;
+        }
+        let (tile, within) = self.locate(t);
+        let k = match self.index[tile] {
+            NONE => {
+                let k = self.new_tile();
+                self.index[tile] = k;
+                k
+            }
+            k => k,
+        };
+        Some(&mut self.tile_mut(k as usize)[within..within + n])
+    }
+
     /// Per block of the row-major grid of `⌈side / block⌉²` blocks of `block` texels: whether
     /// an allocated tile overlaps it.
     pub fn touched_blocks(&self, block: u32) -> Vec<bool> {
@@ -331,6 +366,37 @@ mod tests {
         let b = g.touched_blocks(40);
         let on: Vec<usize> = (0..9).filter(|&i| b[i]).collect();
         assert_eq!(on, vec![0, 1, 3, 4]);
+    }
+
+    #[test]
+    fn runs_stop_at_tile_and_grid_ends_and_write_where_single_texels_do() {
+        for side in [5u32, 16, 37, 64] {
+            let n = side as usize;
+            let (mut by_run, mut single) = (TexelTiles::new(side), TexelTiles::new(side));
+            for y in (0..n).step_by(3) {
+                let mut x = y % 7;
+                while x < n {
+                    let t = y * n + x;
+                    let len = side.div_ceil(3) as usize;
+                    let k = by_run.run_len(t, len);
+                    // to the tile's or the grid's row end, never beyond the run
+                    assert!(k >= 1 && k <= len, "side {side} at ({x}, {y})");
+                    assert_eq!(k, len.min((x / 16 + 1) * 16 - x).min(n - x));
+                    for (i, s) in by_run.run_mut(t, k).unwrap().iter_mut().enumerate() {
+                        s.weight += (t + i) as f32;
+                    }
+                    for i in 0..k {
+                        single.get_mut(t + i).unwrap().weight += (t + i) as f32;
+                    }
+                    x += k + 1;
+                }
+            }
+            assert_eq!(by_run, single, "side {side}");
+            assert_eq!(by_run.run_len(n * n, 4), 0);
+            assert!(by_run.run_mut(n * n, 1).is_none());
+            assert!(by_run.run_mut(0, 0).is_none());
+            assert!(by_run.run_mut(n - 1, 2).is_none(), "past the row's end");
+        }
     }
 
     #[test]
