@@ -43,23 +43,24 @@ fn thread_cpu_ns() -> u64 {
         .unwrap_or(0)
 }
 
-/// On-CPU nanoseconds of the whole process, exited threads included (Linux
-/// /proc/self/stat utime + stime, 10 ms resolution; 0 elsewhere).
+/// On-CPU nanoseconds of the process's live threads (Linux `/proc/self/task/*/schedstat`,
+/// nanosecond resolution; 0 elsewhere). The benchmark's rayon pools live across each
+/// measurement, so no thread that worked exits inside one (the process clock of
+/// `/proc/self/stat`, which would count exited threads, ticks in 10 ms, the size of the
+/// differences measured here).
 fn process_cpu_ns() -> u64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
         return 0;
     };
-    // fields after the ")" that closes the command name: state is field 3, utime 14, stime 15
-    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
-        return 0;
-    };
-    let f: Vec<u64> = rest
-        .split_whitespace()
-        .skip(11)
-        .take(2)
-        .filter_map(|v| v.parse().ok())
-        .collect();
-    f.iter().sum::<u64>() * 10_000_000
+    tasks
+        .flatten()
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| {
+            s.split_whitespace()
+                .next()
+                .and_then(|v| v.parse::<u64>().ok())
+        })
+        .sum()
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
