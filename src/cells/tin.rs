@@ -79,6 +79,13 @@ fn worst_sample(
         grid.get(q[0], q[1])
             .unwrap_or_else(|| heights[q[1] as usize * width + q[0] as usize]) as f64
     };
+    // Twice the area in samples²: a triangle of area 1/2 (or 0) holds no sample but its
+    // corners (Pick's theorem), the common case of a dense TIN
+    let twice_area =
+        (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+    if twice_area.abs() <= 1 {
+        return (-1.0, -1, -1);
+    }
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
     let lat = &grid.lat;
     let (oc, s) = (lat.origin_c, lat.stride);
