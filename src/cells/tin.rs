@@ -87,6 +87,19 @@ fn worst_sample(
         return (-1.0, -1, -1);
     }
     let plane = Plane::new(p, [hz(p[0]), hz(p[1]), hz(p[2])]);
+    if twice_area.abs() == 2 {
+        // area 1: no interior sample and one more on the boundary (B = 4), the midpoint of
+        // the edge whose both coordinate differences are even; its error as the scan
+        // computes it (same plane, same expression)
+        return lone_sample(p, &plane, grid);
+    }
+    scan_triangle(p, &plane, grid)
+}
+
+/// [`worst_sample`] by scanning every lattice sample of the closed triangle `p` whose
+/// heights the plane `plane` interpolates.
+#[inline]
+fn scan_triangle(p: [[i64; 2]; 3], plane: &Plane, grid: &LatticeTiles) -> (f64, i64, i64) {
     let lat = &grid.lat;
     let (oc, s) = (lat.origin_c, lat.stride);
     let mut best = (-1.0f64, -1i64, -1i64);
@@ -110,6 +123,35 @@ fn worst_sample(
         }
     });
     best
+}
+
+/// [`worst_sample`] of a triangle of area 1 (in samples²), whose only sample besides its
+/// corners is the midpoint of one edge: that sample's error if it is a lattice sample
+/// inside the lattice's bounds, as [`scan_triangle`] finds it (bit for bit).
+#[inline]
+fn lone_sample(p: [[i64; 2]; 3], plane: &Plane, grid: &LatticeTiles) -> (f64, i64, i64) {
+    let none = (-1.0, -1, -1);
+    let Some([x, y]) = (0..3).find_map(|k| {
+        let (a, b) = (p[k], p[(k + 1) % 3]);
+        ((b[0] - a[0]) % 2 == 0 && (b[1] - a[1]) % 2 == 0)
+            .then(|| [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2])
+    }) else {
+        return none;
+    };
+    let lat = &grid.lat;
+    let (oc, s) = (lat.origin_c, lat.stride);
+    let inside = (lat.c_lo..=lat.c_hi).contains(&x) && (lat.r_lo..=lat.r_hi).contains(&y);
+    if !inside || (x - oc).rem_euclid(s) != 0 || (y - lat.origin_r).rem_euclid(s) != 0 {
+        return none;
+    }
+    let Some(h) = grid.get(x, y) else {
+        return none;
+    };
+    let (base, a) = plane.row(y);
+    let (base_i, a_i) = (base + a * oc as f64, a * s as f64);
+    let i = ((x - oc) / s) as usize;
+    let e = (h as f64 - (base_i + a_i * (i as u32) as f64)).abs();
+    if e > -1.0 { (e, x, y) } else { none }
 }
 
 #[inline]
@@ -398,5 +440,60 @@ pub fn measure_max_error(dem: &Dem, rect: SampleRect, tin: &Tin) -> f64 {
         worst
     } else {
         f64::INFINITY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn area_one_triangles_find_the_sample_the_scan_finds() {
+        // every triangle of area 1 with short edges, at every position of a small DEM, on
+        // lattices of stride 1 to 3 with bounds that cut some of them: the lone midpoint
+        // gives the scan's answer bit for bit
+        let (w, h) = (24usize, 22usize);
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let heights: Vec<f32> = (0..w * h)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+                (state >> 40) as f32 * 1e-3
+            })
+            .collect();
+        let mut shapes = Vec::new();
+        for (ex, ey) in (-2i64..=2).flat_map(|u| (-2i64..=2).map(move |v| (2 * u, 2 * v))) {
+            for (wx, wy) in (-4i64..=4).flat_map(|x| (-4i64..=4).map(move |y| (x, y))) {
+                if (ex * wy - ey * wx).abs() == 2 {
+                    shapes.push([[0, 0], [ex, ey], [wx, wy]]);
+                }
+            }
+        }
+        assert!(shapes.len() > 50, "{} shapes", shapes.len());
+        let (mut found, mut compared) = (0, 0);
+        for stride in [1i64, 2, 3] {
+            let lat = Lattice {
+                origin_c: 1,
+                origin_r: 2,
+                stride,
+                c_lo: 2,
+                c_hi: 20,
+                r_lo: 3,
+                r_hi: 18,
+            };
+            let grid = LatticeTiles::new(&heights, w, lat, 22, 20);
+            for shape in &shapes {
+                for (ox, oy) in (4i64..18).flat_map(|x| (4i64..17).map(move |y| (x, y))) {
+                    let p = shape.map(|q| [q[0] + ox, q[1] + oy]);
+                    let z = p.map(|q| heights[q[1] as usize * w + q[0] as usize] as f64);
+                    let plane = Plane::new(p, z);
+                    let want = scan_triangle(p, &plane, &grid);
+                    assert_eq!(lone_sample(p, &plane, &grid), want, "stride {stride} {p:?}");
+                    assert_eq!(worst_sample(&heights, w, p, &grid), want);
+                    compared += 1;
+                    found += (want.1 >= 0) as usize;
+                }
+            }
+        }
+        assert!(found > 1000 && found < compared, "{found} of {compared}");
     }
 }
