@@ -187,13 +187,10 @@ impl TexelTiles {
         }
     }
 
-    /// The sums of texel `t` for writing, allocating its tile (zeroed) on first use; `None`
-    /// outside the grid.
+    /// The allocated tile holding texel `t` (`t < len()`; allocated, zeroed, on first use)
+    /// and `t`'s position within it.
     #[inline]
-    pub fn get_mut(&mut self, t: usize) -> Option<&mut TexelSums> {
-        if t >= self.len() {
-            return None;
-        }
+    fn tile_of(&mut self, t: usize) -> (usize, usize) {
         let (tile, within) = self.locate(t);
         let k = match self.index[tile] {
             NONE => {
@@ -203,7 +200,18 @@ impl TexelTiles {
             }
             k => k,
         };
-        Some(&mut self.tile_mut(k as usize)[within])
+        (k as usize, within)
+    }
+
+    /// The sums of texel `t` for writing, allocating its tile (zeroed) on first use; `None`
+    /// outside the grid.
+    #[inline]
+    pub fn get_mut(&mut self, t: usize) -> Option<&mut TexelSums> {
+        if t >= self.len() {
+            return None;
+        }
+        let (k, within) = self.tile_of(t);
+        Some(&mut self.tile_mut(k)[within])
     }
 
     /// How many of the texels `t, t + 1, …, t + len − 1` (one texel row) lie in `t`'s tile
@@ -229,16 +237,8 @@ impl TexelTiles {
         if n == 0 || n > self.run_len(t, n) {
             return None;
         }
-        let (tile, within) = self.locate(t);
-        let k = match self.index[tile] {
-            NONE => {
-                let k = self.new_tile();
-                self.index[tile] = k;
-                k
-            }
-            k => k,
-        };
-        Some(&mut self.tile_mut(k as usize)[within..within + n])
+        let (k, within) = self.tile_of(t);
+        Some(&mut self.tile_mut(k)[within..within + n])
     }
 
     /// Per block of the row-major grid of `⌈side / block⌉²` blocks of `block` texels: whether
