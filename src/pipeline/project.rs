@@ -339,7 +339,7 @@ pub fn project_store(
                     let t = std::time::Instant::now();
                     (
                         l,
-                        finish_level(&store, l, &accs, &sizing, opts, &writer),
+                        finish_level(&store, l, accs, &sizing, opts, &writer),
                         t.elapsed().as_secs_f64(),
                     )
                 })
@@ -882,11 +882,14 @@ fn resolves_more(
 }
 
 /// Blends and writes the photo textures of every cell of `level` from its accumulators
-/// `accs` (indexed by manifest cell): the level's report and the new cell records.
+/// `accs` (indexed by manifest cell): the level's report and the new cell records. Each
+/// cell's accumulator is dropped as soon as the cell is written, so its texel records go
+/// back to the spare chunks (`photo/texel_tiles.rs`) for the next level's splat,
+/// which runs alongside, instead of that level faulting in fresh pages.
 fn finish_level(
     store: &Store,
     level: usize,
-    accs: &[Option<CellAccum>],
+    mut accs: Vec<Option<CellAccum>>,
     sizing: &LevelSizing,
     opts: &ProjectOptions,
     writer: &BackgroundWriter,
@@ -895,17 +898,14 @@ fn finish_level(
     let level_cells: Vec<usize> = (0..cells.len())
         .filter(|&i| cells[i].level as usize == level)
         .collect();
-    let results: Vec<Result<CellOutcome>> = level_cells
-        .par_iter()
-        .map(|&ci| {
-            finish_cell(
-                store,
-                &cells[ci],
-                accs.get(ci).and_then(Option::as_ref),
-                opts,
-                writer,
-            )
-        })
+    let work: Vec<(usize, Option<CellAccum>)> = level_cells
+        .iter()
+        .map(|&ci| (ci, accs.get_mut(ci).and_then(Option::take)))
+        .collect();
+    drop(accs);
+    let results: Vec<Result<CellOutcome>> = work
+        .into_par_iter()
+        .map(|(ci, acc)| finish_cell(store, &cells[ci], acc.as_ref(), opts, writer))
         .collect();
     let mut lr = PhotoLevelReport {
         level: level as u8,
