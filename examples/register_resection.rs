@@ -23,18 +23,14 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{Rng, SceneArgs, build_scene_store};
+use bench_util::scene_args::{
+    Rng, SceneArgs, angle_diff, build_scene_store, photo_height, write_scene_photos,
+};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::register::{CameraParams, Param, ResectOptions, TerrainScene, resect_photo};
-use cliffmap::scene::DemoPhotoOptions;
 use glam::DVec3;
-
-fn angle_diff_deg(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d).to_degrees()
-}
 
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
@@ -65,15 +61,7 @@ fn main() -> anyhow::Result<()> {
             &store_dir,
             "register_resection",
         )?;
-        scene.write_demo_photos(
-            &dem,
-            &out.join("photos"),
-            &DemoPhotoOptions {
-                width,
-                height: width / 4 * 3,
-                supersample: 2,
-            },
-        )?;
+        write_scene_photos(&scene, &dem, &out.join("photos"), width)?;
     }
     let store = cliffmap::store::Store::open(&store_dir)?;
     let anchors = cliffmap::photo::read_photo_list(&list)?;
@@ -104,7 +92,7 @@ fn main() -> anyhow::Result<()> {
             eprintln!("{}: no second place with a clear view", a.name);
             continue;
         };
-        let truth = second.camera.resized(width, width / 4 * 3);
+        let truth = second.camera.resized(width, photo_height(width));
         let img = scene.render_truth_photo(&dem, &truth, 2)?;
         // terrain points the photo shows (a 40-px grid of the true camera's rays), to score a
         // camera by where it puts them: RMS pixel error, what the projection feels
@@ -169,7 +157,7 @@ fn main() -> anyhow::Result<()> {
             let errs = |cam: &CameraModel| {
                 let p = CameraParams::from_camera(cam);
                 let each: Vec<f64> = (0..3)
-                    .map(|i| angle_diff_deg(p.angles[i], tp.angles[i]))
+                    .map(|i| angle_diff(p.angles[i], tp.angles[i]).to_degrees())
                     .collect();
                 let ang = each.iter().copied().fold(0.0, f64::max);
                 (

@@ -13,7 +13,7 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{Rng, SceneArgs, angle_diff, build_scene_store};
+use bench_util::scene_args::{Rng, SceneArgs, angle_diff, build_scene_store, write_scene_photos};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
@@ -21,7 +21,6 @@ use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
     CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
 };
-use cliffmap::scene::DemoPhotoOptions;
 use glam::DVec3;
 
 fn main() -> anyhow::Result<()> {
@@ -61,15 +60,7 @@ fn main() -> anyhow::Result<()> {
                 ..ReparamOptions::default()
             },
         )?;
-        scene.write_demo_photos(
-            &dem,
-            &out.join("photos"),
-            &DemoPhotoOptions {
-                width,
-                height: width / 4 * 3,
-                supersample: 2,
-            },
-        )?;
+        write_scene_photos(&scene, &dem, &out.join("photos"), width)?;
         eprintln!("store and photos: {:.1} s", t.elapsed().as_secs_f64());
     }
     let store = cliffmap::store::Store::open(&store_dir)?;

@@ -12,6 +12,11 @@ use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::register::CameraParams;
 use cliffmap::scene::{DemoPhotoOptions, DemoScene};
 
+/// Writes `cam` as an ImGRAFT-style camera JSON file.
+fn write_camera(path: impl AsRef<Path>, cam: &cliffmap::camera::CameraModel) {
+    std::fs::write(path, serde_json::to_string(&camera_to_json(cam)).unwrap()).unwrap();
+}
+
 fn angle_diff_deg(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
     d.min(std::f64::consts::TAU - d).to_degrees()
@@ -96,21 +101,13 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     p.angles[2] += 0.7f64.to_radians();
     p.focal = [p.focal[0] * 1.02, p.focal[1] * 1.02];
     let rough = p.camera();
-    std::fs::write(
-        photos.join("east_rough.json"),
-        serde_json::to_string(&camera_to_json(&rough)).unwrap(),
-    )
-    .unwrap();
+    write_camera(photos.join("east_rough.json"), &rough);
     let mut up = CameraParams::from_camera(
         &camera_from_json_file(&photos.join("plateau_south.json"), (800, 600)).unwrap(),
     );
     up.angles[1] = -80f64.to_radians();
     let up = up.camera();
-    std::fs::write(
-        photos.join("south_up.json"),
-        serde_json::to_string(&camera_to_json(&up)).unwrap(),
-    )
-    .unwrap();
+    write_camera(photos.join("south_up.json"), &up);
     let rough_list = photos.join("rough.json");
     std::fs::write(
         &rough_list,
@@ -291,11 +288,7 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
     p.angles[2] += 0.8f64.to_radians();
     p.focal = [p.focal[0] * 1.02, p.focal[1] * 1.02];
     p.position += glam::DVec3::new(3.0, -2.5, 1.0);
-    std::fs::write(
-        photos.join("second_rough.json"),
-        serde_json::to_string(&camera_to_json(&p.camera())).unwrap(),
-    )
-    .unwrap();
+    write_camera(photos.join("second_rough.json"), &p.camera());
     let list = photos.join("two_places.json");
     std::fs::write(
         &list,

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::DemoScene;
+use cliffmap::scene::{DemoPhotoOptions, DemoScene};
 
 /// The arguments after the program name: the output folder first, then flags.
 pub struct SceneArgs {
@@ -95,6 +95,31 @@ pub fn build_scene_store(
             ..BuildOptions::default()
         },
         dir,
+    )?;
+    Ok(())
+}
+
+/// Height of the generated scenes' photos for a `width` (4:3).
+pub fn photo_height(width: u32) -> u32 {
+    width / 4 * 3
+}
+
+/// Writes the scene's demo photos (ray cast from its ground truth, `width` pixels wide, 4:3,
+/// supersampled 2×) and their photos.json into `dir`.
+pub fn write_scene_photos(
+    scene: &DemoScene,
+    dem: &cliffmap::dem::Dem,
+    dir: &Path,
+    width: u32,
+) -> anyhow::Result<()> {
+    scene.write_demo_photos(
+        dem,
+        dir,
+        &DemoPhotoOptions {
+            width,
+            height: photo_height(width),
+            supersample: 2,
+        },
     )?;
     Ok(())
 }

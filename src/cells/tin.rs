@@ -62,6 +62,22 @@ impl Plane {
             self.a,
         )
     }
+
+    /// The plane along `row` by lattice column index: `(base, step)` with
+    /// z(oc + i·s, row) = base + step · i.
+    #[inline]
+    fn lattice_row(&self, row: i64, oc: i64, s: i64) -> (f64, f64) {
+        let (base, a) = self.row(row);
+        (base + a * oc as f64, a * s as f64)
+    }
+}
+
+/// The vertical distance of height `h` at lattice column index `i` from the plane
+/// `base + step · i` of [`Plane::lattice_row`] (the error every scan uses).
+#[inline(always)]
+fn lattice_error(h: f32, (base, step): (f64, f64), i: usize) -> f64 {
+    // i < 2^32 always (a DEM side is u32); u32 -> f64 is one cheap conversion
+    (h as f64 - (base + step * (i as u32) as f64)).abs()
 }
 
 /// The worst lattice sample of a triangle that is not one of its corners:
@@ -104,15 +120,12 @@ fn scan_triangle(p: [[i64; 2]; 3], plane: &Plane, grid: &LatticeTiles) -> (f64, 
     let (oc, s) = (lat.origin_c, lat.stride);
     let mut best = (-1.0f64, -1i64, -1i64);
     for_each_span(p, lat, |y, j, i0, i1| {
-        let (base, a) = plane.row(y);
-        // z at lattice column index i: base + a * (oc + i * s)
-        let (base_i, a_i) = (base + a * oc as f64, a * s as f64);
+        let row = plane.lattice_row(y, oc, s);
         let corner_row = p.iter().any(|q| q[1] == y);
         let mut err = best.0;
         let mut found = usize::MAX;
         grid.for_row(j, i0, i1, |i, h| {
-            // i < 2^32 always (a DEM side is u32); u32 -> f64 is one cheap conversion
-            let e = (h as f64 - (base_i + a_i * (i as u32) as f64)).abs();
+            let e = lattice_error(h, row, i);
             if e > err && !(corner_row && is_corner(p, oc + i as i64 * s, y)) {
                 err = e;
                 found = i;
@@ -147,10 +160,7 @@ fn lone_sample(p: [[i64; 2]; 3], plane: &Plane, grid: &LatticeTiles) -> (f64, i6
     let Some(h) = grid.get(x, y) else {
         return none;
     };
-    let (base, a) = plane.row(y);
-    let (base_i, a_i) = (base + a * oc as f64, a * s as f64);
-    let i = ((x - oc) / s) as usize;
-    let e = (h as f64 - (base_i + a_i * (i as u32) as f64)).abs();
+    let e = lattice_error(h, plane.lattice_row(y, oc, s), ((x - oc) / s) as usize);
     if e > -1.0 { (e, x, y) } else { none }
 }
 
