@@ -5,7 +5,12 @@
 //!
 //! ```text
 //! cargo run --release --example register_engabreen -- [STORE_DIR] [--starts N] [--free LIST]
+//!     [--position-scale S]
 //! ```
+//! `--position-scale` scales the position offsets (0: the fitted position kept).
+//! `--resect-render [--max-slope DEG]` (an experiment, docs/registration.md "Position"): after
+//! the terrain search the photo is resected (`register::resect_photo`, position free) against
+//! the store rendered from the camera found, the glacier masked out.
 //! STORE_DIR is built (default build + reparam) when it holds no store.
 
 #[path = "bench_util/mod.rs"]
@@ -16,8 +21,8 @@ use std::path::PathBuf;
 use cliffmap::camera::{CameraModel, camera_from_json_file};
 use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
-    CameraParams, Gcp, PixelOrigin, TerrainOptions, TerrainScene, parse_free, read_gcps,
-    register_to_terrain,
+    CameraParams, Gcp, PixelOrigin, ResectOptions, TerrainOptions, TerrainScene, parse_free,
+    read_gcps, register_to_terrain, resect_photo,
 };
 use glam::DVec3;
 
@@ -57,6 +62,13 @@ fn main() -> anyhow::Result<()> {
         )?;
     }
     let starts: usize = flag("--starts").unwrap_or("6").parse()?;
+    // scales the position offsets (0: the fitted position, only the angles perturbed)
+    let position_scale: f64 = flag("--position-scale").unwrap_or("1").parse()?;
+    let resect_render = args.iter().any(|a| a == "--resect-render");
+    let mask = image::open(
+        bench_util::shared_data("engabreen").join("engabreen_glacier_mask_507x590.png"),
+    )?
+    .to_luma8();
     let mut opts = TerrainOptions::default();
     if let Some(f) = flag("--free") {
         opts.free = parse_free(f)?;
@@ -89,11 +101,62 @@ fn main() -> anyhow::Result<()> {
         for i in 0..3 {
             c.angles[i] += d[i].to_radians();
         }
-        let dp = DVec3::new(3.0 * t(3.1), 3.0 * t(3.7), 1.0 * t(4.3));
+        let dp = position_scale * DVec3::new(3.0 * t(3.1), 3.0 * t(3.7), 1.0 * t(4.3));
         c.position += dp;
         let rough = c.camera();
         let fit = register_to_terrain(&terrain, &photo, &rough, &opts)?;
         let after = gcp_rmse(&fit.found, &gcps);
+        if resect_render {
+            // experiment: the photo resected against the store rendered from the camera found
+            let t = std::time::Instant::now();
+            let c1 = fit.found;
+            let render = cliffmap::eval::render_views(
+                &dir,
+                &[c1],
+                &[cliffmap::render::UvMode::Mixed],
+                0.5,
+                1,
+            )?;
+            let georef = store.manifest.georef;
+            let stable = |p: DVec3| {
+                let (r, c) = georef.grid(p.x, p.y);
+                let (r, c) = (r.round(), c.round());
+                !(r >= 0.0
+                    && c >= 0.0
+                    && (r as u32) < mask.height()
+                    && (c as u32) < mask.width()
+                    && mask.get_pixel(c as u32, r as u32).0[0] >= 128)
+            };
+            let ropts = ResectOptions {
+                surface_error_m: store.manifest.max_error,
+                max_slope_deg: flag("--max-slope").unwrap_or("90").parse()?,
+                search_deg: 1.0,
+                ..ResectOptions::default()
+            };
+            let r = resect_photo(
+                &c1,
+                &render[0][0],
+                &photo,
+                &c1,
+                |o, d| terrain.hit(o, d),
+                stable,
+                &ropts,
+            )?;
+            let truth = CameraParams::from_camera(&fitted);
+            let got = CameraParams::from_camera(&r.found);
+            println!(
+                "  resected: GCP RMSE {:.2} px, position error {:.2} m, angles {:?}, counts {:?}, RMSE {:.2} px, sigma {:?}, accepted {} {:?}, {:.0} s",
+                gcp_rmse(&r.found, &gcps),
+                r.found.position.distance(fitted.position),
+                [0, 1, 2].map(|k| (got.angles[k] - truth.angles[k]).to_degrees()),
+                r.counts,
+                r.rmse_inliers_px,
+                r.sigma_position_m,
+                r.accepted,
+                r.reason,
+                t.elapsed().as_secs_f64()
+            );
+        }
         println!(
             "| {s} | {:+.2} / {:+.2} / {:+.2} | {:+.1}, {:+.1}, {:+.1} | {:.1} | {:.2} | {:.2} | {} | {:.0} |",
             d[0],

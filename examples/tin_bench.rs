@@ -63,6 +63,12 @@ fn process_cpu_ns() -> u64 {
         .sum()
 }
 
+/// The value after flag `name` parsed, if present and valid.
+fn flag_value<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
+    let i = args.iter().position(|a| a == name)?;
+    args.get(i + 1)?.parse().ok()
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
@@ -302,26 +308,32 @@ fn main() -> anyhow::Result<()> {
             ),
             ("Grand Canyon", load_terrain_rgb_mosaic(&gc, 30.9)?),
         ];
+        // --error E (default 2 m) and --reps N (default 3) for the celled level
+        let err: f64 = flag_value(&args, "--error").unwrap_or(2.0);
+        let reps: usize = flag_value(&args, "--reps").unwrap_or(3);
         if args.iter().any(|a| a == "--level") {
-            // the celled finest level (S = 64, 2 m) instead, 3 times each
+            // the celled finest level (S = 64) instead, `reps` times each
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(2)
                 .build()
                 .expect("thread pool");
             for (name, dem) in &dems {
                 let tree = Quadtree::new(dem.width as u32, dem.height as u32, 64);
-                for _ in 0..3 {
+                let mut cpu = Vec::with_capacity(reps);
+                for _ in 0..reps {
                     let (t0, c0) = (Instant::now(), process_cpu_ns());
                     let cells = pool
-                        .install(|| build_level(dem, &tree, tree.finest_level(), 2.0))
+                        .install(|| build_level(dem, &tree, tree.finest_level(), err))
                         .expect("level");
+                    cpu.push(process_cpu_ns().saturating_sub(c0) as f64 / 1e6);
                     println!(
-                        "{name} finest level S=64 2 m: wall {:.0} ms, CPU {:.0} ms, {} triangles",
+                        "{name} finest level S=64 {err} m: wall {:.0} ms, CPU {:.0} ms, {} triangles",
                         t0.elapsed().as_secs_f64() * 1e3,
                         process_cpu_ns().saturating_sub(c0) as f64 / 1e6,
                         cells.iter().map(|(_, t)| t.triangles.len()).sum::<usize>()
                     );
                 }
+                println!("{name} median CPU {:.1} ms", median(cpu));
             }
             return Ok(());
         }

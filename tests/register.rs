@@ -534,3 +534,66 @@ fn a_photo_from_the_same_place_is_tied_to_a_known_one() {
         "IMG_0000.jpg",
     );
 }
+
+#[test]
+fn a_photo_that_sees_far_beyond_the_store_is_turned_onto_it() {
+    // IMG_8902 sees the Engabreen store's ridge and glacier, and beyond them mountains the
+    // store does not hold (no sky in the store's view): its fitted camera turned by
+    // (+1.35°, −0.81°, −0.69°) is registered back (the position known); the 28 GCPs are
+    // held out and score the result (ImGRAFT's fit to them: 3.04 px).
+    let t = tempfile::tempdir().unwrap();
+    let store = t.path().join("store");
+    let dir = common::real_data("engabreen");
+    let args = common::engabreen_build_args(
+        &dir.join("engabreen_dem_3m_507x590.f32"),
+        &dir.join("engabreen_ortho_3m_507x590.png"),
+        &store,
+    );
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let image = dir.join("IMG_8902.jpg");
+    let fitted =
+        camera_from_json_file(&dir.join("engabreen_camera_IMG_8902.json"), (4290, 2856)).unwrap();
+    let mut p = CameraParams::from_camera(&fitted);
+    for (k, d) in [1.35f64, -0.81, -0.69].into_iter().enumerate() {
+        p.angles[k] += d.to_radians();
+    }
+    write_camera(t.path().join("turned.json"), &p.camera());
+    let list = t.path().join("photos.json");
+    std::fs::write(
+        &list,
+        serde_json::json!({"photos": [{"image": image.display().to_string(), "camera": "turned.json"}]})
+            .to_string(),
+    )
+    .unwrap();
+    let out = t.path().join("reg").join("registered.json");
+    register(t.path(), &list, &out, &[]);
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(report["photos"][0]["converged"], true, "{report}");
+    let found = cliffmap::photo::read_photo_specs(&out).unwrap()[0].camera;
+    let gcps = cliffmap::register::read_gcps(
+        &dir.join("gcp8902.txt"),
+        cliffmap::register::PixelOrigin::Format,
+    )
+    .unwrap();
+    let rmse = |cam: &cliffmap::camera::CameraModel| {
+        let e: Vec<f64> = gcps
+            .iter()
+            .filter_map(|g| {
+                let q = cam.project(g.world)?;
+                Some((q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2))
+            })
+            .collect();
+        assert_eq!(e.len(), gcps.len());
+        (e.iter().sum::<f64>() / e.len() as f64).sqrt()
+    };
+    let (before, after) = (rmse(&p.camera()), rmse(&found));
+    eprintln!("Engabreen IMG_8902 turned: GCP RMSE {before:.1} px -> {after:.2} px after register");
+    assert!(before > 100.0, "{before}");
+    assert!(
+        after < 6.0,
+        "GCP RMSE {after:.2} px after register (before {before:.1})"
+    );
+}

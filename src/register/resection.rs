@@ -84,6 +84,9 @@ pub struct ResectOptions {
     /// one distance with the focal length free: the distance along the view trades against
     /// the focal length). Default 0.5.
     pub max_sigma_m: f64,
+    /// Steepest surface (degrees from horizontal) whose points are matched; steeper ones
+    /// are dropped (an anchor rendered from an orthophoto smears walls). Default 90: all.
+    pub max_slope_deg: f64,
 }
 
 impl Default for ResectOptions {
@@ -108,6 +111,7 @@ impl Default for ResectOptions {
             max_move_m: 30.0,
             max_sigma_m: 0.5,
             surface_error_m: 0.5,
+            max_slope_deg: 90.0,
         }
     }
 }
@@ -217,7 +221,15 @@ pub fn resect_photo(
     let k = 4usize;
     let (ca, cb) = (ga.reduced(k), gb.reduced(k));
     let half = opts.half.max(3) as i64;
-    let points = terrain_points(anchor, &ga, half, opts.spacing_px.max(1), &surface, &stable);
+    let points = terrain_points(
+        anchor,
+        &ga,
+        half,
+        opts.spacing_px.max(1),
+        opts.max_slope_deg,
+        &surface,
+        &stable,
+    );
     out.counts[0] = points.len();
 
     // coarse: templates on the 4x reduced photos, searched over the rough uncertainty
@@ -465,6 +477,7 @@ fn terrain_points(
     ga: &Grey,
     half: i64,
     spacing: u32,
+    max_slope_deg: f64,
     surface: &(impl Fn(DVec3, DVec3) -> Option<DVec3> + Sync),
     stable: &(impl Fn(DVec3) -> bool + Sync),
 ) -> Vec<Point> {
@@ -498,6 +511,9 @@ fn terrain_points(
             }
             if n.dot(anchor.position - p) < 0.0 {
                 n = -n;
+            }
+            if n.z.abs() < max_slope_deg.to_radians().cos() - 1e-12 {
+                return None;
             }
             Some(Point {
                 world: p,

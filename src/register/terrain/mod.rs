@@ -17,10 +17,12 @@
 //! yaw, pitch and roll on the photo reduced to about 100 pixels across (a power of two),
 //! Nelder-Mead over every free parameter on photos 2 and 4 times larger from the three best
 //! grid peaks, then from the best through each finer scale to the full photo (by default), the samples
-//! re-cast from the current camera between rounds (occlusions follow the pose). Only the
-//! samples within about 48 pixels (24 on the full photo) of a silhouette (the sky's edge, a jump in distance)
-//! take part: the broad inner parts of regions change nothing when the camera moves a little
-//! but dilute the score. Sample positions are jittered inside their grid cells so that
+//! re-cast from the current camera between rounds (occlusions follow the pose). The
+//! samples within about 48 pixels (24 on the full photo) of a silhouette (the sky's edge, a
+//! jump in distance) take part, and of the regions' insides one sample in 3 × 3: the broad
+//! insides change little when the camera moves a little and would dilute the peak, but
+//! without them a band made mostly of where the store ends can line up with a wrong edge
+//! (Engabreen: a pitch 2° off scored higher than the true one). Sample positions are jittered inside their grid cells so that
 //! whole-pixel shifts are not favoured (the grid effect of partial-volume interpolation). The verdict comes from a
 //! restart: Nelder-Mead from the result moved by a few pixels must come back to it.
 

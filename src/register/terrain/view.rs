@@ -12,6 +12,13 @@ use crate::error::Result;
 use crate::photo::LevelScene;
 use crate::store::Store;
 
+/// Grid stride of the samples [`TerrainScene::sample`] keeps away from the silhouettes when
+/// it keeps a band around them. The band gives the score its sharp peak; these sparse
+/// samples of the regions' insides tie the score to the view as a whole, so that a band
+/// made mostly of where the store ends (a photo that sees far beyond the store, as at
+/// Engabreen) cannot line up with a wrong edge (docs/registration.md).
+pub const INNER_STRIDE: usize = 3;
+
 /// Number of texture-grey classes of a terrain sample's label.
 pub const GREY_CLASSES: u8 = 10;
 /// Label of a sky sample (terrain labels are `1..LABELS`).
@@ -97,9 +104,10 @@ impl<'a> TerrainScene<'a> {
     /// and distance (beyond the view's median distance); misses whose ray rises above the
     /// terrain's highest point before it leaves the terrain's extent as sky; other misses
     /// (rays that leave the store's extent below its top, where the land goes on unseen)
-    /// are dropped. With `band = Some(w)` only the samples within `w` grid steps of a
-    /// layer boundary (sky against terrain, dropped against kept, or a distance jump of
-    /// more than 25 %: the silhouettes) are kept. Deterministic.
+    /// are dropped. With `band = Some(w)` the samples within `w` grid steps of a layer
+    /// boundary (sky against terrain, dropped against kept, or a distance jump of more than
+    /// 25 %: the silhouettes) are kept, and of the others one in [`INNER_STRIDE`]² (every
+    /// `INNER_STRIDE`-th grid row and column). Deterministic.
     pub fn sample(
         &self,
         cam: &CameraModel,
@@ -232,7 +240,13 @@ impl<'a> TerrainScene<'a> {
                         }
                     }
                 }
-                dilate(&edge, nu, nv, wb)
+                let mut keep = dilate(&edge, nu, nv, wb);
+                for r in (0..nv).step_by(INNER_STRIDE) {
+                    for c in (0..nu).step_by(INNER_STRIDE) {
+                        keep[r * nu + c] = true;
+                    }
+                }
+                keep
             }
         };
         Ok(out_at
