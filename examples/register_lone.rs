@@ -110,24 +110,12 @@ fn main() -> anyhow::Result<()> {
             let (_, a1, p1, _) = errs(&c1);
             let (each, _, p2, f2) = errs(&fit.found);
             println!(
-                "| {} | {s} | {a0:.2} / {p0:.2} | {a1:.3} / {p1:.2} | {:.3}, {:.3}, {:.3} / {p2:.2} / {f2:+.2} | {} / {} / {} / {} | {:.2} | {:.2}, {:.2}, {:.2} | {} | {secs:.1} |",
+                "| {} | {s} | {a0:.2} / {p0:.2} | {a1:.3} / {p1:.2} | {:.3}, {:.3}, {:.3} / {p2:.2} / {f2:+.2} | {} | {secs:.1} |",
                 p.name,
                 each[0],
                 each[1],
                 each[2],
-                fit.counts[0],
-                fit.counts[1],
-                fit.counts[2],
-                fit.counts[3],
-                fit.rmse_inliers_px,
-                fit.sigma_position_m[0],
-                fit.sigma_position_m[1],
-                fit.sigma_position_m[2],
-                if fit.accepted {
-                    "yes".to_string()
-                } else {
-                    format!("no: {}", fit.reason.clone().unwrap_or_default())
-                }
+                bench_util::resect_cells(&fit),
             );
         }
     }

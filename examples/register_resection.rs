@@ -182,7 +182,7 @@ fn main() -> anyhow::Result<()> {
                 }
             }
             println!(
-                "| {} | {baseline:.0} | {s} | {a0:.2} / {p0:.2} / {f0:+.2} / {:.1}, {:.1} | {a1:.3} ({:.3}, {:.3}, {:.3}) / {p1:.2} / {f1:+.2} / {:.2}, {:.2} | {} / {} / {} / {} | {:.2} | {:.2}, {:.2}, {:.2} | {} | {secs:.1} |",
+                "| {} | {baseline:.0} | {s} | {a0:.2} / {p0:.2} / {f0:+.2} / {:.1}, {:.1} | {a1:.3} ({:.3}, {:.3}, {:.3}) / {p1:.2} / {f1:+.2} / {:.2}, {:.2} | {} | {secs:.1} |",
                 a.name,
                 px0.0,
                 px0.1,
@@ -191,19 +191,7 @@ fn main() -> anyhow::Result<()> {
                 each[2],
                 px1.0,
                 px1.1,
-                fit.counts[0],
-                fit.counts[1],
-                fit.counts[2],
-                fit.counts[3],
-                fit.rmse_inliers_px,
-                fit.sigma_position_m[0],
-                fit.sigma_position_m[1],
-                fit.sigma_position_m[2],
-                if fit.accepted {
-                    "yes".to_string()
-                } else {
-                    format!("no: {}", fit.reason.clone().unwrap_or_default())
-                }
+                bench_util::resect_cells(&fit),
             );
         }
         summary.push((

@@ -225,3 +225,19 @@ pub fn img8902_photos(dir: &Path) -> anyhow::Result<Vec<cliffmap::photo::PhotoIn
 pub fn store_arg(args: &[String], tmp: &Path) -> PathBuf {
     args.get(1).map_or_else(|| tmp.join("store"), PathBuf::from)
 }
+
+/// A resection's table cells: `points / coarse / fine / inliers | RMSE px | σ position m
+/// | accepted` (markdown, no outer bars).
+pub fn resect_cells(fit: &cliffmap::register::ResectFit) -> String {
+    let [n0, n1, n2, n3] = fit.counts;
+    let [sx, sy, sz] = fit.sigma_position_m;
+    let verdict = if fit.accepted {
+        "yes".to_string()
+    } else {
+        format!("no: {}", fit.reason.clone().unwrap_or_default())
+    };
+    format!(
+        "{n0} / {n1} / {n2} / {n3} | {:.2} | {sx:.2}, {sy:.2}, {sz:.2} | {verdict}",
+        fit.rmse_inliers_px
+    )
+}
