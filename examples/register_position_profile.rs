@@ -1,0 +1,70 @@
+//! How well the terrain search's score locates a photo's position (docs/registration.md,
+//! "Position"): IMG_8902's fitted camera moved along x (east), y (north) and z, the angles
+//! re-fitted by `register_to_terrain` at each position (search ±0.6°, finest scale 1/F);
+//! prints the final score and the held-out GCPs' RMSE per position. A score that peaks
+//! where the GCP RMSE is lowest would let a search over the position find it.
+//!
+//! ```text
+//! cargo run --release --example register_position_profile -- STORE [F]
+//! ```
+//! STORE: an Engabreen store (e.g. the one `register_engabreen` builds); F default 4.
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+use cliffmap::camera::{CameraModel, camera_from_json_file};
+use cliffmap::register::{
+    CameraParams, Gcp, PixelOrigin, TerrainOptions, TerrainScene, read_gcps, register_to_terrain,
+};
+use glam::DVec3;
+
+fn gcp_rmse(cam: &CameraModel, gcps: &[Gcp]) -> f64 {
+    let e: Vec<f64> = gcps
+        .iter()
+        .filter_map(|g| {
+            let q = cam.project(g.world)?;
+            Some((q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2))
+        })
+        .collect();
+    (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt()
+}
+
+fn main() -> anyhow::Result<()> {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let store_dir = a
+        .first()
+        .ok_or_else(|| anyhow::anyhow!("usage: register_position_profile STORE [F]"))?;
+    let factor: u32 = a.get(1).map_or(Ok(4), |s| s.parse())?;
+    let data = bench_util::shared_data("engabreen");
+    let photo = cliffmap::fsutil::decode_rgb8(&data.join("IMG_8902.jpg"))?;
+    let fitted = camera_from_json_file(
+        &data.join("engabreen_camera_IMG_8902.json"),
+        photo.dimensions(),
+    )?;
+    let gcps = read_gcps(&data.join("gcp8902.txt"), PixelOrigin::Format)?;
+    let store = cliffmap::store::Store::open(std::path::Path::new(store_dir))?;
+    let terrain = TerrainScene::new(&store, fitted.position)?;
+    let opts = TerrainOptions {
+        search_deg: [0.6, 0.6, 0.6],
+        finest_factor: factor,
+        ..TerrainOptions::default()
+    };
+    for (name, axis, ds) in [
+        ("x", DVec3::X, vec![-6.0, -3.0, -1.5, 0.0, 1.5, 3.0, 6.0]),
+        ("y", DVec3::Y, vec![-6.0, -3.0, -1.5, 0.0, 1.5, 3.0, 6.0]),
+        ("z", DVec3::Z, vec![-3.0, -1.5, 0.0, 1.5, 3.0]),
+    ] {
+        for d in ds {
+            let mut c = CameraParams::from_camera(&fitted);
+            c.position += axis * d;
+            let fit = register_to_terrain(&terrain, &photo, &c.camera(), &opts)?;
+            println!(
+                "{name} {d:+.1} m: score {:.5} (start {:.5}), GCP RMSE {:.2} px, repeat {:.2}, {:.0} s",
+                fit.score_final,
+                fit.score_start,
+                gcp_rmse(&fit.found, &gcps),
+                fit.repeat_px,
+                fit.seconds
+            );
+        }
+    }
+    Ok(())
+}
