@@ -154,6 +154,11 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
     .unwrap();
     assert_eq!(report["photos"][0]["converged"], true);
     assert_eq!(report["photos"][1]["converged"], false);
+    // the registered photo's kept position: its cost per metre is reported; the photo that
+    // sees no terrain has none
+    let p0 = report["photos"][0]["position_kept_parallax_px_per_m"].as_f64();
+    assert!(p0.is_some_and(|p| p > 0.0), "{report}");
+    assert!(report["photos"][1]["position_kept_parallax_px_per_m"].is_null());
     assert!(
         report["photos"][1]["reason"]
             .as_str()
@@ -566,12 +571,23 @@ fn a_photo_that_sees_far_beyond_the_store_is_turned_onto_it() {
     )
     .unwrap();
     let out = t.path().join("reg").join("registered.json");
-    register(t.path(), &list, &out, &[]);
+    let o = register(t.path(), &list, &out, &[]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("IMG_8902.jpg: its given position was kept"),
+        "{stdout}"
+    );
     let report: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
     )
     .unwrap();
     assert_eq!(report["photos"][0]["converged"], true, "{report}");
+    // the position was kept: what each metre of error in it would cost is reported (the
+    // view spans ~0.5 to ~2 km at f ≈ 6000 px: several pixels per metre)
+    let parallax = report["photos"][0]["position_kept_parallax_px_per_m"]
+        .as_f64()
+        .unwrap();
+    assert!((1.0..50.0).contains(&parallax), "{parallax}");
     let found = cliffmap::photo::read_photo_specs(&out).unwrap()[0].camera;
     let gcps = cliffmap::register::read_gcps(
         &dir.join("gcp8902.txt"),
@@ -590,7 +606,10 @@ fn a_photo_that_sees_far_beyond_the_store_is_turned_onto_it() {
         (e.iter().sum::<f64>() / e.len() as f64).sqrt()
     };
     let (before, after) = (rmse(&p.camera()), rmse(&found));
-    eprintln!("Engabreen IMG_8902 turned: GCP RMSE {before:.1} px -> {after:.2} px after register");
+    eprintln!(
+        "Engabreen IMG_8902 turned: GCP RMSE {before:.1} px -> {after:.2} px after register; \
+         {parallax:.1} px per metre of position error"
+    );
     assert!(before > 100.0, "{before}");
     assert!(
         after < 6.0,

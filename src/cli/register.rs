@@ -166,6 +166,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 r.name, verdict, score, repeat, r.fit.evaluations, r.fit.seconds
             );
         }
+        for r in &results {
+            if let (true, Some(p)) = (r.fit.converged, r.fit.position_kept_parallax_px_per_m) {
+                println!(
+                    "note: {}: its given position was kept (only the view direction and focal \
+                     length were fitted); each metre of error in it shifts the near terrain \
+                     against the far by up to {p:.1} px",
+                    r.name
+                );
+            }
+        }
         println!("wrote {}", a.out.display());
     }
     Ok(())

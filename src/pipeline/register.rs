@@ -475,6 +475,7 @@ fn given(camera: &CameraModel) -> TerrainFit {
         repeat_px: f64::NAN,
         evaluations: 0,
         edges: None,
+        position_kept_parallax_px_per_m: None,
         seconds: 0.0,
     }
 }
@@ -535,6 +536,7 @@ fn report_entry(r: &PhotoRegistration) -> Value {
                 (format!("{}{}", p.name(), if p.is_angle() { "_deg" } else if matches!(p, Param::X | Param::Y | Param::Z) { "_m" } else { "_px" }), json!(v))
             }).collect::<serde_json::Map<String, Value>>(),
         })),
+        "position_kept_parallax_px_per_m": r.fit.position_kept_parallax_px_per_m,
         "evaluations": r.fit.evaluations,
         "seconds": r.fit.seconds,
         "camera": file_name(&r.camera_file),

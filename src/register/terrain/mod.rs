@@ -169,6 +169,9 @@ pub struct TerrainFit {
     pub evaluations: usize,
     /// With the position free: the silhouette-edge stage's result (else `None`).
     pub edges: Option<EdgeSummary>,
+    /// With the position kept (not free): [`parallax_px_per_m`] of the camera found, what
+    /// each metre of error in the given position costs (else `None`).
+    pub position_kept_parallax_px_per_m: Option<f64>,
     /// Seconds spent.
     pub seconds: f64,
 }
@@ -195,6 +198,7 @@ impl TerrainFit {
             repeat_px,
             evaluations,
             edges,
+            position_kept_parallax_px_per_m: None,
             seconds: t0.elapsed().as_secs_f64(),
         }
     }
@@ -414,7 +418,7 @@ pub fn register_to_terrain(
     } else {
         None
     };
-    Ok(TerrainFit::judged(
+    let mut fit = TerrainFit::judged(
         rough,
         found,
         reason,
@@ -422,7 +426,24 @@ pub fn register_to_terrain(
         repeat,
         None,
         t0,
-    ))
+    );
+    fit.position_kept_parallax_px_per_m = parallax_px_per_m(terrain, &found);
+    Ok(fit)
+}
+
+/// Pixels by which a sideways move of the camera by one metre shifts the near terrain it
+/// sees against the far (`fx · (1/near − 1/far)`, near and far the 10th and 90th
+/// percentiles of the distances on a 15 × 15 grid of its rays): what each metre of error
+/// in a position the search keeps costs between them. `None` when fewer than 10 rays meet
+/// the terrain.
+pub fn parallax_px_per_m(terrain: &TerrainScene, cam: &CameraModel) -> Option<f64> {
+    let d = view_depths(terrain, cam);
+    if d.len() < 10 {
+        return None;
+    }
+    let at = |q: f64| d[((d.len() - 1) as f64 * q).round() as usize];
+    let (near, far) = (at(0.1), at(0.9));
+    (near > 0.0).then(|| cam.fx * (1.0 / near - 1.0 / far))
 }
 
 /// The position stage: [`refine_edges`] from the mutual-information result `mi` (found with
@@ -597,6 +618,13 @@ fn scaled(cam: &CameraModel, grey: &GreyImage) -> CameraModel {
 
 /// Median distance of the terrain seen by `cam` (a coarse grid of rays), 100 m if none.
 fn median_depth(terrain: &TerrainScene, cam: &CameraModel) -> f64 {
+    let d = view_depths(terrain, cam);
+    d.get(d.len() / 2).copied().unwrap_or(100.0)
+}
+
+/// Sorted distances (metres) from `cam` to where its rays through a 15 × 15 grid inside
+/// the image meet the terrain.
+fn view_depths(terrain: &TerrainScene, cam: &CameraModel) -> Vec<f64> {
     let mut d: Vec<f64> = Vec::new();
     for j in 1..16 {
         for i in 1..16 {
@@ -612,7 +640,7 @@ fn median_depth(terrain: &TerrainScene, cam: &CameraModel) -> f64 {
         }
     }
     d.sort_unstable_by(f64::total_cmp);
-    d.get(d.len() / 2).copied().unwrap_or(100.0)
+    d
 }
 
 /// Largest image distance (pixels of `a`) between where `a` and `b` show the points at
