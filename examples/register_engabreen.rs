@@ -18,25 +18,12 @@ mod bench_util;
 
 use std::path::PathBuf;
 
-use cliffmap::camera::{CameraModel, camera_from_json_file};
 use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
-    CameraParams, Gcp, PixelOrigin, ResectOptions, TerrainOptions, TerrainScene, parse_free,
-    read_gcps, register_to_terrain, resect_photo,
+    CameraParams, ResectOptions, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
+    resect_photo,
 };
 use glam::DVec3;
-
-fn gcp_rmse(cam: &CameraModel, gcps: &[Gcp]) -> f64 {
-    let mut s = 0.0;
-    let mut n = 0;
-    for g in gcps {
-        if let Some(p) = cam.project(g.world) {
-            s += (p[0] - g.pixel[0]).powi(2) + (p[1] - g.pixel[1]).powi(2);
-            n += 1;
-        }
-    }
-    (s / n.max(1) as f64).sqrt()
-}
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -73,18 +60,12 @@ fn main() -> anyhow::Result<()> {
     if let Some(f) = flag("--free") {
         opts.free = parse_free(f)?;
     }
-    let data = bench_util::shared_data("engabreen");
-    let photo = cliffmap::fsutil::decode_rgb8(&data.join("IMG_8902.jpg"))?;
-    let fitted = camera_from_json_file(
-        &data.join("engabreen_camera_IMG_8902.json"),
-        photo.dimensions(),
-    )?;
-    let gcps = read_gcps(&data.join("gcp8902.txt"), PixelOrigin::Format)?;
+    let (photo, fitted, gcps) = bench_util::engabreen_8902()?;
     let store = cliffmap::store::Store::open(&dir)?;
     let terrain = TerrainScene::new(&store, fitted.position)?;
     println!(
         "fitted camera (ImGRAFT, from the GCPs): GCP RMSE {:.2} px\n",
-        gcp_rmse(&fitted, &gcps)
+        bench_util::gcp_rmse(&fitted, &gcps)
     );
     println!(
         "| start | yaw/pitch/roll change (°) | position change (m) | GCP RMSE start (px) | after (px) | repeat (px) | verdict | s |"
@@ -105,7 +86,7 @@ fn main() -> anyhow::Result<()> {
         c.position += dp;
         let rough = c.camera();
         let fit = register_to_terrain(&terrain, &photo, &rough, &opts)?;
-        let after = gcp_rmse(&fit.found, &gcps);
+        let after = bench_util::gcp_rmse(&fit.found, &gcps);
         if resect_render {
             // experiment: the photo resected against the store rendered from the camera found
             let t = std::time::Instant::now();
@@ -146,7 +127,7 @@ fn main() -> anyhow::Result<()> {
             let got = CameraParams::from_camera(&r.found);
             println!(
                 "  resected: GCP RMSE {:.2} px, position error {:.2} m, angles {:?}, counts {:?}, RMSE {:.2} px, sigma {:?}, accepted {} {:?}, {:.0} s",
-                gcp_rmse(&r.found, &gcps),
+                bench_util::gcp_rmse(&r.found, &gcps),
                 r.found.position.distance(fitted.position),
                 [0, 1, 2].map(|k| (got.angles[k] - truth.angles[k]).to_degrees()),
                 r.counts,
@@ -165,7 +146,7 @@ fn main() -> anyhow::Result<()> {
             dp.x,
             dp.y,
             dp.z,
-            gcp_rmse(&rough, &gcps),
+            bench_util::gcp_rmse(&rough, &gcps),
             after,
             fit.repeat_px,
             if fit.converged {

@@ -10,22 +10,8 @@
 //! STORE: an Engabreen store (e.g. the one `register_engabreen` builds); F default 4.
 #[path = "bench_util/mod.rs"]
 mod bench_util;
-use cliffmap::camera::{CameraModel, camera_from_json_file};
-use cliffmap::register::{
-    CameraParams, Gcp, PixelOrigin, TerrainOptions, TerrainScene, read_gcps, register_to_terrain,
-};
+use cliffmap::register::{CameraParams, TerrainOptions, TerrainScene, register_to_terrain};
 use glam::DVec3;
-
-fn gcp_rmse(cam: &CameraModel, gcps: &[Gcp]) -> f64 {
-    let e: Vec<f64> = gcps
-        .iter()
-        .filter_map(|g| {
-            let q = cam.project(g.world)?;
-            Some((q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2))
-        })
-        .collect();
-    (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt()
-}
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().skip(1).collect();
@@ -33,13 +19,7 @@ fn main() -> anyhow::Result<()> {
         .first()
         .ok_or_else(|| anyhow::anyhow!("usage: register_position_profile STORE [F]"))?;
     let factor: u32 = a.get(1).map_or(Ok(4), |s| s.parse())?;
-    let data = bench_util::shared_data("engabreen");
-    let photo = cliffmap::fsutil::decode_rgb8(&data.join("IMG_8902.jpg"))?;
-    let fitted = camera_from_json_file(
-        &data.join("engabreen_camera_IMG_8902.json"),
-        photo.dimensions(),
-    )?;
-    let gcps = read_gcps(&data.join("gcp8902.txt"), PixelOrigin::Format)?;
+    let (photo, fitted, gcps) = bench_util::engabreen_8902()?;
     let store = cliffmap::store::Store::open(std::path::Path::new(store_dir))?;
     let terrain = TerrainScene::new(&store, fitted.position)?;
     let opts = TerrainOptions {
@@ -60,7 +40,7 @@ fn main() -> anyhow::Result<()> {
                 "{name} {d:+.1} m: score {:.5} (start {:.5}), GCP RMSE {:.2} px, repeat {:.2}, {:.0} s",
                 fit.score_final,
                 fit.score_start,
-                gcp_rmse(&fit.found, &gcps),
+                bench_util::gcp_rmse(&fit.found, &gcps),
                 fit.repeat_px,
                 fit.seconds
             );

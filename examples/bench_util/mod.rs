@@ -241,3 +241,34 @@ pub fn resect_cells(fit: &cliffmap::register::ResectFit) -> String {
         fit.rmse_inliers_px
     )
 }
+
+/// Engabreen's IMG_8902 (decoded), ImGRAFT's camera fitted to it, and its 28 GCPs.
+pub fn engabreen_8902() -> anyhow::Result<(
+    image::RgbImage,
+    cliffmap::camera::CameraModel,
+    Vec<cliffmap::register::Gcp>,
+)> {
+    let data = shared_data("engabreen");
+    let photo = cliffmap::fsutil::decode_rgb8(&data.join("IMG_8902.jpg"))?;
+    let fitted = cliffmap::camera::camera_from_json_file(
+        &data.join("engabreen_camera_IMG_8902.json"),
+        photo.dimensions(),
+    )?;
+    let gcps = cliffmap::register::read_gcps(
+        &data.join("gcp8902.txt"),
+        cliffmap::register::PixelOrigin::Format,
+    )?;
+    Ok((photo, fitted, gcps))
+}
+
+/// RMS distance (pixels) between where `cam` projects the GCPs it sees and their pixels.
+pub fn gcp_rmse(cam: &cliffmap::camera::CameraModel, gcps: &[cliffmap::register::Gcp]) -> f64 {
+    let e: Vec<f64> = gcps
+        .iter()
+        .filter_map(|g| {
+            let q = cam.project(g.world)?;
+            Some((q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2))
+        })
+        .collect();
+    (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt()
+}
