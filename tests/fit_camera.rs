@@ -6,7 +6,7 @@ mod common;
 
 use cli_util::{cliffmap, ok};
 use cliffmap::camera::camera_from_json_file;
-use cliffmap::register::{PixelOrigin, read_gcps};
+use cliffmap::register::{PixelOrigin, gcp_rmse_px, read_gcps};
 use common::exif::{ascii, exif_field, jpeg_with_exif, rationals};
 
 fn path(rel: &str) -> String {
@@ -21,14 +21,9 @@ fn rmse_of(camera: &std::path::Path) -> f64 {
         PixelOrigin::Format,
     )
     .unwrap();
-    let s: f64 = gcps
-        .iter()
-        .map(|g| {
-            let p = cam.project(g.world).unwrap();
-            (p[0] - g.pixel[0]).powi(2) + (p[1] - g.pixel[1]).powi(2)
-        })
-        .sum();
-    (s / gcps.len() as f64).sqrt()
+    let (rmse, n) = gcp_rmse_px(&cam, &gcps);
+    assert_eq!(n, gcps.len());
+    rmse
 }
 
 #[test]

@@ -595,15 +595,9 @@ fn a_photo_that_sees_far_beyond_the_store_is_turned_onto_it() {
     )
     .unwrap();
     let rmse = |cam: &cliffmap::camera::CameraModel| {
-        let e: Vec<f64> = gcps
-            .iter()
-            .filter_map(|g| {
-                let q = cam.project(g.world)?;
-                Some((q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2))
-            })
-            .collect();
-        assert_eq!(e.len(), gcps.len());
-        (e.iter().sum::<f64>() / e.len() as f64).sqrt()
+        let (e, n) = cliffmap::register::gcp_rmse_px(cam, &gcps);
+        assert_eq!(n, gcps.len());
+        e
     };
     let (before, after) = (rmse(&p.camera()), rmse(&found));
     eprintln!(

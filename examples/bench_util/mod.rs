@@ -261,14 +261,8 @@ pub fn engabreen_8902() -> anyhow::Result<(
     Ok((photo, fitted, gcps))
 }
 
-/// RMS distance (pixels) between where `cam` projects the GCPs it sees and their pixels.
+/// RMS distance (pixels) between where `cam` projects the GCPs in front of it and their
+/// pixels ([`cliffmap::register::gcp_rmse_px`]).
 pub fn gcp_rmse(cam: &cliffmap::camera::CameraModel, gcps: &[cliffmap::register::Gcp]) -> f64 {
-    let e: Vec<f64> = gcps
-        .iter()
-        .filter_map(|g| {
-            let q = cam.project(g.world)?;
-            Some((q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2))
-        })
-        .collect();
-    (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt()
+    cliffmap::register::gcp_rmse_px(cam, gcps).0
 }

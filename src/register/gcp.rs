@@ -42,6 +42,24 @@ pub enum PixelOrigin {
     One,
 }
 
+/// RMS distance (pixels) between where `cam` puts the GCPs in front of it and their
+/// pixels, and how many those are (weights ignored): how well a camera fits held-out GCPs.
+/// `(NaN, 0)` when none is in front.
+pub fn gcp_rmse_px(cam: &crate::camera::CameraModel, gcps: &[Gcp]) -> (f64, usize) {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for g in gcps {
+        if let Some(q) = cam.project(g.world) {
+            sum += (q[0] - g.pixel[0]).powi(2) + (q[1] - g.pixel[1]).powi(2);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        (f64::NAN, 0)
+    } else {
+        ((sum / n as f64).sqrt(), n)
+    }
+}
+
 /// Reads a GCP file (either format, see the [module docs](self)).
 pub fn read_gcps(path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -219,6 +237,30 @@ fn parse_csv(lines: &[(usize, &str)], path: &Path, origin: PixelOrigin) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gcp_rmse_counts_the_points_in_front_and_their_pixel_errors() {
+        let r = crate::camera::rotation_from_yaw_pitch_roll(0.3, -0.1, 0.0);
+        let cam =
+            crate::camera::CameraModel::with_fov(DVec3::new(10.0, 20.0, 30.0), r, 800, 600, 1.0);
+        let ray = |u: f64, v: f64| cam.pixel_ray(u, v).unwrap();
+        let gcp = |world: DVec3, pixel: [f64; 2]| Gcp {
+            name: String::new(),
+            world,
+            pixel,
+            weight: 1.0,
+        };
+        // two points seen where their pixels say, off by 3 and 4 px; one behind the camera
+        let gcps = [
+            gcp(cam.position + ray(100.0, 200.0) * 50.0, [103.0, 200.0]),
+            gcp(cam.position + ray(600.0, 400.0) * 80.0, [600.0, 404.0]),
+            gcp(cam.position - ray(400.0, 300.0) * 20.0, [400.0, 300.0]),
+        ];
+        let (rmse, n) = gcp_rmse_px(&cam, &gcps);
+        assert_eq!(n, 2);
+        assert!((rmse - 12.5f64.sqrt()).abs() < 1e-6, "{rmse}");
+        assert!(gcp_rmse_px(&cam, &gcps[2..]).0.is_nan());
+    }
 
     #[test]
     fn imgraft_text_with_sums_and_comments() {

@@ -49,7 +49,7 @@ mod ties;
 
 pub use exif::{ExifFocal, ExifGps, exif_camera_body, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
-pub use gcp::{Gcp, PixelOrigin, parse_gcps, read_gcps};
+pub use gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};
 pub use p3p::{p3p, start_from_gcps_p3p};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
