@@ -22,7 +22,10 @@ fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         if a == "--runs" {
-            runs = args.next().ok_or_else(|| anyhow::anyhow!("--runs needs a value"))?.parse()?;
+            runs = args
+                .next()
+                .ok_or_else(|| anyhow::anyhow!("--runs needs a value"))?
+                .parse()?;
         } else {
             files.push(a);
         }
@@ -35,7 +38,12 @@ fn main() -> anyhow::Result<()> {
     ];
     let mut tot = vec![(0.0f64, 0usize); settings.len()];
     let mut raw_total = 0usize;
-    println!("| file | raw MB | {} |", settings.map(|s| format!("{} ms / MB/s / size ÷ fast", s.0)).join(" | "));
+    println!(
+        "| file | raw MB | {} |",
+        settings
+            .map(|s| format!("{} ms / MB/s / size ÷ fast", s.0))
+            .join(" | ")
+    );
     println!("|---|---|{}", "---|".repeat(settings.len()));
     for f in &files {
         let img = image::open(f)?.to_rgba8();
@@ -50,11 +58,19 @@ fn main() -> anyhow::Result<()> {
             for _ in 0..runs {
                 out.clear();
                 let t = Instant::now();
-                PngEncoder::new_with_quality(&mut out, *c, *flt).write_image(img.as_raw(), w, h, image::ExtendedColorType::Rgba8)?;
+                PngEncoder::new_with_quality(&mut out, *c, *flt).write_image(
+                    img.as_raw(),
+                    w,
+                    h,
+                    image::ExtendedColorType::Rgba8,
+                )?;
                 ts.push(t.elapsed().as_secs_f64() * 1e3);
             }
             let back = image::load_from_memory(&out)?.to_rgba8();
-            anyhow::ensure!(back.as_raw() == img.as_raw(), "{f}: setting {k} did not round-trip");
+            anyhow::ensure!(
+                back.as_raw() == img.as_raw(),
+                "{f}: setting {k} did not round-trip"
+            );
             let ms = median(ts);
             tot[k].0 += ms;
             tot[k].1 += out.len();
@@ -65,7 +81,10 @@ fn main() -> anyhow::Result<()> {
         println!(
             "| {f} | {:.1} | {} |",
             raw as f64 / 1e6,
-            row.iter().map(|(ms, mbs, sz)| format!("{ms:.0} / {mbs:.0} / {:.2}", *sz as f64 / def)).collect::<Vec<_>>().join(" | ")
+            row.iter()
+                .map(|(ms, mbs, sz)| format!("{ms:.0} / {mbs:.0} / {:.2}", *sz as f64 / def))
+                .collect::<Vec<_>>()
+                .join(" | ")
         );
     }
     let def = tot[0].1 as f64;
@@ -73,7 +92,14 @@ fn main() -> anyhow::Result<()> {
         "| all ({} files) | {:.1} | {} |",
         files.len(),
         raw_total as f64 / 1e6,
-        tot.iter().map(|(ms, sz)| format!("{ms:.0} / {:.0} / {:.2}", raw_total as f64 / 1e3 / ms, *sz as f64 / def)).collect::<Vec<_>>().join(" | ")
+        tot.iter()
+            .map(|(ms, sz)| format!(
+                "{ms:.0} / {:.0} / {:.2}",
+                raw_total as f64 / 1e3 / ms,
+                *sz as f64 / def
+            ))
+            .collect::<Vec<_>>()
+            .join(" | ")
     );
     Ok(())
 }

@@ -99,15 +99,7 @@ fn main() -> anyhow::Result<()> {
                 1,
             )?;
             let georef = store.manifest.georef;
-            let stable = |p: DVec3| {
-                let (r, c) = georef.grid(p.x, p.y);
-                let (r, c) = (r.round(), c.round());
-                !(r >= 0.0
-                    && c >= 0.0
-                    && (r as u32) < mask.height()
-                    && (c as u32) < mask.width()
-                    && mask.get_pixel(c as u32, r as u32).0[0] >= 128)
-            };
+            let stable = |p: DVec3| !georef.mask_covers(&mask, p.x, p.y);
             let ropts = ResectOptions {
                 surface_error_m: store.manifest.max_error,
                 max_slope_deg: flag("--max-slope").unwrap_or("90").parse()?,

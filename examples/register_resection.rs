@@ -24,13 +24,12 @@
 mod bench_util;
 
 use bench_util::scene_args::{
-    Rng, SceneArgs, angle_diff, build_scene_store, photo_height, write_scene_photos,
+    Rng, SceneArgs, angle_diff, build_scene_store, photo_height, rough_start, write_scene_photos,
 };
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::register::{CameraParams, Param, ResectOptions, TerrainScene, resect_photo};
-use glam::DVec3;
 
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
@@ -133,15 +132,7 @@ fn main() -> anyhow::Result<()> {
             Vec::new(),
         );
         for s in 0..starts {
-            let mut c = tp;
-            c.angles[0] += (3.0 * rng.next()).to_radians();
-            c.angles[1] += (1.5 * rng.next()).to_radians();
-            c.angles[2] += (1.5 * rng.next()).to_radians();
-            let df = 0.03 * rng.next();
-            if !same_body {
-                c.focal = [c.focal[0] * (1.0 + df), c.focal[1] * (1.0 + df)];
-            }
-            c.position += DVec3::new(5.0 * rng.next(), 5.0 * rng.next(), 2.0 * rng.next());
+            let c = rough_start(tp, &mut rng, 5.0, !same_body);
             let rough: CameraModel = c.camera();
             let t = Instant::now();
             let fit = resect_photo(

@@ -13,7 +13,10 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{Rng, SceneArgs, angle_diff, build_scene_store, write_scene_photos};
+use bench_util::scene_args::{
+    Rng, SceneArgs, angle_diff, build_scene_store, keep_above_ground, rough_start,
+    write_scene_photos,
+};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
@@ -21,7 +24,6 @@ use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
     CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
 };
-use glam::DVec3;
 
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_synthetic OUT [options]")?;
@@ -75,22 +77,8 @@ fn main() -> anyhow::Result<()> {
         let truth = CameraParams::from_camera(&p.camera);
         let terrain = TerrainScene::new(&store, p.camera.position)?;
         for s in 0..starts {
-            let mut c = truth;
-            c.angles[0] += (3.0 * rng.next()).to_radians();
-            c.angles[1] += (1.5 * rng.next()).to_radians();
-            c.angles[2] += (1.5 * rng.next()).to_radians();
-            let df = 0.03 * rng.next();
-            c.focal = [c.focal[0] * (1.0 + df), c.focal[1] * (1.0 + df)];
-            let d = DVec3::new(
-                pos_err * rng.next(),
-                pos_err * rng.next(),
-                0.4 * pos_err * rng.next(),
-            );
-            c.position += d;
-            let ground = terrain
-                .hit(c.position + DVec3::Z * 1000.0, -DVec3::Z)
-                .map_or(c.position.z - 1.7, |g| g.z);
-            c.position.z = c.position.z.max(ground + 0.5);
+            let mut c = rough_start(truth, &mut rng, pos_err, true);
+            keep_above_ground(&mut c, &terrain);
             let rough: CameraModel = c.camera();
             let fit = register_to_terrain(&terrain, &p.image, &rough, &opts)?;
             let got = CameraParams::from_camera(&fit.found);

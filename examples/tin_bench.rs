@@ -285,13 +285,7 @@ fn growth(runs: usize) {
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let runs = args
-        .iter()
-        .position(|a| a == "--runs")
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(3usize)
-        .max(1);
+    let runs = flag_value(&args, "--runs").unwrap_or(3usize).max(1);
     let peer = !args.iter().any(|a| a == "--no-peer");
     println!("cliffmap TIN benchmark, {runs} runs per figure (median)");
     if args.iter().any(|a| a == "--quick") {

@@ -67,6 +67,18 @@ impl GridGeoref {
             (x - self.origin_x) / self.spacing_x,
         )
     }
+
+    /// Whether `mask` (an image on this grid, one pixel per sample) is set (value ≥ 128) at
+    /// the sample nearest world (x, y); false outside the mask.
+    pub fn mask_covers(&self, mask: &image::GrayImage, x: f64, y: f64) -> bool {
+        let (r, c) = self.grid(x, y);
+        let (r, c) = (r.round(), c.round());
+        r >= 0.0
+            && c >= 0.0
+            && (r as u32) < mask.height()
+            && (c as u32) < mask.width()
+            && mask.get_pixel(c as u32, r as u32).0[0] >= 128
+    }
 }
 
 /// An axis-aligned world rectangle (f64, metres): `min` is south-west, `max` north-east.

@@ -123,3 +123,40 @@ pub fn write_scene_photos(
     )?;
     Ok(())
 }
+
+/// `c` perturbed at random inside issue #17's rough-pose ranges: yaw ±3°, pitch and roll
+/// ±1.5°, focal length ±3 % (when `focal`; the draw is made either way), position
+/// ±`position_error` m horizontally and ±0.4 × that vertically. Draws from `rng` in that
+/// order.
+pub fn rough_start(
+    mut c: cliffmap::register::CameraParams,
+    rng: &mut Rng,
+    position_error: f64,
+    focal: bool,
+) -> cliffmap::register::CameraParams {
+    c.angles[0] += (3.0 * rng.next()).to_radians();
+    c.angles[1] += (1.5 * rng.next()).to_radians();
+    c.angles[2] += (1.5 * rng.next()).to_radians();
+    let df = 0.03 * rng.next();
+    if focal {
+        c.focal = [c.focal[0] * (1.0 + df), c.focal[1] * (1.0 + df)];
+    }
+    c.position += glam::DVec3::new(
+        position_error * rng.next(),
+        position_error * rng.next(),
+        0.4 * position_error * rng.next(),
+    );
+    c
+}
+
+/// Raises `c` to at least 0.5 m above the terrain below it (a perturbed position must not
+/// end underground).
+pub fn keep_above_ground(
+    c: &mut cliffmap::register::CameraParams,
+    terrain: &cliffmap::register::TerrainScene,
+) {
+    let ground = terrain
+        .hit(c.position + glam::DVec3::Z * 1000.0, -glam::DVec3::Z)
+        .map_or(c.position.z - 1.7, |g| g.z);
+    c.position.z = c.position.z.max(ground + 0.5);
+}

@@ -206,17 +206,10 @@ pub fn register_photos_with(
         .collect();
     let mut tied: Vec<Option<(String, TieFit)>> = vec![None; specs.len()];
     let georef = store.manifest.georef;
-    let stable = |p: glam::DVec3| match &ties.moving_mask {
-        None => true,
-        Some(m) => {
-            let (r, c) = georef.grid(p.x, p.y);
-            let (r, c) = (r.round(), c.round());
-            !(r >= 0.0
-                && c >= 0.0
-                && (r as u32) < m.height()
-                && (c as u32) < m.width()
-                && m.get_pixel(c as u32, r as u32).0[0] >= 128)
-        }
+    let stable = |p: glam::DVec3| {
+        ties.moving_mask
+            .as_ref()
+            .is_none_or(|m| !georef.mask_covers(m, p.x, p.y))
     };
     // the tie of photo i to the nearest placed photo within reach not tried yet, if any
     let try_tie = |i: usize,
