@@ -482,6 +482,8 @@ fn terrain_points(
     stable: &(impl Fn(DVec3) -> bool + Sync),
 ) -> Vec<Point> {
     let centres = grid_centres(ga.w, ga.h, half + 2, spacing as i64);
+    // smallest |normal.z| of a surface no steeper than max_slope_deg
+    let min_up = max_slope_deg.to_radians().cos() - 1e-12;
     let hit = |x: f64, y: f64| {
         let d = anchor.pixel_ray(x, y)?;
         surface(anchor.position, d)
@@ -512,7 +514,7 @@ fn terrain_points(
             if n.dot(anchor.position - p) < 0.0 {
                 n = -n;
             }
-            if n.z.abs() < max_slope_deg.to_radians().cos() - 1e-12 {
+            if n.z.abs() < min_up {
                 return None;
             }
             Some(Point {
