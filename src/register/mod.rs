@@ -33,6 +33,7 @@
 //! # Ok::<(), cliffmap::Error>(())
 //! ```
 
+mod bundle;
 mod exif;
 mod fit;
 mod gcp;
@@ -47,6 +48,7 @@ mod start;
 pub mod terrain;
 mod ties;
 
+pub use bundle::{BundleFit, BundleOptions, BundlePair, PairTie, adjust_bundle};
 pub use exif::{ExifFocal, ExifGps, exif_camera_body, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};

@@ -44,6 +44,7 @@ use glam::DVec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
+use super::bundle::PairTie;
 use super::fit::{CameraFit, FitOptions, GcpStatus, fit_camera_local};
 use super::gcp::Gcp;
 use super::grey::{Grey, grid_centres};
@@ -142,15 +143,22 @@ pub struct ResectFit {
     pub focal_fitted: bool,
     /// Seconds spent.
     pub seconds: f64,
+    /// The inlier matches of the final fit as ties between the two photos (anchor pixel,
+    /// photo pixel), accepted or not: what [`super::adjust_bundle`] needs to fit both
+    /// cameras together when the anchor's own pose is uncertain.
+    pub ties: Vec<PairTie>,
 }
 
-/// One run of the fine stage: the camera it ended at, its last fit, its match count.
-type FineRun = (CameraModel, Option<CameraFit>, usize);
+/// One run of the fine stage: the camera it ended at, its last fit, its match count, and
+/// the anchor pixels of the matches of its last fit (in the fit's GCP order).
+type FineRun = (CameraModel, Option<CameraFit>, usize, Vec<[f64; 2]>);
 
 /// A terrain point seen by the anchor: where, and the surface's unit normal (towards the
 /// anchor).
 #[derive(Clone, Copy, Debug)]
 struct Point {
+    /// The anchor pixel whose ray met the terrain here.
+    pixel: [f64; 2],
     world: DVec3,
     normal: DVec3,
     /// Unit direction of the anchor's ray to it.
@@ -205,6 +213,7 @@ pub fn resect_photo(
             .iter()
             .any(|p| matches!(p, Param::F | Param::Fx | Param::Fy)),
         seconds: 0.0,
+        ties: Vec::new(),
     };
     for (img, cam, what) in [(anchor_image, anchor, "anchor"), (photo, rough, "photo")] {
         if img.dimensions() != (cam.width, cam.height) {
@@ -275,7 +284,7 @@ pub fn resect_photo(
     // camera and from it turned by 2 px each way in yaw and pitch (matches of a texture
     // that repeats within the search can hold a pose a pixel off), the fit with the most
     // inliers kept (then the lower RMSE)
-    let matches = |cam: &CameraModel| -> Vec<Gcp> {
+    let matches = |cam: &CameraModel| -> Vec<(Gcp, [f64; 2])> {
         points
             .par_iter()
             .filter_map(|p| {
@@ -286,19 +295,20 @@ pub fn resect_photo(
                     return None;
                 }
                 let q = gb.peak_sub_pixel(&t, tn, (x, y), s, half)?;
-                Some(Gcp {
+                let g = Gcp {
                     name: String::new(),
                     world: p.world,
                     pixel: q,
                     weight: match_weight(cam, p, opts.surface_error_m),
-                })
+                };
+                Some((g, p.pixel))
             })
             .collect()
     };
     let fine_from = |from: CameraModel| -> FineRun {
-        let (mut cam, mut last, mut n) = (from, None, 0);
+        let (mut cam, mut last, mut n, mut at) = (from, None, 0, Vec::new());
         for _ in 0..2 {
-            let fine = matches(&cam);
+            let (fine, from_px): (Vec<Gcp>, Vec<[f64; 2]>) = matches(&cam).into_iter().unzip();
             n = fine.len();
             if fine.len() < opts.min_inliers {
                 break;
@@ -307,11 +317,12 @@ pub fn resect_photo(
                 Ok(f) => {
                     cam = f.camera;
                     last = Some(f);
+                    at = from_px;
                 }
                 Err(_) => break,
             }
         }
-        (cam, last, n)
+        (cam, last, n, at)
     };
     let inliers_of = |f: &CameraFit| {
         f.gcps
@@ -343,7 +354,7 @@ pub fn resect_photo(
             best = Some(r);
         }
     }
-    let (cam, last, n_fine) = best.unwrap_or((start, None, 0));
+    let (cam, last, n_fine, anchor_px) = best.unwrap_or((start, None, 0, Vec::new()));
     out.counts[2] = n_fine;
     out.found = cam;
     out.moved_m = cam.position.distance(rough.position);
@@ -357,6 +368,16 @@ pub fn resect_photo(
     };
     let inliers = inliers_of(&fit);
     out.counts[3] = inliers;
+    out.ties = fit
+        .gcps
+        .iter()
+        .zip(&anchor_px)
+        .filter(|(g, _)| g.status == GcpStatus::Inlier)
+        .map(|(g, &a)| PairTie {
+            anchor_px: a,
+            photo_px: g.observed,
+        })
+        .collect();
     out.rmse_inliers_px = fit.rmse_inliers_px;
     for p in &fit.params {
         let i = match p.param {
@@ -518,6 +539,7 @@ fn terrain_points(
                 return None;
             }
             Some(Point {
+                pixel: [xf, yf],
                 world: p,
                 normal: n,
                 ray: (p - anchor.position).normalize(),
