@@ -70,7 +70,14 @@ fn main() -> anyhow::Result<()> {
     let store_dir = out.join("store");
     let list = out.join("photos").join("photos.json");
     if !(has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
-        build_scene_store(&scene, &dem, &ortho, max_error, &store_dir, "register_bundle")?;
+        build_scene_store(
+            &scene,
+            &dem,
+            &ortho,
+            max_error,
+            &store_dir,
+            "register_bundle",
+        )?;
         write_scene_photos(&scene, &dem, &out.join("photos"), width)?;
     }
     let store = cliffmap::store::Store::open(&store_dir)?;
@@ -119,8 +126,18 @@ fn main() -> anyhow::Result<()> {
         let (mut res_b, mut bun_a, mut bun_b, mut times) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for s in 0..starts {
-            let mut ca = rough_start(CameraParams::from_camera(&truth_a), &mut rng, 5.0, !same_body);
-            let mut cb = rough_start(CameraParams::from_camera(&truth_b), &mut rng, 5.0, !same_body);
+            let mut ca = rough_start(
+                CameraParams::from_camera(&truth_a),
+                &mut rng,
+                5.0,
+                !same_body,
+            );
+            let mut cb = rough_start(
+                CameraParams::from_camera(&truth_b),
+                &mut rng,
+                5.0,
+                !same_body,
+            );
             keep_above_ground(&mut ca, &terrain);
             keep_above_ground(&mut cb, &terrain);
             let (rough_a, rough_b) = (ca.camera(), cb.camera());
@@ -132,7 +149,13 @@ fn main() -> anyhow::Result<()> {
                 (rough_a, rough_b)
             };
             let first = resect_photo(
-                &res_a, &anchor.image, &img_b, &res_b0, surface, |_| true, &ropts,
+                &res_a,
+                &anchor.image,
+                &img_b,
+                &res_b0,
+                surface,
+                |_| true,
+                &ropts,
             )?;
             let after_resection = first.found;
             let (mut cam_a, mut cam_b, mut ties) = (res_a, first.found, first.ties);
@@ -140,7 +163,13 @@ fn main() -> anyhow::Result<()> {
             for round in 0..rounds.max(1) {
                 if round > 0 {
                     let again = resect_photo(
-                        &cam_a, &anchor.image, &img_b, &cam_b, surface, |_| true, &ropts,
+                        &cam_a,
+                        &anchor.image,
+                        &img_b,
+                        &cam_b,
+                        surface,
+                        |_| true,
+                        &ropts,
                     )?;
                     if again.ties.len() >= ties.len() / 2 {
                         ties = again.ties;
@@ -149,7 +178,11 @@ fn main() -> anyhow::Result<()> {
                 if ties.len() < 10 {
                     break;
                 }
-                let pairs = [BundlePair { a: 0, b: 1, ties: ties.clone() }];
+                let pairs = [BundlePair {
+                    a: 0,
+                    b: 1,
+                    ties: ties.clone(),
+                }];
                 match adjust_bundle(
                     &[cam_a, cam_b],
                     &[rough_a, rough_b],
@@ -177,21 +210,20 @@ fn main() -> anyhow::Result<()> {
             bun_a.push(ba);
             bun_b.push(bb);
             times.push(secs);
-            let (sig, inl, rmse) = last.as_ref().map_or(
-                ("–".to_string(), "–".to_string(), f64::NAN),
-                |f| {
-                    let m = |v: [f64; 3]| v.iter().copied().fold(0.0, f64::max);
-                    (
-                        format!(
-                            "{:.2}, {:.2}",
-                            m(f.sigma_position_m[0]),
-                            m(f.sigma_position_m[1])
-                        ),
-                        format!("{} / {}", f.inliers[0].0, f.inliers[0].1),
-                        f.rmse_px,
-                    )
-                },
-            );
+            let (sig, inl, rmse) =
+                last.as_ref()
+                    .map_or(("–".to_string(), "–".to_string(), f64::NAN), |f| {
+                        let m = |v: [f64; 3]| v.iter().copied().fold(0.0, f64::max);
+                        (
+                            format!(
+                                "{:.2}, {:.2}",
+                                m(f.sigma_position_m[0]),
+                                m(f.sigma_position_m[1])
+                            ),
+                            format!("{} / {}", f.inliers[0].0, f.inliers[0].1),
+                            f.rmse_px,
+                        )
+                    });
             println!(
                 "| {} | {s} | {:.2} / {:.2}, {:.2} / {:.2} | {:.3} / {:.2} | {:.3} / {:.2}, {:.3} / {:.2} | {sig} | {inl} | {rmse:.2} | {secs:.1} |",
                 anchor.name, ra.0, ra.1, rb.0, rb.1, r1.0, r1.1, ba.0, ba.1, bb.0, bb.1

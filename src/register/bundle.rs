@@ -196,10 +196,7 @@ impl<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync> Problem<'_, S> {
                     return [0.0; 2];
                 }
                 match transfer(cams, r, self.surface) {
-                    Some(q) => [
-                        (q[0] - r.to_px[0]) * r.scale,
-                        (q[1] - r.to_px[1]) * r.scale,
-                    ],
+                    Some(q) => [(q[0] - r.to_px[0]) * r.scale, (q[1] - r.to_px[1]) * r.scale],
                     None => [LOST; 2],
                 }
             })
@@ -421,7 +418,15 @@ pub fn adjust_bundle(
         let scales: Vec<f64> = problem
             .rays
             .par_iter()
-            .map(|r| ray_scale(&cams, r, &surface, opts.match_sigma_px, opts.surface_error_m))
+            .map(|r| {
+                ray_scale(
+                    &cams,
+                    r,
+                    &surface,
+                    opts.match_sigma_px,
+                    opts.surface_error_m,
+                )
+            })
             .collect();
         for ((r, s), w) in problem.rays.iter_mut().zip(scales).zip(&rho) {
             r.scale = s * w.sqrt();
@@ -608,7 +613,10 @@ mod tests {
         for v in (10..600).step_by(30) {
             for u in (10..800).step_by(30) {
                 let px = [u as f64, v as f64];
-                let Some(x) = a.pixel_ray(px[0], px[1]).and_then(|d| corner(a.position, d)) else {
+                let Some(x) = a
+                    .pixel_ray(px[0], px[1])
+                    .and_then(|d| corner(a.position, d))
+                else {
                     continue;
                 };
                 if let Some(q) = b.project(x)
@@ -654,7 +662,10 @@ mod tests {
                 got.position,
                 want.position
             );
-            let (g, w) = (CameraParams::from_camera(got), CameraParams::from_camera(&want));
+            let (g, w) = (
+                CameraParams::from_camera(got),
+                CameraParams::from_camera(&want),
+            );
             for k in 0..3 {
                 assert!((g.angles[k] - w.angles[k]).abs().to_degrees() < 0.005);
             }
@@ -675,10 +686,16 @@ mod tests {
         let opts = BundleOptions::default();
         let pair = |a, b| BundlePair { a, b, ties: vec![] };
         assert!(adjust_bundle(&[c], &[c, c], &[false], &[], corner, &opts).is_err());
-        assert!(adjust_bundle(&[c, c], &[c, c], &[false; 2], &[pair(0, 2)], corner, &opts).is_err());
-        assert!(adjust_bundle(&[c, c], &[c, c], &[false; 2], &[pair(1, 1)], corner, &opts).is_err());
+        assert!(
+            adjust_bundle(&[c, c], &[c, c], &[false; 2], &[pair(0, 2)], corner, &opts).is_err()
+        );
+        assert!(
+            adjust_bundle(&[c, c], &[c, c], &[false; 2], &[pair(1, 1)], corner, &opts).is_err()
+        );
         assert!(adjust_bundle(&[c, c], &[c, c], &[true; 2], &[pair(0, 1)], corner, &opts).is_err());
         // no tie at all
-        assert!(adjust_bundle(&[c, c], &[c, c], &[false; 2], &[pair(0, 1)], corner, &opts).is_err());
+        assert!(
+            adjust_bundle(&[c, c], &[c, c], &[false; 2], &[pair(0, 1)], corner, &opts).is_err()
+        );
     }
 }
