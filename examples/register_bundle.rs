@@ -25,8 +25,7 @@
 mod bench_util;
 
 use bench_util::scene_args::{
-    Rng, SceneArgs, angle_diff, build_scene_store, keep_above_ground, photo_height, rough_start,
-    write_scene_photos,
+    PairScene, Rng, SceneArgs, angle_diff, keep_above_ground, photo_height, rough_start,
 };
 use std::time::Instant;
 
@@ -58,33 +57,13 @@ fn errs(cam: &CameraModel, truth: &CameraModel) -> (f64, f64) {
 
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_bundle OUT [options]")?;
-    let (out, flag, has) = (a.out.clone(), |n: &str| a.flag(n), |n: &str| a.has(n));
-    let scene = a.scene()?;
-    let starts: usize = flag("--starts").unwrap_or("5").parse()?;
-    let turn: f64 = flag("--turn-deg").unwrap_or("12").parse()?;
-    let ratio: f64 = flag("--distance-ratio").unwrap_or("1.15").parse()?;
-    let width: u32 = flag("--photo-width").unwrap_or("1600").parse()?;
-    let max_error: f64 = flag("--max-error").unwrap_or("0.2").parse()?;
+    let (flag, has) = (|n: &str| a.flag(n), |n: &str| a.has(n));
+    let ps = PairScene::from_args(&a, "register_bundle")?;
+    let (scene, dem, store) = (&ps.scene, &ps.dem, &ps.store);
+    let (starts, width, max_error, same_body) = (ps.starts, ps.width, ps.max_error, ps.same_body);
+    let (turn, ratio) = (ps.turn_deg, ps.distance_ratio);
     let rounds: usize = flag("--rounds").unwrap_or("2").parse()?;
-    let (dem, ortho) = scene.generate()?;
-    let store_dir = out.join("store");
-    let list = out.join("photos").join("photos.json");
-    if !(has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
-        build_scene_store(
-            &scene,
-            &dem,
-            &ortho,
-            max_error,
-            &store_dir,
-            "register_bundle",
-        )?;
-        write_scene_photos(&scene, &dem, &out.join("photos"), width)?;
-    }
-    let store = cliffmap::store::Store::open(&store_dir)?;
-    let anchors = cliffmap::photo::read_photo_list(&list)?;
-    let seconds = scene.second_shots(turn, ratio);
     let mut rng = Rng(0xB0_4D1E);
-    let same_body = has("--same-body");
     let mut ropts = ResectOptions {
         surface_error_m: max_error,
         ..ResectOptions::default()
@@ -112,17 +91,21 @@ fn main() -> anyhow::Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     let mut summary = Vec::new();
-    for anchor in &anchors {
-        let terrain = TerrainScene::new(&store, anchor.camera.position)?;
+    for anchor in &ps.anchors {
+        let terrain = TerrainScene::new(store, anchor.camera.position)?;
         let surface = |o, d| terrain.hit(o, d);
         let stem = anchor.name.trim_end_matches(".jpg");
-        let Some(second) = seconds.iter().find(|s| s.name == format!("{stem}_second")) else {
+        let Some(second) = ps
+            .seconds
+            .iter()
+            .find(|s| s.name == format!("{stem}_second"))
+        else {
             eprintln!("{}: no second place with a clear view", anchor.name);
             continue;
         };
         let truth_a = anchor.camera;
         let truth_b = second.camera.resized(width, photo_height(width));
-        let img_b = scene.render_truth_photo(&dem, &truth_b, 2)?;
+        let img_b = scene.render_truth_photo(dem, &truth_b, 2)?;
         let (mut res_b, mut bun_a, mut bun_b, mut times) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for s in 0..starts {

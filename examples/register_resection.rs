@@ -23,9 +23,7 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{
-    Rng, SceneArgs, angle_diff, build_scene_store, photo_height, rough_start, write_scene_photos,
-};
+use bench_util::scene_args::{PairScene, Rng, SceneArgs, angle_diff, photo_height, rough_start};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
@@ -41,32 +39,13 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_resection OUT [options]")?;
-    let (out, flag, has) = (a.out.clone(), |n: &str| a.flag(n), |n: &str| a.has(n));
-    let scene = a.scene()?;
-    let starts: usize = flag("--starts").unwrap_or("5").parse()?;
-    let turn: f64 = flag("--turn-deg").unwrap_or("12").parse()?;
-    let ratio: f64 = flag("--distance-ratio").unwrap_or("1.15").parse()?;
-    let width: u32 = flag("--photo-width").unwrap_or("1600").parse()?;
-    let max_error: f64 = flag("--max-error").unwrap_or("0.2").parse()?;
-    let (dem, ortho) = scene.generate()?;
-    let store_dir = out.join("store");
-    let list = out.join("photos").join("photos.json");
-    if !(has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
-        build_scene_store(
-            &scene,
-            &dem,
-            &ortho,
-            max_error,
-            &store_dir,
-            "register_resection",
-        )?;
-        write_scene_photos(&scene, &dem, &out.join("photos"), width)?;
-    }
-    let store = cliffmap::store::Store::open(&store_dir)?;
-    let anchors = cliffmap::photo::read_photo_list(&list)?;
-    let seconds = scene.second_shots(turn, ratio);
+    let flag = |n: &str| a.flag(n);
+    let ps = PairScene::from_args(&a, "register_resection")?;
+    let (scene, dem, store, anchors, seconds) =
+        (&ps.scene, &ps.dem, &ps.store, &ps.anchors, &ps.seconds);
+    let (starts, width, max_error, same_body) = (ps.starts, ps.width, ps.max_error, ps.same_body);
+    let (turn, ratio) = (ps.turn_deg, ps.distance_ratio);
     let mut rng = Rng(0x2E5E_C710);
-    let same_body = has("--same-body");
     let mut opts = ResectOptions {
         surface_error_m: max_error,
         ..ResectOptions::default()
@@ -84,15 +63,15 @@ fn main() -> anyhow::Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut summary = Vec::new();
-    for a in &anchors {
-        let terrain = TerrainScene::new(&store, a.camera.position)?;
+    for a in anchors {
+        let terrain = TerrainScene::new(store, a.camera.position)?;
         let stem = a.name.trim_end_matches(".jpg");
         let Some(second) = seconds.iter().find(|s| s.name == format!("{stem}_second")) else {
             eprintln!("{}: no second place with a clear view", a.name);
             continue;
         };
         let truth = second.camera.resized(width, photo_height(width));
-        let img = scene.render_truth_photo(&dem, &truth, 2)?;
+        let img = scene.render_truth_photo(dem, &truth, 2)?;
         // terrain points the photo shows (a 40-px grid of the true camera's rays), to score a
         // camera by where it puts them: RMS pixel error, what the projection feels
         let mut shown = Vec::new();

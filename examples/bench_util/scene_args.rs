@@ -48,6 +48,68 @@ impl SceneArgs {
     }
 }
 
+/// The setting of the benchmarks that place a second photo of each demo photo's target
+/// taken elsewhere (`DemoScene::second_shots`): the scene's store and photos in `OUT`
+/// (built unless `--reuse` finds them), and the common flags.
+#[allow(dead_code)] // each example uses its own subset
+pub struct PairScene {
+    pub scene: DemoScene,
+    pub dem: cliffmap::Dem,
+    pub store: cliffmap::store::Store,
+    /// The demo photos with their exact cameras.
+    pub anchors: Vec<cliffmap::photo::PhotoInput>,
+    /// The second places (`--turn-deg`, default 12; `--distance-ratio`, default 1.15).
+    pub seconds: Vec<cliffmap::scene::PhotoShot>,
+    pub turn_deg: f64,
+    pub distance_ratio: f64,
+    /// `--starts` (default 5).
+    pub starts: usize,
+    /// `--photo-width` (default 1600).
+    pub width: u32,
+    /// `--max-error` of the store (default 0.2).
+    pub max_error: f64,
+    /// `--same-body`: the second photo taken with the anchor's camera (focal length known).
+    pub same_body: bool,
+}
+
+#[allow(dead_code)] // not every example that includes this module uses it
+impl PairScene {
+    /// Reads the flags and builds (or, with `--reuse`, opens) the store and photos;
+    /// `generator` names the builder in the store's manifest.
+    pub fn from_args(a: &SceneArgs, generator: &str) -> anyhow::Result<PairScene> {
+        let scene = a.scene()?;
+        let parse = |name: &str, default: &str| a.flag(name).unwrap_or(default).to_string();
+        let starts: usize = parse("--starts", "5").parse()?;
+        let turn_deg: f64 = parse("--turn-deg", "12").parse()?;
+        let distance_ratio: f64 = parse("--distance-ratio", "1.15").parse()?;
+        let width: u32 = parse("--photo-width", "1600").parse()?;
+        let max_error: f64 = parse("--max-error", "0.2").parse()?;
+        let (dem, ortho) = scene.generate()?;
+        let store_dir = a.out.join("store");
+        let list = a.out.join("photos").join("photos.json");
+        if !(a.has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
+            build_scene_store(&scene, &dem, &ortho, max_error, &store_dir, generator)?;
+            write_scene_photos(&scene, &dem, &a.out.join("photos"), width)?;
+        }
+        let store = cliffmap::store::Store::open(&store_dir)?;
+        let anchors = cliffmap::photo::read_photo_list(&list)?;
+        let seconds = scene.second_shots(turn_deg, distance_ratio);
+        Ok(PairScene {
+            scene,
+            dem,
+            store,
+            anchors,
+            seconds,
+            turn_deg,
+            distance_ratio,
+            starts,
+            width,
+            max_error,
+            same_body: a.has("--same-body"),
+        })
+    }
+}
+
 /// Deterministic uniform numbers in [-1, 1] (SplitMix64).
 pub struct Rng(pub u64);
 

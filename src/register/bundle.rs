@@ -27,10 +27,11 @@
 //! from `s² (JᵀJ)⁻¹` with `s²` the normalised tie residuals' variance. Deterministic.
 
 use glam::DVec3;
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use levenberg_marquardt::LevenbergMarquardt;
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
+use super::lsq::{Lsq, Residuals};
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -80,14 +81,7 @@ pub struct BundleOptions {
 impl Default for BundleOptions {
     fn default() -> Self {
         BundleOptions {
-            free: vec![
-                Param::Yaw,
-                Param::Pitch,
-                Param::Roll,
-                Param::X,
-                Param::Y,
-                Param::Z,
-            ],
+            free: Param::POSE.to_vec(),
             prior_position_m: [5.0, 3.0],
             prior_angle_deg: 5.0,
             prior_focal: 0.05,
@@ -165,7 +159,6 @@ struct Problem<'a, S> {
     /// Per camera: the rays it takes part in.
     rays_of: Vec<Vec<usize>>,
     surface: &'a S,
-    x: DVector<f64>,
 }
 
 impl<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync> Problem<'_, S> {
@@ -231,7 +224,7 @@ impl<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync> Problem<'_, S> {
         )
     }
 
-    fn jacobian_at(&self, x: &DVector<f64>) -> DMatrix<f64> {
+    fn jacobian_matrix(&self, x: &DVector<f64>) -> DMatrix<f64> {
         let n_rows = 2 * self.rays.len() + self.n_params();
         let mut j = DMatrix::zeros(n_rows, self.n_params());
         for b in &self.blocks {
@@ -256,28 +249,17 @@ impl<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync> Problem<'_, S> {
     }
 }
 
-impl<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync> LeastSquaresProblem<f64, Dyn, Dyn>
-    for Problem<'_, S>
-{
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, Dyn>;
-    type ParameterStorage = Owned<f64, Dyn>;
-
-    fn set_params(&mut self, x: &DVector<f64>) {
-        self.x.copy_from(x);
+impl<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync> Residuals for Problem<'_, S> {
+    fn free(&self) -> &[Param] {
+        self.free
     }
 
-    fn params(&self) -> DVector<f64> {
-        self.x.clone()
+    fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64> {
+        self.all_residuals(x)
     }
 
-    fn residuals(&self) -> Option<DVector<f64>> {
-        let r = self.all_residuals(&self.x);
-        r.iter().all(|v| v.is_finite()).then_some(r)
-    }
-
-    fn jacobian(&self) -> Option<DMatrix<f64>> {
-        let j = self.jacobian_at(&self.x);
+    fn jacobian_at(&self, x: &DVector<f64>) -> Option<DMatrix<f64>> {
+        let j = self.jacobian_matrix(x);
         j.iter().all(|v| v.is_finite()).then_some(j)
     }
 }
@@ -395,7 +377,7 @@ pub fn adjust_bundle(
         rays_of[r.to].push(i);
     }
     let k = blocks.len() * opts.free.len();
-    let mut problem = Problem {
+    let problem = Problem {
         start: start.to_vec(),
         base: start.iter().map(CameraParams::from_camera).collect(),
         prior: prior.iter().map(CameraParams::from_camera).collect(),
@@ -405,17 +387,21 @@ pub fn adjust_bundle(
         rays,
         rays_of,
         surface: &surface,
+    };
+    let mut lsq = Lsq {
+        problem,
         x: DVector::zeros(k),
     };
     let solver = LevenbergMarquardt::new().with_patience(100);
-    let mut rho = vec![1.0f64; problem.rays.len()];
+    let mut rho = vec![1.0f64; lsq.problem.rays.len()];
     let mut rounds = 0;
-    let mut inlier = vec![false; problem.rays.len()];
+    let mut inlier = vec![false; lsq.problem.rays.len()];
     loop {
         rounds += 1;
-        let cams = problem.cameras_at(&problem.x);
+        let cams = lsq.problem.cameras_at(&lsq.x);
         // the rays' scales at the current cameras, with the Huber weights
-        let scales: Vec<f64> = problem
+        let scales: Vec<f64> = lsq
+            .problem
             .rays
             .par_iter()
             .map(|r| {
@@ -428,16 +414,16 @@ pub fn adjust_bundle(
                 )
             })
             .collect();
-        for ((r, s), w) in problem.rays.iter_mut().zip(scales).zip(&rho) {
+        for ((r, s), w) in lsq.problem.rays.iter_mut().zip(scales).zip(&rho) {
             r.scale = s * w.sqrt();
         }
-        if problem.rays.iter().all(|r| r.scale == 0.0) {
+        if lsq.problem.rays.iter().all(|r| r.scale == 0.0) {
             return Err(Error::BadOption(
                 "bundle: no tie's ray meets the terrain".into(),
             ));
         }
-        let (solved, report) = solver.minimize(problem);
-        problem = solved;
+        let (solved, report) = solver.minimize(lsq);
+        lsq = solved;
         if !report.termination.was_successful() && !report.objective_function.is_finite() {
             return Err(Error::BadOption(format!(
                 "bundle: the solver failed ({:?})",
@@ -445,8 +431,9 @@ pub fn adjust_bundle(
             )));
         }
         // normalised residuals without the Huber weights, for the next weights
-        let cams = problem.cameras_at(&problem.x);
-        let z: Vec<Option<f64>> = problem
+        let cams = lsq.problem.cameras_at(&lsq.x);
+        let z: Vec<Option<f64>> = lsq
+            .problem
             .rays
             .par_iter()
             .zip(&rho)
@@ -481,11 +468,11 @@ pub fn adjust_bundle(
         }
     }
     // covariance: s² (JᵀJ)⁻¹ with the tie rows' variance
-    let x = problem.x.clone();
-    let j = problem.jacobian_at(&x);
-    let r = problem.all_residuals(&x);
-    let n_ray_rows = 2 * problem.rays.len();
-    let used_rows = 2 * problem.rays.iter().filter(|r| r.scale > 0.0).count();
+    let x = lsq.x.clone();
+    let j = lsq.problem.jacobian_matrix(&x);
+    let r = lsq.problem.all_residuals(&x);
+    let n_ray_rows = 2 * lsq.problem.rays.len();
+    let used_rows = 2 * lsq.problem.rays.iter().filter(|r| r.scale > 0.0).count();
     let rss: f64 = r.rows(0, n_ray_rows).iter().map(|v| v * v).sum();
     let s2 = if used_rows > k {
         rss / (used_rows - k) as f64
@@ -493,10 +480,10 @@ pub fn adjust_bundle(
         f64::NAN
     };
     let cov = (j.transpose() * &j).try_inverse();
-    let cams = problem.cameras_at(&x);
+    let cams = lsq.problem.cameras_at(&x);
     let mut sigma_position_m = vec![[f64::NAN; 3]; n];
     let mut sigma_angles_deg = vec![[f64::NAN; 3]; n];
-    for b in &problem.blocks {
+    for b in &lsq.problem.blocks {
         for (kk, &param) in opts.free.iter().enumerate() {
             let col = b.col + kk;
             let sd = cov
@@ -514,7 +501,8 @@ pub fn adjust_bundle(
         }
     }
     // unweighted pixel residuals of the inliers, and inliers per pair
-    let px: Vec<Option<f64>> = problem
+    let px: Vec<Option<f64>> = lsq
+        .problem
         .rays
         .par_iter()
         .map(|r| {

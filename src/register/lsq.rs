@@ -23,6 +23,14 @@ pub(crate) trait Residuals {
     fn free(&self) -> &[Param];
     /// The residuals at offsets `x`.
     fn residuals_at(&self, x: &DVector<f64>) -> DVector<f64>;
+    /// Their Jacobian at `x`; `None` if an entry is not finite. Default: central
+    /// differences over all residuals ([`jacobian`]).
+    fn jacobian_at(&self, x: &DVector<f64>) -> Option<DMatrix<f64>>
+    where
+        Self: Sized,
+    {
+        jacobian(self, x)
+    }
 }
 
 /// The Jacobian of `p`'s residuals at offsets `x` by central differences; `None` if an
@@ -69,6 +77,6 @@ impl<P: Residuals> LeastSquaresProblem<f64, Dyn, Dyn> for Lsq<P> {
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
-        jacobian(&self.problem, &self.x)
+        self.problem.jacobian_at(&self.x)
     }
 }

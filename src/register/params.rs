@@ -41,6 +41,16 @@ pub enum Param {
 }
 
 impl Param {
+    /// The pose: yaw, pitch, roll, x, y, z.
+    pub const POSE: [Param; 6] = [
+        Param::Yaw,
+        Param::Pitch,
+        Param::Roll,
+        Param::X,
+        Param::Y,
+        Param::Z,
+    ];
+
     /// The name used by `--free` and in reports.
     pub fn name(self) -> &'static str {
         match self {
