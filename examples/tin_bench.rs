@@ -306,9 +306,11 @@ fn main() -> anyhow::Result<()> {
         let err: f64 = flag_value(&args, "--error").unwrap_or(2.0);
         let reps: usize = flag_value(&args, "--reps").unwrap_or(3);
         if args.iter().any(|a| a == "--level") {
-            // the celled finest level (S = 64) instead, `reps` times each
+            // the celled finest level (S = 64) instead, `reps` times each, on --threads N
+            // (default 2)
+            let threads: usize = flag_value(&args, "--threads").unwrap_or(2);
             let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(2)
+                .num_threads(threads)
                 .build()
                 .expect("thread pool");
             for (name, dem) in &dems {
@@ -321,7 +323,7 @@ fn main() -> anyhow::Result<()> {
                         .expect("level");
                     cpu.push(process_cpu_ns().saturating_sub(c0) as f64 / 1e6);
                     println!(
-                        "{name} finest level S=64 {err} m: wall {:.0} ms, CPU {:.0} ms, {} triangles",
+                        "{name} finest level S=64 {err} m, {threads} threads: wall {:.0} ms, CPU {:.0} ms, {} triangles",
                         t0.elapsed().as_secs_f64() * 1e3,
                         process_cpu_ns().saturating_sub(c0) as f64 / 1e6,
                         cells.iter().map(|(_, t)| t.triangles.len()).sum::<usize>()

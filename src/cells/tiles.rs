@@ -41,9 +41,18 @@ impl LatticeTiles {
         for j in 0..nj {
             let row = (lat.origin_r + j as i64 * s) as usize * width;
             let (tj, rj) = (j >> 2, (j & 3) * 4);
-            for i in 0..ni {
-                let col = (lat.origin_c + i as i64 * s) as usize;
-                tiles[tj * tiles_x + (i >> 2)].0[rj + (i & 3)] = heights[row + col];
+            let out = &mut tiles[tj * tiles_x..(tj + 1) * tiles_x];
+            if s == 1 {
+                // the row's samples are contiguous: four at a time into each tile's row
+                let src = &heights[row + lat.origin_c as usize..][..ni];
+                for (tile, four) in out.iter_mut().zip(src.chunks(4)) {
+                    tile.0[rj..rj + four.len()].copy_from_slice(four);
+                }
+            } else {
+                for i in 0..ni {
+                    let col = (lat.origin_c + i as i64 * s) as usize;
+                    out[i >> 2].0[rj + (i & 3)] = heights[row + col];
+                }
             }
         }
         LatticeTiles {
