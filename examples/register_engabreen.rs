@@ -11,6 +11,8 @@
 //! `--resect-render [--max-slope DEG]` (an experiment, docs/registration.md "Position"): after
 //! the terrain search the photo is resected (`register::resect_photo`, position free) against
 //! the store rendered from the camera found, the glacier masked out.
+//! `--overlay PNG`: for the first start, the photo blended with the store rendered from the
+//! rough and from the registered camera, side by side, GCPs marked (docs/registration.md).
 //! STORE_DIR is built (default build + reparam) when it holds no store.
 
 #[path = "bench_util/mod.rs"]
@@ -87,6 +89,23 @@ fn main() -> anyhow::Result<()> {
         let rough = c.camera();
         let fit = register_to_terrain(&terrain, &photo, &rough, &opts)?;
         let after = bench_util::gcp_rmse(&fit.found, &gcps);
+        if let (0, Some(path)) = (s, flag("--overlay")) {
+            // photo over the render from the rough and from the registered camera
+            let renders = cliffmap::eval::render_views(
+                &dir,
+                &[rough, fit.found],
+                &[cliffmap::render::UvMode::Mixed],
+                0.5,
+                1,
+            )?;
+            let panels: Vec<image::RgbImage> = [rough, fit.found]
+                .iter()
+                .zip(&renders[0])
+                .map(|(cam, r)| bench_util::overlay::photo_over_render(&photo, r, cam, &gcps, 4))
+                .collect();
+            bench_util::overlay::side_by_side(&panels, 8).save(path)?;
+            println!("wrote {path}");
+        }
         if resect_render {
             // experiment: the photo resected against the store rendered from the camera found
             let t = std::time::Instant::now();

@@ -1,6 +1,7 @@
 //! Helpers shared by the benchmarks (included with `#[path]`).
 #![allow(dead_code)]
 
+pub mod overlay;
 pub mod scene_args;
 
 use std::io::Write;
