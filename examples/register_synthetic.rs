@@ -125,9 +125,9 @@ fn main() -> anyhow::Result<()> {
     }
     println!();
     println!(
-        "| photo | starts | converged | within 0.02° and 0.3 m | converged but outside the goal | median s |"
+        "| photo | starts | registered | registered within 0.02° and 0.3 m | registered outside the goal | refused, found camera within the goal | refused, outside | median s |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     let mut names: Vec<String> = rows.iter().map(|r| r.0.clone()).collect();
     names.dedup();
     for n in names.iter().chain(std::iter::once(&"all".to_string())) {
@@ -135,12 +135,15 @@ fn main() -> anyhow::Result<()> {
             rows.iter().filter(|r| n == "all" || &r.0 == n).collect();
         let mut t: Vec<f64> = sel.iter().map(|r| r.3).collect();
         t.sort_by(f64::total_cmp);
+        let count = |f: &dyn Fn(bool, bool) -> bool| sel.iter().filter(|r| f(r.1, r.2)).count();
         println!(
-            "| {n} | {} | {} | {} | {} | {:.1} |",
+            "| {n} | {} | {} | {} | {} | {} | {} | {:.1} |",
             sel.len(),
-            sel.iter().filter(|r| r.1).count(),
-            sel.iter().filter(|r| r.2).count(),
-            sel.iter().filter(|r| r.1 && !r.2).count(),
+            count(&|c, _| c),
+            count(&|c, g| c && g),
+            count(&|c, g| c && !g),
+            count(&|c, g| !c && g),
+            count(&|c, g| !c && !g),
             t[t.len() / 2]
         );
     }
