@@ -14,7 +14,9 @@
 use std::time::Instant;
 
 use cliffmap::camera::{camera_from_json_file, yaw_pitch_roll_from_rotation};
-use cliffmap::register::{GcpStatus, MatchOptions, fit_rotation, match_photos, stable_matches};
+use cliffmap::register::{
+    GcpStatus, MatchOptions, fit_rotation, match_photos, rotation_consensus, stable_matches,
+};
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;
@@ -123,6 +125,38 @@ fn main() -> anyhow::Result<()> {
         "| with every match: viewdir change (°), RMSE all / inliers (px) | {:+.5}, {:+.6}, {:+.6}; {:.3} / {:.3} | |",
         dall[0], dall[1], dall[2], all.rmse_px, all.rmse_inliers_px
     );
+    // without the glacier mask: every match on terrain, the rotation consensus first (as
+    // `tie_photo` does), then the fit on the matches it keeps
+    let terrain = stable_matches(
+        &cam,
+        &matches,
+        |o, d| tracer.nearest(o, d, f64::INFINITY).map(|h| h.point),
+        |_| true,
+    );
+    for (label, set) in [("no glacier mask", &terrain), ("glacier mask", &stable)] {
+        let t = Instant::now();
+        let c = rotation_consensus(&cam, set, 1.0);
+        let t_c = t.elapsed().as_secs_f64();
+        let agreed: Vec<_> = c.inliers.iter().map(|&i| set[i]).collect();
+        let on_rock = c
+            .inliers
+            .iter()
+            .filter(|&&i| stable.iter().any(|m| m.a == set[i].a))
+            .count();
+        let f = fit_rotation(&cam, &agreed)?;
+        let (y, p, r) = yaw_pitch_roll_from_rotation(&f.camera.world_to_camera);
+        let dd = [y - ya, p - pa, r - ra].map(|v| v.to_degrees());
+        println!(
+            "| {label}, rotation consensus (1 px) of {} terrain matches: agreeing (off the glacier) / second motion; then the fit: viewdir change (°), RMSE inliers (px); consensus time | {} ({on_rock}) / {}; {:+.5}, {:+.6}, {:+.6}; {:.3}; {t_c:.3} s | |",
+            set.len(),
+            c.inliers.len(),
+            c.second,
+            dd[0],
+            dd[1],
+            dd[2],
+            f.rmse_inliers_px
+        );
+    }
     println!("| time: matching / fit (s) | {t_match:.2} / {t_fit:.4} | |");
     Ok(())
 }

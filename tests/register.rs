@@ -524,6 +524,28 @@ fn a_photo_from_the_same_place_is_tied_to_a_known_one() {
             .abs_diff_eq(given.world_to_camera, 1e-12)
     );
     assert!(specs[1].camera.position.abs_diff_eq(given.position, 1e-9));
+    // without the mask the moving glacier's matches are left out by the rotation consensus:
+    // the same tie, the same rotation to 0.001° (docs/registration.md)
+    let out2 = t.path().join("reg2").join("registered.json");
+    std::fs::create_dir_all(out2.parent().unwrap()).unwrap();
+    register(t.path(), &list, &out2, &["--known", "IMG_8902.jpg"]);
+    let report2: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out2.with_file_name("registered.report.json")).unwrap(),
+    )
+    .unwrap();
+    let b2 = &report2["photos"][1];
+    assert_eq!(b2["method"], "tie", "{b2}");
+    assert!(
+        b2["tie"]["rmse_inliers_px"].as_f64().unwrap() <= 0.5,
+        "{b2}"
+    );
+    for k in ["yaw_deg", "pitch_deg", "roll_deg"] {
+        let (x, y) = (
+            b["change_found"][k].as_f64().unwrap(),
+            b2["change_found"][k].as_f64().unwrap(),
+        );
+        assert!((x - y).abs() < 0.001, "{k}: {x} with the mask, {y} without");
+    }
     // a known name not in the list is refused
     fails_naming(
         &[

@@ -50,7 +50,9 @@ pub struct Args {
     #[arg(long, default_value_t = 1.5)]
     resect_rmse_px: f64,
     /// Surfaces that moved between photos (a glacier), left out of the ties' matches: a
-    /// grey PNG on the store's DEM grid, values >= 128 moving.
+    /// grey PNG on the store's DEM grid, values >= 128 moving. Optional: a rotation
+    /// consensus leaves out matches that disagree with the still ground, and refuses a tie
+    /// when two motions have similar support (then a mask decides).
     #[arg(long)]
     moving_mask: Option<PathBuf>,
     /// Only warnings and errors.

@@ -34,6 +34,7 @@
 //! ```
 
 mod bundle;
+mod consensus;
 mod exif;
 mod fit;
 mod gcp;
@@ -49,6 +50,7 @@ pub mod terrain;
 mod ties;
 
 pub use bundle::{BundleFit, BundleOptions, BundlePair, PairTie, adjust_bundle};
+pub use consensus::{RotationConsensus, rotation_consensus};
 pub use exif::{ExifFocal, ExifGps, exif_camera_body, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};

@@ -5,7 +5,11 @@
 //!
 //! The tied photo takes the anchor's position and intrinsics (the same camera body); only
 //! matches whose ray from the anchor meets a surface the caller calls stable are used (the
-//! terrain, not sky or clouds; optionally not a moving glacier). The tie is accepted when at
+//! terrain, not sky or clouds; optionally not a moving glacier). Of those, the matches one
+//! rotation explains within [`TieOptions::consensus_px`] ([`super::rotation_consensus`])
+//! go to the robust fit; when a second rotation explains at least half as many of the
+//! others (and at least [`TieOptions::min_inliers`]), part of the scene moved and the tie is
+//! refused as ambiguous. The tie is accepted when at
 //! least [`TieOptions::min_inliers`] matches are inliers of the robust fit, their RMSE is at
 //! most [`TieOptions::max_rmse_px`], and the photo turned at most
 //! [`TieOptions::max_turn_deg`] from its given camera; otherwise the reason is reported.
@@ -15,6 +19,7 @@ use std::time::Instant;
 use glam::DVec3;
 use image::RgbImage;
 
+use super::consensus::rotation_consensus;
 use super::fit::GcpStatus;
 use super::pair::{MatchOptions, fit_rotation, match_photos, stable_matches};
 use crate::camera::CameraModel;
@@ -31,6 +36,9 @@ pub struct TieOptions {
     pub min_inliers: usize,
     /// Most rotation (degrees) between the given camera and the tied one.
     pub max_turn_deg: f64,
+    /// Tolerance (pixels) of the consensus that picks the matches one rotation explains
+    /// ([`super::rotation_consensus`]) before the robust fit.
+    pub consensus_px: f64,
 }
 
 impl Default for TieOptions {
@@ -40,6 +48,7 @@ impl Default for TieOptions {
             max_rmse_px: 1.0,
             min_inliers: 12,
             max_turn_deg: 8.0,
+            consensus_px: 1.0,
         }
     }
 }
@@ -119,7 +128,39 @@ pub fn tie_photo(
             f64::NAN,
         ));
     }
-    let fit = fit_rotation(anchor, &kept)?;
+    // the matches one rotation explains; a second motion of comparable support (a surface
+    // that moved between the shots) makes the tie ambiguous
+    let consensus = rotation_consensus(anchor, &kept, opts.consensus_px);
+    if consensus.second >= opts.min_inliers && 2 * consensus.second >= consensus.inliers.len() {
+        return Ok(fail(
+            format!(
+                "two motions between the photos: one rotation explains {} matches, another {} \
+                 (part of the scene moved? mark it with --moving-mask)",
+                consensus.inliers.len(),
+                consensus.second
+            ),
+            [found.len(), kept.len(), consensus.inliers.len()],
+            f64::NAN,
+            f64::NAN,
+        ));
+    }
+    if consensus.inliers.len() < opts.min_inliers {
+        return Ok(fail(
+            format!(
+                "{} of {} matches on stable terrain agree on one rotation (within {} px), fewer \
+                 than {}",
+                consensus.inliers.len(),
+                kept.len(),
+                opts.consensus_px,
+                opts.min_inliers
+            ),
+            [found.len(), kept.len(), consensus.inliers.len()],
+            f64::NAN,
+            f64::NAN,
+        ));
+    }
+    let agreed: Vec<_> = consensus.inliers.iter().map(|&i| kept[i]).collect();
+    let fit = fit_rotation(anchor, &agreed)?;
     let inliers = fit
         .gcps
         .iter()

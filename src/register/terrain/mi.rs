@@ -113,10 +113,7 @@ impl GreyImage {
 /// The normalised mutual information `(H(L) + H(G)) / H(L, G)` (1 = independent, 2 = one
 /// determines the other) of the samples' labels L and the photo's classes G (luma ×
 /// chroma, partial-volume) where `cam` (sized like `photo`) projects them; samples outside
-/// the photo or behind the camera fall in a class of their own. Each sample counts with its
-/// [`Sample::weight`] (terrain the store's error bound moves by pixels counts less). 1.0
-/// when the samples that land weigh less than 64 in all. Deterministic whatever the thread
-/// count.
+/// the photo or behind the camera fall in a class of their own. 1.0 when fewer than 64 samples land. Deterministic whatever the thread count.
 pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
     let r = cam.world_to_camera;
     let hists: Vec<Vec<f32>> = samples
@@ -129,10 +126,9 @@ pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
                     SampleAt::Sky(d) => project_dir(cam, r * d),
                 };
                 let row = s.label as usize * BINS;
-                let wt = s.weight;
                 let Some(g) = px.and_then(|px| photo.at(px[0], px[1])) else {
                     if OUTSIDE_BIN {
-                        joint[row + BINS - 1] += wt;
+                        joint[row + BINS - 1] += 1.0;
                     }
                     continue;
                 };
@@ -141,10 +137,10 @@ pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
                     (g[1].floor() as usize).min(CHROMA - 2),
                 );
                 let (fl, fc) = (g[0] - l as f32, g[1] - c as f32);
-                joint[row + c * LUMA + l] += wt * (1.0 - fl) * (1.0 - fc);
-                joint[row + c * LUMA + l + 1] += wt * fl * (1.0 - fc);
-                joint[row + (c + 1) * LUMA + l] += wt * (1.0 - fl) * fc;
-                joint[row + (c + 1) * LUMA + l + 1] += wt * fl * fc;
+                joint[row + c * LUMA + l] += (1.0 - fl) * (1.0 - fc);
+                joint[row + c * LUMA + l + 1] += fl * (1.0 - fc);
+                joint[row + (c + 1) * LUMA + l] += (1.0 - fl) * fc;
+                joint[row + (c + 1) * LUMA + l + 1] += fl * fc;
             }
             joint
         })

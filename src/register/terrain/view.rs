@@ -42,11 +42,6 @@ pub struct Sample {
     pub at: SampleAt,
     /// Its label: [`SKY`], or `1 + grey + GREY_CLASSES · (2 · far + steep)`.
     pub label: u8,
-    /// Its weight in the score, in (0, 1]: `1 / (1 + s²)` for a terrain point, where `s` is
-    /// how many pixels of the sampled image a height error of the store's bound
-    /// (`max_error`) moves the point at its distance (`fx · max_error / distance`), so that
-    /// near ground the TIN places loosely counts less; 1 for sky.
-    pub weight: f32,
 }
 
 /// Where a ray ends ([`TerrainScene::classify`]).
@@ -254,8 +249,6 @@ impl<'a> TerrainScene<'a> {
                 keep
             }
         };
-        // the pixels a terrain error of the store's bound moves a point at distance d
-        let e_px = (cam.fx * self.store.manifest.max_error.max(0.0)) as f32;
         Ok(out_at
             .into_iter()
             .zip(keep)
@@ -264,17 +257,14 @@ impl<'a> TerrainScene<'a> {
                 Ok(hit) => {
                     let g = cuts.iter().filter(|&&c| hit.grey > c).count() as u8;
                     let class = 2 * u8::from(hit.dist > median) + u8::from(hit.steep);
-                    let s = e_px / hit.dist.max(1e-3);
                     Sample {
                         at: SampleAt::Point(hit.point),
                         label: 1 + g + GREY_CLASSES * class,
-                        weight: 1.0 / (1.0 + s * s),
                     }
                 }
                 Err(dir) => Sample {
                     at: SampleAt::Sky(dir),
                     label: SKY,
-                    weight: 1.0,
                 },
             })
             .collect())
