@@ -11,7 +11,7 @@
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
-//!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--register]]
+//!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--register [--include-unregistered]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
 //! ```
 //! `--second-photos` projects and scores second photos of the demo photos' targets taken
@@ -22,7 +22,8 @@
 //! `--rough SEED` projects with every camera turned and zoomed at random inside what a phone's
 //! compass and EXIF give (yaw ±3°, pitch and roll ±1.5°, focal length ±3 %; seeded);
 //! `--register` first refines those cameras with `cliffmap register` (prints the errors
-//! before and after) and projects the registered ones.
+//! before and after) and projects the registered ones (photos it could not confirm are left
+//! out, as `cliffmap project` does, unless `--include-unregistered`).
 //! ```text
 //! ```
 //! `--perturb-*` project the photos with every camera's yaw turned by DEG degrees or its
@@ -224,7 +225,23 @@ fn main() -> anyhow::Result<()> {
                 None => out,
             };
         }
-        let photos = cliffmap::photo::read_photo_list(&project_list)?;
+        // as `cliffmap project` does: photos `register` could not confirm are left out unless
+        // `--include-unregistered`
+        let photos = cliffmap::photo::read_photo_specs(&project_list)?
+            .iter()
+            .filter(|s| {
+                let keep = s.unregistered.is_none() || has("--include-unregistered");
+                if !keep {
+                    eprintln!(
+                        "left out {}: {}",
+                        s.name,
+                        s.unregistered.as_deref().unwrap_or("")
+                    );
+                }
+                keep
+            })
+            .map(cliffmap::photo::PhotoSpec::load)
+            .collect::<Result<Vec<_>, _>>()?;
         let t = Instant::now();
         let mut popts = ProjectOptions {
             quiet: true,

@@ -164,6 +164,40 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
             .as_str()
             .is_some_and(|r| !r.is_empty())
     );
+    // the list marks the photo it could not confirm, and `project` leaves it out unless asked
+    assert!(specs[0].unregistered.is_none());
+    assert!(specs[1].unregistered.is_some(), "{:?}", specs[1]);
+    let store = tmp.path().join("store");
+    let project = |extra: &[&str]| {
+        let mut args = vec![
+            "project",
+            store.to_str().unwrap(),
+            "--photos",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        String::from_utf8_lossy(&ok(&args).stderr).into_owned()
+    };
+    let err = project(&[]);
+    assert!(err.contains("plateau_south.jpg: left out"), "{err}");
+    assert!(!err.contains("plateau_east.jpg: left out"), "{err}");
+    let err = project(&["--include-unregistered"]);
+    assert!(!err.contains("left out"), "{err}");
+    // a list of unconfirmed photos only is refused, naming the list
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut list: serde_json::Value = serde_json::from_str(&text).unwrap();
+    list["photos"].as_array_mut().unwrap().remove(0);
+    let only = out.with_file_name("only_unregistered.json");
+    std::fs::write(&only, list.to_string()).unwrap();
+    fails_naming(
+        &[
+            "project",
+            store.to_str().unwrap(),
+            "--photos",
+            only.to_str().unwrap(),
+        ],
+        "only_unregistered.json",
+    );
 }
 
 /// A photo with only a rough pose in the list (`"rough"`): the focal length from its EXIF

@@ -43,6 +43,11 @@ pub struct Args {
     /// Keep every photo texture at its active texture's size (no photo-driven sizes).
     #[arg(long)]
     pub fixed_photo_texels: bool,
+    /// Also project photos a registered list marks `"registered": false` (their cameras
+    /// could not be confirmed by `cliffmap register`); by default they are left out with a
+    /// warning, since a wrong pose makes the terrain worse than no photo.
+    #[arg(long)]
+    pub include_unregistered: bool,
     /// Occlusion margin: photo pixels closer than PX (pose uncertainty, full-resolution
     /// pixels) plus the TIN error's displacement to an occlusion edge of the photo (a
     /// silhouette, the skyline, a depth jump) count less; 0 switches it off.
@@ -122,7 +127,31 @@ fn parse_ray_accel(s: &str) -> Result<RayAccel, String> {
 /// Reads the photos and their cameras from `--photos` or `--colmap`.
 fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
     match (&a.photos, &a.colmap) {
-        (Some(p), _) => Ok(cliffmap::photo::read_photo_list(p)?),
+        (Some(p), _) => {
+            let specs = cliffmap::photo::read_photo_specs(p)?;
+            let total = specs.len();
+            let mut keep = Vec::with_capacity(total);
+            for s in specs {
+                match (&s.unregistered, a.include_unregistered) {
+                    (Some(why), false) => eprintln!(
+                        "warning: {}: left out ({why}); --include-unregistered projects it anyway",
+                        s.name
+                    ),
+                    _ => keep.push(s),
+                }
+            }
+            if keep.is_empty() && total > 0 {
+                anyhow::bail!(
+                    "{}: every photo is marked \"registered\": false, nothing to project \
+                     (--include-unregistered projects them with their given cameras)",
+                    p.display()
+                );
+            }
+            Ok(keep
+                .iter()
+                .map(cliffmap::photo::PhotoSpec::load)
+                .collect::<Result<_, _>>()?)
+        }
         (None, Some(d)) => Ok(cliffmap::photo::read_colmap(d)?),
         (None, None) => anyhow::bail!("give --photos PHOTOS.json or --colmap DIR"),
     }

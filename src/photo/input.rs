@@ -28,6 +28,10 @@ pub struct PhotoSpec {
     pub image_path: PathBuf,
     /// The camera in the world frame, for an image of exactly the file's size.
     pub camera: CameraModel,
+    /// Why `cliffmap register` could not confirm this camera (it kept the one it was given),
+    /// from a registered list's `"registered": false` entry; `None` for a camera to trust.
+    /// `cliffmap project` leaves such photos out unless asked (docs/formats.md).
+    pub unregistered: Option<String>,
 }
 
 impl PhotoSpec {
@@ -146,6 +150,7 @@ fn spec_for_size(
         name: file_name(image_path),
         image_path: image_path.to_path_buf(),
         camera,
+        unregistered: None,
     })
 }
 
@@ -167,6 +172,12 @@ struct Entry {
     rotation_delta_deg: Option<[f64; 3]>,
     #[serde(default)]
     rough: Option<RoughPose>,
+    /// `false` in a registered list for a photo whose camera `register` could not confirm.
+    #[serde(default)]
+    registered: Option<bool>,
+    /// Why not, with `"registered": false`.
+    #[serde(default)]
+    reason: Option<String>,
 }
 
 /// A photo's rough pose as a photographer knows it (a `"rough"` entry of `photos.json`):
@@ -374,9 +385,15 @@ pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
         if let Some(d) = e.rotation_delta_deg {
             cam = apply_rotation_delta(&cam, d);
         }
-        out.push(PhotoEntry::Fitted(spec_for_size(
-            &image, size, cam, &cam_file,
-        )?));
+        let mut spec = spec_for_size(&image, size, cam, &cam_file)?;
+        if e.registered == Some(false) {
+            spec.unregistered = Some(
+                e.reason
+                    .clone()
+                    .unwrap_or_else(|| "its camera was not confirmed".into()),
+            );
+        }
+        out.push(PhotoEntry::Fitted(spec));
     }
     Ok(out)
 }

@@ -130,6 +130,7 @@ pub fn resolve_photo_entries(
                     name,
                     image_path,
                     camera: r.camera,
+                    unregistered: None,
                 });
             }
         }
@@ -445,7 +446,18 @@ pub fn register_photos_with(
     let entries: Vec<Value> = specs
         .iter()
         .zip(&results)
-        .map(|(s, r)| json!({ "image": relative_or_absolute(&s.image_path, &dir), "camera": file_name(&r.camera_file) }))
+        .map(|(s, r)| {
+            let mut e = json!({ "image": relative_or_absolute(&s.image_path, &dir), "camera": file_name(&r.camera_file) });
+            if !r.fit.converged {
+                // the given camera is kept; `project` leaves the photo out unless asked
+                e["registered"] = json!(false);
+                e["reason"] = json!(format!(
+                    "not registered, its given camera kept: {}",
+                    r.fit.reason.as_deref().unwrap_or("did not converge")
+                ));
+            }
+            e
+        })
         .collect();
     write_atomic(
         out,
