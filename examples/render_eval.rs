@@ -11,7 +11,8 @@
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
-//!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--register [--include-unregistered]]]
+//!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--known-focal]
+//!     [--register [--include-unregistered]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
 //! ```
 //! `--second-photos` projects and scores second photos of the demo photos' targets taken
@@ -20,7 +21,8 @@
 //! `--rough-position M` also moves each rough camera by up to ±M m horizontally and ±0.4 M
 //! vertically.
 //! `--rough SEED` projects with every camera turned and zoomed at random inside what a phone's
-//! compass and EXIF give (yaw ±3°, pitch and roll ±1.5°, focal length ±3 %; seeded);
+//! compass and EXIF give (yaw ±3°, pitch and roll ±1.5°, focal length ±3 %; seeded;
+//! `--known-focal`: the focal length exact and held by `register`, the angles the same);
 //! `--register` first refines those cameras with `cliffmap register` (prints the errors
 //! before and after) and projects the registered ones (photos it could not confirm are left
 //! out, as `cliffmap project` does, unless `--include-unregistered`).
@@ -142,7 +144,8 @@ fn main() -> anyhow::Result<()> {
             perturbed_list(&list, flag("--perturb-yaw"), flag("--perturb-position"))?;
         if let Some(seed) = flag("--rough") {
             let position: f64 = flag("--rough-position").unwrap_or("0").parse()?;
-            project_list = rough_list(&project_list, seed.parse()?, position)?;
+            project_list =
+                rough_list(&project_list, seed.parse()?, position, has("--known-focal"))?;
         }
         if has("--register") {
             let mut specs = cliffmap::photo::read_photo_specs(&project_list)?;
@@ -160,7 +163,14 @@ fn main() -> anyhow::Result<()> {
                 &store,
                 &specs,
                 &out,
-                &cliffmap::register::TerrainOptions::default(),
+                &cliffmap::register::TerrainOptions {
+                    free: if has("--known-focal") {
+                        cliffmap::register::parse_free("yaw,pitch,roll")?
+                    } else {
+                        cliffmap::register::TerrainOptions::default().free
+                    },
+                    ..cliffmap::register::TerrainOptions::default()
+                },
                 &ties,
                 &mut |w| eprintln!("warning: {w}"),
             )?;
@@ -392,7 +402,12 @@ fn perturbed_list(
 
 /// Every camera of `list` turned and zoomed at random (seed `seed`): yaw ±3°, pitch and roll
 /// ±1.5°, focal length ±3 % (uniform), position kept; written beside it.
-fn rough_list(list: &std::path::Path, seed: u64, position_m: f64) -> anyhow::Result<PathBuf> {
+fn rough_list(
+    list: &std::path::Path,
+    seed: u64,
+    position_m: f64,
+    known_focal: bool,
+) -> anyhow::Result<PathBuf> {
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5DEE_CE66_D;
     let mut rnd = move || {
         state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -409,9 +424,12 @@ fn rough_list(list: &std::path::Path, seed: u64, position_m: f64) -> anyhow::Res
             p + (1.5 * rnd()).to_radians(),
             r + (1.5 * rnd()).to_radians(),
         );
+        // the same random sequence whether or not the focal length is known
         let k = 1.0 + 0.03 * rnd();
-        cam.fx *= k;
-        cam.fy *= k;
+        if !known_focal {
+            cam.fx *= k;
+            cam.fy *= k;
+        }
         if position_m > 0.0 {
             cam.position += glam::DVec3::new(
                 position_m * rnd(),
