@@ -129,18 +129,17 @@ fn load_photos(a: &Args) -> anyhow::Result<Vec<PhotoInput>> {
     match (&a.photos, &a.colmap) {
         (Some(p), _) => {
             let specs = cliffmap::photo::read_photo_specs(p)?;
-            let total = specs.len();
-            let mut keep = Vec::with_capacity(total);
-            for s in specs {
-                match (&s.unregistered, a.include_unregistered) {
-                    (Some(why), false) => eprintln!(
-                        "warning: {}: left out ({why}); --include-unregistered projects it anyway",
-                        s.name
-                    ),
-                    _ => keep.push(s),
-                }
+            let (keep, left): (Vec<_>, Vec<_>) = specs
+                .into_iter()
+                .partition(|s| a.include_unregistered || s.unregistered.is_none());
+            for s in &left {
+                eprintln!(
+                    "warning: {}: left out ({}); --include-unregistered projects it anyway",
+                    s.name,
+                    s.unregistered.as_deref().unwrap_or_default()
+                );
             }
-            if keep.is_empty() && total > 0 {
+            if keep.is_empty() && !left.is_empty() {
                 anyhow::bail!(
                     "{}: every photo is marked \"registered\": false, nothing to project \
                      (--include-unregistered projects them with their given cameras)",

@@ -14,7 +14,7 @@
 //! the earlier hypothesis); the same search over the matches it leaves gives the second
 //! motion's support. Deterministic.
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
 use super::pair::PatchMatch;
 use super::start::{rotation_from_bearings, sample_picker};
@@ -43,90 +43,74 @@ pub fn rotation_consensus(
     matches: &[PatchMatch],
     tol_px: f64,
 ) -> RotationConsensus {
-    // world bearings through A, and B's camera-frame bearings (A's intrinsics)
+    // per usable match: its index, its world bearing through A and its camera-frame
+    // bearing in B (A's intrinsics)
     let rays = a.ray_caster();
-    let bearings: Vec<Option<(DVec3, DVec3)>> = matches
+    let usable: Vec<Bearing> = matches
         .iter()
-        .map(|m| {
+        .enumerate()
+        .filter_map(|(i, m)| {
             let w = rays.ray(m.a[0], m.a[1])?;
             let b = a.world_to_camera * rays.ray(m.b[0], m.b[1])?;
-            Some((w.normalize(), b.normalize()))
+            Some((i, w.normalize(), b.normalize()))
         })
         .collect();
-    let tol_rad = tol_px / a.fx.max(a.fy).max(1e-9);
-    let all: Vec<usize> = (0..matches.len()).collect();
-    let best = best_set(&bearings, &all, tol_rad);
-    let rest: Vec<usize> = all
+    let cos_tol = (tol_px / a.fx.max(a.fy).max(1e-9)).cos();
+    let best = best_set(&usable, cos_tol);
+    let rest: Vec<Bearing> = usable
         .iter()
         .copied()
-        .filter(|i| best.binary_search(i).is_err())
+        .filter(|u| best.binary_search(&u.0).is_err())
         .collect();
-    let second = best_set(&bearings, &rest, tol_rad).len();
+    let second = best_set(&rest, cos_tol).len();
     RotationConsensus {
         inliers: best,
         second,
     }
 }
 
-/// The largest subset of `among` (ascending) that one rotation explains within `tol_rad`.
-fn best_set(bearings: &[Option<(DVec3, DVec3)>], among: &[usize], tol_rad: f64) -> Vec<usize> {
-    let usable: Vec<usize> = among
-        .iter()
-        .copied()
-        .filter(|&i| bearings[i].is_some())
-        .collect();
-    let n = usable.len();
+/// A match's index, world bearing and camera bearing (unit vectors).
+type Bearing = (usize, DVec3, DVec3);
+
+/// The indices (ascending) of the largest subset of `among` that one rotation explains to
+/// within the angle whose cosine is `cos_tol`.
+fn best_set(among: &[Bearing], cos_tol: f64) -> Vec<usize> {
+    let n = among.len();
     if n < 2 {
         return Vec::new();
     }
-    let cos_tol = tol_rad.cos();
-    let pairs = n * (n - 1) / 2;
-    let mut pick = sample_picker(0x9e37_79b9_7f4a_7c15);
     let mut best: Vec<usize> = Vec::new();
-    let try_pair = |i: usize, j: usize, best: &mut Vec<usize>| {
-        let (Some((wi, bi)), Some((wj, bj))) = (bearings[i], bearings[j]) else {
-            return;
-        };
+    let try_pair = |(_, wi, bi): Bearing, (_, wj, bj): Bearing, best: &mut Vec<usize>| {
         if wi.cross(wj).length() < MIN_SPREAD_RAD || bi.cross(bj).length() < MIN_SPREAD_RAD {
             return;
         }
         let Some(r) = rotation_from_bearings(&[bi, bj], &[wi, wj], &[1.0, 1.0]) else {
             return;
         };
-        let set = agreeing(bearings, &usable, r, cos_tol);
+        let set: Vec<usize> = among
+            .iter()
+            .filter(|(_, w, b)| (r * *w).dot(*b) >= cos_tol)
+            .map(|u| u.0)
+            .collect();
         if set.len() > best.len() {
             *best = set;
         }
     };
-    if pairs <= MAX_HYPOTHESES {
+    if n * (n - 1) / 2 <= MAX_HYPOTHESES {
         for x in 0..n {
             for y in x + 1..n {
-                try_pair(usable[x], usable[y], &mut best);
+                try_pair(among[x], among[y], &mut best);
             }
         }
     } else {
+        let mut pick = sample_picker(0x9e37_79b9_7f4a_7c15);
         for _ in 0..MAX_HYPOTHESES {
             let x = pick(n);
             let y = (x + 1 + pick(n - 1)) % n;
-            try_pair(usable[x], usable[y], &mut best);
+            try_pair(among[x], among[y], &mut best);
         }
     }
     best
-}
-
-/// The matches of `among` whose world bearing `r` turns to within the angle of `cos_tol`
-/// of their camera bearing.
-fn agreeing(
-    bearings: &[Option<(DVec3, DVec3)>],
-    among: &[usize],
-    r: DMat3,
-    cos_tol: f64,
-) -> Vec<usize> {
-    among
-        .iter()
-        .copied()
-        .filter(|&i| bearings[i].is_some_and(|(w, b)| (r * w).dot(b) >= cos_tol))
-        .collect()
 }
 
 #[cfg(test)]
