@@ -8,6 +8,9 @@
 //!     [--position-scale S]
 //! ```
 //! `--position-scale` scales the position offsets (0: the fitted position kept).
+//! `--textures best`: the terrain samples labelled by the store's photo textures where it
+//! has them (`LabelTexture::Best`; docs/registration.md, "Registering against projected
+//! photos").
 //! `--resect-render [--max-slope DEG]` (an experiment, docs/registration.md "Position"): after
 //! the terrain search the photo is resected (`register::resect_photo`, position free) against
 //! the store rendered from the camera found, the glacier masked out.
@@ -22,8 +25,8 @@ use std::path::PathBuf;
 
 use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
-    CameraParams, ResectOptions, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
-    resect_photo,
+    CameraParams, LabelTexture, ResectOptions, TerrainOptions, TerrainScene, parse_free,
+    register_to_terrain, resect_photo,
 };
 use glam::DVec3;
 
@@ -64,7 +67,13 @@ fn main() -> anyhow::Result<()> {
     }
     let (photo, fitted, gcps) = bench_util::engabreen_8902()?;
     let store = cliffmap::store::Store::open(&dir)?;
-    let terrain = TerrainScene::new(&store, fitted.position)?;
+    // --textures best: labels from the store's photo textures where present
+    let labels = if flag("--textures") == Some("best") {
+        LabelTexture::Best
+    } else {
+        LabelTexture::Active
+    };
+    let terrain = TerrainScene::with_labels(&store, fitted.position, labels)?;
     println!(
         "fitted camera (ImGRAFT, from the GCPs): GCP RMSE {:.2} px\n",
         bench_util::gcp_rmse(&fitted, &gcps)

@@ -384,6 +384,101 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
     );
 }
 
+/// `--textures best`: a second photo of a target registered against the photo texture an
+/// exact photo of it left in the store, against the active textures before that photo was
+/// projected (a warning says so), and the photo the textures came from refused.
+#[test]
+fn register_against_projected_photo_textures() {
+    let tmp = tempfile::tempdir().unwrap();
+    scene_with_photos(tmp.path());
+    let photos = tmp.path().join("photos");
+    let store = tmp.path().join("store");
+    let scene = DemoScene::default();
+    let (dem, _) = scene.generate().unwrap();
+    let second = scene
+        .second_shots(12.0, 1.15)
+        .into_iter()
+        .find(|s| s.name == "escarpment_second")
+        .unwrap();
+    let truth = second.camera.resized(800, 600);
+    scene
+        .render_truth_photo(&dem, &truth, 1)
+        .unwrap()
+        .save(photos.join("esc_second.jpg"))
+        .unwrap();
+    let mut p = CameraParams::from_camera(&truth);
+    p.angles[0] += 1.2f64.to_radians();
+    p.angles[1] -= 0.7f64.to_radians();
+    p.angles[2] += 0.5f64.to_radians();
+    p.focal = [p.focal[0] * 1.015, p.focal[1] * 1.015];
+    write_camera(photos.join("esc_second_rough.json"), &p.camera());
+    let list = photos.join("second.json");
+    std::fs::write(
+        &list,
+        r#"{"photos": [{"image": "esc_second.jpg", "camera": "esc_second_rough.json"}]}"#,
+    )
+    .unwrap();
+    let run = |name: &str| {
+        let out = tmp.path().join(name).join("registered.json");
+        let o = register(tmp.path(), &list, &out, &["--textures", "best"]);
+        let cam = cliffmap::photo::read_photo_specs(&out).unwrap()[0].camera;
+        (String::from_utf8_lossy(&o.stderr).into_owned(), cam)
+    };
+    // no photo textures yet: the active ones, with a warning
+    let (err, active) = run("before");
+    assert!(err.contains("no photo textures"), "{err}");
+    // the exact escarpment photo projected; the second registered against its texture
+    let anchor = photos.join("anchor.json");
+    std::fs::write(
+        &anchor,
+        r#"{"photos": [{"image": "escarpment.jpg", "camera": "escarpment.json"}]}"#,
+    )
+    .unwrap();
+    ok(&[
+        "project",
+        store.to_str().unwrap(),
+        "--photos",
+        anchor.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let (err, best) = run("after");
+    assert!(!err.contains("no photo textures"), "{err}");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(tmp.path().join("after").join("registered.report.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(report["textures"], "best");
+    let (ea, eb) = (angle_errors(&active, &truth), angle_errors(&best, &truth));
+    let worst = |e: [f64; 3]| e.into_iter().fold(0.0, f64::max);
+    let depth = 150.0;
+    let (pa, pb) = (
+        cliffmap::register::terrain::pixel_distance(&truth, &active, depth),
+        cliffmap::register::terrain::pixel_distance(&truth, &best, depth),
+    );
+    // (largest image distance at the corners and centre, points 150 m out: 0.27 px against
+    // 0.82 px when written)
+    assert!(
+        pb < 0.5 && pb < 0.6 * pa && worst(eb) < 0.02,
+        "with photo textures {pb:.3} px, angles {eb:?}; with the active ones {pa:.3} px, {ea:?}"
+    );
+    // the photo the textures came from is refused unless known
+    let out = tmp.path().join("self").join("registered.json");
+    fails_naming(
+        &[
+            "register",
+            store.to_str().unwrap(),
+            "--photos",
+            anchor.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--textures",
+            "best",
+        ],
+        "escarpment.jpg",
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn register_refuses_bad_input_naming_it() {
     let tmp = tempfile::tempdir().unwrap();

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use cliffmap::pipeline::{TieSettings, register_photos_with, resolve_photo_entries};
-use cliffmap::register::{ResectOptions, TerrainOptions, TieOptions, parse_free};
+use cliffmap::register::{LabelTexture, ResectOptions, TerrainOptions, TieOptions, parse_free};
 
 /// Flags of `cliffmap register`.
 #[derive(clap::Args, Debug)]
@@ -55,9 +55,27 @@ pub struct Args {
     /// when two motions have similar support (then a mask decides).
     #[arg(long)]
     moving_mask: Option<PathBuf>,
+    /// Which textures the terrain search matches the photo against: `active` (the ortho or
+    /// reparameterized textures; never photo textures, so an earlier projection with a
+    /// wrong camera cannot pull the fit) or `best` (photo textures where `cliffmap project`
+    /// wrote them: far sharper on walls, for photos registered after others whose cameras
+    /// are trusted were projected; docs/registration.md, "Registering against projected
+    /// photos"). With `best`, a photo the store's textures were projected from is refused
+    /// unless named with --known.
+    #[arg(long, value_enum, default_value = "active")]
+    textures: Textures,
     /// Only warnings and errors.
     #[arg(long)]
     quiet: bool,
+}
+
+/// `--textures`: what labels the terrain's samples.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum Textures {
+    /// The ortho or reparameterized textures.
+    Active,
+    /// Photo textures where present, else the active ones.
+    Best,
 }
 
 /// Runs `cliffmap register`.
@@ -77,6 +95,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         free: parse_free(&a.free)?,
         search_deg: [v[0], v[1], v[2]],
         repeat_px: a.repeat_px,
+        labels: match a.textures {
+            Textures::Active => LabelTexture::Active,
+            Textures::Best => LabelTexture::Best,
+        },
         ..TerrainOptions::default()
     };
     opts.validate()?;

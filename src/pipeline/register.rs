@@ -25,8 +25,8 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{PhotoEntry, PhotoSpec};
 use crate::register::{
-    CameraParams, Param, ResectFit, ResectOptions, TerrainFit, TerrainOptions, TerrainScene,
-    TieFit, TieOptions, register_to_terrain, resect_photo, rough_camera, tie_photo,
+    CameraParams, LabelTexture, Param, ResectFit, ResectOptions, TerrainFit, TerrainOptions,
+    TerrainScene, TieFit, TieOptions, register_to_terrain, resect_photo, rough_camera, tie_photo,
 };
 use crate::store::Store;
 
@@ -184,6 +184,9 @@ pub fn register_photos_with(
                 d.height
             )));
         }
+    }
+    if opts.labels == LabelTexture::Best {
+        check_photo_labels(&store, specs, &ties.known, warn)?;
     }
     let dir = out
         .parent()
@@ -347,7 +350,7 @@ pub fn register_photos_with(
         }
         let spec = &specs[i];
         let photo = spec.load()?;
-        let terrain = TerrainScene::new(&store, spec.camera.position)?;
+        let terrain = TerrainScene::for_options(&store, spec.camera.position, opts)?;
         let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         fits[i] = Some((fit, "terrain"));
@@ -435,7 +438,13 @@ pub fn register_photos_with(
             camera_file,
         });
     }
-    let report = json!({ "photos": results.iter().map(report_entry).collect::<Vec<Value>>() });
+    let report = json!({
+        "textures": match opts.labels {
+            LabelTexture::Active => "active",
+            LabelTexture::Best => "best",
+        },
+        "photos": results.iter().map(report_entry).collect::<Vec<Value>>(),
+    });
     let report_path = dir.join(format!("{stem}.report.json"));
     write_atomic(
         &report_path,
@@ -563,4 +572,38 @@ fn relative_or_absolute(p: &Path, dir: &Path) -> String {
         Ok(rel) => rel.display().to_string(),
         Err(_) => pa.display().to_string(),
     }
+}
+
+/// With photo textures as the terrain's labels: a photo to be registered must not be one
+/// of those the store's textures were projected from (it would be fitted to its own colours
+/// where its given camera put them, and keep that camera); known photos may be. A store
+/// without photo textures gets a warning (the active textures label the samples).
+fn check_photo_labels(
+    store: &Store,
+    specs: &[PhotoSpec],
+    known: &[String],
+    warn: &mut dyn FnMut(&str),
+) -> Result<()> {
+    let Some(projected) = &store.manifest.photos else {
+        warn(&format!(
+            "{}: no photo textures (run `cliffmap project` with photos whose cameras are \
+             trusted first); registering against the active textures",
+            store.dir.display()
+        ));
+        return Ok(());
+    };
+    if let Some(s) = specs
+        .iter()
+        .find(|s| !known.contains(&s.name) && projected.photos.iter().any(|p| p.name == s.name))
+    {
+        return Err(Error::BadOption(format!(
+            "{}: the store's photo textures were projected from this photo ({}), so \
+             registering it against them would only find the camera it was projected with; \
+             name it with --known, project only trusted photos first, or register against \
+             the active textures",
+            s.image_path.display(),
+            store.dir.display()
+        )));
+    }
+    Ok(())
 }

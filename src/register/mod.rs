@@ -63,7 +63,7 @@ pub use start::{
     rotation_from_bearings, start_from_gcps, start_from_position, start_without_position,
 };
 pub use terrain::{
-    EdgeFit, EdgeOptions, TerrainFit, TerrainOptions, TerrainScene, parallax_px_per_m,
-    refine_edges, register_to_terrain,
+    EdgeFit, EdgeOptions, LabelTexture, TerrainFit, TerrainOptions, TerrainScene,
+    parallax_px_per_m, refine_edges, register_to_terrain,
 };
 pub use ties::{TieFit, TieOptions, tie_photo};

@@ -38,7 +38,7 @@ use image::RgbImage;
 
 pub use edges::{ContourPoint, EdgeFit, EdgeImage, EdgeOptions, contour, refine_edges};
 pub use mi::{GreyImage, nmi};
-pub use view::{LABELS, RayEnd, SKY, Sample, SampleAt, TerrainScene};
+pub use view::{LABELS, LabelTexture, RayEnd, SKY, Sample, SampleAt, TerrainScene};
 
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
@@ -66,6 +66,10 @@ pub struct TerrainOptions {
     /// by the command: measured on the demo scene it recovers the position in only a few
     /// starts and can agree with itself on a wrong one (docs/registration.md, "Position").
     pub experimental_position: bool,
+    /// Which textures give the terrain samples their grey when a caller builds the scene
+    /// from these options ([`TerrainScene::for_options`]; `pipeline::register_photos_with`
+    /// does). [`register_to_terrain`] itself uses the scene it is given.
+    pub labels: LabelTexture,
 }
 
 impl Default for TerrainOptions {
@@ -81,6 +85,7 @@ impl Default for TerrainOptions {
             finest_factor: 1,
             position_sigma_m: 5.0,
             experimental_position: false,
+            labels: LabelTexture::Active,
         }
     }
 }

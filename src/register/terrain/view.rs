@@ -53,20 +53,56 @@ pub enum RayEnd {
     Sky,
 }
 
-/// The store's finest level as a ray-castable scene with the active textures the rays hit
+/// Which texture of a cell gives a terrain sample its grey ([`TerrainScene::with_labels`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LabelTexture {
+    /// The active parameterization's texture (reparameterized, else ortho); photo textures
+    /// are never used, so an earlier projection with a wrong pose cannot pull the fit.
+    #[default]
+    Active,
+    /// The photo-enhanced texture where `cliffmap project` wrote one, else the active one:
+    /// sharper labels where photos with trusted cameras (from `fit-camera`, or registered
+    /// earlier) already cover what this photo sees.
+    Best,
+}
+
+/// A cell's label texture and the factor from active-texture texels to its texels.
+type LabelImage = std::sync::Arc<(RgbaImage, f32)>;
+
+/// The store's finest level as a ray-castable scene with the label textures the rays hit
 /// (loaded on demand) and the terrain's highest point.
 pub struct TerrainScene<'a> {
     store: &'a Store,
     scene: LevelScene,
-    textures: std::sync::Mutex<Vec<Option<std::sync::Arc<RgbaImage>>>>,
+    labels: LabelTexture,
+    textures: std::sync::Mutex<Vec<Option<LabelImage>>>,
     top_z: f64,
     lo: [f64; 2],
     hi: [f64; 2],
 }
 
 impl<'a> TerrainScene<'a> {
-    /// The finest level of `store`, in an f32 frame centred on `near` (a camera position).
+    /// The finest level of `store`, in an f32 frame centred on `near` (a camera position),
+    /// labelled by the active textures ([`LabelTexture::Active`]).
     pub fn new(store: &'a Store, near: DVec3) -> Result<TerrainScene<'a>> {
+        Self::with_labels(store, near, LabelTexture::Active)
+    }
+
+    /// [`TerrainScene::with_labels`] with the labels `opts` asks for.
+    pub fn for_options(
+        store: &'a Store,
+        near: DVec3,
+        opts: &super::TerrainOptions,
+    ) -> Result<TerrainScene<'a>> {
+        Self::with_labels(store, near, opts.labels)
+    }
+
+    /// [`TerrainScene::new`] with the samples' greys taken from `labels`.
+    pub fn with_labels(
+        store: &'a Store,
+        near: DVec3,
+        labels: LabelTexture,
+    ) -> Result<TerrainScene<'a>> {
         let level = store.manifest.quadtree.levels.saturating_sub(1);
         let scene = LevelScene::from_store(
             store,
@@ -91,6 +127,7 @@ impl<'a> TerrainScene<'a> {
         Ok(TerrainScene {
             store,
             scene,
+            labels,
             textures: std::sync::Mutex::new(vec![None; n]),
             top_z,
             lo,
@@ -177,7 +214,7 @@ impl<'a> TerrainScene<'a> {
                     });
                     let grey = textures[self.scene.cell_of(hh.triangle) as usize]
                         .as_deref()
-                        .map_or(0.5, |t| grey_at(t, p));
+                        .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)));
                     out_at.push(Some(Ok(Hit {
                         point,
                         grey,
@@ -298,11 +335,19 @@ impl<'a> TerrainScene<'a> {
                 .map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?;
             cells.iter().copied().filter(|&c| t[c].is_none()).collect()
         };
-        let loaded: Vec<(usize, RgbaImage)> = missing
+        let loaded: Vec<(usize, (RgbaImage, f32))> = missing
             .par_iter()
             .map(|&c| {
                 let rec = &self.store.manifest.cells[self.scene.cells[c].cell as usize];
-                self.store.read_active_texture(rec).map(|t| (c, t))
+                match (&rec.photo, self.labels) {
+                    (Some(photo), LabelTexture::Best) => {
+                        let (t, _) = self.store.read_photo_texture(rec, photo)?;
+                        let scale =
+                            t.width() as f32 / crate::store::active_texels(rec).max(1) as f32;
+                        Ok((c, (t, scale)))
+                    }
+                    _ => self.store.read_active_texture(rec).map(|t| (c, (t, 1.0))),
+                }
             })
             .collect::<Result<_>>()?;
         let mut t = self
