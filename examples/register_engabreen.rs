@@ -10,7 +10,8 @@
 //! `--position-scale` scales the position offsets (0: the fitted position kept).
 //! `--textures best`: the terrain samples labelled by the store's photo textures where it
 //! has them (`LabelTexture::Best`; docs/registration.md, "Registering against projected
-//! photos").
+//! photos"). `--label-8937`: IMG_8937's own pixels label the terrain it shows
+//! (`TerrainScene::set_label_photos`).
 //! `--resect-render [--max-slope DEG]` (an experiment, docs/registration.md "Position"): after
 //! the terrain search the photo is resected (`register::resect_photo`, position free) against
 //! the store rendered from the camera found, the glacier masked out.
@@ -73,7 +74,23 @@ fn main() -> anyhow::Result<()> {
     } else {
         LabelTexture::Active
     };
-    let terrain = TerrainScene::with_labels(&store, fitted.position, labels)?;
+    let mut terrain = TerrainScene::with_labels(&store, fitted.position, labels)?;
+    // --label-8937: IMG_8937's pixels label the terrain it shows (its camera as in
+    // fixtures/engabreen_photos.json: IMG_8902's ImGRAFT camera turned by ImGRAFT's tie)
+    let label_photos = if args.iter().any(|a| a == "--label-8937") {
+        let list = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("fixtures")
+            .join("engabreen_photos.json");
+        cliffmap::photo::read_photo_list(&list)?
+            .into_iter()
+            .filter(|p| p.name == "IMG_8937.jpg")
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let refs: Vec<(cliffmap::camera::CameraModel, &image::RgbImage)> =
+        label_photos.iter().map(|p| (p.camera, &p.image)).collect();
+    terrain.set_label_photos(&refs);
     println!(
         "fitted camera (ImGRAFT, from the GCPs): GCP RMSE {:.2} px\n",
         bench_util::gcp_rmse(&fitted, &gcps)

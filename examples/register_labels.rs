@@ -6,8 +6,9 @@
 //! anchor a second photo of the same target is taken elsewhere (`DemoScene::second_shots`)
 //! and rendered from the ground truth. Its camera is turned and zoomed `--starts` times
 //! inside the issue's ranges (yaw ±3°, pitch and roll ±1.5°, focal ±3 %; position exact)
-//! and registered against the terrain twice from each start: labels from the active
-//! (ortho / reparameterized) textures, and from the photo textures. Prints per start the
+//! and registered against the terrain three times from each start: labels from the active
+//! (ortho / reparameterized) textures, from the photo textures, and from the anchor photo's
+//! own pixels (`TerrainScene::set_label_photos`). Prints per start the
 //! angle errors and the pixel error of the found camera on the terrain the photo shows.
 //!
 //! ```text
@@ -56,7 +57,7 @@ fn main() -> anyhow::Result<()> {
         "| second photo | start | start: yaw / pitch / roll ° | labels | after: yaw / pitch / roll ° | focal % | px median / 90 % | verdict | s |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
-    let mut summary: Vec<(String, LabelTexture, f64, bool)> = Vec::new();
+    let mut summary: Vec<(String, &str, f64, bool)> = Vec::new();
     for anchor in &ps.anchors {
         let stem = anchor.name.trim_end_matches(".jpg");
         let Some(second) = ps
@@ -71,6 +72,10 @@ fn main() -> anyhow::Result<()> {
         let tp = CameraParams::from_camera(&truth);
         let active = TerrainScene::new(&store, truth.position)?;
         let best = TerrainScene::with_labels(&store, truth.position, LabelTexture::Best)?;
+        // the anchor's own pixels as labels (what `register --textures best --known ANCHOR`
+        // does within one run, no projection needed)
+        let mut photos = TerrainScene::new(&store, truth.position)?;
+        photos.set_label_photos(&[(anchor.camera, &anchor.image)]);
         // terrain points the photo shows (a 40-px grid of the true camera's rays)
         let mut shown = Vec::new();
         for v in (20..truth.height).step_by(40) {
@@ -102,12 +107,16 @@ fn main() -> anyhow::Result<()> {
         for s in 0..ps.starts {
             let rough = rough_start(tp, &mut rng, 0.0, true).camera();
             let a0 = angles(&rough);
-            for (label, terrain) in [(LabelTexture::Active, &active), (LabelTexture::Best, &best)] {
+            for (label, terrain) in [
+                ("active", &active),
+                ("photo textures", &best),
+                ("anchor photo", &photos),
+            ] {
                 let fit = register_to_terrain(terrain, &img, &rough, &opts)?;
                 let a1 = angles(&fit.found);
                 let (m, p90) = px_err(&fit.found);
                 println!(
-                    "| {} | {s} | {:.2} / {:.2} / {:.2} | {:?} | {:.3} / {:.3} / {:.3} | {:+.2} | {:.2} / {:.2} | {} | {:.1} |",
+                    "| {} | {s} | {:.2} / {:.2} / {:.2} | {} | {:.3} / {:.3} / {:.3} | {:+.2} | {:.2} / {:.2} | {} | {:.1} |",
                     second.name,
                     a0[0],
                     a0[1],
@@ -132,7 +141,7 @@ fn main() -> anyhow::Result<()> {
     }
     println!("\n| labels | registered | median of the median px errors (registered) | largest |");
     println!("|---|---|---|---|");
-    for label in [LabelTexture::Active, LabelTexture::Best] {
+    for label in ["active", "photo textures", "anchor photo"] {
         let mut e: Vec<f64> = summary
             .iter()
             .filter(|r| r.1 == label && r.3)
@@ -141,7 +150,7 @@ fn main() -> anyhow::Result<()> {
         let n = summary.iter().filter(|r| r.1 == label).count();
         e.sort_by(f64::total_cmp);
         println!(
-            "| {label:?} | {} / {n} | {:.2} | {:.2} |",
+            "| {label} | {} / {n} | {:.2} | {:.2} |",
             e.len(),
             e.get(e.len() / 2).copied().unwrap_or(f64::NAN),
             e.last().copied().unwrap_or(f64::NAN)

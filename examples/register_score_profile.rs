@@ -11,7 +11,7 @@
 //! ```
 //! PHOTOS.json: a photo list with exact cameras (e.g. `render_eval`'s `OUT/photos/photos.json`).
 use cliffmap::register::CameraParams;
-use cliffmap::register::terrain::{GreyImage, LABELS, SKY, Sample, TerrainScene, nmi};
+use cliffmap::register::terrain::{GREY_CLASSES, GreyImage, SKY, Sample, TerrainScene, nmi};
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().skip(1).collect();
@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
             }
             None => None,
         };
-        let classes = ((LABELS - 1) / 4) as u8;
+        let classes = GREY_CLASSES;
         let grey: Vec<Option<f64>> = band
             .iter()
             .map(|s| match s.at {
@@ -143,7 +143,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     {
-        let classes = ((LABELS - 1) / 4) as u8;
+        let classes = GREY_CLASSES;
         // --no-grey: labels without the texture's grey; --binary: sky or terrain only
         let steep_no_grey = a.iter().any(|x| x == "--steep-no-grey");
         let (no_grey, binary) = (
@@ -161,8 +161,8 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let all = terrain.sample(&cam, 1.0, 0.04, None)?;
-    let classes = ((LABELS - 1) / 4) as u8;
-    let far = |s: &Sample| s.label != SKY && (s.label - 1) / classes >= 2;
+    let classes = GREY_CLASSES;
+    let far = |s: &Sample| s.label != SKY && (s.label - 1) / classes % 4 >= 2;
     let steep = |s: &Sample| s.label != SKY && (s.label - 1) / classes % 2 == 1;
     let subsets: Vec<(&str, Vec<Sample>)> = vec![
         ("search (band + 1/9 inner)", band.clone()),

@@ -385,8 +385,9 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
 }
 
 /// `--textures best`: a second photo of a target registered against the photo texture an
-/// exact photo of it left in the store, against the active textures before that photo was
-/// projected (a warning says so), and the photo the textures came from refused.
+/// exact photo of it left in the store, against that photo's pixels when it is named
+/// `--known` in the same run, against the active textures with neither (a warning says
+/// so), and the photo the textures came from refused.
 #[test]
 fn register_against_projected_photo_textures() {
     let tmp = tempfile::tempdir().unwrap();
@@ -427,6 +428,31 @@ fn register_against_projected_photo_textures() {
     // no photo textures yet: the active ones, with a warning
     let (err, active) = run("before");
     assert!(err.contains("no photo textures"), "{err}");
+    // the exact escarpment photo named --known in the same run: its pixels label the
+    // terrain it shows (no projection; resection off, so the terrain search places it)
+    let with_known = photos.join("with_known.json");
+    std::fs::write(
+        &with_known,
+        r#"{"photos": [{"image": "escarpment.jpg", "camera": "escarpment.json"}, {"image": "esc_second.jpg", "camera": "esc_second_rough.json"}]}"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("known").join("registered.json");
+    let o = register(
+        tmp.path(),
+        &with_known,
+        &out,
+        &[
+            "--textures",
+            "best",
+            "--known",
+            "escarpment.jpg",
+            "--resect-distance-m",
+            "0",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("no photo textures"), "{err}");
+    let known = cliffmap::photo::read_photo_specs(&out).unwrap()[1].camera;
     // the exact escarpment photo projected; the second registered against its texture
     let anchor = photos.join("anchor.json");
     std::fs::write(
@@ -448,18 +474,27 @@ fn register_against_projected_photo_textures() {
     )
     .unwrap();
     assert_eq!(report["textures"], "best");
-    let (ea, eb) = (angle_errors(&active, &truth), angle_errors(&best, &truth));
+    let (ea, eb, ek) = (
+        angle_errors(&active, &truth),
+        angle_errors(&best, &truth),
+        angle_errors(&known, &truth),
+    );
     let worst = |e: [f64; 3]| e.into_iter().fold(0.0, f64::max);
     let depth = 150.0;
-    let (pa, pb) = (
-        cliffmap::register::terrain::pixel_distance(&truth, &active, depth),
-        cliffmap::register::terrain::pixel_distance(&truth, &best, depth),
+    let px = |c| cliffmap::register::terrain::pixel_distance(&truth, c, depth);
+    let (pa, pb, pk) = (px(&active), px(&best), px(&known));
+    eprintln!(
+        "active {pa:.3} px {ea:?}; photo textures {pb:.3} px {eb:?}; known photo {pk:.3} px {ek:?}"
     );
     // (largest image distance at the corners and centre, points 150 m out: 0.27 px against
     // 0.82 px when written)
     assert!(
         pb < 0.5 && pb < 0.6 * pa && worst(eb) < 0.02,
         "with photo textures {pb:.3} px, angles {eb:?}; with the active ones {pa:.3} px, {ea:?}"
+    );
+    assert!(
+        pk < 0.5 && pk < 0.6 * pa && worst(ek) < 0.02,
+        "with the known photo's pixels {pk:.3} px, angles {ek:?}; with the active textures {pa:.3} px, {ea:?}"
     );
     // the photo the textures came from is refused unless known
     let out = tmp.path().join("self").join("registered.json");

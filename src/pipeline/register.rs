@@ -350,7 +350,20 @@ pub fn register_photos_with(
         }
         let spec = &specs[i];
         let photo = spec.load()?;
-        let terrain = TerrainScene::for_options(&store, spec.camera.position, opts)?;
+        let mut terrain = TerrainScene::for_options(&store, spec.camera.position, opts)?;
+        if opts.labels == LabelTexture::Best {
+            // the photos placed so far with trusted cameras (known, or tied or resected to
+            // such a photo) label the terrain they show
+            let mut sources = Vec::new();
+            for j in (0..specs.len()).filter(|&j| j != i && trusted[j]) {
+                if let Some((f, _)) = &fits[j] {
+                    sources.push((f.camera, specs[j].load()?.image));
+                }
+            }
+            let refs: Vec<(CameraModel, &image::RgbImage)> =
+                sources.iter().map(|(c, img)| (*c, img)).collect();
+            terrain.set_label_photos(&refs);
+        }
         let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         fits[i] = Some((fit, "terrain"));
@@ -577,7 +590,8 @@ fn relative_or_absolute(p: &Path, dir: &Path) -> String {
 /// With photo textures as the terrain's labels: a photo to be registered must not be one
 /// of those the store's textures were projected from (it would be fitted to its own colours
 /// where its given camera put them, and keep that camera); known photos may be. A store
-/// without photo textures gets a warning (the active textures label the samples).
+/// without photo textures and a run without known photos get a warning (the active
+/// textures label the samples).
 fn check_photo_labels(
     store: &Store,
     specs: &[PhotoSpec],
@@ -585,9 +599,13 @@ fn check_photo_labels(
     warn: &mut dyn FnMut(&str),
 ) -> Result<()> {
     let Some(projected) = &store.manifest.photos else {
+        if !known.is_empty() {
+            return Ok(());
+        }
         warn(&format!(
-            "{}: no photo textures (run `cliffmap project` with photos whose cameras are \
-             trusted first); registering against the active textures",
+            "{}: no photo textures and no --known photos to label the terrain (project \
+             photos whose cameras are trusted first, or name them with --known); \
+             registering against the active textures",
             store.dir.display()
         ));
         return Ok(());

@@ -38,7 +38,7 @@ use image::RgbImage;
 
 pub use edges::{ContourPoint, EdgeFit, EdgeImage, EdgeOptions, contour, refine_edges};
 pub use mi::{GreyImage, nmi};
-pub use view::{LABELS, LabelTexture, RayEnd, SKY, Sample, SampleAt, TerrainScene};
+pub use view::{GREY_CLASSES, LABELS, LabelTexture, RayEnd, SKY, Sample, SampleAt, TerrainScene};
 
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;

@@ -23,8 +23,9 @@ pub const INNER_STRIDE: usize = 3;
 pub const GREY_CLASSES: u8 = 10;
 /// Label of a sky sample (terrain labels are `1..LABELS`).
 pub const SKY: u8 = 0;
-/// Number of labels: sky, then grey × steep (2) × distance (2).
-pub const LABELS: usize = 1 + GREY_CLASSES as usize * 4;
+/// Number of labels: sky, then grey × steep (2) × distance (2) × source (2: the store's
+/// texture, or a label photo's pixels, [`TerrainScene::set_label_photos`]).
+pub const LABELS: usize = 1 + GREY_CLASSES as usize * 8;
 
 /// What one sample is: a terrain point (world metres) or a sky direction (unit, world).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,7 +41,8 @@ pub enum SampleAt {
 pub struct Sample {
     /// Where the sample is.
     pub at: SampleAt,
-    /// Its label: [`SKY`], or `1 + grey + GREY_CLASSES · (2 · far + steep)`.
+    /// Its label: [`SKY`], or `1 + grey + GREY_CLASSES · (2 · far + steep + 4 · photo)`
+    /// (`photo`: the grey came from a label photo; greys are classed per source).
     pub label: u8,
 }
 
@@ -76,6 +78,7 @@ pub struct TerrainScene<'a> {
     scene: LevelScene,
     labels: LabelTexture,
     textures: std::sync::Mutex<Vec<Option<LabelImage>>>,
+    label_photos: Vec<LabelPhoto>,
     top_z: f64,
     lo: [f64; 2],
     hi: [f64; 2],
@@ -129,10 +132,53 @@ impl<'a> TerrainScene<'a> {
             scene,
             labels,
             textures: std::sync::Mutex::new(vec![None; n]),
+            label_photos: Vec::new(),
             top_z,
             lo,
             hi,
         })
+    }
+
+    /// Photos with trusted cameras whose pixels label the terrain samples they see (instead
+    /// of the cells' textures): per sample, of the photos that show its point unoccluded,
+    /// the one that resolves it finest (smallest distance / focal length). Their greys are
+    /// classed apart from the textures' (a label's source is part of it). Replaces any
+    /// earlier set.
+    pub fn set_label_photos(&mut self, photos: &[(CameraModel, &image::RgbImage)]) {
+        self.label_photos = photos
+            .iter()
+            .filter(|(c, img)| (c.width, c.height) == img.dimensions())
+            .map(|(c, img)| LabelPhoto::new(*c, img))
+            .collect();
+    }
+
+    /// Grey (0..1) of the label photo that shows `point` finest, unoccluded (its ray meets
+    /// the terrain within 0.1 m + 0.2 % of the distance of `point`), if any.
+    fn photo_grey(&self, bvh: &crate::photo::TriangleBvh, point: DVec3) -> Option<f32> {
+        let mut best: Option<(f64, f32)> = None;
+        for lp in &self.label_photos {
+            let d = point - lp.camera.position;
+            let dist = d.length();
+            let res = dist / lp.camera.fx;
+            if best.is_some_and(|b| b.0 <= res) || dist <= 0.0 {
+                continue;
+            }
+            let Some(px) = lp.camera.project(point) else {
+                continue;
+            };
+            let Some(g) = lp.at(px[0], px[1]) else {
+                continue;
+            };
+            let origin = (lp.camera.position - self.scene.frame_origin).as_vec3();
+            let dir = (d / dist).as_vec3();
+            let seen = bvh
+                .nearest(origin, dir, 0.05, f32::INFINITY)
+                .is_some_and(|h| (h.t as f64 - dist).abs() <= 0.1 + 0.002 * dist);
+            if seen {
+                best = Some((res, g));
+            }
+        }
+        best.map(|b| b.1)
     }
 
     /// Samples of the view of `cam` at the centres of a `step`-pixel grid inside the image
@@ -196,9 +242,24 @@ impl<'a> TerrainScene<'a> {
             grey: f32,
             steep: bool,
             dist: f32,
+            photo: bool,
         }
+        // greys from the label photos, where one shows the point
+        let photo_greys: Vec<Option<f32>> = if self.label_photos.is_empty() {
+            Vec::new()
+        } else {
+            raw.par_iter()
+                .map(|r| match r {
+                    Some((dir, Some(hh))) => {
+                        self.photo_grey(bvh, cam.position + *dir * hh.t as f64)
+                    }
+                    _ => None,
+                })
+                .collect()
+        };
         let mut out_at: Vec<Option<Result<Hit, DVec3>>> = Vec::with_capacity(raw.len());
-        for r in &raw {
+        for (i, r) in raw.iter().enumerate() {
+            let photo_grey = photo_greys.get(i).copied().flatten();
             let Some((dir, hit)) = r else {
                 out_at.push(None);
                 continue;
@@ -212,40 +273,47 @@ impl<'a> TerrainScene<'a> {
                     let p = [0, 1].map(|k| {
                         hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]
                     });
-                    let grey = textures[self.scene.cell_of(hh.triangle) as usize]
-                        .as_deref()
-                        .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)));
+                    let grey = photo_grey.unwrap_or_else(|| {
+                        textures[self.scene.cell_of(hh.triangle) as usize]
+                            .as_deref()
+                            .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)))
+                    });
                     out_at.push(Some(Ok(Hit {
                         point,
                         grey,
                         steep,
                         dist: hh.t,
+                        photo: photo_grey.is_some(),
                     })));
                 }
                 None if self.rises_above(cam.position, *dir) => out_at.push(Some(Err(*dir))),
                 None => out_at.push(None),
             }
         }
-        let mut greys: Vec<f32> = out_at
-            .iter()
-            .flatten()
-            .filter_map(|a| a.as_ref().ok().map(|h| h.grey))
-            .collect();
+        // grey class boundaries per source (texture, label photo): quantiles of the view's own
+        let cuts_of = |photo: bool| -> Vec<f32> {
+            let mut greys: Vec<f32> = out_at
+                .iter()
+                .flatten()
+                .filter_map(|a| a.as_ref().ok().filter(|h| h.photo == photo).map(|h| h.grey))
+                .collect();
+            greys.sort_unstable_by(f32::total_cmp);
+            (1..GREY_CLASSES as usize)
+                .map(|k| {
+                    greys
+                        .get(k * greys.len() / GREY_CLASSES as usize)
+                        .copied()
+                        .unwrap_or(0.5)
+                })
+                .collect()
+        };
+        let cuts = [cuts_of(false), cuts_of(true)];
         let mut dists: Vec<f32> = out_at
             .iter()
             .flatten()
             .filter_map(|a| a.as_ref().ok().map(|h| h.dist))
             .collect();
-        greys.sort_unstable_by(f32::total_cmp);
         dists.sort_unstable_by(f32::total_cmp);
-        let cuts: Vec<f32> = (1..GREY_CLASSES as usize)
-            .map(|k| {
-                greys
-                    .get(k * greys.len() / GREY_CLASSES as usize)
-                    .copied()
-                    .unwrap_or(0.5)
-            })
-            .collect();
         let median = dists.get(dists.len() / 2).copied().unwrap_or(0.0);
         // Layers for the band: 0 dropped, 1 sky, else the hit's distance.
         let keep: Vec<bool> = match band {
@@ -292,8 +360,13 @@ impl<'a> TerrainScene<'a> {
             .filter_map(|(a, k)| if k { a } else { None })
             .map(|a| match a {
                 Ok(hit) => {
-                    let g = cuts.iter().filter(|&&c| hit.grey > c).count() as u8;
-                    let class = 2 * u8::from(hit.dist > median) + u8::from(hit.steep);
+                    let g = cuts[usize::from(hit.photo)]
+                        .iter()
+                        .filter(|&&c| hit.grey > c)
+                        .count() as u8;
+                    let class = 4 * u8::from(hit.photo)
+                        + 2 * u8::from(hit.dist > median)
+                        + u8::from(hit.steep);
                     Sample {
                         at: SampleAt::Point(hit.point),
                         label: 1 + g + GREY_CLASSES * class,
@@ -469,5 +542,36 @@ mod tests {
             assert!((-0.5..0.5).contains(&a) && (-0.5..0.5).contains(&b));
             assert_eq!(jitter(i), (a, b));
         }
+    }
+}
+
+/// A photo with a trusted camera as grey levels for labelling terrain samples.
+struct LabelPhoto {
+    camera: CameraModel,
+    luma: Vec<f32>,
+}
+
+impl LabelPhoto {
+    fn new(camera: CameraModel, img: &image::RgbImage) -> LabelPhoto {
+        let luma = img
+            .pixels()
+            .map(|p| (0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32) / 255.0)
+            .collect();
+        LabelPhoto { camera, luma }
+    }
+
+    /// Bilinear grey at pixel position (u, v) (pixel-centre convention), `None` outside.
+    fn at(&self, u: f64, v: f64) -> Option<f32> {
+        let (w, h) = (self.camera.width as usize, self.camera.height as usize);
+        if !(u >= 0.0 && v >= 0.0 && u <= (w - 1) as f64 && v <= (h - 1) as f64) {
+            return None;
+        }
+        let (x0, y0) = (u.floor() as usize, v.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = ((u - x0 as f64) as f32, (v - y0 as f64) as f32);
+        let l = &self.luma;
+        let top = l[y0 * w + x0] * (1.0 - fx) + l[y0 * w + x1] * fx;
+        let bot = l[y1 * w + x0] * (1.0 - fx) + l[y1 * w + x1] * fx;
+        Some(top * (1.0 - fy) + bot * fy)
     }
 }
