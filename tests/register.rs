@@ -453,6 +453,13 @@ fn register_against_projected_photo_textures() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("no photo textures"), "{err}");
     let known = cliffmap::photo::read_photo_specs(&out).unwrap()[1].camera;
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
+    )
+    .unwrap();
+    let share = report["photos"][1]["photo_label_share"].as_f64().unwrap();
+    assert!(share > 0.2 && share <= 1.0, "{report}");
+    assert!(report["photos"][0]["photo_label_share"].is_null());
     // the exact escarpment photo projected; the second registered against its texture
     let anchor = photos.join("anchor.json");
     std::fs::write(

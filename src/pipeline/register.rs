@@ -366,6 +366,13 @@ pub fn register_photos_with(
         }
         let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
+        if fit.photo_label_share.is_some_and(|s| s < 0.01) {
+            warn(&format!(
+                "{}: none of the trusted photos shows what it sees; registered against the \
+                 store's textures",
+                spec.name
+            ));
+        }
         fits[i] = Some((fit, "terrain"));
     }
     for i in 0..specs.len() {
@@ -503,6 +510,7 @@ fn given(camera: &CameraModel) -> TerrainFit {
         evaluations: 0,
         edges: None,
         position_kept_parallax_px_per_m: None,
+        photo_label_share: None,
         seconds: 0.0,
     }
 }
@@ -564,6 +572,7 @@ fn report_entry(r: &PhotoRegistration) -> Value {
             }).collect::<serde_json::Map<String, Value>>(),
         })),
         "position_kept_parallax_px_per_m": r.fit.position_kept_parallax_px_per_m,
+        "photo_label_share": r.fit.photo_label_share,
         "evaluations": r.fit.evaluations,
         "seconds": r.fit.seconds,
         "camera": file_name(&r.camera_file),

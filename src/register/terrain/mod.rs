@@ -177,6 +177,10 @@ pub struct TerrainFit {
     /// With the position kept (not free): [`parallax_px_per_m`] of the camera found, what
     /// each metre of error in the given position costs (else `None`).
     pub position_kept_parallax_px_per_m: Option<f64>,
+    /// With label photos ([`TerrainScene::set_label_photos`]): the share (0..1) of the
+    /// terrain samples of the final view whose labels came from their pixels (0: none of
+    /// them shows what this photo sees); else `None`.
+    pub photo_label_share: Option<f64>,
     /// Seconds spent.
     pub seconds: f64,
 }
@@ -204,6 +208,7 @@ impl TerrainFit {
             evaluations,
             edges,
             position_kept_parallax_px_per_m: None,
+            photo_label_share: None,
             seconds: t0.elapsed().as_secs_f64(),
         }
     }
@@ -379,6 +384,14 @@ pub fn register_to_terrain(
         Some(band_width(finest)),
     )?;
     let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
+    let photo_label_share = terrain.has_label_photos().then(|| {
+        let terrain_samples = samples.iter().filter(|s| s.label != SKY).count();
+        let from_photos = samples
+            .iter()
+            .filter(|s| s.label != SKY && (s.label - 1) / GREY_CLASSES >= 4)
+            .count();
+        from_photos as f64 / terrain_samples.max(1) as f64
+    });
     let mut repeat: f64 = 0.0;
     // (with the position free the edge stage restarts instead)
     let kicks: &[[f64; 2]] = if opts.position_free() {
@@ -433,6 +446,7 @@ pub fn register_to_terrain(
         t0,
     );
     fit.position_kept_parallax_px_per_m = parallax_px_per_m(terrain, &found);
+    fit.photo_label_share = photo_label_share;
     Ok(fit)
 }
 

@@ -152,6 +152,11 @@ impl<'a> TerrainScene<'a> {
             .collect();
     }
 
+    /// Whether label photos are set ([`TerrainScene::set_label_photos`]).
+    pub fn has_label_photos(&self) -> bool {
+        !self.label_photos.is_empty()
+    }
+
     /// Grey (0..1) of the label photo that shows `point` finest, unoccluded (its ray meets
     /// the terrain within 0.1 m + 0.2 % of the distance of `point`), if any.
     fn photo_grey(&self, bvh: &crate::photo::TriangleBvh, point: DVec3) -> Option<f32> {
