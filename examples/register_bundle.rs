@@ -94,12 +94,7 @@ fn main() -> anyhow::Result<()> {
     for anchor in &ps.anchors {
         let terrain = TerrainScene::new(store, anchor.camera.position)?;
         let surface = |o, d| terrain.hit(o, d);
-        let stem = anchor.name.trim_end_matches(".jpg");
-        let Some(second) = ps
-            .seconds
-            .iter()
-            .find(|s| s.name == format!("{stem}_second"))
-        else {
+        let Some(second) = ps.second_of(anchor) else {
             eprintln!("{}: no second place with a clear view", anchor.name);
             continue;
         };

@@ -19,10 +19,13 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{PairScene, Rng, SceneArgs, angle_diff, photo_height, rough_start};
+use bench_util::scene_args::{
+    PairScene, Rng, SceneArgs, angle_diff, photo_height, pixel_errors, reparam_quietly,
+    rough_start, shown_points,
+};
 
 use cliffmap::camera::CameraModel;
-use cliffmap::pipeline::{ProjectOptions, ReparamOptions, project_store, reparam_store};
+use cliffmap::pipeline::{ProjectOptions, project_store};
 use cliffmap::register::{
     CameraParams, LabelTexture, TerrainOptions, TerrainScene, register_to_terrain,
 };
@@ -33,13 +36,7 @@ fn main() -> anyhow::Result<()> {
     let fresh = !(a.has("--reuse") && store_dir.join("manifest.json").exists());
     let ps = PairScene::from_args(&a, "register_labels")?;
     if fresh {
-        reparam_store(
-            &store_dir,
-            &ReparamOptions {
-                quiet: true,
-                ..ReparamOptions::default()
-            },
-        )?;
+        reparam_quietly(&store_dir)?;
         project_store(
             &store_dir,
             &ps.anchors,
@@ -59,12 +56,7 @@ fn main() -> anyhow::Result<()> {
     println!("|---|---|---|---|---|---|---|---|---|");
     let mut summary: Vec<(String, &str, f64, bool)> = Vec::new();
     for anchor in &ps.anchors {
-        let stem = anchor.name.trim_end_matches(".jpg");
-        let Some(second) = ps
-            .seconds
-            .iter()
-            .find(|s| s.name == format!("{stem}_second"))
-        else {
+        let Some(second) = ps.second_of(anchor) else {
             continue;
         };
         let truth = second.camera.resized(width, photo_height(width));
@@ -76,30 +68,9 @@ fn main() -> anyhow::Result<()> {
         // does within one run, no projection needed)
         let mut photos = TerrainScene::new(&store, truth.position)?;
         photos.set_label_photos(&[(anchor.camera, &anchor.image)]);
-        // terrain points the photo shows (a 40-px grid of the true camera's rays)
-        let mut shown = Vec::new();
-        for v in (20..truth.height).step_by(40) {
-            for u in (20..truth.width).step_by(40) {
-                if let Some(p) = truth
-                    .pixel_ray(u as f64, v as f64)
-                    .and_then(|d| active.hit(truth.position, d))
-                {
-                    shown.push((p, [u as f64, v as f64]));
-                }
-            }
-        }
-        let px_err = |cam: &CameraModel| {
-            let mut e: Vec<f64> = shown
-                .iter()
-                .map(|(p, q)| {
-                    cam.project(*p)
-                        .map_or(1e6, |r| (r[0] - q[0]).hypot(r[1] - q[1]))
-                })
-                .collect();
-            e.sort_by(f64::total_cmp);
-            let at = |f: f64| e.get((f * (e.len() as f64 - 1.0)) as usize).copied();
-            (at(0.5).unwrap_or(f64::NAN), at(0.9).unwrap_or(f64::NAN))
-        };
+        // terrain points the photo shows, to score a camera by where it puts them
+        let shown = shown_points(&truth, |o, d| active.hit(o, d));
+        let px_err = |cam: &CameraModel| pixel_errors(cam, &shown);
         let angles = |cam: &CameraModel| {
             let p = CameraParams::from_camera(cam);
             [0, 1, 2].map(|i| angle_diff(p.angles[i], tp.angles[i]).to_degrees())

@@ -23,7 +23,9 @@
 #[path = "bench_util/mod.rs"]
 mod bench_util;
 
-use bench_util::scene_args::{PairScene, Rng, SceneArgs, angle_diff, photo_height, rough_start};
+use bench_util::scene_args::{
+    PairScene, Rng, SceneArgs, angle_diff, photo_height, pixel_errors, rough_start, shown_points,
+};
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
@@ -41,8 +43,7 @@ fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_resection OUT [options]")?;
     let flag = |n: &str| a.flag(n);
     let ps = PairScene::from_args(&a, "register_resection")?;
-    let (scene, dem, store, anchors, seconds) =
-        (&ps.scene, &ps.dem, &ps.store, &ps.anchors, &ps.seconds);
+    let (scene, dem, store, anchors) = (&ps.scene, &ps.dem, &ps.store, &ps.anchors);
     let (starts, width, max_error, same_body) = (ps.starts, ps.width, ps.max_error, ps.same_body);
     let (turn, ratio) = (ps.turn_deg, ps.distance_ratio);
     let mut rng = Rng(0x2E5E_C710);
@@ -65,40 +66,17 @@ fn main() -> anyhow::Result<()> {
     let mut summary = Vec::new();
     for a in anchors {
         let terrain = TerrainScene::new(store, a.camera.position)?;
-        let stem = a.name.trim_end_matches(".jpg");
-        let Some(second) = seconds.iter().find(|s| s.name == format!("{stem}_second")) else {
+        let Some(second) = ps.second_of(a) else {
             eprintln!("{}: no second place with a clear view", a.name);
             continue;
         };
         let truth = second.camera.resized(width, photo_height(width));
         let img = scene.render_truth_photo(dem, &truth, 2)?;
-        // terrain points the photo shows (a 40-px grid of the true camera's rays), to score a
-        // camera by where it puts them: RMS pixel error, what the projection feels
-        let mut shown = Vec::new();
-        for v in (20..truth.height).step_by(40) {
-            for u in (20..truth.width).step_by(40) {
-                if let Some(p) = truth
-                    .pixel_ray(u as f64, v as f64)
-                    .and_then(|d| terrain.hit(truth.position, d))
-                {
-                    shown.push((p, [u as f64, v as f64]));
-                }
-            }
-        }
-        // median and 90th percentile of the pixel errors (the near ground at the image's
-        // foot moves most with the position)
-        let px_err = |cam: &CameraModel| {
-            let mut e: Vec<f64> = shown
-                .iter()
-                .map(|(p, q)| {
-                    cam.project(*p)
-                        .map_or(1e6, |r| (r[0] - q[0]).hypot(r[1] - q[1]))
-                })
-                .collect();
-            e.sort_by(f64::total_cmp);
-            let at = |f: f64| e.get((f * (e.len() as f64 - 1.0)) as usize).copied();
-            (at(0.5).unwrap_or(f64::NAN), at(0.9).unwrap_or(f64::NAN))
-        };
+        // terrain points the photo shows, to score a camera by where it puts them: RMS
+        // pixel error, what the projection feels (median and 90th percentile; the near
+        // ground at the image's foot moves most with the position)
+        let shown = shown_points(&truth, |o, d| terrain.hit(o, d));
+        let px_err = |cam: &CameraModel| pixel_errors(cam, &shown);
         let baseline = truth.position.distance(a.camera.position);
         let tp = CameraParams::from_camera(&truth);
         let (mut ok, mut goal, mut times, mut pos_errs, mut ang_errs, mut px_errs, mut px90_errs) = (

@@ -14,13 +14,12 @@
 mod bench_util;
 
 use bench_util::scene_args::{
-    Rng, SceneArgs, angle_diff, build_scene_store, keep_above_ground, rough_start,
+    Rng, SceneArgs, angle_diff, build_scene_store, keep_above_ground, reparam_quietly, rough_start,
     write_scene_photos,
 };
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
-use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
     CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
 };
@@ -55,13 +54,7 @@ fn main() -> anyhow::Result<()> {
             &store_dir,
             "register_synthetic",
         )?;
-        reparam_store(
-            &store_dir,
-            &ReparamOptions {
-                quiet: true,
-                ..ReparamOptions::default()
-            },
-        )?;
+        reparam_quietly(&store_dir)?;
         write_scene_photos(&scene, &dem, &out.join("photos"), width)?;
         eprintln!("store and photos: {:.1} s", t.elapsed().as_secs_f64());
     }

@@ -297,6 +297,42 @@ fn register_starts_from_a_rough_pose_and_exif() {
     assert!(notes.iter().any(|n| n.contains("the terrain")), "{notes:?}");
 }
 
+/// Renders the demo scene's second shot `shot` (`DemoScene::second_shots(12, 1.15)`) at
+/// 800 × 600 into `photos/IMAGE`, and writes `photos/ROUGH` with its camera turned by
+/// `turn_deg` (yaw, pitch, roll), the focal length scaled by `focal` and moved by `moved`
+/// metres; returns the true camera.
+fn second_photo(
+    photos: &Path,
+    shot: &str,
+    image: &str,
+    rough: &str,
+    turn_deg: [f64; 3],
+    focal: f64,
+    moved: glam::DVec3,
+) -> cliffmap::camera::CameraModel {
+    let scene = DemoScene::default();
+    let (dem, _) = scene.generate().unwrap();
+    let second = scene
+        .second_shots(12.0, 1.15)
+        .into_iter()
+        .find(|s| s.name == shot)
+        .unwrap();
+    let truth = second.camera.resized(800, 600);
+    scene
+        .render_truth_photo(&dem, &truth, 1)
+        .unwrap()
+        .save(photos.join(image))
+        .unwrap();
+    let mut p = CameraParams::from_camera(&truth);
+    for k in 0..3 {
+        p.angles[k] += turn_deg[k].to_radians();
+    }
+    p.focal = [p.focal[0] * focal, p.focal[1] * focal];
+    p.position += moved;
+    write_camera(photos.join(rough), &p.camera());
+    truth
+}
+
 /// A photo taken 12° around the target from a known photo's place, its rough camera metres
 /// and degrees off: `register --known` resects it against the known photo. With the focal
 /// length free, 800 × 600 photos do not pin the distance along the view down, and the
@@ -308,26 +344,15 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
     let tmp = tempfile::tempdir().unwrap();
     scene_with_photos(tmp.path());
     let photos = tmp.path().join("photos");
-    let scene = DemoScene::default();
-    let (dem, _) = scene.generate().unwrap();
-    let second = scene
-        .second_shots(12.0, 1.15)
-        .into_iter()
-        .find(|s| s.name == "plateau_south_second")
-        .unwrap();
-    let truth = second.camera.resized(800, 600);
-    scene
-        .render_truth_photo(&dem, &truth, 1)
-        .unwrap()
-        .save(photos.join("south_second.jpg"))
-        .unwrap();
-    let mut p = CameraParams::from_camera(&truth);
-    p.angles[0] += 2.0f64.to_radians();
-    p.angles[1] -= 1.0f64.to_radians();
-    p.angles[2] += 0.8f64.to_radians();
-    p.focal = [p.focal[0] * 1.02, p.focal[1] * 1.02];
-    p.position += glam::DVec3::new(3.0, -2.5, 1.0);
-    write_camera(photos.join("second_rough.json"), &p.camera());
+    let truth = second_photo(
+        &photos,
+        "plateau_south_second",
+        "south_second.jpg",
+        "second_rough.json",
+        [2.0, -1.0, 0.8],
+        1.02,
+        glam::DVec3::new(3.0, -2.5, 1.0),
+    );
     let list = photos.join("two_places.json");
     std::fs::write(
         &list,
@@ -394,25 +419,15 @@ fn register_against_projected_photo_textures() {
     scene_with_photos(tmp.path());
     let photos = tmp.path().join("photos");
     let store = tmp.path().join("store");
-    let scene = DemoScene::default();
-    let (dem, _) = scene.generate().unwrap();
-    let second = scene
-        .second_shots(12.0, 1.15)
-        .into_iter()
-        .find(|s| s.name == "escarpment_second")
-        .unwrap();
-    let truth = second.camera.resized(800, 600);
-    scene
-        .render_truth_photo(&dem, &truth, 1)
-        .unwrap()
-        .save(photos.join("esc_second.jpg"))
-        .unwrap();
-    let mut p = CameraParams::from_camera(&truth);
-    p.angles[0] += 1.2f64.to_radians();
-    p.angles[1] -= 0.7f64.to_radians();
-    p.angles[2] += 0.5f64.to_radians();
-    p.focal = [p.focal[0] * 1.015, p.focal[1] * 1.015];
-    write_camera(photos.join("esc_second_rough.json"), &p.camera());
+    let truth = second_photo(
+        &photos,
+        "escarpment_second",
+        "esc_second.jpg",
+        "esc_second_rough.json",
+        [1.2, -0.7, 0.5],
+        1.015,
+        glam::DVec3::ZERO,
+    );
     let list = photos.join("second.json");
     std::fs::write(
         &list,

@@ -110,6 +110,75 @@ impl PairScene {
     }
 }
 
+#[allow(dead_code)]
+impl PairScene {
+    /// The second place of `anchor` (`NAME_second` for `NAME.jpg`), if the scene has one
+    /// with a clear view of its target.
+    pub fn second_of(
+        &self,
+        anchor: &cliffmap::photo::PhotoInput,
+    ) -> Option<&cliffmap::scene::PhotoShot> {
+        let stem = anchor.name.trim_end_matches(".jpg");
+        self.seconds
+            .iter()
+            .find(|s| s.name == format!("{stem}_second"))
+    }
+}
+
+/// Terrain points the camera `truth` shows, on a 40-px grid of its rays (from 20 px in),
+/// with their pixels: `hit(origin, direction)` gives a ray's terrain point.
+#[allow(dead_code)]
+pub fn shown_points(
+    truth: &cliffmap::camera::CameraModel,
+    hit: impl Fn(glam::DVec3, glam::DVec3) -> Option<glam::DVec3>,
+) -> Vec<(glam::DVec3, [f64; 2])> {
+    let mut shown = Vec::new();
+    for v in (20..truth.height).step_by(40) {
+        for u in (20..truth.width).step_by(40) {
+            if let Some(p) = truth
+                .pixel_ray(u as f64, v as f64)
+                .and_then(|d| hit(truth.position, d))
+            {
+                shown.push((p, [u as f64, v as f64]));
+            }
+        }
+    }
+    shown
+}
+
+/// Median and 90th percentile of the image distance (pixels) between where `cam` shows the
+/// points of [`shown_points`] and their true pixels (10⁶ for a point behind `cam`): what a
+/// projection with `cam` feels. NaN without points.
+#[allow(dead_code)]
+pub fn pixel_errors(
+    cam: &cliffmap::camera::CameraModel,
+    shown: &[(glam::DVec3, [f64; 2])],
+) -> (f64, f64) {
+    let mut e: Vec<f64> = shown
+        .iter()
+        .map(|(p, q)| {
+            cam.project(*p)
+                .map_or(1e6, |r| (r[0] - q[0]).hypot(r[1] - q[1]))
+        })
+        .collect();
+    e.sort_by(f64::total_cmp);
+    let at = |f: f64| e.get((f * (e.len() as f64 - 1.0)) as usize).copied();
+    (at(0.5).unwrap_or(f64::NAN), at(0.9).unwrap_or(f64::NAN))
+}
+
+/// Reparameterizes the store in `dir` quietly with the default options.
+#[allow(dead_code)]
+pub fn reparam_quietly(dir: &Path) -> anyhow::Result<()> {
+    cliffmap::pipeline::reparam_store(
+        dir,
+        &cliffmap::pipeline::ReparamOptions {
+            quiet: true,
+            ..cliffmap::pipeline::ReparamOptions::default()
+        },
+    )?;
+    Ok(())
+}
+
 /// Deterministic uniform numbers in [-1, 1] (SplitMix64).
 pub struct Rng(pub u64);
 
