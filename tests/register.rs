@@ -412,7 +412,8 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
 /// `--textures best`: a second photo of a target registered against the photo texture an
 /// exact photo of it left in the store, against that photo's pixels when it is named
 /// `--known` in the same run, against the active textures with neither (a warning says
-/// so), and the photo the textures came from refused.
+/// so); two rough photos registered against the terrain and then against each other; and
+/// the photo the textures came from refused.
 #[test]
 fn register_against_projected_photo_textures() {
     let tmp = tempfile::tempdir().unwrap();
@@ -475,6 +476,48 @@ fn register_against_projected_photo_textures() {
     let share = report["photos"][1]["photo_label_share"].as_f64().unwrap();
     assert!(share > 0.2 && share <= 1.0, "{report}");
     assert!(report["photos"][0]["photo_label_share"].is_null());
+    // two rough photos of the escarpment, nothing known, no photo textures: the terrain
+    // first, then (with `best`) each again against the other's pixels
+    let esc_truth = camera_from_json_file(&photos.join("escarpment.json"), (800, 600)).unwrap();
+    let mut q = CameraParams::from_camera(&esc_truth);
+    q.angles[0] -= 1.4f64.to_radians();
+    q.angles[1] += 0.6f64.to_radians();
+    q.angles[2] -= 0.9f64.to_radians();
+    q.focal = [q.focal[0] * 0.98, q.focal[1] * 0.98];
+    write_camera(photos.join("esc_rough.json"), &q.camera());
+    let both = photos.join("both_rough.json");
+    std::fs::write(
+        &both,
+        r#"{"photos": [{"image": "escarpment.jpg", "camera": "esc_rough.json"}, {"image": "esc_second.jpg", "camera": "esc_second_rough.json"}]}"#,
+    )
+    .unwrap();
+    let run_both = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name).join("registered.json");
+        let mut args = vec!["--resect-distance-m", "0"];
+        args.extend_from_slice(extra);
+        register(tmp.path(), &both, &out, &args);
+        let report: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
+        )
+        .unwrap();
+        let specs = cliffmap::photo::read_photo_specs(&out).unwrap();
+        let d = |t, c| cliffmap::register::terrain::pixel_distance(t, c, 150.0);
+        (
+            report,
+            d(&esc_truth, &specs[0].camera),
+            d(&truth, &specs[1].camera),
+        )
+    };
+    let (_, a1, b1) = run_both("both_active", &[]);
+    let (report, a2, b2) = run_both("both_best", &["--textures", "best"]);
+    // (1.13 / 0.82 px against 0.68 / 0.72 px when written)
+    for k in 0..2 {
+        assert_eq!(report["photos"][k]["method"], "terrain_photos", "{report}");
+    }
+    assert!(
+        a2 + b2 < 0.9 * (a1 + b1) && a2 <= a1 + 0.05 && b2 <= b1 + 0.05,
+        "two rough photos: active textures {a1:.3} / {b1:.3} px, then against each other {a2:.3} / {b2:.3} px"
+    );
     // the exact escarpment photo projected; the second registered against its texture
     let anchor = photos.join("anchor.json");
     std::fs::write(

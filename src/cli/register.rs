@@ -55,13 +55,14 @@ pub struct Args {
     /// when two motions have similar support (then a mask decides).
     #[arg(long)]
     moving_mask: Option<PathBuf>,
-    /// Which textures the terrain search matches the photo against: `active` (the ortho or
+    /// What the terrain search matches the photo against: `active` (the ortho or
     /// reparameterized textures; never photo textures, so an earlier projection with a
-    /// wrong camera cannot pull the fit) or `best` (photo textures where `cliffmap project`
-    /// wrote them: far sharper on walls, for photos registered after others whose cameras
-    /// are trusted were projected; docs/registration.md, "Registering against projected
-    /// photos"). With `best`, a photo the store's textures were projected from is refused
-    /// unless named with --known.
+    /// wrong camera cannot pull the fit) or `best`: the pixels of the list's trusted photos
+    /// (--known, tied, resected) where they show the terrain, else photo textures where
+    /// `cliffmap project` wrote them, else the active textures; then every photo the
+    /// terrain placed is registered again against the other placed photos' pixels
+    /// (docs/registration.md, "Registering against projected photos"). With `best`, a photo
+    /// the store's textures were projected from is refused unless named with --known.
     #[arg(long, value_enum, default_value = "active")]
     textures: Textures,
     /// Only warnings and errors.
@@ -161,7 +162,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
         for r in &results {
             let verdict = match (r.fit.converged, r.method) {
-                (true, "terrain") => "registered",
+                (true, "terrain" | "terrain_photos") => "registered",
                 (true, m) => m,
                 (false, _) => "kept",
             };

@@ -386,10 +386,7 @@ pub fn register_to_terrain(
     let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
     let photo_label_share = terrain.has_label_photos().then(|| {
         let terrain_samples = samples.iter().filter(|s| s.label != SKY).count();
-        let from_photos = samples
-            .iter()
-            .filter(|s| s.label != SKY && (s.label - 1) / GREY_CLASSES >= 4)
-            .count();
+        let from_photos = samples.iter().filter(|s| s.photo_labelled()).count();
         from_photos as f64 / terrain_samples.max(1) as f64
     });
     let mut repeat: f64 = 0.0;

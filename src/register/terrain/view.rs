@@ -46,6 +46,13 @@ pub struct Sample {
     pub label: u8,
 }
 
+impl Sample {
+    /// Whether the sample's grey came from a label photo ([`TerrainScene::set_label_photos`]).
+    pub fn photo_labelled(&self) -> bool {
+        self.label != SKY && (self.label - 1) / GREY_CLASSES >= 4
+    }
+}
+
 /// Where a ray ends ([`TerrainScene::classify`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RayEnd {
@@ -150,6 +157,18 @@ impl<'a> TerrainScene<'a> {
             .filter(|(c, img)| (c.width, c.height) == img.dimensions())
             .map(|(c, img)| LabelPhoto::new(*c, img))
             .collect();
+    }
+
+    /// Share (0..1) of the terrain samples of `cam`'s view (one per pixel) that the label
+    /// photos label; 0 without label photos or terrain in view.
+    pub fn photo_label_share(&self, cam: &CameraModel) -> Result<f64> {
+        if self.label_photos.is_empty() {
+            return Ok(0.0);
+        }
+        let samples = self.sample(cam, 1.0, 0.0, None)?;
+        let terrain = samples.iter().filter(|s| s.label != SKY).count();
+        let photo = samples.iter().filter(|s| s.photo_labelled()).count();
+        Ok(photo as f64 / terrain.max(1) as f64)
     }
 
     /// Whether label photos are set ([`TerrainScene::set_label_photos`]).

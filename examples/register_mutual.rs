@@ -1,0 +1,132 @@
+//! Two rough photos of one target registered against the terrain, then each again against
+//! the other's pixels (`TerrainScene::set_label_photos` with the other's camera found):
+//! does a second, mutual pass make them agree, and does it move them towards the truth?
+//! (docs/registration.md, "Registering against projected photos": a trial.)
+//!
+//! Per demo photo (A, exact camera known to the benchmark only) and its second shot (B,
+//! `DemoScene::second_shots`), both cameras turned and zoomed inside the issue's ranges
+//! (position exact). Pass 1: each against the active textures. Pass 2: each from its pass-1
+//! camera against the other's pixels. Prints per start the pixel errors of A and B against
+//! the truth (median over a 40-px grid of the terrain each shows) and the ghost: on terrain
+//! both see, how far apart (A's pixels) the two photos put the same texel's colour.
+//!
+//! ```text
+//! cargo run --release --example register_mutual -- OUT [--scene demo|tall] [--starts N]
+//!     [--max-error M] [--photo-width W] [--reuse] [--sequential]
+//! ```
+//! `--sequential`: in pass 2, B is registered against A's pass-2 camera (else both
+//! against the other's pass-1 camera).
+
+#[path = "bench_util/mod.rs"]
+mod bench_util;
+
+use bench_util::scene_args::{
+    PairScene, Rng, SceneArgs, photo_height, pixel_errors, reparam_quietly, rough_start,
+    shown_points,
+};
+
+use cliffmap::camera::CameraModel;
+use cliffmap::register::{CameraParams, TerrainOptions, TerrainScene, register_to_terrain};
+
+fn main() -> anyhow::Result<()> {
+    let a = SceneArgs::from_env("register_mutual OUT [options]")?;
+    let store_dir = a.out.join("store");
+    let fresh = !(a.has("--reuse") && store_dir.join("manifest.json").exists());
+    let ps = PairScene::from_args(&a, "register_mutual")?;
+    if fresh {
+        reparam_quietly(&store_dir)?;
+    }
+    let store = cliffmap::store::Store::open(&store_dir)?;
+    let (scene, dem, width) = (&ps.scene, &ps.dem, ps.width);
+    let mut rng = Rng(0x307A_2026);
+    let opts = TerrainOptions::default();
+    println!(
+        "| target | start | pass 1: A px, B px, ghost px | pass 2 (against each other): A px, B px, ghost px |"
+    );
+    println!("|---|---|---|---|");
+    let mut rows = Vec::new();
+    for anchor in &ps.anchors {
+        let Some(second) = ps.second_of(anchor) else {
+            continue;
+        };
+        let (ta, tb) = (
+            anchor.camera,
+            second.camera.resized(width, photo_height(width)),
+        );
+        let (img_a, img_b) = (&anchor.image, scene.render_truth_photo(dem, &tb, 2)?);
+        let terrain = TerrainScene::new(&store, ta.position)?;
+        let hit = |o, d| terrain.hit(o, d);
+        let (shown_a, shown_b) = (shown_points(&ta, hit), shown_points(&tb, hit));
+        // where photo X (found camera fx, true camera tx) paints the terrain point p: the
+        // true point its found camera's pixel shows
+        let painted = |fx: &CameraModel, tx: &CameraModel, p| {
+            fx.project(p)
+                .and_then(|q| tx.pixel_ray(q[0], q[1]))
+                .and_then(|d| terrain.hit(tx.position, d))
+        };
+        // ghost: on A's shown points that B also sees, the distance in A's true pixels
+        // between what A and B paint there (median)
+        let ghost = |fa: &CameraModel, fb: &CameraModel| {
+            let mut g: Vec<f64> = shown_a
+                .iter()
+                .filter_map(|(p, _)| {
+                    let (pa, pb) = (painted(fa, &ta, *p)?, painted(fb, &tb, *p)?);
+                    let (qa, qb) = (ta.project(pa)?, ta.project(pb)?);
+                    tb.project(*p)
+                        .filter(|q| {
+                            q[0] >= 0.0
+                                && q[1] >= 0.0
+                                && q[0] < tb.width as f64
+                                && q[1] < tb.height as f64
+                        })
+                        .map(|_| (qa[0] - qb[0]).hypot(qa[1] - qb[1]))
+                })
+                .collect();
+            g.sort_by(f64::total_cmp);
+            g.get(g.len() / 2).copied().unwrap_or(f64::NAN)
+        };
+        for s in 0..ps.starts {
+            let ra = rough_start(CameraParams::from_camera(&ta), &mut rng, 0.0, true).camera();
+            let rb = rough_start(CameraParams::from_camera(&tb), &mut rng, 0.0, true).camera();
+            let a1 = register_to_terrain(&terrain, img_a, &ra, &opts)?.camera;
+            let b1 = register_to_terrain(&terrain, &img_b, &rb, &opts)?.camera;
+            let mut la = TerrainScene::new(&store, ta.position)?;
+            la.set_label_photos(&[(b1, &img_b)]);
+            let a2 = register_to_terrain(&la, img_a, &a1, &opts)?.camera;
+            // --sequential: B against A's pass-2 camera (Gauss-Seidel), else its pass-1 one
+            let a_for_b = if a.has("--sequential") { a2 } else { a1 };
+            let mut lb = TerrainScene::new(&store, tb.position)?;
+            lb.set_label_photos(&[(a_for_b, img_a)]);
+            let b2 = register_to_terrain(&lb, &img_b, &b1, &opts)?.camera;
+            let e = |c: &CameraModel, sh| pixel_errors(c, sh).0;
+            let r = [
+                e(&a1, &shown_a),
+                e(&b1, &shown_b),
+                ghost(&a1, &b1),
+                e(&a2, &shown_a),
+                e(&b2, &shown_b),
+                ghost(&a2, &b2),
+            ];
+            println!(
+                "| {} | {s} | {:.2}, {:.2}, {:.2} | {:.2}, {:.2}, {:.2} |",
+                anchor.name, r[0], r[1], r[2], r[3], r[4], r[5]
+            );
+            rows.push(r);
+        }
+    }
+    let med = |k: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    println!(
+        "\nmedians: pass 1 A {:.2}, B {:.2}, ghost {:.2} px; pass 2 A {:.2}, B {:.2}, ghost {:.2} px",
+        med(0),
+        med(1),
+        med(2),
+        med(3),
+        med(4),
+        med(5)
+    );
+    Ok(())
+}
