@@ -6,7 +6,9 @@
 //! Per demo photo (A, exact camera known to the benchmark only) and its second shot (B,
 //! `DemoScene::second_shots`), both cameras turned and zoomed inside the ranges
 //! (position exact). Pass 1: each against the active textures. Pass 2: each from its pass-1
-//! camera against the other's pixels. Prints per start the pixel errors of A and B against
+//! camera (the given one if pass 1 refused it) against the other's pixels if the other is
+//! placed, kept if it converges (a refused camera printed as it was given). Prints per start
+//! the pixel errors of A and B against
 //! the truth (median over a 40-px grid of the terrain each shows) and the ghost: on terrain
 //! both see, how far apart (A's pixels) the two photos put the same texel's colour.
 //!
@@ -26,7 +28,9 @@ use bench_util::scene_args::{
 };
 
 use cliffmap::camera::CameraModel;
-use cliffmap::register::{CameraParams, TerrainOptions, TerrainScene, register_to_terrain};
+use cliffmap::register::{
+    CameraParams, TerrainFit, TerrainOptions, TerrainScene, register_to_terrain,
+};
 
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_mutual OUT [options]")?;
@@ -45,6 +49,7 @@ fn main() -> anyhow::Result<()> {
     );
     println!("|---|---|---|---|");
     let mut rows = Vec::new();
+    let mut registered = [0usize; 2];
     for anchor in &ps.anchors {
         let Some(second) = ps.second_of(anchor) else {
             continue;
@@ -88,16 +93,32 @@ fn main() -> anyhow::Result<()> {
         for s in 0..ps.starts {
             let ra = rough_start(CameraParams::from_camera(&ta), &mut rng, 0.0, true).camera();
             let rb = rough_start(CameraParams::from_camera(&tb), &mut rng, 0.0, true).camera();
-            let a1 = register_to_terrain(&terrain, img_a, &ra, &opts)?.camera;
-            let b1 = register_to_terrain(&terrain, &img_b, &rb, &opts)?.camera;
-            let mut la = TerrainScene::new(&store, ta.position)?;
-            la.set_label_photos(&[(b1, &img_b)]);
-            let a2 = register_to_terrain(&la, img_a, &a1, &opts)?.camera;
-            // --sequential: B against A's pass-2 camera (Gauss-Seidel), else its pass-1 one
-            let a_for_b = if a.has("--sequential") { a2 } else { a1 };
-            let mut lb = TerrainScene::new(&store, tb.position)?;
-            lb.set_label_photos(&[(a_for_b, img_a)]);
-            let b2 = register_to_terrain(&lb, &img_b, &b1, &opts)?.camera;
+            let fa1 = register_to_terrain(&terrain, img_a, &ra, &opts)?;
+            let fb1 = register_to_terrain(&terrain, &img_b, &rb, &opts)?;
+            // pass 2 as `register --textures best` runs it: from the photo's camera (the
+            // given one if pass 1 refused it) against the other's pixels, if the other is
+            // placed; kept if it converges
+            let again = |img: &image::RgbImage,
+                         first: &TerrainFit,
+                         other: &TerrainFit,
+                         other_img: &image::RgbImage|
+             -> anyhow::Result<TerrainFit> {
+                if !other.converged {
+                    return Ok(first.clone());
+                }
+                let mut t = TerrainScene::new(&store, first.camera.position)?;
+                t.set_label_photos(&[(other.camera, other_img)]);
+                let f = register_to_terrain(&t, img, &first.camera, &opts)?;
+                Ok(if f.converged { f } else { first.clone() })
+            };
+            let fa2 = again(img_a, &fa1, &fb1, &img_b)?;
+            // --sequential: B against A's pass-2 camera (Gauss-Seidel, what `register`
+            // does), else against its pass-1 one
+            let fa_for_b = if a.has("--sequential") { &fa2 } else { &fa1 };
+            let fb2 = again(&img_b, &fb1, fa_for_b, img_a)?;
+            registered[0] += usize::from(fa1.converged) + usize::from(fb1.converged);
+            registered[1] += usize::from(fa2.converged) + usize::from(fb2.converged);
+            let (a1, b1, a2, b2) = (fa1.camera, fb1.camera, fa2.camera, fb2.camera);
             let e = |c: &CameraModel, sh| pixel_errors(c, sh).0;
             let r = [
                 e(&a1, &shown_a),
@@ -120,13 +141,16 @@ fn main() -> anyhow::Result<()> {
         v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
     };
     println!(
-        "\nmedians: pass 1 A {:.2}, B {:.2}, ghost {:.2} px; pass 2 A {:.2}, B {:.2}, ghost {:.2} px",
+        "\nmedians: pass 1 A {:.2}, B {:.2}, ghost {:.2} px; pass 2 A {:.2}, B {:.2}, ghost {:.2} px; registered (converged) pass 1 {} of {n}, pass 2 {} of {n}",
         med(0),
         med(1),
         med(2),
         med(3),
         med(4),
-        med(5)
+        med(5),
+        registered[0],
+        registered[1],
+        n = 2 * rows.len()
     );
     Ok(())
 }

@@ -641,14 +641,16 @@ fn check_photo_labels(
 }
 
 /// With `--textures best`, after every photo has been placed or not: each photo the terrain
-/// search registered is registered again, in list order, from its camera, with the pixels
-/// of every other placed photo (known, tied, resected, or registered; their current
-/// cameras, so a photo sees the ones before it already refined) labelling the terrain they
-/// show. Kept when that search converges (method "terrain_photos"); skipped for a photo no
-/// other placed photo overlaps (under 1 % of its terrain samples, on the photo reduced
-/// 8 times). Two rough photos of one target on the demo scene: median pixel errors 0.63 /
-/// 0.46 → 0.38 / 0.32 px, and the two photos' disagreement on the terrain both show 1.04 →
-/// 0.35 px (docs/registration.md).
+/// search was run on is registered again, in list order, from its camera (the one found, or
+/// the given one if the search refused it), with the pixels of every other placed photo
+/// (known, tied, resected, or registered; their current cameras, so a photo sees the ones
+/// before it already refined) labelling the terrain they show. Kept when that search
+/// converges (method "terrain_photos", so a photo the terrain alone could not confirm may
+/// be placed by the others); skipped for a photo no other placed photo overlaps (under 1 %
+/// of its terrain samples, on the photo reduced 8 times). Two rough photos of one target:
+/// on the demo scene median pixel errors 0.63 / 0.46 → 0.38 / 0.32 px and their
+/// disagreement on the terrain both show 1.04 → 0.35 px; on the tall-walls scene 8 → 12 of
+/// 12 cameras placed (docs/registration.md).
 fn second_pass_against_photos(
     store: &Store,
     specs: &[PhotoSpec],
@@ -661,12 +663,11 @@ fn second_pass_against_photos(
         f.as_ref().is_some_and(|(f, _)| f.converged) || trusted[j]
     };
     for i in 0..specs.len() {
+        // every photo the terrain search was run on: registered ones from their camera,
+        // refused ones (whose camera is still the given one) from that
         let Some((first, "terrain")) = &fits[i] else {
             continue;
         };
-        if !first.converged {
-            continue;
-        }
         let mut sources = Vec::new();
         for j in (0..specs.len()).filter(|&j| j != i && placed(&fits[j], j)) {
             if let Some((f, _)) = &fits[j] {
@@ -696,7 +697,7 @@ fn second_pass_against_photos(
             let mut f = fit;
             f.seconds += first.seconds;
             fits[i] = Some((f, "terrain_photos"));
-        } else {
+        } else if first.converged {
             warn(&format!(
                 "{}: registered against the terrain; the second pass against the other \
                  photos did not confirm a change ({}), the first camera kept",
