@@ -33,9 +33,8 @@ use cliffmap::register::{
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_labels OUT [options]")?;
     let store_dir = a.out.join("store");
-    let fresh = !(a.has("--reuse") && store_dir.join("manifest.json").exists());
     let ps = PairScene::from_args(&a, "register_labels")?;
-    if fresh {
+    if ps.built {
         reparam_quietly(&store_dir)?;
         project_store(
             &store_dir,

@@ -35,9 +35,8 @@ use cliffmap::register::{
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("register_mutual OUT [options]")?;
     let store_dir = a.out.join("store");
-    let fresh = !(a.has("--reuse") && store_dir.join("manifest.json").exists());
     let ps = PairScene::from_args(&a, "register_mutual")?;
-    if fresh {
+    if ps.built {
         reparam_quietly(&store_dir)?;
     }
     let store = cliffmap::store::Store::open(&store_dir)?;

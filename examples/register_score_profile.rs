@@ -8,7 +8,12 @@
 //!
 //! ```text
 //! cargo run --release --example register_score_profile -- STORE PHOTOS.json NAME [STEP_DEG] [N]
+//!     [--truth demo|tall [--blur M | --ortho DX,DY]] [--binary | --no-grey | --steep-no-grey]
 //! ```
+//! `--truth`: the samples' greys from the scene's true colour at their points (`--blur M`:
+//! averaged over an M × M box on the true surface; `--ortho DX,DY`: from the scene's ortho,
+//! bilinear, shifted by DX, DY metres). `--binary`: labels sky or terrain only;
+//! `--no-grey`: without the grey; `--steep-no-grey`: without it on steep samples.
 //! PHOTOS.json: a photo list with exact cameras (e.g. `render_eval`'s `OUT/photos/photos.json`).
 use cliffmap::register::CameraParams;
 use cliffmap::register::terrain::{GREY_CLASSES, GreyImage, SKY, Sample, TerrainScene, nmi};
@@ -40,22 +45,21 @@ fn main() -> anyhow::Result<()> {
             _ => cliffmap::scene::DemoScene::default(),
         };
         let colour = scene.surface_colour_fn();
-        let dem = scene.generate()?.0;
-        let blur: f64 = a
-            .iter()
-            .position(|x| x == "--blur")
-            .and_then(|j| a.get(j + 1))
-            .map_or(0.0, |v| v.parse().unwrap_or(0.0));
+        let (dem, ortho_image) = scene.generate()?;
+        let flag = |name: &str| {
+            a.iter()
+                .position(|x| x == name)
+                .map(|j| a.get(j + 1).map_or("", String::as_str))
+        };
+        let blur: f64 = flag("--blur").map_or(Ok(0.0), str::parse)?;
         // --ortho DX,DY: grey from the scene's ortho image (bilinear, shifted by DX, DY m)
-        let ortho = match a.iter().position(|x| x == "--ortho") {
-            Some(j) => {
-                let d: Vec<f64> = a
-                    .get(j + 1)
-                    .map_or("0,0", |s| s.as_str())
-                    .split(',')
-                    .map(|v| v.parse().unwrap_or(0.0))
-                    .collect();
-                Some((scene.generate()?.1, d[0], d[1]))
+        let ortho = match flag("--ortho") {
+            Some(v) => {
+                let d: Vec<f64> = v.split(',').map(str::parse).collect::<Result<_, _>>()?;
+                let [dx, dy] = d[..] else {
+                    anyhow::bail!("--ortho takes DX,DY (metres), got {v:?}");
+                };
+                Some((ortho_image, dx, dy))
             }
             None => None,
         };
@@ -164,35 +168,15 @@ fn main() -> anyhow::Result<()> {
     let classes = GREY_CLASSES;
     let far = |s: &Sample| s.label != SKY && (s.label - 1) / classes % 4 >= 2;
     let steep = |s: &Sample| s.label != SKY && (s.label - 1) / classes % 2 == 1;
+    let pick = |f: &dyn Fn(&Sample) -> bool| band.iter().copied().filter(|s| f(s)).collect();
     let subsets: Vec<(&str, Vec<Sample>)> = vec![
         ("search (band + 1/9 inner)", band.clone()),
         ("every pixel", all.clone()),
-        (
-            "no sky",
-            band.iter().copied().filter(|s| s.label != SKY).collect(),
-        ),
-        (
-            "near + sky",
-            band.iter().copied().filter(|s| !far(s)).collect(),
-        ),
-        (
-            "far + sky",
-            band.iter()
-                .copied()
-                .filter(|s| s.label == SKY || far(s))
-                .collect(),
-        ),
-        (
-            "flat + sky",
-            band.iter().copied().filter(|s| !steep(s)).collect(),
-        ),
-        (
-            "steep + sky",
-            band.iter()
-                .copied()
-                .filter(|s| s.label == SKY || steep(s))
-                .collect(),
-        ),
+        ("no sky", pick(&|s| s.label != SKY)),
+        ("near + sky", pick(&|s| !far(s))),
+        ("far + sky", pick(&|s| s.label == SKY || far(s))),
+        ("flat + sky", pick(&|s| !steep(s))),
+        ("steep + sky", pick(&|s| s.label == SKY || steep(s))),
     ];
     let truth = CameraParams::from_camera(&p.camera);
     for (axis, k) in [("yaw", 0usize), ("pitch", 1), ("roll", 2)] {

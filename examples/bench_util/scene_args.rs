@@ -70,6 +70,8 @@ pub struct PairScene {
     pub max_error: f64,
     /// `--same-body`: the second photo taken with the anchor's camera (focal length known).
     pub same_body: bool,
+    /// Whether the store and photos were built now (not reused with `--reuse`).
+    pub built: bool,
 }
 
 #[allow(dead_code)] // not every example that includes this module uses it
@@ -87,7 +89,9 @@ impl PairScene {
         let (dem, ortho) = scene.generate()?;
         let store_dir = a.out.join("store");
         let list = a.out.join("photos").join("photos.json");
-        if !(a.has("--reuse") && store_dir.join("manifest.json").exists() && list.exists()) {
+        let built =
+            !(a.has("--reuse") && store_dir.join("manifest.json").exists() && list.exists());
+        if built {
             build_scene_store(&scene, &dem, &ortho, max_error, &store_dir, generator)?;
             write_scene_photos(&scene, &dem, &a.out.join("photos"), width)?;
         }
@@ -106,6 +110,7 @@ impl PairScene {
             width,
             max_error,
             same_body: a.has("--same-body"),
+            built,
         })
     }
 }

@@ -356,15 +356,7 @@ pub fn register_photos_with(
         if opts.labels == LabelTexture::Best {
             // the photos placed so far with trusted cameras (known, or tied or resected to
             // such a photo) label the terrain they show
-            let mut sources = Vec::new();
-            for j in (0..specs.len()).filter(|&j| j != i && trusted[j]) {
-                if let Some((f, _)) = &fits[j] {
-                    sources.push((f.camera, specs[j].load()?.image));
-                }
-            }
-            let refs: Vec<(CameraModel, &image::RgbImage)> =
-                sources.iter().map(|(c, img)| (*c, img)).collect();
-            terrain.set_label_photos(&refs);
+            set_label_photos(&mut terrain, specs, &fits, |j| j != i && trusted[j])?;
         }
         let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
@@ -464,10 +456,7 @@ pub fn register_photos_with(
         });
     }
     let report = json!({
-        "textures": match opts.labels {
-            LabelTexture::Active => "active",
-            LabelTexture::Best => "best",
-        },
+        "textures": opts.labels.name(),
         "photos": results.iter().map(report_entry).collect::<Vec<Value>>(),
     });
     let report_path = dir.join(format!("{stem}.report.json"));
@@ -668,20 +657,13 @@ fn second_pass_against_photos(
         let Some((first, "terrain")) = &fits[i] else {
             continue;
         };
-        let mut sources = Vec::new();
-        for j in (0..specs.len()).filter(|&j| j != i && placed(&fits[j], j)) {
-            if let Some((f, _)) = &fits[j] {
-                sources.push((f.camera, specs[j].load()?.image));
-            }
-        }
-        if sources.is_empty() {
+        let source = |j: usize| j != i && placed(&fits[j], j);
+        if !(0..specs.len()).any(source) {
             continue;
         }
-        let refs: Vec<(CameraModel, &image::RgbImage)> =
-            sources.iter().map(|(c, img)| (*c, img)).collect();
         let spec = &specs[i];
         let mut terrain = TerrainScene::for_options(store, spec.camera.position, opts)?;
-        terrain.set_label_photos(&refs);
+        set_label_photos(&mut terrain, specs, fits, source)?;
         let small = first.camera.resized(
             (first.camera.width / 8).max(16),
             (first.camera.height / 8).max(12),
@@ -706,5 +688,25 @@ fn second_pass_against_photos(
             ));
         }
     }
+    Ok(())
+}
+
+/// Gives `terrain` the photos `pick` chooses among those with a fit as label photos (their
+/// fitted cameras; images decoded here).
+fn set_label_photos(
+    terrain: &mut TerrainScene,
+    specs: &[PhotoSpec],
+    fits: &[Option<(TerrainFit, &'static str)>],
+    pick: impl Fn(usize) -> bool,
+) -> Result<()> {
+    let mut sources = Vec::new();
+    for (j, fit) in fits.iter().enumerate().filter(|(j, _)| pick(*j)) {
+        if let Some((f, _)) = fit {
+            sources.push((f.camera, specs[j].load()?.image));
+        }
+    }
+    let refs: Vec<(CameraModel, &image::RgbImage)> =
+        sources.iter().map(|(c, img)| (*c, img)).collect();
+    terrain.set_label_photos(&refs);
     Ok(())
 }

@@ -384,11 +384,9 @@ pub fn register_to_terrain(
         Some(band_width(finest)),
     )?;
     let score_start = nmi(&samples, &scaled(rough, &grey), &grey);
-    let photo_label_share = terrain.has_label_photos().then(|| {
-        let terrain_samples = samples.iter().filter(|s| s.label != SKY).count();
-        let from_photos = samples.iter().filter(|s| s.photo_labelled()).count();
-        from_photos as f64 / terrain_samples.max(1) as f64
-    });
+    let photo_label_share = terrain
+        .has_label_photos()
+        .then(|| view::photo_label_share(&samples));
     let mut repeat: f64 = 0.0;
     // (with the position free the edge stage restarts instead)
     let kicks: &[[f64; 2]] = if opts.position_free() {

@@ -53,6 +53,14 @@ impl Sample {
     }
 }
 
+/// Share (0..1) of the terrain samples (not sky) of `samples` whose grey came from a label
+/// photo; 0 without terrain samples.
+pub fn photo_label_share(samples: &[Sample]) -> f64 {
+    let terrain = samples.iter().filter(|s| s.label != SKY).count();
+    let photo = samples.iter().filter(|s| s.photo_labelled()).count();
+    photo as f64 / terrain.max(1) as f64
+}
+
 /// Where a ray ends ([`TerrainScene::classify`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RayEnd {
@@ -73,6 +81,16 @@ pub enum LabelTexture {
     /// sharper labels where photos with trusted cameras (from `fit-camera`, or registered
     /// earlier) already cover what this photo sees.
     Best,
+}
+
+impl LabelTexture {
+    /// The name `cliffmap register --textures` and its report use: "active" or "best".
+    pub fn name(self) -> &'static str {
+        match self {
+            LabelTexture::Active => "active",
+            LabelTexture::Best => "best",
+        }
+    }
 }
 
 /// A cell's label texture and the factor from active-texture texels to its texels.
@@ -150,7 +168,7 @@ impl<'a> TerrainScene<'a> {
     /// of the cells' textures): per sample, of the photos that show its point unoccluded,
     /// the one that resolves it finest (smallest distance / focal length). Their greys are
     /// classed apart from the textures' (a label's source is part of it). Replaces any
-    /// earlier set.
+    /// earlier set; a photo whose image size is not its camera's is ignored.
     pub fn set_label_photos(&mut self, photos: &[(CameraModel, &image::RgbImage)]) {
         self.label_photos = photos
             .iter()
@@ -165,10 +183,7 @@ impl<'a> TerrainScene<'a> {
         if self.label_photos.is_empty() {
             return Ok(0.0);
         }
-        let samples = self.sample(cam, 1.0, 0.0, None)?;
-        let terrain = samples.iter().filter(|s| s.label != SKY).count();
-        let photo = samples.iter().filter(|s| s.photo_labelled()).count();
-        Ok(photo as f64 / terrain.max(1) as f64)
+        Ok(photo_label_share(&self.sample(cam, 1.0, 0.0, None)?))
     }
 
     /// Whether label photos are set ([`TerrainScene::set_label_photos`]).
