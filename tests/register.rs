@@ -71,6 +71,14 @@ fn scene_with_photos(dir: &Path) -> std::path::PathBuf {
         .unwrap()
 }
 
+/// The report `cliffmap register --out OUT` wrote beside `OUT` (`registered.report.json`
+/// for `registered.json`).
+fn read_report(out: &Path) -> serde_json::Value {
+    let stem = out.file_stem().unwrap().to_string_lossy();
+    let path = out.with_file_name(format!("{stem}.report.json"));
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// `cliffmap register` on the store in `dir` with the photo list `list`, writing `out`, with
 /// `extra` flags; fails the test if the command fails.
 fn register(dir: &Path, list: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
@@ -148,10 +156,7 @@ fn register_recovers_turned_cameras_and_keeps_what_it_cannot_place() {
         kept.world_to_camera.abs_diff_eq(up.world_to_camera, 1e-9)
             && kept.position.abs_diff_eq(up.position, 1e-9)
     );
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
-    )
-    .unwrap();
+    let report = read_report(&out);
     assert_eq!(report["photos"][0]["converged"], true);
     assert_eq!(report["photos"][1]["converged"], false);
     // the registered photo's kept position: its cost per metre is reported; the photo that
@@ -362,10 +367,7 @@ fn register_resects_a_photo_from_elsewhere_against_a_known_one() {
     let run = |name: &str| {
         let out = tmp.path().join(name).join("registered.json");
         register(tmp.path(), &list, &out, &["--known", "plateau_south.jpg"]);
-        let report: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
-        )
-        .unwrap();
+        let report = read_report(&out);
         let cam = cliffmap::photo::read_photo_specs(&out).unwrap()[1].camera;
         (report["photos"][1].clone(), cam)
     };
@@ -469,10 +471,7 @@ fn register_against_projected_photo_textures() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("no photo textures"), "{err}");
     let known = cliffmap::photo::read_photo_specs(&out).unwrap()[1].camera;
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
-    )
-    .unwrap();
+    let report = read_report(&out);
     let share = report["photos"][1]["photo_label_share"].as_f64().unwrap();
     assert!(share > 0.2 && share <= 1.0, "{report}");
     assert!(report["photos"][0]["photo_label_share"].is_null());
@@ -496,10 +495,7 @@ fn register_against_projected_photo_textures() {
         let mut args = vec!["--resect-distance-m", "0"];
         args.extend_from_slice(extra);
         register(tmp.path(), &both, &out, &args);
-        let report: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
-        )
-        .unwrap();
+        let report = read_report(&out);
         let specs = cliffmap::photo::read_photo_specs(&out).unwrap();
         let d = |t, c| cliffmap::register::terrain::pixel_distance(t, c, 150.0);
         (
@@ -534,10 +530,7 @@ fn register_against_projected_photo_textures() {
     ]);
     let (err, best) = run("after");
     assert!(!err.contains("no photo textures"), "{err}");
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(tmp.path().join("after").join("registered.report.json")).unwrap(),
-    )
-    .unwrap();
+    let report = read_report(&tmp.path().join("after").join("registered.json"));
     assert_eq!(report["textures"], "best");
     let (ea, eb, ek) = (
         angle_errors(&active, &truth),
@@ -723,10 +716,7 @@ fn a_photo_from_the_same_place_is_tied_to_a_known_one() {
         &out,
         &["--known", "IMG_8902.jpg", "--moving-mask", &mask],
     );
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
-    )
-    .unwrap();
+    let report = read_report(&out);
     let (a, b) = (&report["photos"][0], &report["photos"][1]);
     assert_eq!(a["method"], "known");
     assert_eq!(b["method"], "tie", "{b}");
@@ -758,10 +748,7 @@ fn a_photo_from_the_same_place_is_tied_to_a_known_one() {
     let out2 = t.path().join("reg2").join("registered.json");
     std::fs::create_dir_all(out2.parent().unwrap()).unwrap();
     register(t.path(), &list, &out2, &["--known", "IMG_8902.jpg"]);
-    let report2: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out2.with_file_name("registered.report.json")).unwrap(),
-    )
-    .unwrap();
+    let report2 = read_report(&out2);
     let b2 = &report2["photos"][1];
     assert_eq!(b2["method"], "tie", "{b2}");
     assert!(
@@ -828,10 +815,7 @@ fn a_photo_that_sees_far_beyond_the_store_is_turned_onto_it() {
         stdout.contains("IMG_8902.jpg: its given position was kept"),
         "{stdout}"
     );
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.with_file_name("registered.report.json")).unwrap(),
-    )
-    .unwrap();
+    let report = read_report(&out);
     assert_eq!(report["photos"][0]["converged"], true, "{report}");
     // the position was kept: what each metre of error in it would cost is reported (the
     // view spans ~0.5 to ~2 km at f ≈ 6000 px: several pixels per metre)
