@@ -12,7 +12,7 @@
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
 //!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--known-focal]
-//!     [--register [--include-unregistered]]]
+//!     [--register [--include-unregistered] [--textures active|best]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
 //! ```
 //! `--second-photos` projects and scores second photos of the demo photos' targets taken
@@ -168,6 +168,11 @@ fn main() -> anyhow::Result<()> {
                         cliffmap::register::parse_free("yaw,pitch,roll")?
                     } else {
                         cliffmap::register::TerrainOptions::default().free
+                    },
+                    labels: match flag("--textures") {
+                        None | Some("active") => cliffmap::register::LabelTexture::Active,
+                        Some("best") => cliffmap::register::LabelTexture::Best,
+                        Some(t) => anyhow::bail!("--textures active|best, not {t:?}"),
                     },
                     ..cliffmap::register::TerrainOptions::default()
                 },

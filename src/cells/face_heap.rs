@@ -19,6 +19,14 @@ pub(crate) struct FaceHeap {
 }
 
 impl FaceHeap {
+    /// An empty heap with room for faces `0..n`.
+    pub fn with_capacity(n: usize) -> FaceHeap {
+        FaceHeap {
+            heap: Vec::with_capacity(n / 2),
+            pos: vec![ABSENT; n],
+        }
+    }
+
     #[inline]
     fn above(a: (f64, u32), b: (f64, u32)) -> bool {
         a.0 > b.0 || (a.0 == b.0 && a.1 > b.1)

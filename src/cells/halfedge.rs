@@ -65,6 +65,10 @@ pub(crate) struct Mesh {
     stack: Vec<u32>,
 }
 
+/// Rectangles of at most this many samples reserve their densest triangulation's storage
+/// up front ([`Mesh::rectangle`]): a finest-level cell (129² samples at most) does.
+pub(crate) const RESERVE_SAMPLES: usize = 1 << 15;
+
 impl Mesh {
     /// The Delaunay triangulation of `rect`'s four corners and the `border` points that lie
     /// strictly inside one of its sides (other points are ignored; duplicates are merged).
@@ -99,13 +103,23 @@ impl Mesh {
             side.dedup();
         }
         let n_boundary = 4 + left.len() + bottom.len() + right.len() + top.len();
+        // a cell-sized rectangle gets room for its densest triangulation at once (no
+        // regrowth while refining); larger ones grow as they refine
+        let samples = (c1 - c0 + 1) as usize * (r1 - r0 + 1) as usize;
+        let (v, t) = if samples <= RESERVE_SAMPLES {
+            (samples, 2 * samples)
+        } else {
+            (0, 0)
+        };
+        let mut coords = Vec::with_capacity(v.max(4));
+        coords.extend([[c0, r0], [c0, r1], [c1, r1], [c1, r0]]);
         let mut m = Mesh {
-            coords: vec![[c0, r0], [c0, r1], [c1, r1], [c1, r0]],
-            tri: Vec::new(),
-            twin: Vec::new(),
+            coords,
+            tri: Vec::with_capacity(3 * t),
+            twin: Vec::with_capacity(3 * t),
             hull_out: vec![NONE; n_boundary],
             dirty: Vec::new(),
-            is_dirty: Vec::new(),
+            is_dirty: Vec::with_capacity(t),
             stack: Vec::new(),
         };
         let (tl, bl, br, tr) = (0, 1, 2, 3);
