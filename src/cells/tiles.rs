@@ -44,9 +44,18 @@ impl LatticeTiles {
             let out = &mut tiles[tj * tiles_x..(tj + 1) * tiles_x];
             if s == 1 {
                 // the row's samples are contiguous: four at a time into each tile's row
+                // (whole fours as fixed-size copies, not a `memmove` call each)
                 let src = &heights[row + lat.origin_c as usize..][..ni];
-                for (tile, four) in out.iter_mut().zip(src.chunks(4)) {
-                    tile.0[rj..rj + four.len()].copy_from_slice(four);
+                let fours = src.chunks_exact(4);
+                let rest = fours.remainder();
+                for (tile, four) in out.iter_mut().zip(fours) {
+                    let dst = &mut tile.0[rj..rj + 4];
+                    for k in 0..4 {
+                        dst[k] = four[k];
+                    }
+                }
+                if let Some(tile) = out.get_mut(ni / 4).filter(|_| !rest.is_empty()) {
+                    tile.0[rj..rj + rest.len()].copy_from_slice(rest);
                 }
             } else {
                 for i in 0..ni {
