@@ -691,6 +691,11 @@ impl CellAccum {
         self.best.len()
     }
 
+    /// Texels held by the tiles some photo reached (a measure of the cell's blending work).
+    pub fn allocated(&self) -> usize {
+        self.merged.allocated()
+    }
+
     /// Whether the texture has no texels.
     #[inline]
     pub fn is_empty(&self) -> bool {

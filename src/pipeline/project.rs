@@ -17,6 +17,7 @@
 //! same photos give byte-identical files; records and files of an earlier run that this
 //! run does not write are removed. The manifest is written last.
 
+use std::cmp::Reverse;
 use std::path::Path;
 
 use indicatif::{MultiProgress, ProgressBar};
@@ -462,17 +463,27 @@ fn splat_batch(
     samples: &PhotoSamples,
 ) {
     let groups = group_by_cell(batch, cells, level);
-    pas.par_iter_mut()
+    // the cells with footprints, the costliest first (footprints times texture scale²), one
+    // task each, so that the largest one does not start last
+    let mut work: Vec<(usize, &mut Option<PhotoAccum>, &CellFootprints)> = pas
+        .iter_mut()
         .zip(groups)
         .enumerate()
-        .for_each(|(ci, (pa, cf))| {
-            if let Some(cf) = cf {
-                let scale = scales.get(ci).copied().unwrap_or(1).max(1);
-                pa.get_or_insert_with(|| {
-                    PhotoAccum::with_scale(active_texels(&cells[ci]) * scale, scale)
-                })
-                .add_samples(cf.iter(), samples);
-            }
+        .filter_map(|(ci, (pa, cf))| cf.map(|cf| (ci, pa, cf)))
+        .collect();
+    let cost = |ci: usize, cf: &CellFootprints| {
+        let s = scales.get(ci).copied().unwrap_or(1).max(1) as usize;
+        cf.len() * s * s
+    };
+    work.sort_by_key(|(ci, _, cf)| Reverse((cost(*ci, cf), Reverse(*ci))));
+    work.into_par_iter()
+        .with_max_len(1)
+        .for_each(|(ci, pa, cf)| {
+            let scale = scales.get(ci).copied().unwrap_or(1).max(1);
+            pa.get_or_insert_with(|| {
+                PhotoAccum::with_scale(active_texels(&cells[ci]) * scale, scale)
+            })
+            .add_samples(cf.iter(), samples);
         });
 }
 
@@ -632,11 +643,20 @@ impl LevelRun<'_> {
                 r.rejected_silhouette = counts.rejected_silhouette;
                 r.reconstructed_footprints = counts.reconstructed;
             }
-            let written: Vec<Result<u64>> = accs
-                .par_iter_mut()
-                .zip(pas.into_par_iter())
-                .zip(sizing.contexts.par_iter_mut())
+            // the cells this photo reached, the largest accumulators first, one task each
+            let mut work: Vec<_> = accs
+                .iter_mut()
+                .zip(pas)
+                .zip(sizing.contexts.iter_mut())
                 .enumerate()
+                .filter(|(_, ((_, pa), _))| pa.is_some())
+                .collect();
+            work.sort_by_key(|(ci, ((_, pa), _))| {
+                Reverse((pa.as_ref().map_or(0, |p| p.sums.allocated()), Reverse(*ci)))
+            });
+            let written: Vec<Result<u64>> = work
+                .into_par_iter()
+                .with_max_len(1)
                 .map(|(ci, ((acc, pa), ctx))| match (acc.as_mut(), pa) {
                     (_, None) => Ok(0),
                     (Some(acc), Some(pa)) => Ok(acc.merge(&pa, pi as u16)),
@@ -898,15 +918,29 @@ fn finish_level(
     let level_cells: Vec<usize> = (0..cells.len())
         .filter(|&i| cells[i].level as usize == level)
         .collect();
-    let work: Vec<(usize, Option<CellAccum>)> = level_cells
+    let mut work: Vec<(usize, usize, Option<CellAccum>)> = level_cells
         .iter()
-        .map(|&ci| (ci, accs.get_mut(ci).and_then(Option::take)))
+        .enumerate()
+        .map(|(k, &ci)| (k, ci, accs.get_mut(ci).and_then(Option::take)))
         .collect();
     drop(accs);
-    let results: Vec<Result<CellOutcome>> = work
+    // the largest accumulators first, one task each (a 2048² cell takes as long as many
+    // small ones; in index order it could start last); the results back in cell order
+    work.sort_by_key(|(k, _, acc)| {
+        Reverse((acc.as_ref().map_or(0, CellAccum::allocated), Reverse(*k)))
+    });
+    let mut results: Vec<(usize, Result<CellOutcome>)> = work
         .into_par_iter()
-        .map(|(ci, acc)| finish_cell(store, &cells[ci], acc.as_ref(), opts, writer))
+        .with_max_len(1)
+        .map(|(k, ci, acc)| {
+            (
+                k,
+                finish_cell(store, &cells[ci], acc.as_ref(), opts, writer),
+            )
+        })
         .collect();
+    results.sort_by_key(|(k, _)| *k);
+    let results = results.into_iter().map(|(_, r)| r);
     let mut lr = PhotoLevelReport {
         level: level as u8,
         wanted_larger: sizing.wanted,
