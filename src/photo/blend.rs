@@ -16,7 +16,7 @@
 
 use image::{GrayImage, RgbaImage};
 
-use super::accumulate::{CellAccum, CellContext};
+use super::cell_accum::{CellAccum, CellContext};
 use super::confidence::ConfidenceParams;
 
 use crate::colour::ColourSpace;

@@ -18,7 +18,8 @@
 
 use image::RgbaImage;
 
-use super::accumulate::{CellContext, PhotoAccum};
+use super::accumulate::PhotoAccum;
+use super::cell_accum::CellContext;
 pub use super::colour_transform::ColourTransform;
 
 /// Which texels serve as leveling samples and how the fit is guarded.

@@ -31,6 +31,7 @@ mod accel;
 mod accumulate;
 mod blend;
 mod bvh;
+mod cell_accum;
 mod colmap;
 mod colour_transform;
 mod confidence;
@@ -41,6 +42,7 @@ mod level;
 mod occlusion;
 mod pyramid;
 mod reconstruct;
+mod samples;
 mod scene;
 mod silhouette;
 mod sizing;
@@ -50,11 +52,10 @@ mod triangle;
 mod viewgrid;
 
 pub use accel::RayAccel;
-pub use accumulate::{
-    BlendMode, CellAccum, CellContext, MIN_COS_SLOPE, PhotoAccum, PhotoSamples, TexelSums,
-};
+pub use accumulate::{PhotoAccum, TexelSums};
 pub use blend::{Blended, blend_cell, magnify};
 pub use bvh::{BvhQuality, TriHit, TriangleBvh, nearest_brute_force};
+pub use cell_accum::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE};
 pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
 pub use footprint::{
@@ -71,6 +72,7 @@ pub use level::{
 };
 pub use occlusion::{OcclusionMap, occlusion_weight};
 pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
+pub use samples::PhotoSamples;
 pub use scene::{LevelScene, SceneCell};
 pub use sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
 pub use splat::{

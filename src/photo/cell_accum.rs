@@ -1,0 +1,414 @@
+//! All photos' contributions to one cell texture ([`CellAccum`]: the sharpest photos win,
+//! weighted or best view, [`BlendMode`]) and what the resolution rule knows of the cell
+//! ([`CellContext`]). A cell's first photo hands over its [`PhotoAccum`]'s memory; later
+//! photos are merged texel by texel, in photo order (docs/projection.md, "Several photos").
+
+use super::accumulate::PhotoAccum;
+use super::confidence::ConfidenceParams;
+use super::texel_tiles::{TexelSums, TexelTiles};
+
+/// How several photos' colours combine in a texel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BlendMode {
+    /// Average of the photos' colours weighted by coverage confidence × resolution^−γ
+    /// ([`ConfidenceParams::sharpness_power`]): the sharpest photo dominates, photos of
+    /// similar resolution are averaged.
+    #[default]
+    Confidence,
+    /// The colour of the photo with the highest such weight (first photo on ties).
+    Best,
+}
+
+impl BlendMode {
+    /// The name stored in the manifest: "blend" or "best".
+    pub fn name(self) -> &'static str {
+        match self {
+            BlendMode::Confidence => "blend",
+            BlendMode::Best => "best",
+        }
+    }
+}
+
+/// The least factor of a photo's selection weight on texels next to its occlusion edges
+/// (occlusion weight 0): another photo that sees such a texel clear of its own edges wins
+/// unless it resolves the surface about 5.6× more coarsely (`1000^(1/4)`, γ = 4).
+const EDGE_FLOOR: f32 = 1e-3;
+
+/// `x^−p` for `x > 0`; by multiplications when `p` is a small whole number (the default 4).
+#[inline]
+fn inverse_power(x: f32, p: f32) -> f32 {
+    if p == 4.0 {
+        let q = 1.0 / (x * x);
+        q * q
+    } else if p.fract() == 0.0 && (0.0..=16.0).contains(&p) {
+        (1.0 / x).powi(p as i32)
+    } else {
+        x.powf(-p)
+    }
+}
+
+/// Surface slopes whose cosine is below this count as this in [`CellContext`] (an ortho
+/// pixel smeared over ~20 ortho pixels of wall height).
+pub const MIN_COS_SLOPE: f32 = 0.05;
+
+/// What the resolution rule needs to know about one cell (docs/projection.md, "Blending").
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellContext {
+    /// Side of the cell's existing (active) texture and normal map, texels.
+    pub base_texels: u32,
+    /// Per existing texel (row-major), the cosine of the surface slope from the normal map
+    /// (1 = flat, 0 = vertical).
+    pub cos_slope: Vec<f32>,
+    /// The cell TIN's vertical error bound `ε` (metres): its surface lies within `ε` of the
+    /// DEM vertically, so within `ε·cos θ` along the surface normal.
+    pub max_error: f32,
+    /// Ground sample distance the existing texture resolves (metres): the larger of the
+    /// ortho's pixel spacing and the existing texture's texel size on the ground.
+    pub existing_ground: f32,
+    /// The existing texture's texel size on the ground (metres; of the orthographic texture,
+    /// which reparameterized ones are resampled from).
+    pub texel_ground: f32,
+}
+
+impl CellContext {
+    /// A context for a flat cell (every cosine 1) of `base_texels` side.
+    pub fn flat(base_texels: u32, max_error: f32, existing_ground: f32) -> CellContext {
+        let n = base_texels as usize * base_texels as usize;
+        CellContext {
+            base_texels,
+            cos_slope: vec![1.0; n],
+            max_error,
+            existing_ground,
+            texel_ground: existing_ground,
+        }
+    }
+
+    /// The existing texel under texel `t` of a texture `scale` times finer.
+    #[inline]
+    pub fn base_index(&self, t: usize, texels: u32, scale: u32) -> usize {
+        let (x, y) = (t % texels as usize, t / texels as usize);
+        let s = scale.max(1) as usize;
+        (y / s) * self.base_texels as usize + x / s
+    }
+
+    /// [`CellContext::base_index`] as a function of `t` for a texture of side `texels`,
+    /// `scale` times the existing one's (by shifts when both are powers of two).
+    #[inline]
+    pub fn base_indexer(&self, texels: u32, scale: u32) -> impl Fn(usize) -> usize + Copy {
+        let (n, s, base) = (
+            texels as usize,
+            scale.max(1) as usize,
+            self.base_texels as usize,
+        );
+        let shifts = (n.is_power_of_two() && s.is_power_of_two())
+            .then(|| (n.trailing_zeros(), s.trailing_zeros()));
+        move |t: usize| match shifts {
+            Some((ln, ls)) => ((t >> ln) >> ls) * base + ((t & (n - 1)) >> ls),
+            None => (t / n / s) * base + (t % n) / s,
+        }
+    }
+
+    /// The cosine of the slope at existing texel `b` (1 outside the map).
+    #[inline]
+    pub fn cos_at(&self, b: usize) -> f32 {
+        self.cos_slope.get(b).copied().unwrap_or(1.0)
+    }
+
+    /// A photo's resolution (metres) on existing texel `b` from its mean surface footprint
+    /// and mean `1 / cos_view` there: `r + ε·cos θ·g`, the pixel size plus the displacement
+    /// the TIN's error causes along the photo's rays.
+    #[inline]
+    pub fn photo_resolution(&self, b: usize, footprint: [f32; 2]) -> f32 {
+        footprint[0] + self.max_error * self.cos_at(b) * footprint[1]
+    }
+
+    /// The existing texture's resolution (metres) on existing texel `b`:
+    /// `ground / max(cos θ, 0.05) + ε`, its ground sample distance stretched along the
+    /// fall line, plus the TIN's displacement of a vertical ortho ray.
+    #[inline]
+    pub fn existing_resolution(&self, b: usize) -> f32 {
+        self.existing_ground / self.cos_at(b).max(MIN_COS_SLOPE) + self.max_error
+    }
+}
+
+/// All photos' contributions to one cell texture on one level.
+///
+/// Per texel it keeps one record of the same layout as a [`PhotoAccum`]'s ([`TexelSums`]),
+/// so that a cell's first photo hands over its memory ([`CellAccum::from_photo`]), with the
+/// fields standing for: `coverage` the highest single-photo coverage confidence; `weight`
+/// Σ selection weights (best mode: the best photo's); `colour` Σ weight · colour (best mode:
+/// the best photo's colour); `footprint` Σ weight · resolution (best mode: the best photo's
+/// resolution); `grazing` the largest single-photo selection weight.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellAccum {
+    /// Blend mode.
+    pub mode: BlendMode,
+    /// Texture side in texels.
+    pub texels: u32,
+    /// Factor from the existing texture's texels to this texture's (a power of two).
+    pub scale: u32,
+    /// The cell's context of the resolution rule.
+    pub context: CellContext,
+    /// Per texel: 1 + the index of the photo with the largest selection weight there (the
+    /// `photo` given to [`CellAccum::merge`]; 0 where no photo gave colour). Read it with
+    /// [`CellAccum::best_photo`].
+    best: Vec<u16>,
+    /// γ of the selection weight `confidence · resolution^−γ`.
+    sharpness: f32,
+    merged: TexelTiles,
+}
+
+impl CellAccum {
+    /// An empty accumulator of `texels` side, `scale` times the existing texture's.
+    pub fn new(
+        texels: u32,
+        scale: u32,
+        mode: BlendMode,
+        context: CellContext,
+        params: &ConfidenceParams,
+    ) -> CellAccum {
+        let n = texels as usize * texels as usize;
+        CellAccum {
+            mode,
+            texels,
+            scale: scale.max(1),
+            context,
+            best: vec![0; n],
+            sharpness: params.sharpness_power as f32,
+            merged: TexelTiles::new(texels),
+        }
+    }
+
+    /// The accumulator of one photo's deposits `p` (photo number `photo`), as
+    /// [`CellAccum::new`] followed by [`CellAccum::merge`] of `p` (bit for bit), using `p`'s
+    /// memory; also returns how many texels `p` gave colour.
+    pub fn from_photo(
+        p: PhotoAccum,
+        photo: u16,
+        mode: BlendMode,
+        context: CellContext,
+        params: &ConfidenceParams,
+    ) -> (CellAccum, u64) {
+        let (texels, scale) = (p.texels, p.scale.max(1));
+        let mut merged = p.sums;
+        let sharpness = params.sharpness_power as f32;
+        let mut best = vec![0u16; merged.len()];
+        let label = photo.saturating_add(1);
+        let mut written = 0;
+        let base_index = context.base_indexer(texels, scale);
+        merged.for_each_mut(|t, s| {
+            match Self::photo_texel(s, &context, base_index(t), sharpness) {
+                Some((c, conf, res, w)) => {
+                    written += 1;
+                    best[t] = label;
+                    *s = match mode {
+                        BlendMode::Confidence => TexelSums {
+                            coverage: conf,
+                            weight: w,
+                            colour: c.map(|v| w * v),
+                            footprint: w * res,
+                            grazing: w,
+                            clear: 0.0,
+                        },
+                        BlendMode::Best => TexelSums {
+                            coverage: conf,
+                            weight: w,
+                            colour: c,
+                            footprint: res,
+                            grazing: w,
+                            clear: 0.0,
+                        },
+                    };
+                }
+                None => *s = TexelSums::default(),
+            }
+        });
+        (
+            CellAccum {
+                mode,
+                texels,
+                scale,
+                context,
+                best,
+                sharpness,
+                merged,
+            },
+            written,
+        )
+    }
+
+    /// A photo's colour, coverage confidence, resolution and selection weight at a texel
+    /// over existing texel `b`, from its sums `s` (`None` without colour).
+    #[inline]
+    fn photo_texel(
+        s: &TexelSums,
+        ctx: &CellContext,
+        b: usize,
+        sharpness: f32,
+    ) -> Option<([f32; 3], f32, f32, f32)> {
+        if !(s.weight > 0.0) {
+            return None;
+        }
+        let c = s.colour.map(|v| (v / s.weight).clamp(0.0, 1.0));
+        let conf = (s.weight / s.coverage.max(1.0)).clamp(0.0, 1.0);
+        let res = ctx
+            .photo_resolution(b, [s.footprint / s.weight, s.grazing / s.weight])
+            .max(1e-6);
+        // a photo near its occlusion edges keeps a little weight, so that it still gives
+        // colour where no other photo does
+        let clear = EDGE_FLOOR + (1.0 - EDGE_FLOOR) * (s.clear / s.weight).clamp(0.0, 1.0);
+        let w = conf * clear * inverse_power(res, sharpness);
+        Some((c, conf, res, if w.is_finite() { w } else { 0.0 }))
+    }
+
+    /// Adds the deposits of photo number `photo` (same texture size); returns how many texels
+    /// it gave colour.
+    pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
+        let mut written = 0;
+        let label = photo.saturating_add(1);
+        let n = self.merged.len().min(p.sums.len());
+        let (ctx, texels, scale, sharpness, mode) = (
+            &self.context,
+            self.texels,
+            self.scale,
+            self.sharpness,
+            self.mode,
+        );
+        let (merged, best) = (&mut self.merged, &mut self.best);
+        let base_index = ctx.base_indexer(texels, scale);
+        p.sums.for_each(|t, ps| {
+            if t >= n {
+                return;
+            }
+            let Some((c, conf, res, w)) = Self::photo_texel(ps, ctx, base_index(t), sharpness)
+            else {
+                return;
+            };
+            written += 1;
+            let first = best[t] == 0;
+            let Some(s) = merged.get_mut(t) else { return };
+            match mode {
+                BlendMode::Confidence => {
+                    s.weight += w;
+                    for k in 0..3 {
+                        s.colour[k] += w * c[k];
+                    }
+                    s.footprint += w * res;
+                }
+                BlendMode::Best => {
+                    // the first photo with colour, then any strictly better one
+                    if first || w > s.weight {
+                        s.weight = w;
+                        s.colour = c;
+                        s.footprint = res;
+                    }
+                }
+            }
+            if first || w > s.grazing {
+                best[t] = label;
+                s.grazing = w;
+            }
+            s.coverage = s.coverage.max(conf);
+        });
+        written
+    }
+
+    /// Per block of `block` texels (row-major over the `⌈texels / block⌉²` grid): whether
+    /// footprints reached it (every texel some photo gave colour lies in such a block).
+    pub fn touched_blocks(&self, block: u32) -> Vec<bool> {
+        self.merged.touched_blocks(block)
+    }
+
+    /// Whether some photo gave texel `t` colour.
+    #[inline]
+    pub fn has_colour(&self, t: usize) -> bool {
+        self.best.get(t).is_some_and(|&p| p != 0)
+    }
+
+    /// The photo (the index given to [`CellAccum::merge`]) with the largest selection weight
+    /// at texel `t`, if some photo gave it colour.
+    #[inline]
+    pub fn best_photo(&self, t: usize) -> Option<u16> {
+        self.best.get(t).and_then(|&p| p.checked_sub(1))
+    }
+
+    /// Texels of the texture (`texels²`).
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.best.len()
+    }
+
+    /// Texels held by the tiles some photo reached (a measure of the cell's blending work).
+    pub fn allocated(&self) -> usize {
+        self.merged.allocated()
+    }
+
+    /// Whether the texture has no texels.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.best.is_empty()
+    }
+
+    /// The highest single-photo coverage confidence at texel `t`, in [0, 1].
+    #[inline]
+    pub fn confidence(&self, t: usize) -> f32 {
+        self.merged.get(t).coverage
+    }
+
+    /// Calls `f(t, colour, confidence, resolution, photo)` for every texel `t` some photo
+    /// gave colour (the values of [`CellAccum::colour_at`], [`CellAccum::confidence`],
+    /// [`CellAccum::resolution_at`] and [`CellAccum::best_photo`]), in tile order: only the
+    /// tiles footprints reached are visited.
+    pub fn for_each_coloured(&self, mut f: impl FnMut(usize, [f32; 3], f32, f32, Option<u16>)) {
+        self.merged.for_each(|t, s| {
+            let Some(&label) = self.best.get(t) else {
+                return;
+            };
+            if label == 0 {
+                return;
+            }
+            let (colour, res) = match self.mode {
+                BlendMode::Confidence if s.weight > 0.0 => (
+                    s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
+                    s.footprint / s.weight,
+                ),
+                BlendMode::Confidence => ([0.0; 3], f32::INFINITY),
+                BlendMode::Best => (
+                    s.colour,
+                    if s.weight > 0.0 {
+                        s.footprint
+                    } else {
+                        f32::INFINITY
+                    },
+                ),
+            };
+            f(t, colour, s.coverage, res, Some(label - 1));
+        });
+    }
+
+    /// The combined photo colour (working space 0..1) at texel `t`, if any photo gave it colour.
+    pub fn colour_at(&self, t: usize) -> Option<[f32; 3]> {
+        if !self.has_colour(t) {
+            return None;
+        }
+        let s = self.merged.get(t);
+        Some(match self.mode {
+            BlendMode::Confidence if s.weight > 0.0 => {
+                s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0))
+            }
+            BlendMode::Confidence => [0.0; 3],
+            BlendMode::Best => s.colour,
+        })
+    }
+
+    /// The combined photo resolution (metres) at texel `t` (the weighted mean of the photos',
+    /// or the best photo's); infinite without usable colour.
+    pub fn resolution_at(&self, t: usize) -> f32 {
+        let s = self.merged.get(t);
+        match self.mode {
+            BlendMode::Confidence if s.weight > 0.0 => s.footprint / s.weight,
+            BlendMode::Best if self.has_colour(t) && s.weight > 0.0 => s.footprint,
+            _ => f32::INFINITY,
+        }
+    }
+}

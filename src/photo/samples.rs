@@ -1,0 +1,112 @@
+//! A photo image prepared for splatting ([`PhotoSamples`]): its colours through the
+//! leveling transform into the working colour space, the border feather of every pixel,
+//! the angle a pixel subtends and, if on, the occlusion margin's inputs. Made once per photo
+//! and level; [`super::PhotoAccum::add_samples`] reads it per footprint.
+
+use image::RgbImage;
+
+use super::PixelFootprint;
+use super::colour_transform::ColourTransform;
+use super::confidence::{BorderFeather, ConfidenceParams};
+use super::occlusion::{OcclusionMap, occlusion_weight};
+use crate::colour::ColourSpace;
+
+/// A photo image prepared for splatting: its 8-bit values mapped by a colour transform and
+/// decoded into the working colour space (per channel, the same numbers as transforming and
+/// decoding each pixel), the border feather of every pixel
+/// ([`ConfidenceParams::border_feather`]) and the angle a pixel subtends.
+#[derive(Clone, Debug)]
+pub struct PhotoSamples<'a> {
+    pub(super) image: &'a RgbImage,
+    /// Per channel and 8-bit value, the working-space value (leveling applied).
+    pub(super) lut: [[f32; 256]; 3],
+    pub(super) feather: BorderFeather,
+    /// Radians per pixel: `1 / √(fx·fy)` of the camera the footprints were cast with.
+    pub(super) pixel_angle: f32,
+    /// The occlusion margin's inputs, if on.
+    occlusion: Option<OcclusionTerm<'a>>,
+}
+
+/// What [`PhotoSamples`] needs for the occlusion margin ([`super::occlusion`]).
+#[derive(Clone, Debug)]
+struct OcclusionTerm<'a> {
+    map: &'a OcclusionMap,
+    /// Full-resolution pixels per pixel of the image the footprints were cast for.
+    step_scale: f32,
+    /// Pose uncertainty, full-resolution pixels.
+    margin_px: f32,
+    /// Full-resolution focal length, pixels.
+    focal_full: f32,
+    /// TIN error (metres) per manifest cell.
+    cell_error: &'a [f32],
+}
+
+impl<'a> PhotoSamples<'a> {
+    /// Prepares `image` (cast with a camera of focal lengths `fx`, `fy` pixels) with
+    /// `transform` (applied to sRGB values) and the feather of `params`, decoding into `space`.
+    pub fn new(
+        image: &'a RgbImage,
+        focal_px: [f64; 2],
+        transform: &ColourTransform,
+        params: &ConfidenceParams,
+        space: ColourSpace,
+    ) -> PhotoSamples<'a> {
+        let lut = std::array::from_fn(|k| {
+            std::array::from_fn(|v| {
+                let mut rgb = [0.0; 3];
+                rgb[k] = v as f32 / 255.0;
+                space.decode(transform.apply(rgb)[k])
+            })
+        });
+        let f = (focal_px[0] * focal_px[1]).sqrt();
+        let pixel_angle = if f.is_finite() && f > 0.0 {
+            (1.0 / f) as f32
+        } else {
+            0.0
+        };
+        PhotoSamples {
+            image,
+            lut,
+            feather: params.border_feather(image.width(), image.height()),
+            pixel_angle,
+            occlusion: None,
+        }
+    }
+}
+
+impl<'a> PhotoSamples<'a> {
+    /// Adds the occlusion margin of `params` ([`super::occlusion`]): `map` of this photo,
+    /// the image these samples are of being `step_scale` times smaller per side than the
+    /// full-resolution photo of focal length `focal_full` pixels; `cell_error[c]` the TIN
+    /// error (metres) of manifest cell `c`. No change when the margin is 0.
+    pub fn with_occlusion(
+        mut self,
+        map: &'a OcclusionMap,
+        step_scale: f32,
+        focal_full: f64,
+        cell_error: &'a [f32],
+        params: &ConfidenceParams,
+    ) -> PhotoSamples<'a> {
+        if params.occlusion_margin_px > 0.0 {
+            self.occlusion = Some(OcclusionTerm {
+                map,
+                step_scale,
+                margin_px: params.occlusion_margin_px as f32,
+                focal_full: focal_full as f32,
+                cell_error,
+            });
+        }
+        self
+    }
+
+    /// The occlusion weight of footprint `fp` (1 without the margin).
+    #[inline]
+    pub(super) fn occlusion_weight(&self, fp: &PixelFootprint) -> f32 {
+        let Some(o) = &self.occlusion else {
+            return 1.0;
+        };
+        let eps = o.cell_error.get(fp.cell as usize).copied().unwrap_or(0.0);
+        let margin = o.margin_px + o.focal_full * eps / fp.distance.max(1e-3);
+        occlusion_weight(o.map.distance_px(fp.pixel, o.step_scale), margin)
+    }
+}
