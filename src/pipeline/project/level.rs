@@ -1,0 +1,472 @@
+//! One level's projection: each photo cast onto the level's cells and splatted into
+//! per-cell accumulators, with the photo texture sizes chosen first ([`LevelRun`]).
+
+use super::*;
+
+/// Per manifest cell, its footprints in `fs`; cells not on `level` (a footprint set from a
+/// foreign scene) get none.
+pub(super) fn group_by_cell<'a>(
+    fs: &'a FootprintSet,
+    cells: &[CellRecord],
+    level: u8,
+) -> Vec<Option<&'a CellFootprints>> {
+    let mut out = vec![None; cells.len()];
+    for cf in &fs.cells {
+        let cell = cf.cell as usize;
+        if cell < cells.len() && cells[cell].level == level {
+            out[cell] = Some(cf);
+        }
+    }
+    out
+}
+
+/// Splats a batch of one photo's footprints on `level` (cells of other levels are ignored)
+/// into the photo's per-cell accumulators `pas` (indexed by manifest cell, created on first
+/// use with the cell's photo texture scale `scales[cell]`), in parallel over cells, each
+/// cell's footprints in order.
+pub(super) fn splat_batch(
+    batch: &FootprintSet,
+    pas: &mut [Option<PhotoAccum>],
+    cells: &[CellRecord],
+    scales: &[u32],
+    level: u8,
+    samples: &PhotoSamples,
+) {
+    let groups = group_by_cell(batch, cells, level);
+    // the cells with footprints, the costliest first (footprints times texture scale²), one
+    // task each, so that the largest one does not start last
+    let mut work: Vec<(usize, &mut Option<PhotoAccum>, &CellFootprints)> = pas
+        .iter_mut()
+        .zip(groups)
+        .enumerate()
+        .filter_map(|(ci, (pa, cf))| cf.map(|cf| (ci, pa, cf)))
+        .collect();
+    let cost = |ci: usize, cf: &CellFootprints| {
+        let s = scales.get(ci).copied().unwrap_or(1).max(1) as usize;
+        cf.len() * s * s
+    };
+    work.sort_by_key(|(ci, _, cf)| Reverse((cost(*ci, cf), Reverse(*ci))));
+    work.into_par_iter()
+        .with_max_len(1)
+        .for_each(|(ci, pa, cf)| {
+            let scale = scales.get(ci).copied().unwrap_or(1).max(1);
+            pa.get_or_insert_with(|| {
+                PhotoAccum::with_scale(active_texels(&cells[ci]) * scale, scale)
+            })
+            .add_samples(cf.iter(), samples);
+        });
+}
+
+/// The resolution rule's view of cell `rec` ([`CellContext`]): slopes from its active normal
+/// map, its TIN's measured error, and the ground sample distance of its existing texture
+/// (the larger of the ortho's spacing, when the store records it, and the texel size).
+pub(super) fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContext> {
+    let normals = store.read_active_normal_map(rec)?;
+    let t = active_texels(rec);
+    if normals.dimensions() != (t, t) {
+        return Err(Error::store(
+            store.dir.join(&active_normal_path(rec)),
+            format!(
+                "normal map {:?} is not the cell's {t}x{t} texels",
+                normals.dimensions()
+            ),
+        ));
+    }
+    let texel = rec.extent.width().max(rec.extent.height()) / rec.texels.max(1) as f64;
+    let ground = store.manifest.ortho_spacing.unwrap_or(0.0).max(texel);
+    Ok(CellContext {
+        base_texels: t,
+        cos_slope: normals
+            .pixels()
+            .map(|p| normal_cos_slope(p.0).abs() as f32)
+            .collect(),
+        max_error: rec.max_error.max(0.0) as f32,
+        existing_ground: ground as f32,
+        texel_ground: texel as f32,
+    })
+}
+
+/// Path of the cell's active normal map (for messages).
+pub(super) fn active_normal_path(rec: &CellRecord) -> String {
+    rec.reparam
+        .as_ref()
+        .map_or(&rec.files.normal, |r| &r.files.normal)
+        .path
+        .clone()
+}
+
+/// What every level's projection of a run shares.
+pub(super) struct LevelRun<'a> {
+    pub(super) store: &'a Store,
+    pub(super) pyramids: &'a [PhotoPyramid<'a>],
+    /// Per photo, its colour leveling.
+    pub(super) transforms: &'a [ColourTransform],
+    pub(super) opts: &'a ProjectOptions,
+    pub(super) buffers: &'a FootprintBuffers,
+    pub(super) bars: &'a [ProgressBar],
+    pub(super) finest: usize,
+    /// TIN error (metres) per manifest cell, for the occlusion margin.
+    pub(super) cell_errors: Vec<f32>,
+}
+
+impl LevelRun<'_> {
+    /// Casts and splats every photo onto the cells of `level` (using a photo's footprints
+    /// cached from the leveling where they are of this level, and `first_scene`, the first
+    /// photo's finest scene, if given) and returns the per-cell accumulators (indexed by
+    /// manifest cell); adds to the photos' reports.
+    pub(super) fn project_level(
+        &self,
+        level: usize,
+        occlusion: &mut [Option<OcclusionMap>],
+        cached: &mut [Option<(usize, FootprintSet)>],
+        first_scene: &mut Option<LevelScene>,
+        reports: &mut [PhotoReport],
+        timer: &mut StageTimer,
+    ) -> Result<(Vec<Option<CellAccum>>, LevelSizing)> {
+        let step = self.finest - level;
+        let ncells = self.store.manifest.cells.len();
+        let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
+        // This level's scenes, one per photo, built once for the sizing and the main casts.
+        let mut scenes: Vec<Option<LevelScene>> = (0..self.pyramids.len()).map(|_| None).collect();
+        if let Some(scene) = first_scene.take() {
+            if level == self.finest {
+                scenes[0] = Some(scene);
+            } else {
+                *first_scene = Some(scene);
+            }
+        }
+        let mut sizing = self.size_level(level, cached, &mut scenes)?;
+        timer.lap(&format!("level {level}: texture sizes"));
+        for (pi, pyr) in self.pyramids.iter().enumerate() {
+            let (img, cam) = pyr.level(step);
+            let cells = &self.store.manifest.cells;
+            if level == self.finest
+                && self.opts.confidence.occlusion_margin_px > 0.0
+                && occlusion[pi].is_none()
+            {
+                occlusion[pi] = Some(self.occlusion_map(pyr, level, &mut scenes[pi])?);
+                timer.lap(&format!("level {level} photo {pi}: occlusion map"));
+            }
+            let mut samples = PhotoSamples::new(
+                img,
+                [cam.fx, cam.fy],
+                &self.transforms[pi],
+                &self.opts.confidence,
+                self.opts.colour_space,
+            );
+            if let Some(map) = &occlusion[pi] {
+                let (_, full) = pyr.level(0);
+                samples = samples.with_occlusion(
+                    map,
+                    (1u64 << step) as f32,
+                    (full.fx * full.fy).sqrt(),
+                    &self.cell_errors,
+                    &self.opts.confidence,
+                );
+            }
+            // This photo's deposits per manifest cell, filled batch by batch in row order.
+            let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
+            let counts = match cached[pi].take() {
+                Some((l, fs)) if l == level => {
+                    splat_batch(&fs, &mut pas, cells, &sizing.scales, level as u8, &samples);
+                    let mut counts = FootprintSet::default();
+                    counts.add_counts(&fs);
+                    self.buffers.recycle(fs);
+                    counts
+                }
+                other => {
+                    cached[pi] = other;
+                    let scene = match scenes[pi].take() {
+                        Some(scene) => scene,
+                        None => LevelScene::from_store(
+                            self.store,
+                            level as u8,
+                            cam.position,
+                            self.opts.ray,
+                        )?,
+                    };
+                    let mut counts = FootprintSet::default();
+                    for_each_footprint_batch_in(
+                        self.buffers,
+                        &scene,
+                        &cam,
+                        &self.opts.footprint,
+                        |batch| {
+                            splat_batch(
+                                batch,
+                                &mut pas,
+                                cells,
+                                &sizing.scales,
+                                level as u8,
+                                &samples,
+                            );
+                            counts.add_counts(batch);
+                        },
+                    );
+                    counts
+                }
+            };
+            timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
+            if level == self.finest {
+                let r = &mut reports[pi];
+                r.pixels_hit = counts.pixels_hit;
+                r.rejected_silhouette = counts.rejected_silhouette;
+                r.reconstructed_footprints = counts.reconstructed;
+            }
+            // the cells this photo reached, the largest accumulators first, one task each
+            let mut work: Vec<_> = accs
+                .iter_mut()
+                .zip(pas)
+                .zip(sizing.contexts.iter_mut())
+                .enumerate()
+                .filter(|(_, ((_, pa), _))| pa.is_some())
+                .collect();
+            work.sort_by_key(|(ci, ((_, pa), _))| {
+                Reverse((pa.as_ref().map_or(0, |p| p.sums.allocated()), Reverse(*ci)))
+            });
+            let written: Vec<Result<u64>> = work
+                .into_par_iter()
+                .with_max_len(1)
+                .map(|(ci, ((acc, pa), ctx))| match (acc.as_mut(), pa) {
+                    (_, None) => Ok(0),
+                    (Some(acc), Some(pa)) => Ok(acc.merge(&pa, pi as u16)),
+                    (None, Some(pa)) => {
+                        let ctx = match ctx.take() {
+                            Some(c) => c,
+                            None => cell_context(self.store, &cells[ci])?,
+                        };
+                        let (first, n) = CellAccum::from_photo(
+                            pa,
+                            pi as u16,
+                            self.opts.blend,
+                            ctx,
+                            &self.opts.confidence,
+                        );
+                        *acc = Some(first);
+                        Ok(n)
+                    }
+                })
+                .collect();
+            for w in written {
+                reports[pi].texels_written += w?;
+            }
+            self.bars[pi].inc(1);
+            timer.lap(&format!("level {level} photo {pi}: merge"));
+        }
+        Ok((accs, sizing))
+    }
+
+    /// The occlusion map of a photo ([`OcclusionMap`]): its pyramid image at half size (or
+    /// the full one if it has no smaller image) cast onto the finest level `level` (with
+    /// `scene`, built there if `None` and kept).
+    fn occlusion_map(
+        &self,
+        pyr: &PhotoPyramid,
+        level: usize,
+        scene: &mut Option<LevelScene>,
+    ) -> Result<OcclusionMap> {
+        let step = OCCLUSION_STEP.min(pyr.steps());
+        let (img, cam) = pyr.level(step);
+        let scene = match scene {
+            Some(s) => s,
+            None => scene.insert(LevelScene::from_store(
+                self.store,
+                level as u8,
+                cam.position,
+                self.opts.ray,
+            )?),
+        };
+        let fs = photo_footprints_in(self.buffers, scene, &cam, &self.opts.footprint);
+        let map = OcclusionMap::from_footprints(
+            &fs,
+            img.width(),
+            img.height(),
+            (1u64 << step) as f32,
+            self.opts.footprint.max_depth_jump,
+        );
+        self.buffers.recycle(fs);
+        Ok(map)
+    }
+
+    /// The photo texture scale of every cell of `level` (indexed by manifest cell; 1 for
+    /// other levels): from sizing casts of each photo's image two halvings coarser than the
+    /// level's (or from its footprints cached from the leveling), [`SizingBins`] per cell,
+    /// then [`choose_scales`] within this level's share of the budget (see
+    /// [`PhotoTextureOptions`]). Fills `scenes` with the photos' scenes it built.
+    fn size_level(
+        &self,
+        level: usize,
+        cached: &[Option<(usize, FootprintSet)>],
+        scenes: &mut [Option<LevelScene>],
+    ) -> Result<LevelSizing> {
+        let cells = &self.store.manifest.cells;
+        let topt = &self.opts.texture;
+        let mut out = LevelSizing {
+            scales: vec![1; cells.len()],
+            contexts: vec![None; cells.len()],
+            ..LevelSizing::default()
+        };
+        if !topt.photo_driven {
+            return Ok(out);
+        }
+        let step = self.finest - level;
+        // each photo's footprints for the sizing: cached from the leveling, or cast from the
+        // image two halvings coarser (side scale: coarse pixel side to this level's)
+        let mut sets: Vec<(std::borrow::Cow<FootprintSet>, f32, f64)> = Vec::new();
+        for (pi, pyr) in self.pyramids.iter().enumerate() {
+            let (_, cam) = pyr.level(step);
+            let focal = (cam.fx * cam.fy).sqrt();
+            if let Some((l, fs)) = &cached[pi] {
+                if *l == level {
+                    sets.push((std::borrow::Cow::Borrowed(fs), 1.0, focal));
+                    continue;
+                }
+            }
+            let scene = match scenes[pi].take() {
+                Some(s) => s,
+                None => {
+                    LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?
+                }
+            };
+            let coarse = (step + SIZING_STEPS).min(pyr.steps());
+            let (_, ccam) = pyr.level(coarse);
+            let fs = photo_footprints_in(self.buffers, &scene, &ccam, &self.opts.footprint);
+            sets.push((
+                std::borrow::Cow::Owned(fs),
+                0.5f32.powi((coarse - step) as i32),
+                focal,
+            ));
+            scenes[pi] = Some(scene);
+        }
+        // the resolution rule's view of every cell the photos reach
+        let mut seen = vec![false; cells.len()];
+        for (fs, ..) in &sets {
+            for cf in &fs.cells {
+                if let Some(v) = seen.get_mut(cf.cell as usize) {
+                    *v = cells[cf.cell as usize].level as usize == level;
+                }
+            }
+        }
+        let contexts: Vec<Option<CellContext>> = (0..cells.len())
+            .into_par_iter()
+            .map(|ci| {
+                if seen[ci] {
+                    cell_context(self.store, &cells[ci]).map(Some)
+                } else {
+                    Ok(None)
+                }
+            })
+            .collect::<Result<_>>()?;
+        // every footprint counts as a delivered pixel; only those the blend lets dominate
+        // size the texture
+        let weights = &self.opts.confidence;
+        let mut bins: Vec<Option<SizingBins>> = vec![None; cells.len()];
+        for (fs, side_scale, focal) in &sets {
+            for cf in &fs.cells {
+                let ci = cf.cell as usize;
+                let Some(ctx) = contexts.get(ci).and_then(Option::as_ref) else {
+                    continue;
+                };
+                let b = bins[ci].get_or_insert_with(SizingBins::default);
+                for fp in cf.iter() {
+                    b.add(
+                        fp,
+                        ctx.base_texels,
+                        *side_scale,
+                        resolves_more(ctx, fp, *focal, weights),
+                    );
+                }
+            }
+        }
+        for (fs, _, _) in sets {
+            if let std::borrow::Cow::Owned(fs) = fs {
+                self.buffers.recycle(fs);
+            }
+        }
+        out.contexts = contexts;
+        let level_cells: Vec<usize> = (0..cells.len())
+            .filter(|&i| cells[i].level as usize == level)
+            .collect();
+        let requests: Vec<SizeRequest> = level_cells
+            .iter()
+            .map(|&ci| {
+                let base = active_texels(&cells[ci]);
+                let max_scale = (topt.max_texels / base.max(1)).max(1);
+                match &bins[ci] {
+                    Some(b) => SizeRequest {
+                        base_texels: base,
+                        scale: b.wanted_scale(
+                            max_scale,
+                            topt.texels_per_pixel,
+                            base,
+                            topt.texels_per_delivered,
+                        ),
+                        covered: b.covered() as f64 / (SIZING_BINS * SIZING_BINS) as f64,
+                    },
+                    None => SizeRequest {
+                        base_texels: base,
+                        scale: 1,
+                        covered: 0.0,
+                    },
+                }
+            })
+            .collect();
+        // the finest level's share is 3/4 of the budget, each coarser one a quarter of that
+        let share = 0.75 * 0.25f64.powi(step as i32);
+        out.budget_bytes = (topt.budget_bytes as f64 * share) as u64;
+        let granted = choose_scales(&requests, out.budget_bytes);
+        for ((&ci, &g), r) in level_cells.iter().zip(&granted).zip(&requests) {
+            out.scales[ci] = g;
+            out.wanted += (r.scale > 1) as u64;
+            out.upsized += (g > 1) as u64;
+        }
+        Ok(out)
+    }
+}
+
+/// Pyramid halvings between the full-resolution photo and the image its occlusion map is
+/// cast from (edges located to a map pixel, 2 full-resolution pixels).
+pub(super) const OCCLUSION_STEP: usize = 1;
+
+/// Pyramid halvings between a level's image and its sizing cast's.
+pub(super) const SIZING_STEPS: usize = 2;
+
+/// The photo texture sizes of one level.
+#[derive(Clone, Debug, Default)]
+pub(super) struct LevelSizing {
+    /// Per manifest cell, the factor of its photo texture's side over its active texture's.
+    pub(super) scales: Vec<u32>,
+    /// Cells that wanted a larger photo texture.
+    pub(super) wanted: u64,
+    /// Cells that got one.
+    pub(super) upsized: u64,
+    /// This level's share of the budget, bytes.
+    pub(super) budget_bytes: u64,
+    /// The cells' resolution contexts loaded for the sizing (indexed by manifest cell).
+    pub(super) contexts: Vec<Option<CellContext>>,
+}
+
+/// Whether the photo pixel of footprint `fp` (cast for an image of focal length `focal`
+/// pixels) would get weight against cell `ctx`'s existing texture by the resolution rule
+/// (the texel under its centre; [`ConfidenceParams::resolution_weight`] at least 1/2: the
+/// photo dominates there).
+pub(super) fn resolves_more(
+    ctx: &CellContext,
+    fp: &crate::photo::PixelFootprint,
+    focal: f64,
+    weights: &ConfidenceParams,
+) -> bool {
+    let c = fp
+        .corners
+        .iter()
+        .fold([0.0f32; 2], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1]]);
+    let n = ctx.base_texels as f32;
+    if !(c[0] >= 0.0 && c[1] >= 0.0 && c[0] < n && c[1] < n) {
+        return false;
+    }
+    let b = c[1] as usize * ctx.base_texels as usize + c[0] as usize;
+    let g = 1.0 / fp.cos_view.max(1e-3);
+    let r = fp.distance / focal as f32 * g;
+    let ratio = ctx.existing_resolution(b) as f64 / ctx.photo_resolution(b, [r, g]) as f64;
+    weights.resolution_weight(ratio) >= 0.5
+}

@@ -1,0 +1,442 @@
+//! `project`: ground photos merged into the cell textures of every quadtree level
+//! (docs/projection.md, "Splatting, blending and leveling").
+//!
+//! Per photo, the colour leveling (if on) is fitted first on a coarse level (the pyramid
+//! step whose image has at most `leveling_max_pixels`; if that gives too few samples, once
+//! more at full resolution). Then per level, finest first, per photo in input order: the level's cells
+//! become a ray-castable scene near the camera, the photo's pyramid image for the level
+//! (halved once per level above the finest) is cast into footprints batch by batch of
+//! pixel rows; each batch is splatted per cell in parallel into that photo's accumulators
+//! while the next batch is cast (each cell's deposits stay in row order, so the sums do not
+//! depend on the batching), and the accumulators are merged into the level's per-cell
+//! accumulators. Finally (while the next coarser level is cast) every cell of the level
+//! that received photo colour gets `{stem}.photo.png` (the active texture blended with
+//! photo colour) and `{stem}.photo.conf.png` (the photo share), and every cell's steep
+//! texels are counted. Casts share one set of scratch buffers ([`FootprintBuffers`]).
+//! Each run starts from the active textures (never from earlier photo textures), so the
+//! same photos give byte-identical files; records and files of an earlier run that this
+//! run does not write are removed. The manifest is written last.
+
+use std::cmp::Reverse;
+use std::path::Path;
+
+use indicatif::{MultiProgress, ProgressBar};
+use rayon::prelude::*;
+
+use super::{progress_bar, write_stats};
+use crate::colour::ColourSpace;
+use crate::error::{Error, Result};
+use crate::fsutil::{PngCompression, encode_png};
+use crate::photo::{
+    BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform,
+    ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
+    OcclusionMap, PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS,
+    SizeRequest, SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
+    for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
+};
+use crate::stats::texel_stretch;
+use crate::store::photo_texture::pack;
+use crate::store::{
+    BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
+    PhotoSettings, Store, active_texels, cell_stem, texcoord,
+};
+
+/// Texels steeper than this (degrees from horizontal) count as steep.
+pub const STEEP_SLOPE_DEG: f64 = 60.0;
+
+/// Options of `project`.
+#[derive(Clone, Debug)]
+pub struct ProjectOptions {
+    /// How photos combine per texel.
+    pub blend: BlendMode,
+    /// Footprint formation (reconstruction, silhouette rejection).
+    pub footprint: FootprintOptions,
+    /// Fit and apply a per-photo colour transform towards the existing texture.
+    pub level_colours: bool,
+    /// Ray-casting acceleration for the pixel-corner rays.
+    pub ray: RayAccel,
+    /// Confidence terms and blend ramp.
+    pub confidence: ConfidenceParams,
+    /// Leveling sample selection and guards.
+    pub leveling: LevelingParams,
+    /// The leveling is fitted on the first pyramid image with at most this many pixels.
+    pub leveling_max_pixels: u64,
+    /// The space photo colours are averaged and blended in.
+    pub colour_space: ColourSpace,
+    /// Photo texture sizes.
+    pub texture: PhotoTextureOptions,
+    /// PNG compression of the photo textures and confidence maps (default fast).
+    pub png_compression: PngCompression,
+    /// Hide progress bars.
+    pub quiet: bool,
+}
+
+impl Default for ProjectOptions {
+    fn default() -> Self {
+        ProjectOptions {
+            blend: BlendMode::Confidence,
+            footprint: FootprintOptions::default(),
+            level_colours: true,
+            ray: RayAccel::default(),
+            confidence: ConfidenceParams::default(),
+            leveling: LevelingParams::default(),
+            leveling_max_pixels: 1 << 20,
+            colour_space: ColourSpace::Linear,
+            texture: PhotoTextureOptions::default(),
+            png_compression: PngCompression::default(),
+            quiet: false,
+        }
+    }
+}
+
+/// How large the photo textures are (docs/projection.md, "Texture sizes").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotoTextureOptions {
+    /// Size each cell's photo texture by the finest detail the photos deliver on it
+    /// ([`SizingBins`]); `false`: every photo texture has its active texture's size.
+    pub photo_driven: bool,
+    /// Largest photo texture side, texels (a power of two, 64..=8192). Default 2048.
+    pub max_texels: u32,
+    /// GPU bytes (RGBA8 with mips) the enlarged photo textures of all levels may take
+    /// together: 3/4 for the finest level, a quarter of the previous share for each coarser
+    /// one. Default 1 GiB.
+    pub budget_bytes: u64,
+    /// Texels per photo pixel side the sizing aims at, in [0.25, 4]. Default 1.
+    pub texels_per_pixel: f64,
+    /// Most texels an enlarged texture holds per full-resolution photo pixel its cell
+    /// receives (> 0; a speed and memory knob: cells the photos cover only in part get
+    /// smaller textures). Default infinite (no bound: sizes follow the finest detail).
+    pub texels_per_delivered: f64,
+}
+
+impl Default for PhotoTextureOptions {
+    fn default() -> Self {
+        PhotoTextureOptions {
+            photo_driven: true,
+            max_texels: 2048,
+            budget_bytes: 1 << 30,
+            texels_per_pixel: 1.0,
+            texels_per_delivered: f64::INFINITY,
+        }
+    }
+}
+
+impl PhotoTextureOptions {
+    /// Rejects a cap that is not a power of two in 64..=8192.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.max_texels.is_power_of_two() && (64..=8192).contains(&self.max_texels)) {
+            return Err(Error::BadOption(format!(
+                "--max-photo-texels must be a power of two in 64..=8192, got {}",
+                self.max_texels
+            )));
+        }
+        if !(self.texels_per_delivered > 0.0) {
+            return Err(Error::BadOption(format!(
+                "texels per delivered pixel must be positive, got {}",
+                self.texels_per_delivered
+            )));
+        }
+        if !(0.25..=4.0).contains(&self.texels_per_pixel) {
+            return Err(Error::BadOption(format!(
+                "--texels-per-pixel must be in [0.25, 4], got {}",
+                self.texels_per_pixel
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What a `project` run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProjectReport {
+    /// The settings and per-photo / per-level reports, as stored in the manifest.
+    pub settings: PhotoSettings,
+    /// Cells (all levels) that got a photo texture.
+    pub cells_written: usize,
+    /// Wall-clock seconds each stage of the run took, in order (stage name, seconds): colour
+    /// leveling, then per level and photo the footprints and the splat, and the cells
+    /// written per level. For benchmarks; not stored.
+    pub stage_seconds: Vec<(String, f64)>,
+}
+
+/// Wall-clock durations of consecutive stages (also logged at debug level).
+struct StageTimer {
+    last: std::time::Instant,
+    laps: Vec<(String, f64)>,
+}
+
+impl StageTimer {
+    fn new() -> StageTimer {
+        StageTimer {
+            last: std::time::Instant::now(),
+            laps: Vec::new(),
+        }
+    }
+
+    fn lap(&mut self, stage: &str) {
+        let now = std::time::Instant::now();
+        let dt = (now - self.last).as_secs_f64();
+        self.last = now;
+        self.note(stage, dt);
+    }
+
+    /// Records a stage that ran alongside others (does not start a new lap).
+    fn note(&mut self, stage: &str, dt: f64) {
+        tracing::debug!("project: {stage}: {dt:.3} s");
+        self.laps.push((stage.to_string(), dt));
+    }
+}
+
+/// Runs `project` on the store in `dir` with `photos` (see the [module docs](self)).
+/// Errors on an unreadable store, a photo whose image size differs from its camera's, or a
+/// failed write; a photo that sees no terrain only logs a warning.
+pub fn project_store(
+    dir: &Path,
+    photos: &[PhotoInput],
+    opts: &ProjectOptions,
+) -> Result<ProjectReport> {
+    opts.confidence.validate()?;
+    opts.texture.validate()?;
+    if photos.len() >= u16::MAX as usize {
+        return Err(Error::BadOption(format!(
+            "at most {} photos per run, got {}",
+            u16::MAX - 1,
+            photos.len()
+        )));
+    }
+    let mut timer = StageTimer::new();
+    let _lock = crate::store::StoreLock::acquire(dir, "cliffmap project")?;
+    let mut store = Store::open(dir)?;
+    for p in photos {
+        if p.image.dimensions() != (p.camera.width, p.camera.height) {
+            return Err(Error::bad_input(
+                &p.image_path,
+                format!(
+                    "image is {}x{} pixels but its camera is for {}x{}",
+                    p.image.width(),
+                    p.image.height(),
+                    p.camera.width,
+                    p.camera.height
+                ),
+            ));
+        }
+    }
+    let ncells = store.manifest.cells.len();
+    let levels = store.manifest.quadtree.levels as usize;
+    let finest = levels.saturating_sub(1);
+    timer.lap("open store");
+    let pyramids: Vec<PhotoPyramid> = photos
+        .iter()
+        .map(|p| PhotoPyramid::new_in(&p.image, p.camera, finest + SIZING_STEPS, opts.colour_space))
+        .collect();
+    timer.lap("photo pyramids");
+
+    let multi = MultiProgress::new();
+    let steps = levels as u64 + opts.level_colours as u64;
+    let bars: Vec<ProgressBar> = photos
+        .iter()
+        .map(|p| {
+            let pb = progress_bar(steps, &p.name, opts.quiet);
+            if opts.quiet { pb } else { multi.add(pb) }
+        })
+        .collect();
+
+    let mut reports: Vec<PhotoReport> = photos
+        .iter()
+        .map(|p| PhotoReport {
+            name: p.name.clone(),
+            image: crate::fsutil::relative_path(&p.image_path, dir),
+            texels_written: 0,
+            texels_supplied: 0,
+            pixels_hit: 0,
+            rejected_silhouette: 0,
+            reconstructed_footprints: 0,
+            colour_gain: [1.0; 3],
+            colour_offset: [0.0; 3],
+            colour_samples: 0,
+        })
+        .collect();
+
+    let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    // Scratch memory of all casts of this run.
+    let buffers = FootprintBuffers::default();
+    // Footprints cast for the leveling are kept for the main loop while they are few.
+    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
+    let mut cached_len = 0usize;
+    // The first photo's finest scene is built alongside the leveling (which leaves cores
+    // idle in its smaller steps); it is the first scene the level loop needs, unless the
+    // leveling casts the finest level itself (a photo of at most `leveling_max_pixels`).
+    let prebuild = !opts.level_colours
+        || pyramids
+            .first()
+            .is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
+    let (leveled, first_scene) = rayon::join(
+        || -> Result<Vec<(ColourTransform, usize, Option<(usize, FootprintSet)>)>> {
+            if !opts.level_colours {
+                return Ok(Vec::new());
+            }
+            pyramids
+                .iter()
+                .map(|pyr| estimate_leveling(&store, pyr, finest, opts, &buffers))
+                .collect()
+        },
+        || {
+            let first = photos.first().filter(|_| prebuild);
+            first
+                .map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray))
+                .transpose()
+        },
+    );
+    for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
+        if let Some((level, fs)) = fs {
+            if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
+                cached_len += fs.len();
+                cached[i] = Some((level, fs));
+            }
+        }
+        transforms[i] = t;
+        reports[i].colour_gain = t.gain;
+        reports[i].colour_offset = t.offset;
+        reports[i].colour_samples = n as u64;
+        bars[i].inc(1);
+    }
+    let mut first_scene = first_scene?;
+    timer.lap(if opts.level_colours {
+        "colour leveling (alongside the first finest scene)"
+    } else {
+        "first finest scene"
+    });
+
+    let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
+    let mut level_reports = Vec::with_capacity(levels);
+    // Finest level first; the cells of each level are blended and written while the next
+    // coarser level is cast and splatted (levels are independent, so the output is the same
+    // as level by level).
+    let run = LevelRun {
+        store: &store,
+        pyramids: &pyramids,
+        transforms: &transforms,
+        opts,
+        buffers: &buffers,
+        bars: &bars,
+        finest,
+        cell_errors: store
+            .manifest
+            .cells
+            .iter()
+            .map(|c| c.max_error.max(0.0) as f32)
+            .collect(),
+    };
+    let mut pending: Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))> = None;
+    // The photo textures are written on a thread of their own (the fsyncs do not hold up
+    // the workers); all are on disk before the manifest refers to them.
+    let writer = BackgroundWriter::new(dir);
+    // per photo, its occlusion map (made at the finest level, used by every level)
+    let mut occlusion: Vec<Option<OcclusionMap>> = photos.iter().map(|_| None).collect();
+    for level in (0..levels).rev().map(Some).chain([None]) {
+        let (finished, projected) = rayon::join(
+            || {
+                pending.take().map(|(l, (accs, sizing))| {
+                    let t = std::time::Instant::now();
+                    (
+                        l,
+                        finish_level(&store, l, accs, &sizing, opts, &writer),
+                        t.elapsed().as_secs_f64(),
+                    )
+                })
+            },
+            || -> Result<Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))>> {
+                let Some(level) = level else { return Ok(None) };
+                Ok(Some((
+                    level,
+                    run.project_level(
+                        level,
+                        &mut occlusion,
+                        &mut cached,
+                        &mut first_scene,
+                        &mut reports,
+                        &mut timer,
+                    )?,
+                )))
+            },
+        );
+        if let Some((l, result, secs)) = finished {
+            let (lr, recs, supplied) = result?;
+            for (ci, rec) in recs {
+                records[ci] = Some(rec);
+            }
+            for (r, n) in reports.iter_mut().zip(supplied) {
+                r.texels_supplied += n;
+            }
+            level_reports.push(lr);
+            timer.note(
+                &format!("level {l}: cells written (alongside the next level)"),
+                secs,
+            );
+            // The time after the next level's casts until these writes were done.
+            timer.lap(&format!("level {l}: rest of its cell writes"));
+        }
+        pending = projected?;
+    }
+    writer.finish()?;
+    timer.lap("photo textures on disk");
+    level_reports.sort_by_key(|r| r.level);
+    for pb in &bars {
+        pb.finish_and_clear();
+    }
+    for r in &reports {
+        if r.texels_written == 0 {
+            tracing::warn!(
+                "photo {}: it sees no terrain of the store (no texels written)",
+                r.name
+            );
+        }
+    }
+
+    let cells_written = records.iter().filter(|r| r.is_some()).count();
+    for (c, r) in store.manifest.cells.iter_mut().zip(records) {
+        c.photo = r;
+    }
+    let settings = PhotoSettings {
+        blend: opts.blend.name().to_string(),
+        reconstruct: opts.footprint.reconstruct,
+        level_colours: opts.level_colours,
+        ray_accel: opts.ray.name(),
+        colour_space: opts.colour_space.name().to_string(),
+        photo_driven_sizes: opts.texture.photo_driven,
+        max_photo_texels: opts.texture.max_texels,
+        photo_texture_budget: opts.texture.budget_bytes,
+        occlusion_margin_px: opts.confidence.occlusion_margin_px,
+        photos: reports,
+        levels: level_reports,
+    };
+    store.manifest.photos = Some(settings.clone());
+    let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);
+    write_stats(dir, &store.manifest, threshold)?;
+    store.manifest.write(dir)?;
+    remove_stale_photo_files(dir, &store.manifest.cells);
+    timer.lap("manifest and stats");
+    Ok(ProjectReport {
+        settings,
+        cells_written,
+        stage_seconds: timer.laps,
+    })
+}
+
+/// Removes the photo textures of cells without a photo record (left by an earlier run).
+pub(crate) fn remove_stale_photo_files(dir: &Path, cells: &[CellRecord]) {
+    for c in cells.iter().filter(|c| c.photo.is_none()) {
+        for ext in ["photo.png", "photo.conf.png"] {
+            let _ =
+                std::fs::remove_file(dir.join(format!("{}.{ext}", cell_stem(c.level, c.x, c.y))));
+        }
+    }
+}
+
+mod finish;
+mod level;
+mod leveling;
+
+use finish::{check_size, finish_level};
+use level::{LevelRun, LevelSizing, SIZING_STEPS, cell_context, splat_batch};
+use leveling::{MAX_CACHED_FOOTPRINTS, estimate_leveling, leveling_step};
