@@ -283,22 +283,8 @@ impl<'a> TerrainScene<'a> {
             dist: f32,
             photo: bool,
         }
-        // greys from the label photos, where one shows the point
-        let photo_greys: Vec<Option<f32>> = if self.label_photos.is_empty() {
-            Vec::new()
-        } else {
-            raw.par_iter()
-                .map(|r| match r {
-                    Some((dir, Some(hh))) => {
-                        self.photo_grey(bvh, cam.position + *dir * hh.t as f64)
-                    }
-                    _ => None,
-                })
-                .collect()
-        };
         let mut out_at: Vec<Option<Result<Hit, DVec3>>> = Vec::with_capacity(raw.len());
-        for (i, r) in raw.iter().enumerate() {
-            let photo_grey = photo_greys.get(i).copied().flatten();
+        for r in &raw {
             let Some((dir, hit)) = r else {
                 out_at.push(None);
                 continue;
@@ -312,41 +298,21 @@ impl<'a> TerrainScene<'a> {
                     let p = [0, 1].map(|k| {
                         hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]
                     });
-                    let grey = photo_grey.unwrap_or_else(|| {
-                        textures[self.scene.cell_of(hh.triangle) as usize]
-                            .as_deref()
-                            .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)))
-                    });
+                    let grey = textures[self.scene.cell_of(hh.triangle) as usize]
+                        .as_deref()
+                        .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)));
                     out_at.push(Some(Ok(Hit {
                         point,
                         grey,
                         steep,
                         dist: hh.t,
-                        photo: photo_grey.is_some(),
+                        photo: false,
                     })));
                 }
                 None if self.rises_above(cam.position, *dir) => out_at.push(Some(Err(*dir))),
                 None => out_at.push(None),
             }
         }
-        // grey class boundaries per source (texture, label photo): quantiles of the view's own
-        let cuts_of = |photo: bool| -> Vec<f32> {
-            let mut greys: Vec<f32> = out_at
-                .iter()
-                .flatten()
-                .filter_map(|a| a.as_ref().ok().filter(|h| h.photo == photo).map(|h| h.grey))
-                .collect();
-            greys.sort_unstable_by(f32::total_cmp);
-            (1..GREY_CLASSES as usize)
-                .map(|k| {
-                    greys
-                        .get(k * greys.len() / GREY_CLASSES as usize)
-                        .copied()
-                        .unwrap_or(0.5)
-                })
-                .collect()
-        };
-        let cuts = [cuts_of(false), cuts_of(true)];
         let mut dists: Vec<f32> = out_at
             .iter()
             .flatten()
@@ -393,6 +359,49 @@ impl<'a> TerrainScene<'a> {
                 keep
             }
         };
+        // Greys from the label photos, where one shows the point: only for the samples
+        // kept (each costs a ray to test the point's visibility from every label photo).
+        if !self.label_photos.is_empty() {
+            let greys: Vec<Option<f32>> = out_at
+                .par_iter()
+                .zip(&keep)
+                .map(|(a, &k)| match a {
+                    Some(Ok(h)) if k => self.photo_grey(bvh, h.point),
+                    _ => None,
+                })
+                .collect();
+            for (a, g) in out_at.iter_mut().zip(greys) {
+                if let (Some(Ok(h)), Some(g)) = (a, g) {
+                    h.grey = g;
+                    h.photo = true;
+                }
+            }
+        }
+        // grey class boundaries per source (texture, label photo): quantiles of the view's
+        // own greys; with label photos and a band, over the uniform one-in-`INNER_STRIDE`²
+        // grid of samples (kept, so their source is known; an unbiased subset of the view)
+        let uniform = |i: usize| (i / nu) % INNER_STRIDE == 0 && (i % nu) % INNER_STRIDE == 0;
+        let quantile_set = |i: usize| self.label_photos.is_empty() || band.is_none() || uniform(i);
+        let cuts_of = |photo: bool| -> Vec<f32> {
+            let mut greys: Vec<f32> = out_at
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| quantile_set(*i))
+                .filter_map(|(_, a)| a.as_ref()?.as_ref().ok())
+                .filter(|h| h.photo == photo)
+                .map(|h| h.grey)
+                .collect();
+            greys.sort_unstable_by(f32::total_cmp);
+            (1..GREY_CLASSES as usize)
+                .map(|k| {
+                    greys
+                        .get(k * greys.len() / GREY_CLASSES as usize)
+                        .copied()
+                        .unwrap_or(0.5)
+                })
+                .collect()
+        };
+        let cuts = [cuts_of(false), cuts_of(true)];
         Ok(out_at
             .into_iter()
             .zip(keep)
