@@ -67,7 +67,18 @@ pub(crate) struct Mesh {
 
 /// Rectangles of at most this many samples reserve their densest triangulation's storage
 /// up front ([`Mesh::rectangle`]): a finest-level cell (129² samples at most) does.
-pub(crate) const RESERVE_SAMPLES: usize = 1 << 15;
+const RESERVE_SAMPLES: usize = 1 << 15;
+
+/// Triangle slots to reserve for a triangulation of `rect`'s samples: two per sample (the
+/// densest) for a rectangle of at most [`RESERVE_SAMPLES`], else none (it grows).
+pub(crate) fn reserved_triangles(rect: SampleRect) -> usize {
+    let samples = (rect.c1 - rect.c0 + 1) as usize * (rect.r1 - rect.r0 + 1) as usize;
+    if samples <= RESERVE_SAMPLES {
+        2 * samples
+    } else {
+        0
+    }
+}
 
 impl Mesh {
     /// The Delaunay triangulation of `rect`'s four corners and the `border` points that lie
@@ -105,13 +116,8 @@ impl Mesh {
         let n_boundary = 4 + left.len() + bottom.len() + right.len() + top.len();
         // a cell-sized rectangle gets room for its densest triangulation at once (no
         // regrowth while refining); larger ones grow as they refine
-        let samples = (c1 - c0 + 1) as usize * (r1 - r0 + 1) as usize;
-        let (v, t) = if samples <= RESERVE_SAMPLES {
-            (samples, 2 * samples)
-        } else {
-            (0, 0)
-        };
-        let mut coords = Vec::with_capacity(v.max(4));
+        let t = reserved_triangles(rect);
+        let mut coords = Vec::with_capacity((t / 2).max(4));
         coords.extend([[c0, r0], [c0, r1], [c1, r1], [c1, r0]]);
         let mut m = Mesh {
             coords,

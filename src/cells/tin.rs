@@ -226,16 +226,6 @@ impl Greedy<'_> {
     }
 }
 
-/// Triangle slots to reserve for `rect` (see [`super::halfedge::RESERVE_SAMPLES`]).
-fn g_reserve(rect: SampleRect) -> usize {
-    let samples = (rect.c1 - rect.c0 + 1) as usize * (rect.r1 - rect.r0 + 1) as usize;
-    if samples <= super::halfedge::RESERVE_SAMPLES {
-        2 * samples
-    } else {
-        0
-    }
-}
-
 fn check_rect(dem: &Dem, rect: SampleRect) -> Result<()> {
     if !(rect.c0 < rect.c1
         && rect.r0 < rect.r1
@@ -311,8 +301,8 @@ fn greedy_tin(
         width: dem.width,
         epsilon,
         mesh: Mesh::rectangle(rect, &pts),
-        cand: Vec::with_capacity(g_reserve(rect)),
-        heap: FaceHeap::with_capacity(g_reserve(rect)),
+        cand: Vec::with_capacity(super::halfedge::reserved_triangles(rect)),
+        heap: FaceHeap::with_capacity(super::halfedge::reserved_triangles(rect)),
         dirty: Vec::new(),
     };
     let inner = if refine_boundary { 0 } else { 1 };

@@ -109,6 +109,19 @@ pub(super) struct CellOutcome {
     supplied_base: Vec<u64>,
 }
 
+impl CellOutcome {
+    /// A cell that gets no photo texture, with its count of covered steep texels.
+    fn without_photo(steep_texels: u64) -> CellOutcome {
+        CellOutcome {
+            record: None,
+            steep_texels,
+            steep_photo_base: 0,
+            photo_base: 0,
+            supplied_base: Vec::new(),
+        }
+    }
+}
+
 /// Which texel centres of a `texels × texels` texture of cell `rec` (active layout) lie on a
 /// surface triangle in texture space (row-major).
 pub(super) fn covered_mask(store: &Store, rec: &CellRecord, texels: u32) -> Result<Vec<bool>> {
@@ -165,13 +178,7 @@ pub(super) fn finish_cell(
             .zip(normals.pixels())
             .filter(|(c, n)| **c && (normal_cos_slope(n.0) as f32) < cos_steep)
             .count() as u64;
-        return Ok(CellOutcome {
-            record: None,
-            steep_texels,
-            steep_photo_base: 0,
-            photo_base: 0,
-            supplied_base: Vec::new(),
-        });
+        return Ok(CellOutcome::without_photo(steep_texels));
     };
     let existing = store.read_active_texture(rec)?;
     let ctx = &acc.context;
@@ -204,13 +211,7 @@ pub(super) fn finish_cell(
         .present(acc.texels)
         .map_err(|e| Error::store(&store.dir, e))?;
     if !present.contains(&true) {
-        return Ok(CellOutcome {
-            record: None,
-            steep_texels,
-            steep_photo_base: 0,
-            photo_base: 0,
-            supplied_base: Vec::new(),
-        });
+        return Ok(CellOutcome::without_photo(steep_texels));
     }
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {

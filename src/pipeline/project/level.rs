@@ -219,18 +219,15 @@ impl LevelRun<'_> {
                 .zip(pas)
                 .zip(sizing.contexts.iter_mut())
                 .enumerate()
-                .filter(|(_, ((_, pa), _))| pa.is_some())
+                .filter_map(|(ci, ((acc, pa), ctx))| pa.map(|pa| (ci, acc, pa, ctx)))
                 .collect();
-            work.sort_by_key(|(ci, ((_, pa), _))| {
-                Reverse((pa.as_ref().map_or(0, |p| p.sums.allocated()), Reverse(*ci)))
-            });
+            work.sort_by_key(|(ci, _, pa, _)| Reverse((pa.sums.allocated(), Reverse(*ci))));
             let written: Vec<Result<u64>> = work
                 .into_par_iter()
                 .with_max_len(1)
-                .map(|(ci, ((acc, pa), ctx))| match (acc.as_mut(), pa) {
-                    (_, None) => Ok(0),
-                    (Some(acc), Some(pa)) => Ok(acc.merge(&pa, pi as u16)),
-                    (None, Some(pa)) => {
+                .map(|(ci, acc, pa, ctx)| match acc.as_mut() {
+                    Some(acc) => Ok(acc.merge(&pa, pi as u16)),
+                    None => {
                         let ctx = match ctx.take() {
                             Some(c) => c,
                             None => cell_context(self.store, &cells[ci])?,
