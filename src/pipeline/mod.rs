@@ -9,6 +9,7 @@
 //!   confidence map, steep-texel counts).
 
 mod build;
+mod decoded_photos;
 mod derived_ortho;
 mod mesh;
 mod photo_stats;

@@ -20,6 +20,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
 
+use super::decoded_photos::{DEFAULT_BUDGET_BYTES, DecodedPhotos};
 use crate::camera::{CameraModel, camera_to_json};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -151,9 +152,10 @@ pub fn register_photos(
     register_photos_with(store_dir, specs, out, opts, &TieSettings::default(), warn)
 }
 
-/// Registers each photo of `specs` (decoded one at a time) against the store in `store_dir`
-/// with `opts`, known photos and ties as `ties` says, and writes the refined list to `out`
-/// with camera files and a report beside it (module docs). A photo nothing places keeps
+/// Registers each photo of `specs` against the store in `store_dir` (each image decoded
+/// once while the images kept for reuse fit in 1 GiB) with `opts`, known photos and ties
+/// as `ties` says, and writes the refined list to `out` with camera files and a report
+/// beside it (module docs). A photo nothing places keeps
 /// its given camera (its camera file is a copy of it) and is reported with the reason;
 /// `warn` is called with a line for it. Errors for a known name not in the list or a
 /// moving mask not of the store's DEM size.
@@ -190,6 +192,8 @@ pub fn register_photos_with(
     if opts.labels == LabelTexture::Best {
         check_photo_labels(&store, specs, &ties.known, warn)?;
     }
+    // each photo decoded once while memory allows (anchors and label sources are reused)
+    let images = DecodedPhotos::new(specs, DEFAULT_BUDGET_BYTES);
     let dir = out
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -235,7 +239,7 @@ pub fn register_photos_with(
         let Some((_, j, anchor)) = anchor else {
             return Ok(None);
         };
-        let (a_img, p_img) = (specs[j].load()?.image, specs[i].load()?.image);
+        let (a_img, p_img) = (images.get(j)?, images.get(i)?);
         let terrain = TerrainScene::new(&store, anchor.position)?;
         let tie = tie_photo(
             &anchor,
@@ -271,7 +275,7 @@ pub fn register_photos_with(
         let Some((_, j, anchor)) = anchor else {
             return Ok(None);
         };
-        let (a_img, p_img) = (specs[j].load()?.image, specs[i].load()?.image);
+        let (a_img, p_img) = (images.get(j)?, images.get(i)?);
         let terrain = TerrainScene::new(&store, anchor.position)?;
         // the same camera body (EXIF make, model, serial, lens, focal length) and image
         // size: the anchor's intrinsics, the focal length not fitted (it would trade
@@ -351,14 +355,14 @@ pub fn register_photos_with(
             }
         }
         let spec = &specs[i];
-        let photo = spec.load()?;
+        let photo = images.get(i)?;
         let mut terrain = TerrainScene::for_options(&store, spec.camera.position, opts)?;
         if opts.labels == LabelTexture::Best {
             // the photos placed so far with trusted cameras (known, or tied or resected to
             // such a photo) label the terrain they show
-            set_label_photos(&mut terrain, specs, &fits, |j| j != i && trusted[j])?;
+            set_label_photos(&mut terrain, &images, &fits, |j| j != i && trusted[j])?;
         }
-        let fit = register_to_terrain(&terrain, &photo.image, &spec.camera, opts)
+        let fit = register_to_terrain(&terrain, &photo, &spec.camera, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         if fit.photo_label_share.is_some_and(|s| s < 0.01) {
             warn(&format!(
@@ -401,7 +405,7 @@ pub fn register_photos_with(
         }
     }
     if opts.labels == LabelTexture::Best {
-        second_pass_against_photos(&store, specs, &mut fits, &trusted, opts, warn)?;
+        second_pass_against_photos(&store, specs, &images, &mut fits, &trusted, opts, warn)?;
     }
     let fits: Vec<(TerrainFit, &'static str)> = fits
         .into_iter()
@@ -643,6 +647,7 @@ fn check_photo_labels(
 fn second_pass_against_photos(
     store: &Store,
     specs: &[PhotoSpec],
+    images: &DecodedPhotos,
     fits: &mut [Option<(TerrainFit, &'static str)>],
     trusted: &[bool],
     opts: &TerrainOptions,
@@ -663,7 +668,7 @@ fn second_pass_against_photos(
         }
         let spec = &specs[i];
         let mut terrain = TerrainScene::for_options(store, spec.camera.position, opts)?;
-        set_label_photos(&mut terrain, specs, fits, source)?;
+        set_label_photos(&mut terrain, images, fits, source)?;
         let small = first.camera.resized(
             (first.camera.width / 8).max(16),
             (first.camera.height / 8).max(12),
@@ -671,9 +676,9 @@ fn second_pass_against_photos(
         if terrain.photo_label_share(&small)? < 0.01 {
             continue;
         }
-        let photo = spec.load()?;
+        let photo = images.get(i)?;
         let start = first.camera;
-        let fit = register_to_terrain(&terrain, &photo.image, &start, opts)
+        let fit = register_to_terrain(&terrain, &photo, &start, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         if fit.converged {
             let mut f = fit;
@@ -692,21 +697,21 @@ fn second_pass_against_photos(
 }
 
 /// Gives `terrain` the photos `pick` chooses among those with a fit as label photos (their
-/// fitted cameras; images decoded here).
+/// fitted cameras; images from `images`).
 fn set_label_photos(
     terrain: &mut TerrainScene,
-    specs: &[PhotoSpec],
+    images: &DecodedPhotos,
     fits: &[Option<(TerrainFit, &'static str)>],
     pick: impl Fn(usize) -> bool,
 ) -> Result<()> {
     let mut sources = Vec::new();
     for (j, fit) in fits.iter().enumerate().filter(|(j, _)| pick(*j)) {
         if let Some((f, _)) = fit {
-            sources.push((f.camera, specs[j].load()?.image));
+            sources.push((f.camera, images.get(j)?));
         }
     }
     let refs: Vec<(CameraModel, &image::RgbImage)> =
-        sources.iter().map(|(c, img)| (*c, img)).collect();
+        sources.iter().map(|(c, img)| (*c, img.as_ref())).collect();
     terrain.set_label_photos(&refs);
     Ok(())
 }
