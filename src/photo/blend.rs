@@ -85,6 +85,7 @@ pub fn blend_cell(
     let mut stored = vec![false; grid * grid];
     let (px, cv) = (texture.as_mut(), conf.as_mut());
     let base_index = ctx.base_indexer(acc.texels, acc.scale);
+    let block_index = block_indexer(w as usize, side as usize, grid);
     let resolution_weight = params.resolution_weight_fn();
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
         if t >= n {
@@ -107,8 +108,7 @@ pub fn blend_cell(
         e[3] = e[3].max(crate::fastmath::to_u8(beta * 255.0));
         cv[t] = crate::fastmath::to_u8(s * 255.0);
         // (stored wherever the photo had weight, even a share that rounds to 0)
-        let (x, y) = (t % w as usize, t / w as usize);
-        stored[(y / side as usize) * grid + x / side as usize] = true;
+        stored[block_index(t)] = true;
         let cov = covered.get(b).copied().unwrap_or(false);
         if s > 0.5 && cov {
             photo_texels += 1;
@@ -130,6 +130,19 @@ pub fn blend_cell(
         steep_texels,
         steep_photo_texels,
         supplied,
+    }
+}
+
+/// The block (row-major over a `grid`-wide grid of `side`-texel blocks) of texel `t` of a
+/// row-major texture `w` texels wide; shifts when `w` and `side` are powers of two (the
+/// usual sizes), divisions otherwise.
+fn block_indexer(w: usize, side: usize, grid: usize) -> impl Fn(usize) -> usize + Copy {
+    let (w, side) = (w.max(1), side.max(1));
+    let shifts = (w.is_power_of_two() && side.is_power_of_two())
+        .then(|| (w.trailing_zeros(), side.trailing_zeros()));
+    move |t: usize| match shifts {
+        Some((lw, ls)) => ((t >> lw) >> ls) * grid + ((t & (w - 1)) >> ls),
+        None => (t / w / side) * grid + (t % w) / side,
     }
 }
 
@@ -335,6 +348,24 @@ mod tests {
                 mean >= mean1 - 0.5,
                 "scale {scale}: mean share {mean} < {mean1}"
             );
+        }
+    }
+
+    #[test]
+    fn block_indices_by_shifts_equal_those_by_division() {
+        for (w, side) in [
+            (256usize, 64usize),
+            (2048, 64),
+            (64, 64),
+            (96, 32),
+            (100, 7),
+        ] {
+            let grid = w.div_ceil(side);
+            let f = block_indexer(w, side, grid);
+            for t in (0..w * w).step_by(13) {
+                let (x, y) = (t % w, t / w);
+                assert_eq!(f(t), (y / side) * grid + x / side, "{w} {side} {t}");
+            }
         }
     }
 }
