@@ -170,6 +170,13 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
         manifest_before
     );
 
+    // a lone photo competes with no other: the occlusion margin (which only weighs photos
+    // against each other) changes no file
+    let mut no_margin = opts();
+    no_margin.confidence.occlusion_margin_px = 0.0;
+    project_store(&dir, &[wall_photo()], &no_margin).unwrap();
+    assert_eq!(photo_files(&dir), before);
+
     // a camera facing away: no photo textures, stale files removed, no error
     let away = photo(
         DVec3::new(X0 + 2.0, Y0 - 32.0, 115.0),

@@ -50,7 +50,8 @@ pub struct Args {
     pub include_unregistered: bool,
     /// Occlusion margin: photo pixels closer than PX (pose uncertainty, full-resolution
     /// pixels) plus the TIN error's displacement to an occlusion edge of the photo (a
-    /// silhouette, the skyline, a depth jump) count less; 0 switches it off.
+    /// silhouette, the skyline, a depth jump) count less when photos compete for a texel (a
+    /// lone photo needs no map); 0 switches it off.
     #[arg(long, default_value_t = 2.0, value_name = "PX")]
     pub occlusion_margin: f64,
     /// Colour space photo colours are averaged and blended in.

@@ -140,7 +140,10 @@ impl LevelRun<'_> {
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
             let cells = &self.store.manifest.cells;
+            // the occlusion weight only enters the choice between photos (docs/projection.md,
+            // "Occlusion margin"), so a lone photo needs no map
             if level == self.finest
+                && self.pyramids.len() > 1
                 && self.opts.confidence.occlusion_margin_px > 0.0
                 && occlusion[pi].is_none()
             {

@@ -331,7 +331,8 @@ pub fn project_store(
     // The photo textures are written on a thread of their own (the fsyncs do not hold up
     // the workers); all are on disk before the manifest refers to them.
     let writer = BackgroundWriter::new(dir);
-    // per photo, its occlusion map (made at the finest level, used by every level)
+    // per photo, its occlusion map (made at the finest level when there are several
+    // photos, used by every level)
     let mut occlusion: Vec<Option<OcclusionMap>> = photos.iter().map(|_| None).collect();
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
