@@ -85,60 +85,19 @@ fn main() -> anyhow::Result<()> {
         let terrain = TerrainScene::new(&store, ta.position)?;
         let hit = |o, d| terrain.hit(o, d);
         let (shown_a, shown_b) = (shown_points(&ta, hit), shown_points(&tb, hit));
-        // where photo X (found camera fx, true camera tx) paints the terrain point p: the
-        // true point its found camera's pixel shows
-        let painted = |fx: &CameraModel, tx: &CameraModel, p| {
-            fx.project(p)
-                .and_then(|q| tx.pixel_ray(q[0], q[1]))
-                .and_then(|d| terrain.hit(tx.position, d))
-        };
-        // ghost: on A's shown points that B also sees, the distance in A's true pixels
-        // between what A and B paint there (median)
-        let ghost = |fa: &CameraModel, fb: &CameraModel| {
-            let mut g: Vec<f64> = shown_a
-                .iter()
-                .filter_map(|(p, _)| {
-                    let (pa, pb) = (painted(fa, &ta, *p)?, painted(fb, &tb, *p)?);
-                    let (qa, qb) = (ta.project(pa)?, ta.project(pb)?);
-                    tb.project(*p)
-                        .filter(|q| {
-                            q[0] >= 0.0
-                                && q[1] >= 0.0
-                                && q[0] < tb.width as f64
-                                && q[1] < tb.height as f64
-                        })
-                        .map(|_| (qa[0] - qb[0]).hypot(qa[1] - qb[1]))
-                })
-                .collect();
-            g.sort_by(f64::total_cmp);
-            g.get(g.len() / 2).copied().unwrap_or(f64::NAN)
-        };
+        let ghost =
+            |fa: &CameraModel, fb: &CameraModel| ghost_px(&terrain, &shown_a, (&ta, &tb), (fa, fb));
         for s in 0..ps.starts {
             let ra = rough_start(CameraParams::from_camera(&ta), &mut rng, 0.0, true).camera();
             let rb = rough_start(CameraParams::from_camera(&tb), &mut rng, 0.0, true).camera();
             let fa1 = register_to_terrain(&terrain, img_a, &ra, &opts)?;
             let fb1 = register_to_terrain(&terrain, &img_b, &rb, &opts)?;
-            // pass 2 as `register --textures best` runs it: from the photo's camera (the
-            // given one if pass 1 refused it) against the other's pixels, if the other is
-            // placed; kept if it converges
-            let again = |img: &image::RgbImage,
-                         first: &TerrainFit,
-                         other: &TerrainFit,
-                         other_img: &image::RgbImage|
-             -> anyhow::Result<TerrainFit> {
-                if !other.converged {
-                    return Ok(first.clone());
-                }
-                let mut t = TerrainScene::new(&store, first.camera.position)?;
-                t.set_label_photos(&[(other.camera, other_img)]);
-                let f = register_to_terrain(&t, img, &first.camera, &opts)?;
-                Ok(if f.converged { f } else { first.clone() })
-            };
-            let fa2 = again(img_a, &fa1, &fb1, &img_b)?;
+            // pass 2 as `register --textures best` runs it (`again`)
+            let fa2 = again(&store, &opts, img_a, &fa1, &[(&fb1, &img_b)])?;
             // --sequential: B against A's pass-2 camera (Gauss-Seidel, what `register`
             // does), else against its pass-1 one
             let fa_for_b = if a.has("--sequential") { &fa2 } else { &fa1 };
-            let fb2 = again(&img_b, &fb1, fa_for_b, img_a)?;
+            let fb2 = again(&store, &opts, &img_b, &fb1, &[(fa_for_b, img_a)])?;
             registered[0] += usize::from(fa1.converged) + usize::from(fb1.converged);
             registered[1] += usize::from(fa2.converged) + usize::from(fb2.converged);
             let (a1, b1, a2, b2) = (fa1.camera, fb1.camera, fa2.camera, fb2.camera);
@@ -158,11 +117,7 @@ fn main() -> anyhow::Result<()> {
             rows.push(r);
         }
     }
-    let med = |k: usize| {
-        let mut v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-    };
+    let med = |k: usize| median(rows.iter().map(|r| r[k]).collect());
     println!(
         "\nmedians: pass 1 A {:.2}, B {:.2}, ghost {:.2} px; pass 2 A {:.2}, B {:.2}, ghost {:.2} px; registered (converged) pass 1 {} of {n}, pass 2 {} of {n}",
         med(0),
@@ -254,30 +209,8 @@ fn run_triples(
             shown_points(&tb, hit),
             shown_points(&tc, hit),
         );
-        let painted = |fx: &CameraModel, tx: &CameraModel, p| {
-            fx.project(p)
-                .and_then(|q| tx.pixel_ray(q[0], q[1]))
-                .and_then(|d| terrain.hit(tx.position, d))
-        };
-        let ghost = |fa: &CameraModel, fb: &CameraModel| {
-            let mut g: Vec<f64> = sa
-                .iter()
-                .filter_map(|(p, _)| {
-                    let (pa, pb) = (painted(fa, &ta, *p)?, painted(fb, &tb, *p)?);
-                    let (qa, qb) = (ta.project(pa)?, ta.project(pb)?);
-                    tb.project(*p)
-                        .filter(|q| {
-                            q[0] >= 0.0
-                                && q[1] >= 0.0
-                                && q[0] < tb.width as f64
-                                && q[1] < tb.height as f64
-                        })
-                        .map(|_| (qa[0] - qb[0]).hypot(qa[1] - qb[1]))
-                })
-                .collect();
-            g.sort_by(f64::total_cmp);
-            g.get(g.len() / 2).copied().unwrap_or(f64::NAN)
-        };
+        let ghost =
+            |fa: &CameraModel, fb: &CameraModel| ghost_px(&terrain, &sa, (&ta, &tb), (fa, fb));
         for s in 0..ps.starts {
             let ra = rough_start(CameraParams::from_camera(&ta), &mut rng, 0.0, true).camera();
             let rb = rough_start(CameraParams::from_camera(&tb), &mut rng, 0.0, true).camera();
@@ -319,11 +252,7 @@ fn run_triples(
             rows.push(r);
         }
     }
-    let med = |k: usize| {
-        let mut v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-    };
+    let med = |k: usize| median(rows.iter().map(|r| r[k]).collect());
     let m: Vec<String> = (0..10).map(|k| format!("{:.2}", med(k))).collect();
     println!(
         "\nmedians: pass 1 A, B, C {}, {}, {}; two photos A, B {}, {} ghost {}; three photos A, B, C {}, {}, {} ghost {} px; registered pass 1 {} of {}, two photos {} of {}, three photos {} of {}",
@@ -345,4 +274,42 @@ fn run_triples(
         3 * rows.len()
     );
     Ok(())
+}
+
+/// The median of `v` (the upper one of an even count; NaN when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// The ghost between photos A and B (true cameras `ta`, `tb`; found ones `fa`, `fb`): on
+/// the points A shows (`shown_a`) that B also sees, the median distance in A's true pixels
+/// between what A and B paint there, where a photo paints a point with the true point its
+/// found camera's pixel shows.
+fn ghost_px(
+    terrain: &TerrainScene,
+    shown_a: &[(glam::DVec3, [f64; 2])],
+    (ta, tb): (&CameraModel, &CameraModel),
+    (fa, fb): (&CameraModel, &CameraModel),
+) -> f64 {
+    let painted = |fx: &CameraModel, tx: &CameraModel, p| {
+        fx.project(p)
+            .and_then(|q| tx.pixel_ray(q[0], q[1]))
+            .and_then(|d| terrain.hit(tx.position, d))
+    };
+    let inside_b = |q: &[f64; 2]| {
+        q[0] >= 0.0 && q[1] >= 0.0 && q[0] < tb.width as f64 && q[1] < tb.height as f64
+    };
+    median(
+        shown_a
+            .iter()
+            .filter_map(|(p, _)| {
+                let (pa, pb) = (painted(fa, ta, *p)?, painted(fb, tb, *p)?);
+                let (qa, qb) = (ta.project(pa)?, ta.project(pb)?);
+                tb.project(*p)
+                    .filter(inside_b)
+                    .map(|_| (qa[0] - qb[0]).hypot(qa[1] - qb[1]))
+            })
+            .collect(),
+    )
 }

@@ -73,13 +73,15 @@ pub(super) fn finish_level(
     Ok((lr, records, supplied))
 }
 
-/// Errors unless the active texture and normal map have the cell's active texture size.
-pub(super) fn check_size(
+/// The cell's active texture, checked (with the normal map's side `normal_texels`, as its
+/// resolution context read it) against the cell's active texture size; errors name the file.
+pub(super) fn read_checked_active(
     store: &Store,
     rec: &CellRecord,
-    tex: (u32, u32),
-    nrm: (u32, u32),
-) -> Result<()> {
+    normal_texels: u32,
+) -> Result<image::RgbaImage> {
+    let existing = store.read_active_texture(rec)?;
+    let (tex, nrm) = (existing.dimensions(), (normal_texels, normal_texels));
     let t = active_texels(rec);
     if tex != (t, t) || nrm != (t, t) {
         let f = rec
@@ -91,7 +93,7 @@ pub(super) fn check_size(
             format!("texture {tex:?} or normal map {nrm:?} is not the cell's {t}x{t} texels"),
         ));
     }
-    Ok(())
+    Ok(existing)
 }
 
 /// A finished cell: its photo record (if it got photo colour) and its steep texel count
@@ -180,14 +182,8 @@ pub(super) fn finish_cell(
             .count() as u64;
         return Ok(CellOutcome::without_photo(steep_texels));
     };
-    let existing = store.read_active_texture(rec)?;
     let ctx = &acc.context;
-    check_size(
-        store,
-        rec,
-        existing.dimensions(),
-        (ctx.base_texels, ctx.base_texels),
-    )?;
+    let existing = read_checked_active(store, rec, ctx.base_texels)?;
     // (the active texture's masks, looked up for the photo texture's texels: these masks only
     // feed the texel counts)
     let covered = covered_mask(store, rec, ctx.base_texels)?;

@@ -40,14 +40,8 @@ pub(super) fn estimate_leveling(
             .enumerate()
             .filter_map(|(ci, pa)| pa.as_ref().map(|pa| (&cells[ci], pa)))
             .map(|(rec, pa)| {
-                let existing = store.read_active_texture(rec)?;
                 let ctx = cell_context(store, rec)?;
-                check_size(
-                    store,
-                    rec,
-                    existing.dimensions(),
-                    (ctx.base_texels, ctx.base_texels),
-                )?;
+                let existing = read_checked_active(store, rec, ctx.base_texels)?;
                 let mut pairs = ColourPairs::default();
                 collect_pairs(pa, &existing, &ctx, &opts.leveling, &mut pairs);
                 Ok(pairs)

@@ -438,6 +438,6 @@ mod finish;
 mod level;
 mod leveling;
 
-use finish::{check_size, finish_level};
+use finish::{finish_level, read_checked_active};
 use level::{LevelRun, LevelSizing, SIZING_STEPS, cell_context, splat_batch};
 use leveling::{MAX_CACHED_FOOTPRINTS, estimate_leveling, leveling_step};
