@@ -19,6 +19,8 @@ mod halfedge;
 pub mod normals;
 mod quadtree;
 mod raster;
+#[cfg(target_arch = "x86_64")]
+mod scan_x4;
 mod taps;
 pub mod texture;
 mod tiles;

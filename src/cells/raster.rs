@@ -45,6 +45,7 @@ fn floor_div(n: i64, d: i64) -> i64 {
 /// An edge's column on successive rows, exactly: `floor` and `ceil` of
 /// `p.col + (row - p.row) * (q.col - p.col) / (q.row - p.row)`, kept as an integer quotient
 /// and remainder and stepped `stride` rows at a time without division.
+#[derive(Clone, Copy)]
 struct EdgeWalk {
     x0: i64,
     q: i64,
@@ -100,71 +101,129 @@ impl EdgeWalk {
 /// `i0..=i1` (`col = origin_c + i * stride`). Rows are visited in increasing order.
 /// Degenerate triangles visit nothing. Exact integer scanline: per row, the columns
 /// between the ceiling of the left edge and the floor of the right edge.
-#[inline]
+#[inline(always)]
 pub(crate) fn for_each_span(
     tri: [[i64; 2]; 3],
     lat: &Lattice,
     mut f: impl FnMut(i64, usize, usize, usize),
 ) {
-    // sort by row: p0 top, p2 bottom; the long edge p0-p2 spans every row
-    let [mut p0, mut p1, mut p2] = tri;
-    if p1[1] < p0[1] {
-        std::mem::swap(&mut p0, &mut p1);
+    for (y, j, i0, i1) in Spans::new(tri, lat) {
+        f(y, j, i0, i1);
     }
-    if p2[1] < p1[1] {
-        std::mem::swap(&mut p1, &mut p2);
-    }
-    if p1[1] < p0[1] {
-        std::mem::swap(&mut p0, &mut p1);
-    }
-    let c = (p2[0] - p0[0]) * (p1[1] - p0[1]) - (p2[1] - p0[1]) * (p1[0] - p0[0]);
-    if c == 0 {
-        return;
-    }
-    // c < 0: p1 lies right of the long edge, so the long edge bounds the rows on the left
-    let long_left = c < 0;
-    let s = lat.stride;
-    let ymax = p2[1].min(lat.r_hi);
-    let mut y = snap_up(p0[1].max(lat.r_lo), lat.origin_r, s);
-    if y > ymax {
-        return;
-    }
-    let mut j = ((y - lat.origin_r) / s) as usize;
-    // rows before `top_end` are bounded by p0-p1, the others by p1-p2
-    let top_end = if p1[1] == p2[1] { p2[1] + 1 } else { p1[1] };
-    let mut on_top = y < top_end;
-    let mut long = EdgeWalk::new(p0, p2, y, s);
-    let mut short = if on_top {
-        EdgeWalk::new(p0, p1, y, s)
-    } else {
-        EdgeWalk::new(p1, p2, y, s)
-    };
-    let oc = lat.origin_c;
-    while y <= ymax {
-        if on_top && y >= top_end {
-            short = EdgeWalk::new(p1, p2, y, s);
-            on_top = false;
+}
+
+/// [`for_each_span`]'s rows as an iterator of `(row, j, i0, i1)` (for code that must not
+/// go through a closure).
+pub(crate) struct Spans {
+    p1: [i64; 2],
+    p2: [i64; 2],
+    long_left: bool,
+    y: i64,
+    ymax: i64,
+    j: usize,
+    top_end: i64,
+    on_top: bool,
+    long: EdgeWalk,
+    short: EdgeWalk,
+    lat: Lattice,
+}
+
+impl Spans {
+    /// The spans of the closed triangle `tri` on `lat` (none for a degenerate triangle).
+    #[inline(always)]
+    pub(crate) fn new(tri: [[i64; 2]; 3], lat: &Lattice) -> Spans {
+        // sort by row: p0 top, p2 bottom; the long edge p0-p2 spans every row
+        let [mut p0, mut p1, mut p2] = tri;
+        if p1[1] < p0[1] {
+            std::mem::swap(&mut p0, &mut p1);
         }
-        let (lo, hi) = if long_left {
-            (long.ceil(), short.floor())
-        } else {
-            (short.ceil(), long.floor())
+        if p2[1] < p1[1] {
+            std::mem::swap(&mut p1, &mut p2);
+        }
+        if p1[1] < p0[1] {
+            std::mem::swap(&mut p0, &mut p1);
+        }
+        let c = (p2[0] - p0[0]) * (p1[1] - p0[1]) - (p2[1] - p0[1]) * (p1[0] - p0[0]);
+        let s = lat.stride;
+        let ymax = p2[1].min(lat.r_hi);
+        let y = snap_up(p0[1].max(lat.r_lo), lat.origin_r, s);
+        let idle = EdgeWalk {
+            x0: 0,
+            q: 0,
+            r: 0,
+            dy: 1,
+            qs: 0,
+            rs: 0,
         };
-        let (lo, hi) = (lo.max(lat.c_lo), hi.min(lat.c_hi));
-        if lo <= hi {
-            let (i0, i1) = if s == 1 {
-                (lo - oc, hi - oc)
+        let mut out = Spans {
+            p1,
+            p2,
+            // c < 0: p1 lies right of the long edge, so the long edge bounds the rows on
+            // the left
+            long_left: c < 0,
+            y,
+            ymax: y - 1,
+            j: 0,
+            top_end: 0,
+            on_top: false,
+            long: idle,
+            short: idle,
+            lat: *lat,
+        };
+        if c == 0 || y > ymax {
+            return out;
+        }
+        out.ymax = ymax;
+        out.j = ((y - lat.origin_r) / s) as usize;
+        // rows before `top_end` are bounded by p0-p1, the others by p1-p2
+        out.top_end = if p1[1] == p2[1] { p2[1] + 1 } else { p1[1] };
+        out.on_top = y < out.top_end;
+        out.long = EdgeWalk::new(p0, p2, y, s);
+        out.short = if out.on_top {
+            EdgeWalk::new(p0, p1, y, s)
+        } else {
+            EdgeWalk::new(p1, p2, y, s)
+        };
+        out
+    }
+}
+
+impl Iterator for Spans {
+    type Item = (i64, usize, usize, usize);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Self::Item> {
+        let (lat, s) = (&self.lat, self.lat.stride);
+        let oc = lat.origin_c;
+        while self.y <= self.ymax {
+            let y = self.y;
+            if self.on_top && y >= self.top_end {
+                self.short = EdgeWalk::new(self.p1, self.p2, y, s);
+                self.on_top = false;
+            }
+            let (lo, hi) = if self.long_left {
+                (self.long.ceil(), self.short.floor())
             } else {
-                (ceil_div(lo - oc, s), floor_div(hi - oc, s))
+                (self.short.ceil(), self.long.floor())
             };
-            if i0 <= i1 {
-                f(y, j, i0 as usize, i1 as usize);
+            let (lo, hi) = (lo.max(lat.c_lo), hi.min(lat.c_hi));
+            let j = self.j;
+            self.long.step();
+            self.short.step();
+            self.y += s;
+            self.j += 1;
+            if lo <= hi {
+                let (i0, i1) = if s == 1 {
+                    (lo - oc, hi - oc)
+                } else {
+                    (ceil_div(lo - oc, s), floor_div(hi - oc, s))
+                };
+                if i0 <= i1 {
+                    return Some((y, j, i0 as usize, i1 as usize));
+                }
             }
         }
-        long.step();
-        short.step();
-        y += s;
-        j += 1;
+        None
     }
 }
 

@@ -92,6 +92,17 @@ impl LatticeTiles {
             .then(|| self.tiles[(j >> 2) * self.tiles_x + (i >> 2)].0[(j & 3) * 4 + (i & 3)])
     }
 
+    /// Lattice row `j`'s tiles and the offset of the row within each tile: columns
+    /// `4k..4k + 4` are `tiles[k].0[offset..offset + 4]` (beyond the stored ones, 0).
+    #[inline(always)]
+    pub fn row_tiles(&self, j: usize) -> (&[Tile], usize) {
+        let tj = j >> 2;
+        (
+            &self.tiles[tj * self.tiles_x..(tj + 1) * self.tiles_x],
+            (j & 3) * 4,
+        )
+    }
+
     /// Calls `f(i, h)` for the lattice columns `i0..=i1` (lattice indices) of lattice row
     /// `j`, in increasing order, with their heights.
     #[inline]

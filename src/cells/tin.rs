@@ -7,7 +7,8 @@
 //! Phase 1 uses the level's lattice (every stride-th sample); phase 2 rescans every
 //! triangle against all full-resolution samples and continues with full-resolution
 //! candidates, so the bound holds for every DEM sample of the cell. Work is in integer
-//! grid coordinates, with exact predicates.
+//! grid coordinates, with exact predicates. Where the CPU has AVX2, rows are scanned four
+//! samples at a time ([`super::scan_x4`]), with the same result bit for bit.
 
 use super::border::{LevelBorders, border_error, check_epsilon, check_tree};
 use super::face_heap::FaceHeap;
@@ -26,7 +27,7 @@ pub fn level_epsilon(tree: &Quadtree, level: u8, max_error_finest: f64) -> f64 {
 
 /// Plane through three grid points with heights: `z(col,row) = h0 + a*(col-c0) + b*(row-r0)`.
 #[derive(Clone, Copy)]
-struct Plane {
+pub(super) struct Plane {
     c0: f64,
     r0: f64,
     h0: f64,
@@ -35,7 +36,7 @@ struct Plane {
 }
 
 impl Plane {
-    fn new(p: [[i64; 2]; 3], h: [f64; 3]) -> Plane {
+    pub(super) fn new(p: [[i64; 2]; 3], h: [f64; 3]) -> Plane {
         let (dx1, dy1) = ((p[1][0] - p[0][0]) as f64, (p[1][1] - p[0][1]) as f64);
         let (dx2, dy2) = ((p[2][0] - p[0][0]) as f64, (p[2][1] - p[0][1]) as f64);
         let (dh1, dh2) = (h[1] - h[0], h[2] - h[0]);
@@ -65,8 +66,8 @@ impl Plane {
 
     /// The plane along `row` by lattice column index: `(base, step)` with
     /// z(oc + i·s, row) = base + step · i.
-    #[inline]
-    fn lattice_row(&self, row: i64, oc: i64, s: i64) -> (f64, f64) {
+    #[inline(always)]
+    pub(super) fn lattice_row(&self, row: i64, oc: i64, s: i64) -> (f64, f64) {
         let (base, a) = self.row(row);
         (base + a * oc as f64, a * s as f64)
     }
@@ -83,12 +84,13 @@ fn lattice_error(h: f32, (base, step): (f64, f64), i: usize) -> f64 {
 /// The worst lattice sample of a triangle that is not one of its corners:
 /// `(error, col, row)`, or error -1 if the triangle holds no such sample. Corner heights
 /// come from the full-resolution grid (corners need not be on the lattice).
-#[inline]
+#[inline(always)]
 fn worst_sample(
     heights: &[f32],
     width: usize,
     p: [[i64; 2]; 3],
     grid: &LatticeTiles,
+    simd: Lanes,
 ) -> (f64, i64, i64) {
     // corners from the compact copy when stored there (always at stride 1), else the DEM
     let hz = |q: [i64; 2]| {
@@ -109,13 +111,49 @@ fn worst_sample(
         // computes it (same plane, same expression)
         return lone_sample(p, &plane, grid);
     }
+    #[cfg(target_arch = "x86_64")]
+    if let Some(v3) = simd {
+        return super::scan_x4::scan_triangle_x4(v3, p, &plane, grid);
+    }
+    let _ = simd;
     scan_triangle(p, &plane, grid)
+}
+
+/// The four-lane scan's token where the CPU has AVX2 (x86-64), else the scalar scan.
+#[cfg(target_arch = "x86_64")]
+type Lanes = Option<pulp::x86::V3>;
+/// The four-lane scan's token where the CPU has AVX2 (x86-64), else the scalar scan.
+#[cfg(not(target_arch = "x86_64"))]
+type Lanes = Option<()>;
+
+/// The four-lane scan's token if this CPU can run it and the environment variable
+/// `CLIFFMAP_SCALAR_TIN` is unset (set, it selects the scalar scan, for benchmarks; the
+/// TINs are the same either way).
+fn detect_lanes() -> Lanes {
+    static LANES: std::sync::OnceLock<Lanes> = std::sync::OnceLock::new();
+    *LANES.get_or_init(|| {
+        if std::env::var_os("CLIFFMAP_SCALAR_TIN").is_some() {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        {
+            pulp::x86::V3::try_new()
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            None
+        }
+    })
 }
 
 /// [`worst_sample`] by scanning every lattice sample of the closed triangle `p` whose
 /// heights the plane `plane` interpolates.
 #[inline]
-fn scan_triangle(p: [[i64; 2]; 3], plane: &Plane, grid: &LatticeTiles) -> (f64, i64, i64) {
+pub(super) fn scan_triangle(
+    p: [[i64; 2]; 3],
+    plane: &Plane,
+    grid: &LatticeTiles,
+) -> (f64, i64, i64) {
     let lat = &grid.lat;
     let (oc, s) = (lat.origin_c, lat.stride);
     let mut best = (-1.0f64, -1i64, -1i64);
@@ -180,9 +218,12 @@ struct Greedy<'a> {
     cand: Vec<([u32; 2], f64)>,
     heap: FaceHeap,
     dirty: Vec<u32>,
+    /// The four-lane scan, where available.
+    lanes: Lanes,
 }
 
 impl Greedy<'_> {
+    #[inline(always)]
     fn rescan(&mut self, t: u32, lat: &LatticeTiles) {
         let idx = t as usize;
         if idx >= self.cand.len() {
@@ -190,7 +231,7 @@ impl Greedy<'_> {
             self.cand.resize(n, ([0; 2], 0.0));
         }
         let p = self.mesh.corners(t);
-        let (err, col, row) = worst_sample(self.heights, self.width, p, lat);
+        let (err, col, row) = worst_sample(self.heights, self.width, p, lat, self.lanes);
         self.cand[idx] = ([col as u32, row as u32], err.max(0.0));
         if err > self.epsilon {
             self.heap.set(t, Some(err));
@@ -200,6 +241,7 @@ impl Greedy<'_> {
     }
 
     /// Rescans the triangles written since the last rescan.
+    #[inline(always)]
     fn rescan_dirty(&mut self, lat: &LatticeTiles) {
         let mut dirty = std::mem::take(&mut self.dirty);
         self.mesh.take_dirty(&mut dirty);
@@ -209,6 +251,17 @@ impl Greedy<'_> {
         self.dirty = dirty;
     }
 
+    /// Scans every triangle, then inserts worst samples until all are within epsilon.
+    fn refine(&mut self, lat: &LatticeTiles) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = self.lanes {
+            // (the scans compiled for AVX2: the token is only handed out where it runs)
+            return v3.vectorize(Refine(self, lat));
+        }
+        Refine(self, lat).run();
+    }
+
+    #[inline(always)]
     fn rescan_all(&mut self, lat: &LatticeTiles) {
         self.heap.clear();
         self.mesh.take_dirty(&mut self.dirty);
@@ -217,12 +270,35 @@ impl Greedy<'_> {
         }
     }
 
+    #[inline(always)]
     fn run(&mut self, lat: &LatticeTiles) {
         while let Some((_, t)) = self.heap.peek() {
             // the candidate lies in the closed triangle and is not one of its corners
             self.mesh.insert(t, self.cand[t as usize].0);
             self.rescan_dirty(lat);
         }
+    }
+}
+
+/// [`Greedy::refine`]'s work, as one call for [`pulp`]'s dispatch.
+struct Refine<'g, 'h, 'l>(&'g mut Greedy<'h>, &'l LatticeTiles);
+
+impl Refine<'_, '_, '_> {
+    #[inline(always)]
+    fn run(self) {
+        let Refine(g, lat) = self;
+        g.rescan_all(lat);
+        g.run(lat);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl pulp::NullaryFnOnce for Refine<'_, '_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn call(self) {
+        self.run()
     }
 }
 
@@ -267,12 +343,21 @@ pub fn build_tin(
     if stride == 0 {
         return Err(Error::BadOption("TIN lattice stride must be >= 1".into()));
     }
-    Ok(greedy_tin(dem, rect, stride, epsilon, border, false))
+    Ok(greedy_tin(
+        dem,
+        rect,
+        stride,
+        epsilon,
+        border,
+        false,
+        detect_lanes(),
+    ))
 }
 
 /// [`build_tin`] after its checks. With `refine_boundary`, the rectangle's boundary
 /// samples are candidates too (inserted greedily like interior ones, splitting a boundary
 /// edge), so `border` needs only the corners and the bound covers the boundary itself.
+/// `lanes`: the four-lane scan's token, or `None` for the scalar scan (the same TIN).
 fn greedy_tin(
     dem: &Dem,
     rect: SampleRect,
@@ -280,6 +365,7 @@ fn greedy_tin(
     epsilon: f64,
     border: &[[u32; 2]],
     refine_boundary: bool,
+    lanes: Lanes,
 ) -> Tin {
     let on_boundary = |v: &[u32; 2]| {
         let (c, r) = (v[0], v[1]);
@@ -304,6 +390,7 @@ fn greedy_tin(
         cand: Vec::with_capacity(super::halfedge::reserved_triangles(rect)),
         heap: FaceHeap::with_capacity(super::halfedge::reserved_triangles(rect)),
         dirty: Vec::new(),
+        lanes,
     };
     let inner = if refine_boundary { 0 } else { 1 };
     let interior = |s: u32| Lattice {
@@ -322,8 +409,7 @@ fn greedy_tin(
         rect.c1 as i64,
         rect.r1 as i64,
     );
-    g.rescan_all(&coarse);
-    g.run(&coarse);
+    g.refine(&coarse);
     drop(coarse);
     if stride > 1 {
         let fine = LatticeTiles::new(
@@ -333,8 +419,7 @@ fn greedy_tin(
             rect.c1 as i64,
             rect.r1 as i64,
         );
-        g.rescan_all(&fine);
-        g.run(&fine);
+        g.refine(&fine);
     }
     let interior_err = g.cand.iter().map(|c| c.1).fold(0.0f64, f64::max);
     // with `refine_boundary` the scanned lattice holds every sample of `rect`
@@ -369,7 +454,7 @@ pub fn build_dem_tin(dem: &Dem, epsilon: f64) -> Result<Tin> {
     // as Delatin: start from the four corners and refine the outer edge greedily with the
     // interior (pre-inserting a simplified outer edge instead makes long slivers across
     // the whole DEM, which the first insertions rescan again and again)
-    Ok(greedy_tin(dem, rect, 1, epsilon, &[], true))
+    Ok(greedy_tin(dem, rect, 1, epsilon, &[], true, detect_lanes()))
 }
 
 /// TINs of every cell of `level`, in [`Quadtree::cells`] order, each within
@@ -458,6 +543,50 @@ mod tests {
     use super::*;
 
     #[test]
+    fn four_lane_and_scalar_scans_build_the_same_tins() {
+        // a rough random DEM (plateaus of equal heights give ties): whole-DEM TINs and
+        // cell TINs on a stride-2 lattice, bit for bit the same with either scan
+        let Some(lanes) = detect_lanes() else {
+            return;
+        };
+        let (w, h) = (97usize, 83usize);
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let heights: Vec<f32> = (0..w * h)
+            .map(|k| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+                let (c, r) = ((k % w) as f32, (k / w) as f32);
+                if c < 15.0 {
+                    7.0
+                } else {
+                    (c * 0.3).sin() * 9.0 + r * 0.2 + (state >> 40) as f32 * 2e-7
+                }
+            })
+            .collect();
+        let dem = Dem::from_heights(w, h, heights, crate::georef::GridGeoref::new(0.0, 0.0, 1.0))
+            .expect("dem");
+        let whole = SampleRect {
+            c0: 0,
+            r0: 0,
+            c1: w as u32 - 1,
+            r1: h as u32 - 1,
+        };
+        let cell = SampleRect {
+            c0: 8,
+            r0: 4,
+            c1: 72,
+            r1: 68,
+        };
+        for (rect, stride, eps, boundary) in [(whole, 1, 0.5, true), (cell, 2, 0.3, false)] {
+            let a = greedy_tin(&dem, rect, stride, eps, &[], boundary, None);
+            let b = greedy_tin(&dem, rect, stride, eps, &[], boundary, Some(lanes));
+            assert!(a.triangles.len() > 500, "{} triangles", a.triangles.len());
+            assert_eq!(a.vertices, b.vertices);
+            assert_eq!(a.triangles, b.triangles);
+            assert_eq!(a.max_error.to_bits(), b.max_error.to_bits());
+        }
+    }
+
+    #[test]
     fn area_one_triangles_find_the_sample_the_scan_finds() {
         // every triangle of area 1 with short edges, at every position of a small DEM, on
         // lattices of stride 1 to 3 with bounds that cut some of them: the lone midpoint
@@ -498,7 +627,8 @@ mod tests {
                     let plane = Plane::new(p, z);
                     let want = scan_triangle(p, &plane, &grid);
                     assert_eq!(lone_sample(p, &plane, &grid), want, "stride {stride} {p:?}");
-                    assert_eq!(worst_sample(&heights, w, p, &grid), want);
+                    assert_eq!(worst_sample(&heights, w, p, &grid, None), want);
+                    assert_eq!(worst_sample(&heights, w, p, &grid, detect_lanes()), want);
                     compared += 1;
                     found += (want.1 >= 0) as usize;
                 }
