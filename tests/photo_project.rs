@@ -176,6 +176,11 @@ fn e2e_wall_photo_colours_the_wall_and_reruns_identically() {
     no_margin.confidence.occlusion_margin_px = 0.0;
     project_store(&dir, &[wall_photo()], &no_margin).unwrap();
     assert_eq!(photo_files(&dir), before);
+    // nor does the rule that mixes photos: with one photo both give its colour
+    let mut best = opts();
+    best.blend = BlendMode::Best;
+    project_store(&dir, &[wall_photo()], &best).unwrap();
+    assert_eq!(photo_files(&dir), before);
 
     // a camera facing away: no photo textures, stale files removed, no error
     let away = photo(

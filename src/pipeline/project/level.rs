@@ -238,7 +238,7 @@ impl LevelRun<'_> {
                         let (first, n) = CellAccum::from_photo(
                             pa,
                             pi as u16,
-                            self.opts.blend,
+                            accumulator_mode(self.opts.blend, self.pyramids.len()),
                             ctx,
                             &self.opts.confidence,
                         );
@@ -469,4 +469,11 @@ pub(super) fn resolves_more(
     let r = fp.distance / focal as f32 * g;
     let ratio = ctx.existing_resolution(b) as f64 / ctx.photo_resolution(b, [r, g]) as f64;
     weights.resolution_weight(ratio) >= 0.5
+}
+
+/// The blend mode a cell accumulator runs in for `mode` with `photos` photos: with one photo
+/// the weighted mean is that photo's colour, so the accumulator keeps it as `Best` does
+/// (its colour and resolution, not sums to divide again; equal up to float rounding).
+fn accumulator_mode(mode: BlendMode, photos: usize) -> BlendMode {
+    if photos > 1 { mode } else { BlendMode::Best }
 }
