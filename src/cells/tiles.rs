@@ -94,6 +94,7 @@ impl LatticeTiles {
 
     /// Lattice row `j`'s tiles and the offset of the row within each tile: columns
     /// `4k..4k + 4` are `tiles[k].0[offset..offset + 4]` (beyond the stored ones, 0).
+    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub fn row_tiles(&self, j: usize) -> (&[Tile], usize) {
         let tj = j >> 2;
