@@ -87,20 +87,31 @@ pub fn blend_cell(
     let base_index = ctx.base_indexer(acc.texels, acc.scale);
     let block_index = block_indexer(w as usize, side as usize, grid);
     let resolution_weight = params.resolution_weight_fn();
+    // (per existing texel and per alpha value, computed once: the same values bit for bit)
+    let existing_res: Vec<f64> = (0..base_n)
+        .map(|b| ctx.existing_resolution(b) as f64)
+        .collect();
+    let alphas: [f64; 256] = std::array::from_fn(|a| a as f64 / 255.0);
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
         if t >= n {
             return;
         }
         let b = base_index(t);
-        let ratio = ctx.existing_resolution(b) as f64 / resolution as f64;
+        let e_res = match existing_res.get(b) {
+            Some(&r) => r,
+            None => ctx.existing_resolution(b) as f64,
+        };
+        let ratio = e_res / resolution as f64;
         // (= params.photo_weight(confidence, ratio))
         let beta = params.blend_weight(confidence as f64) * resolution_weight(ratio);
         if !(beta > 0.0) {
             return;
         }
         let e = &mut px[4 * t..4 * t + 4];
-        let alpha = e[3] as f64 / 255.0;
-        let s = beta / (beta + (1.0 - beta) * alpha);
+        let alpha = alphas[e[3] as usize];
+        // (x / 1 is x: most texels are fully known and most such denominators are 1)
+        let d = beta + (1.0 - beta) * alpha;
+        let s = if d == 1.0 { beta } else { beta / d };
         for k in 0..3 {
             let old = space.decode_u8(e[k]) as f64;
             e[k] = space.encode_u8((s * p[k] as f64 + (1.0 - s) * old) as f32);
