@@ -18,7 +18,8 @@
 //! ```
 //! `ACCELS` is a comma-separated list of variants `ACCEL[+TEXTURES]`: a `--ray-accel` value,
 //! optionally with the photo texture sizes `fixed` (the cells' own sizes,
-//! `--fixed-photo-texels`) or `tpdN` (`--max-texels-per-photo-pixel N`); default
+//! `--fixed-photo-texels`), `tpdN` (`--max-texels-per-photo-pixel N`) or `kK`
+//! (`--texels-per-pixel K`); default
 //! `grid,bvh:fast` (photo-driven sizes, the defaults of `cliffmap project`). The table also
 //! gives the photo texture memory each variant wrote (GPU, RGBA8 with mips) and the bytes
 //! of its photo texture files.
@@ -140,7 +141,7 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A variant `ACCEL[+fixed|+tpdN]` (see the module docs).
+/// A variant `ACCEL[+fixed|+tpdN|+kK]` (see the module docs).
 fn parse_variant(v: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptions)> {
     let (accel, texture) = v.split_once('+').map_or((v, None), |(a, t)| (a, Some(t)));
     let accel =
@@ -149,6 +150,11 @@ fn parse_variant(v: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptio
     match texture {
         None => {}
         Some("fixed") => opts.photo_driven = false,
+        Some(t) if t.starts_with('k') => {
+            opts.texels_per_pixel = t[1..]
+                .parse()
+                .map_err(|_| anyhow::anyhow!("bad texture variant {t}"))?;
+        }
         Some(t) => {
             let n: f64 = t
                 .strip_prefix("tpd")
