@@ -32,7 +32,7 @@ const CAP: f32 = 256.0;
 pub struct OcclusionMap {
     width: u32,
     height: u32,
-    /// Full-resolution pixels per map pixel side (2 for a map cast at half size).
+    /// Full-resolution pixels per map pixel side (4 for a map cast at a quarter size).
     full_per_map: f32,
     /// Row-major distances in map pixels, capped at [`CAP`].
     dist: Vec<f32>,

@@ -140,14 +140,12 @@ impl LevelRun<'_> {
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (img, cam) = pyr.level(step);
             let cells = &self.store.manifest.cells;
-            // the occlusion weight only enters the choice between photos (docs/projection.md,
-            // "Occlusion margin"), so a lone photo needs no map
-            if level == self.finest
-                && self.pyramids.len() > 1
-                && self.opts.confidence.occlusion_margin_px > 0.0
-                && occlusion[pi].is_none()
-            {
-                occlusion[pi] = Some(self.occlusion_map(pyr, level, &mut scenes[pi])?);
+            // (made from the sizing cast where there was one, else cast here)
+            if self.wants_occlusion(level) && occlusion[pi].is_none() {
+                occlusion[pi] = match sizing.occlusion.get_mut(pi).and_then(Option::take) {
+                    Some(map) => Some(map),
+                    None => Some(self.occlusion_map(pyr, level, &mut scenes[pi])?),
+                };
                 timer.lap(&format!("level {level} photo {pi}: occlusion map"));
             }
             let mut samples = PhotoSamples::new(
@@ -256,9 +254,19 @@ impl LevelRun<'_> {
         Ok((accs, sizing))
     }
 
-    /// The occlusion map of a photo ([`OcclusionMap`]): its pyramid image at half size (or
-    /// the full one if it has no smaller image) cast onto the finest level `level` (with
-    /// `scene`, built there if `None` and kept).
+    /// Whether photos on `level` need occlusion maps: on the finest level, with several
+    /// photos and a margin. (The occlusion weight only enters the choice between photos,
+    /// docs/projection.md "Occlusion margin", so a lone photo needs no map.)
+    fn wants_occlusion(&self, level: usize) -> bool {
+        level == self.finest
+            && self.pyramids.len() > 1
+            && self.opts.confidence.occlusion_margin_px > 0.0
+    }
+
+    /// The occlusion map of a photo ([`OcclusionMap`]) where the sizing made none (fixed
+    /// photo texture sizes): its pyramid image [`OCCLUSION_STEP`] halvings smaller (or its
+    /// smallest) cast onto the finest level `level` (with `scene`, built there if `None`
+    /// and kept).
     fn occlusion_map(
         &self,
         pyr: &PhotoPyramid,
@@ -312,13 +320,16 @@ impl LevelRun<'_> {
         let step = self.finest - level;
         // each photo's footprints for the sizing: cached from the leveling, or cast from the
         // image two halvings coarser (side scale: coarse pixel side to this level's)
+        // (with the pyramid step each set was cast from)
         let mut sets: Vec<(std::borrow::Cow<FootprintSet>, f32, f64)> = Vec::new();
+        let mut cast_steps: Vec<usize> = Vec::new();
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (_, cam) = pyr.level(step);
             let focal = (cam.fx * cam.fy).sqrt();
             if let Some((l, fs)) = &cached[pi] {
                 if *l == level {
                     sets.push((std::borrow::Cow::Borrowed(fs), 1.0, focal));
+                    cast_steps.push(step);
                     continue;
                 }
             }
@@ -336,7 +347,28 @@ impl LevelRun<'_> {
                 0.5f32.powi((coarse - step) as i32),
                 focal,
             ));
+            cast_steps.push(coarse);
             scenes[pi] = Some(scene);
+        }
+        // the finest level's occlusion maps from the same casts (a map pixel per cast pixel:
+        // a quarter of the photo's side, or its full size where the leveling's cast of a
+        // small photo is reused), so no photo is cast again for them
+        if self.wants_occlusion(level) {
+            out.occlusion = sets
+                .iter()
+                .zip(&cast_steps)
+                .zip(self.pyramids)
+                .map(|(((fs, ..), &k), pyr)| {
+                    let (img, _) = pyr.level(k);
+                    Some(OcclusionMap::from_footprints(
+                        fs,
+                        img.width(),
+                        img.height(),
+                        (1u64 << k) as f32,
+                        self.opts.footprint.max_depth_jump,
+                    ))
+                })
+                .collect();
         }
         // the resolution rule's view of every cell the photos reach
         let mut seen = vec![false; cells.len()];
@@ -425,8 +457,9 @@ impl LevelRun<'_> {
 }
 
 /// Pyramid halvings between the full-resolution photo and the image its occlusion map is
-/// cast from (edges located to a map pixel, 2 full-resolution pixels).
-pub(super) const OCCLUSION_STEP: usize = 1;
+/// cast from when the sizing made none (edges located to a map pixel, 4 full-resolution
+/// pixels), as the finest level's sizing cast ([`SIZING_STEPS`]).
+pub(super) const OCCLUSION_STEP: usize = SIZING_STEPS;
 
 /// Pyramid halvings between a level's image and its sizing cast's.
 pub(super) const SIZING_STEPS: usize = 2;
@@ -444,6 +477,9 @@ pub(super) struct LevelSizing {
     pub(super) budget_bytes: u64,
     /// The cells' resolution contexts loaded for the sizing (indexed by manifest cell).
     pub(super) contexts: Vec<Option<CellContext>>,
+    /// Per photo, its occlusion map made from the sizing cast (finest level, several
+    /// photos; empty otherwise).
+    pub(super) occlusion: Vec<Option<OcclusionMap>>,
 }
 
 /// Whether the photo pixel of footprint `fp` (cast for an image of focal length `focal`
