@@ -54,15 +54,7 @@ fn main() -> anyhow::Result<()> {
     let (scene, dem, width) = (&ps.scene, &ps.dem, ps.width);
     let mut rng = Rng(0x307A_2026);
     let opts = TerrainOptions::default();
-    let third: Option<(f64, f64)> = match a.flag("--third") {
-        Some(v) => {
-            let (t, r) = v
-                .split_once(',')
-                .ok_or_else(|| anyhow::anyhow!("--third wants TURN_DEG,DISTANCE_RATIO"))?;
-            Some((t.parse()?, r.parse()?))
-        }
-        None => None,
-    };
+    let third = a.pair("--third", "TURN_DEG,DISTANCE_RATIO")?;
     if let Some((turn, ratio)) = third {
         let rounds: usize = a.flag("--rounds").unwrap_or("1").parse()?;
         return run_triples(&ps, &store, turn, ratio, rounds);

@@ -77,15 +77,7 @@ fn main() -> anyhow::Result<()> {
     let photos_dir = out.join("photos");
     // with --second-photos, the photos projected and scored are second photos of the demo
     // photos' targets from elsewhere; the demo photos are then anchors for `register`
-    let second: Option<(f64, f64)> = match flag("--second-photos") {
-        Some(v) => {
-            let (t, r) = v
-                .split_once(',')
-                .ok_or_else(|| anyhow::anyhow!("--second-photos TURN_DEG,DISTANCE_RATIO"))?;
-            Some((t.parse()?, r.parse()?))
-        }
-        None => None,
-    };
+    let second = a.pair("--second-photos", "TURN_DEG,DISTANCE_RATIO")?;
     let anchors = photos_dir.join("photos.json");
     let list = match second {
         Some(_) => photos_dir.join("seconds.json"),
@@ -283,11 +275,8 @@ fn main() -> anyhow::Result<()> {
         if let Some(m) = flag("--feather") {
             popts.confidence.feather = m.parse()?;
         }
-        if let Some(m) = flag("--resolution-ramp") {
-            let (a, b) = m
-                .split_once(',')
-                .ok_or_else(|| anyhow::anyhow!("--resolution-ramp LO,HI"))?;
-            popts.confidence.resolution_ramp = [a.parse()?, b.parse()?];
+        if let Some((lo, hi)) = a.pair("--resolution-ramp", "LO,HI")? {
+            popts.confidence.resolution_ramp = [lo, hi];
         }
         if let Some(m) = flag("--occlusion-margin") {
             popts.confidence.occlusion_margin_px = m.parse()?;

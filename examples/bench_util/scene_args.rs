@@ -33,6 +33,18 @@ impl SceneArgs {
             .map(String::as_str)
     }
 
+    /// The value after `--name` as two numbers `A,B` (`usage` names them in the error), if
+    /// given.
+    pub fn pair(&self, name: &str, usage: &str) -> anyhow::Result<Option<(f64, f64)>> {
+        let Some(v) = self.flag(name) else {
+            return Ok(None);
+        };
+        let (a, b) = v
+            .split_once(',')
+            .ok_or_else(|| anyhow::anyhow!("{name} wants {usage}"))?;
+        Ok(Some((a.parse()?, b.parse()?)))
+    }
+
     /// Whether the switch `--name` is given.
     pub fn has(&self, name: &str) -> bool {
         self.args.iter().any(|a| a == name)
