@@ -15,6 +15,9 @@
 //! `--resect-render [--max-slope DEG]` (an experiment, docs/registration.md "Position"): after
 //! the terrain search the photo is resected (`register::resect_photo`, position free) against
 //! the store rendered from the camera found, the glacier masked out.
+//! `--position-search H` (an experiment, docs/registration.md "Position by the score at full
+//! resolution"): after the angle search, the position searched by the score itself, steps
+//! H, H/2, H/4 metres.
 //! `--overlay PNG`: for the first start, the photo blended with the store rendered from the
 //! rough and from the registered camera, side by side, GCPs marked (docs/registration.md).
 //! STORE_DIR is built (default build + reparam) when it holds no store.
@@ -66,6 +69,10 @@ fn main() -> anyhow::Result<()> {
     if let Some(f) = flag("--free") {
         opts.free = parse_free(f)?;
     }
+    // --position-search H: the position searched by the score at full resolution
+    if let Some(h) = flag("--position-search") {
+        opts.position_search_m = Some(h.parse()?);
+    }
     let (photo, fitted, gcps) = bench_util::engabreen_8902()?;
     let store = cliffmap::store::Store::open(&dir)?;
     // --textures best: labels from the store's photo textures where present
@@ -96,9 +103,9 @@ fn main() -> anyhow::Result<()> {
         bench_util::gcp_rmse(&fitted, &gcps)
     );
     println!(
-        "| start | yaw/pitch/roll change (°) | position change (m) | GCP RMSE start (px) | after (px) | repeat (px) | verdict | s |"
+        "| start | yaw/pitch/roll change (°) | position change (m) | GCP RMSE start (px) | after (px) | position after, from the fitted (m) | repeat (px) | verdict | s |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     let base = CameraParams::from_camera(&fitted);
     let mut finals = Vec::new();
     for s in 0..starts {
@@ -176,7 +183,7 @@ fn main() -> anyhow::Result<()> {
             );
         }
         println!(
-            "| {s} | {:+.2} / {:+.2} / {:+.2} | {:+.1}, {:+.1}, {:+.1} | {:.1} | {:.2} | {:.2} | {} | {:.0} |",
+            "| {s} | {:+.2} / {:+.2} / {:+.2} | {:+.1}, {:+.1}, {:+.1} | {:.1} | {:.2} | {:+.2}, {:+.2}, {:+.2} | {:.2} | {} | {:.0} |",
             d[0],
             d[1],
             d[2],
@@ -185,6 +192,9 @@ fn main() -> anyhow::Result<()> {
             dp.z,
             bench_util::gcp_rmse(&rough, &gcps),
             after,
+            fit.found.position.x - fitted.position.x,
+            fit.found.position.y - fitted.position.y,
+            fit.found.position.z - fitted.position.z,
             fit.repeat_px,
             if fit.converged {
                 "converged"

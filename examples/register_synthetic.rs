@@ -8,6 +8,7 @@
 //! ```text
 //! cargo run --release --example register_synthetic -- OUT [--scene demo|tall] [--starts N]
 //!     [--photo-width W] [--free LIST] [--reuse] [--position-error M] [--max-error M] [--finest F]
+//!     [--position-search H]
 //! ```
 
 #[path = "bench_util/mod.rs"]
@@ -39,6 +40,11 @@ fn main() -> anyhow::Result<()> {
         opts.free = parse_free(f)?;
         // (x, y, z: the silhouette-edge stage, which the command does not offer)
         opts.experimental_position = true;
+    }
+    // --position-search H: the position searched by the score at full resolution (an
+    // experiment, docs/registration.md "Position by the score at full resolution")
+    if let Some(h) = flag("--position-search") {
+        opts.position_search_m = Some(h.parse()?);
     }
     let (dem, ortho) = scene.generate()?;
     let store_dir = out.join("store");

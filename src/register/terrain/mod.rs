@@ -28,6 +28,7 @@
 
 mod edges;
 mod mi;
+mod position;
 mod simplex;
 mod view;
 
@@ -66,6 +67,11 @@ pub struct TerrainOptions {
     /// by the command: measured on the demo scene it recovers the position in only a few
     /// starts and can agree with itself on a wrong one (docs/registration.md, "Position").
     pub experimental_position: bool,
+    /// `Some(h)`: after the angle search, search the position by the score itself at the
+    /// finest scale, steps `h`, `h/2`, `h/4` metres along, across and up (the module
+    /// `position`; docs/registration.md, "Position by the score at full resolution"). An
+    /// experiment, off by default and not offered by the command.
+    pub position_search_m: Option<f64>,
     /// Which textures give the terrain samples their grey when a caller builds the scene
     /// from these options ([`TerrainScene::for_options`]; `pipeline::register_photos_with`
     /// does). [`register_to_terrain`] itself uses the scene it is given.
@@ -85,6 +91,7 @@ impl Default for TerrainOptions {
             finest_factor: 1,
             position_sigma_m: 5.0,
             experimental_position: false,
+            position_search_m: None,
             labels: LabelTexture::Active,
         }
     }
@@ -376,6 +383,17 @@ pub fn register_to_terrain(
         let (c2, s2, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
         evals += e;
         (cam, score) = (c2, s2);
+    }
+    if let (Some(h), false) = (opts.position_search_m, opts.position_free()) {
+        let (c2, s2, e) = position::search_position(terrain, &space, cam, score, &grey, h, 2)?;
+        evals += e;
+        (cam, score) = (c2, s2);
+        // the angles once more with samples cast from the position found
+        let (c2, s2, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
+        evals += e;
+        if s2 >= score {
+            (cam, score) = (c2, s2);
+        }
     }
     let samples = terrain.sample(
         &scaled(&cam.camera(), &grey),

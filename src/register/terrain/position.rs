@@ -1,0 +1,206 @@
+//! A search over the camera position by the mutual-information score itself, at the finest
+//! scale (docs/registration.md, "Position by the score at full resolution"): an experiment
+//! of the library ([`super::TerrainOptions::position_search_m`]), not offered by
+//! `cliffmap register`.
+//!
+//! Input: the angle search's result (found with the rough position) and the finest photo
+//! scale. Output: the camera at the best position found and its score. Per round, along
+//! three axes in turn (horizontal along the view, horizontal across it, vertical), the
+//! position moves by `±h`; at each trial position the camera is first turned so that the
+//! point it looked at (the image centre at the view's median distance) stays in the centre,
+//! then its free angles and focal length are refitted (Nelder-Mead, samples re-cast from
+//! it); the score's parabola through the three positions gives a fourth trial at its
+//! vertex when it is concave, and the best of the trials is kept. `h` halves each round.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::mi::GreyImage;
+use super::view::TerrainScene;
+use super::{Space, refine};
+use crate::error::Result;
+use crate::register::params::CameraParams;
+
+/// `cam` moved to `position`, turned so that the point `depth` metres ahead of its old
+/// position along its view axis stays on its view axis, with the same turn about that axis
+/// against a level camera (the horizon's tilt in the image is kept).
+pub(super) fn moved_keeping_target(
+    cam: &CameraParams,
+    position: DVec3,
+    depth: f64,
+) -> CameraParams {
+    let model = cam.camera();
+    let target = model.position + model.forward() * depth;
+    // the camera's turn about its view axis against a level camera looking at the target,
+    // kept at the new position (so the horizon keeps its tilt in the image)
+    let (Some(level_old), Some(level_new)) = (
+        crate::camera::rotation_look_at(model.position, target),
+        crate::camera::rotation_look_at(position, target),
+    ) else {
+        let mut out = *cam;
+        out.position = position;
+        return out;
+    };
+    let turn = model.world_to_camera * level_old.transpose();
+    let mut m = model;
+    m.position = position;
+    m.world_to_camera = turn * level_new;
+    let mut out = *cam;
+    out.position = position;
+    out.angles = CameraParams::from_camera(&m).angles;
+    out
+}
+
+/// The three search axes for a camera looking along `forward`: horizontal along the view,
+/// horizontal across it, up (unit vectors; east and north when the view is vertical).
+fn axes(forward: DVec3) -> [DVec3; 3] {
+    let h = DVec3::new(forward.x, forward.y, 0.0);
+    let along = if h.length() > 1e-6 {
+        h.normalize()
+    } else {
+        DVec3::Y
+    };
+    let across = DVec3::new(along.y, -along.x, 0.0);
+    [along, across, DVec3::Z]
+}
+
+/// The search described in the module comment from `cam` (score `score` at `grey`'s
+/// scale), steps `step_m`, `step_m / 2`, ... for `rounds` rounds; returns the best camera,
+/// its score and the number of score evaluations.
+pub(super) fn search_position(
+    terrain: &TerrainScene,
+    space: &Space,
+    cam: CameraParams,
+    score: f64,
+    grey: &GreyImage,
+    step_m: f64,
+    rounds: usize,
+) -> Result<(CameraParams, f64, usize)> {
+    let (mut best, mut best_score, mut evals) = (cam, score, 0usize);
+    let depth = space.depth;
+    let trial = |from: &CameraParams, p: DVec3| -> Result<(CameraParams, f64, usize)> {
+        let moved = moved_keeping_target(from, p, depth);
+        refine(terrain, space, &moved, grey, 2.0)
+    };
+    let mut h = step_m;
+    for _ in 0..rounds {
+        for axis in axes(best.camera().forward()) {
+            let (p0, s0, c0) = (best.position, best_score, best);
+            let offsets = [-2.0 * h, -h, h, 2.0 * h];
+            let trials: Vec<Result<(CameraParams, f64, usize)>> = offsets
+                .par_iter()
+                .with_max_len(1)
+                .map(|&t| trial(&c0, p0 + axis * t))
+                .collect();
+            let mut points = vec![(0.0, s0)];
+            for (t, r) in offsets.iter().zip(trials) {
+                let (_, s, e) = r?;
+                evals += e;
+                points.push((*t, s));
+            }
+            let t = peak_offset(&points, 2.0 * h);
+            if t != 0.0 {
+                let (c, s, e) = trial(&c0, p0 + axis * t)?;
+                evals += e;
+                (best, best_score) = (c, s);
+            }
+        }
+        h /= 2.0;
+    }
+    Ok((best, best_score, evals))
+}
+
+/// Scores below the best by more than this are left out of the parabola (a camera moved
+/// into the terrain's shadow or under a ridge: the score falls off a cliff, not a parabola).
+const FIT_DROP: f64 = 0.01;
+
+/// Where along an axis the score peaks, from noisy scores `points` (offset, score): the
+/// vertex of the least-squares parabola through the points within [`FIT_DROP`] of the
+/// best, when concave, clamped to `±reach`; otherwise the best point's offset.
+fn peak_offset(points: &[(f64, f64)], reach: f64) -> f64 {
+    let top = points.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    let best = points
+        .iter()
+        .copied()
+        .filter(|p| p.1 == top)
+        .map(|p| p.0)
+        .next()
+        .unwrap_or(0.0);
+    let kept: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|p| p.1 >= top - FIT_DROP && p.1.is_finite())
+        .collect();
+    if kept.len() < 3 {
+        return best;
+    }
+    // least squares for s = a + b t + c t² (normal equations)
+    let mut m = nalgebra::Matrix3::<f64>::zeros();
+    let mut r = nalgebra::Vector3::<f64>::zeros();
+    for &(t, s) in &kept {
+        let v = nalgebra::Vector3::new(1.0, t, t * t);
+        m += v * v.transpose();
+        r += v * s;
+    }
+    let Some(x) = m.lu().solve(&r) else {
+        return best;
+    };
+    let (b, c) = (x[1], x[2]);
+    if !(c < 0.0) {
+        return best;
+    }
+    (-b / (2.0 * c)).clamp(-reach, reach)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraModel;
+
+    #[test]
+    fn a_moved_camera_still_looks_at_its_target() {
+        let (pos, target) = (DVec3::new(10.0, -200.0, 50.0), DVec3::new(30.0, 0.0, 20.0));
+        let rot = crate::camera::rotation_look_at(pos, target).expect("distinct points");
+        let cam = CameraModel::pinhole(pos, rot, 800, 600, 1000.0);
+        let mut p = CameraParams::from_camera(&cam);
+        p.angles[2] += 0.2; // a tilted horizon
+        let depth = (DVec3::new(30.0, 0.0, 20.0) - cam.position).length();
+        let moved = moved_keeping_target(&p, cam.position + DVec3::new(3.0, -2.0, 1.5), depth);
+        let m = moved.camera();
+        let [u, v] = m
+            .project(DVec3::new(30.0, 0.0, 20.0))
+            .expect("target in front of the moved camera");
+        assert!(
+            (u - m.cx).abs() < 1e-6 && (v - m.cy).abs() < 1e-6,
+            "{u} {v}"
+        );
+        // the horizon keeps its tilt
+        assert!(
+            (moved.angles[2] - p.angles[2]).abs() < 1e-9,
+            "{:?}",
+            moved.angles
+        );
+    }
+
+    #[test]
+    fn the_peak_of_noisy_scores_is_the_parabola_vertex() {
+        // s = 1 - 0.001 (t - 0.7)², exact and with a cliff at -2 left out
+        let f = |t: f64| 1.0 - 0.001 * (t - 0.7) * (t - 0.7);
+        let pts: Vec<(f64, f64)> = [-2.0, -1.0, 0.0, 1.0, 2.0].map(|t| (t, f(t))).to_vec();
+        assert!((peak_offset(&pts, 2.0) - 0.7).abs() < 1e-9);
+        let mut cliff = pts.clone();
+        cliff[0].1 = 0.5;
+        assert!((peak_offset(&cliff, 2.0) - 0.7).abs() < 1e-9);
+        // clamped to the reach; a convex set gives the best point
+        assert_eq!(peak_offset(&pts, 0.5), 0.5);
+        let convex: Vec<(f64, f64)> = [-1.0, 0.0, 1.0].map(|t| (t, t * t)).to_vec();
+        assert_eq!(peak_offset(&convex, 1.0), -1.0);
+    }
+
+    #[test]
+    fn the_axes_are_along_across_and_up() {
+        let [a, c, z] = axes(DVec3::new(0.6, 0.6, -0.52));
+        assert!((a - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-12);
+        assert!(a.dot(c).abs() < 1e-12 && c.z == 0.0 && z == DVec3::Z);
+    }
+}
