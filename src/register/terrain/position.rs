@@ -4,13 +4,14 @@
 //! `cliffmap register`.
 //!
 //! Input: the angle search's result (found with the rough position) and the finest photo
-//! scale. Output: the camera at the best position found and its score. Per round, along
-//! three axes in turn (horizontal along the view, horizontal across it, vertical), the
-//! position moves by `±h`; at each trial position the camera is first turned so that the
+//! scale. Output: the camera at the position found and its score. Per round, along three
+//! axes in turn (horizontal along the view, horizontal across it, vertical), the position
+//! is tried at `±h` and `±2h`; at each trial position the camera is first turned so that the
 //! point it looked at (the image centre at the view's median distance) stays in the centre,
 //! then its free angles and focal length are refitted (Nelder-Mead, samples re-cast from
-//! it); the score's parabola through the three positions gives a fourth trial at its
-//! vertex when it is concave, and the best of the trials is kept. `h` halves each round.
+//! it). The scores are noisy, so the camera moves to the vertex of the least-squares
+//! parabola through the five scores ([`peak_offset`]), not to the best trial. `h` halves
+//! each round.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -65,7 +66,7 @@ fn axes(forward: DVec3) -> [DVec3; 3] {
 }
 
 /// The search described in the module comment from `cam` (score `score` at `grey`'s
-/// scale), steps `step_m`, `step_m / 2`, ... for `rounds` rounds; returns the best camera,
+/// scale), steps `step_m`, `step_m / 2`, ... for `rounds` rounds; returns the camera found,
 /// its score and the number of score evaluations.
 pub(super) fn search_position(
     terrain: &TerrainScene,
