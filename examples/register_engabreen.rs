@@ -18,6 +18,7 @@
 //! `--position-search H` (an experiment, docs/registration.md "Position by the score at full
 //! resolution"): after the angle search, the position searched by the score itself, steps
 //! H, H/2, H/4 metres.
+//! `--focal-scale S`: the rough camera's focal length S times the fitted one.
 //! `--overlay PNG`: for the first start, the photo blended with the store rendered from the
 //! rough and from the registered camera, side by side, GCPs marked (docs/registration.md).
 //! STORE_DIR is built (default build + reparam) when it holds no store.
@@ -119,6 +120,9 @@ fn main() -> anyhow::Result<()> {
         }
         let dp = position_scale * DVec3::new(3.0 * t(3.1), 3.0 * t(3.7), 1.0 * t(4.3));
         c.position += dp;
+        // --focal-scale S: the rough focal length S times the fitted one (an EXIF value off)
+        let fs: f64 = flag("--focal-scale").unwrap_or("1").parse()?;
+        c.focal = c.focal.map(|f| f * fs);
         let rough = c.camera();
         let fit = register_to_terrain(&terrain, &photo, &rough, &opts)?;
         let after = bench_util::gcp_rmse(&fit.found, &gcps);
