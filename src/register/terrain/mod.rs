@@ -68,7 +68,8 @@ pub struct TerrainOptions {
     /// starts and can agree with itself on a wrong one (docs/registration.md, "Position").
     pub experimental_position: bool,
     /// `Some(h)`: after the angle search, search the position by the score itself at the
-    /// finest scale, steps `h`, `h/2`, `h/4` metres along, across and up (the module
+    /// finest scale, trials at `±h` and `±2h`, then at half those, metres along, across and
+    /// up, `h` in (0, 50] (the module
     /// `position`; docs/registration.md, "Position by the score at full resolution"). An
     /// experiment, off by default and not offered by the command.
     pub position_search_m: Option<f64>,
@@ -122,6 +123,13 @@ impl TerrainOptions {
             return Err(Error::BadOption(format!(
                 "register: parameter {} cannot be refined against the terrain (free: yaw, pitch, roll, f, fx, fy, x, y, z)",
                 p.name()
+            )));
+        }
+        if let Some(h) = self.position_search_m
+            && !(h.is_finite() && h > 0.0 && h <= 50.0)
+        {
+            return Err(Error::BadOption(format!(
+                "register: position search step {h} m must be in (0, 50]"
             )));
         }
         if self.position_free() && !self.experimental_position {

@@ -199,6 +199,23 @@ mod tests {
     }
 
     #[test]
+    fn a_bad_search_step_is_refused() {
+        use super::super::TerrainOptions;
+        for h in [0.0, -1.0, f64::NAN, f64::INFINITY, 100.0] {
+            let o = TerrainOptions {
+                position_search_m: Some(h),
+                ..TerrainOptions::default()
+            };
+            assert!(o.validate().is_err(), "{h}");
+        }
+        let o = TerrainOptions {
+            position_search_m: Some(1.5),
+            ..TerrainOptions::default()
+        };
+        assert!(o.validate().is_ok());
+    }
+
+    #[test]
     fn the_axes_are_along_across_and_up() {
         let [a, c, z] = axes(DVec3::new(0.6, 0.6, -0.52));
         assert!((a - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-12);
