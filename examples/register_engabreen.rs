@@ -108,6 +108,8 @@ fn main() -> anyhow::Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     let base = CameraParams::from_camera(&fitted);
+    // --focal-scale S: the rough focal length S times the fitted one (an EXIF value off)
+    let focal_scale: f64 = flag("--focal-scale").unwrap_or("1").parse()?;
     let mut finals = Vec::new();
     for s in 0..starts {
         // Deterministic spread of starts: signs alternate, sizes cycle.
@@ -120,9 +122,7 @@ fn main() -> anyhow::Result<()> {
         }
         let dp = position_scale * DVec3::new(3.0 * t(3.1), 3.0 * t(3.7), 1.0 * t(4.3));
         c.position += dp;
-        // --focal-scale S: the rough focal length S times the fitted one (an EXIF value off)
-        let fs: f64 = flag("--focal-scale").unwrap_or("1").parse()?;
-        c.focal = c.focal.map(|f| f * fs);
+        c.focal = c.focal.map(|f| f * focal_scale);
         let rough = c.camera();
         let fit = register_to_terrain(&terrain, &photo, &rough, &opts)?;
         let after = bench_util::gcp_rmse(&fit.found, &gcps);

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 use super::mi::GreyImage;
 use super::view::TerrainScene;
 use super::{Space, refine};
+use crate::camera::{rotation_look_at, yaw_pitch_roll_from_rotation};
 use crate::error::Result;
 use crate::register::params::CameraParams;
 
@@ -32,23 +33,19 @@ pub(super) fn moved_keeping_target(
 ) -> CameraParams {
     let model = cam.camera();
     let target = model.position + model.forward() * depth;
-    // the camera's turn about its view axis against a level camera looking at the target,
-    // kept at the new position (so the horizon keeps its tilt in the image)
-    let (Some(level_old), Some(level_new)) = (
-        crate::camera::rotation_look_at(model.position, target),
-        crate::camera::rotation_look_at(position, target),
-    ) else {
-        let mut out = *cam;
-        out.position = position;
-        return out;
-    };
-    let turn = model.world_to_camera * level_old.transpose();
-    let mut m = model;
-    m.position = position;
-    m.world_to_camera = turn * level_new;
     let mut out = *cam;
     out.position = position;
-    out.angles = CameraParams::from_camera(&m).angles;
+    // the camera's turn about its view axis against a level camera looking at the target,
+    // kept at the new position (so the horizon keeps its tilt in the image)
+    if let (Some(level_old), Some(level_new)) = (
+        rotation_look_at(model.position, target),
+        rotation_look_at(position, target),
+    ) {
+        let (y, p, r) = yaw_pitch_roll_from_rotation(
+            &(model.world_to_camera * level_old.transpose() * level_new),
+        );
+        out.angles = [y, p, r];
+    }
     out
 }
 
