@@ -21,22 +21,24 @@ use super::confidence::ConfidenceParams;
 
 use crate::colour::ColourSpace;
 pub use crate::store::magnify;
-use crate::store::photo_texture::magnify_blocks;
+use crate::store::photo_texture::{Magnifier, MagnifyScratch, compose};
 use crate::store::{PHOTO_BLOCK, PhotoBlocks};
+use rayon::prelude::*;
 
 /// A cell's photo-enhanced texture and its statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Blended {
-    /// RGBA8 texture of the accumulator's size, with the existing texture's layout, computed
-    /// in the blocks of side `block_side` that footprints reached;
-    /// texels of the other blocks are 0, or the existing ones when the sizes are equal
-    /// (there the texture is the existing one magnified).
+    /// The stored blocks of the RGBA8 texture of the accumulator's size (with the existing
+    /// texture's layout), packed into an atlas as [`crate::store::photo_texture::pack`] lays
+    /// them out; outside the blocks the texture is the existing one magnified
+    /// ([`Blended::compose`] gives the whole texture).
     pub texture: RgbaImage,
-    /// Per texel the photo's share `s` of the colour, 0..255 (0 outside those blocks).
+    /// Per texel of the blocks the photo's share `s` of the colour, 0..255, in the same
+    /// atlas layout (0 outside the blocks).
     pub confidence: GrayImage,
     /// Block side (texels) of `blocks`.
     pub block_side: u32,
-    /// The blocks where some texel got photo weight `β > 0` (those to store): elsewhere the
+    /// The blocks where some texel got photo weight `β > 0` (those stored): elsewhere the
     /// texture equals the existing one magnified.
     pub blocks: PhotoBlocks,
     /// Covered texels with `s > 0.5`.
@@ -48,6 +50,30 @@ pub struct Blended {
     /// Per photo (by the index given to [`CellAccum::merge`]): covered texels with `s > 0.5`
     /// whose heaviest photo it is.
     pub supplied: Vec<u64>,
+}
+
+impl Blended {
+    /// The whole texture and confidence map (of `existing`'s size times `scale`, the
+    /// arguments given to [`blend_cell`] and the accumulator's scale): `existing` magnified
+    /// with the blocks over it, confidence 0 outside the blocks.
+    pub fn compose(&self, existing: &RgbaImage, scale: u32) -> (RgbaImage, GrayImage) {
+        let texture = crate::store::magnify(existing, scale);
+        let (w, h) = texture.dimensions();
+        if self.texture.width() == 0 {
+            return (texture, GrayImage::new(w, h));
+        }
+        match compose(
+            existing,
+            scale,
+            &self.blocks,
+            &self.texture,
+            &self.confidence,
+        ) {
+            Ok(both) => both,
+            // (not reached: the atlases are laid out from these blocks)
+            Err(_) => (texture, GrayImage::new(w, h)),
+        }
+    }
 }
 
 /// Blends `acc` into `existing` (the cell's existing texture, `acc.scale` times smaller than
@@ -65,11 +91,31 @@ pub fn blend_cell(
     steep: &[bool],
 ) -> Blended {
     let side = PHOTO_BLOCK.min(acc.texels).max(1);
+    let magnifier = Magnifier::new(existing, acc.scale);
+    let (w, h) = magnifier.dimensions();
+    let grid = PhotoBlocks::grid(side, w) as usize;
+    // The blocks footprints reached, each blended in its own slot of `side²` texels
+    // (block-major): no buffer of the whole texture.
     let computed = acc.touched_blocks(side);
-    let mut texture = magnify_blocks(existing, acc.scale, Some((side, &computed)));
-    let (w, h) = texture.dimensions();
+    let mut slot_of = vec![u32::MAX; grid * grid];
+    let mut slots = Vec::new();
+    for (i, _) in computed.iter().enumerate().filter(|c| *c.1) {
+        if i < slot_of.len() {
+            slot_of[i] = slots.len() as u32;
+            slots.push(i);
+        }
+    }
+    let (sd, bt) = (side as usize, side as usize * side as usize);
+    let mut px = vec![0u8; slots.len() * bt * 4];
+    let mut cv = vec![0u8; slots.len() * bt];
+    px.par_chunks_mut(bt * 4).zip(&slots).for_each_init(
+        MagnifyScratch::default,
+        |scratch, (out, &i)| {
+            let origin = [(i % grid) * sd, (i / grid) * sd];
+            magnifier.fill(origin, [sd, sd], out, sd, scratch);
+        },
+    );
     let ctx: &CellContext = &acc.context;
-    let mut conf = GrayImage::new(w, h);
     let (mut photo_texels, mut steep_photo_texels) = (0, 0);
     let mut supplied: Vec<u64> = Vec::new();
     let n = (w as usize * h as usize).min(acc.len());
@@ -81,11 +127,10 @@ pub fn blend_cell(
         .filter(|(c, s)| **c && **s)
         .count() as u64
         * (acc.scale as u64).pow(2);
-    let grid = PhotoBlocks::grid(side, w) as usize;
     let mut stored = vec![false; grid * grid];
-    let (px, cv) = (texture.as_mut(), conf.as_mut());
     let base_index = ctx.base_indexer(acc.texels, acc.scale);
-    let block_index = block_indexer(w as usize, side as usize, grid);
+    let block_index = block_indexer(w as usize, sd, grid);
+    let within_block = within_indexer(w as usize, sd);
     let resolution_weight = params.resolution_weight_fn();
     // (per existing texel and per alpha value, computed once: the same values bit for bit)
     let existing_res: Vec<f64> = (0..base_n)
@@ -107,7 +152,13 @@ pub fn blend_cell(
         if !(beta > 0.0) {
             return;
         }
-        let e = &mut px[4 * t..4 * t + 4];
+        let block = block_index(t);
+        // (every texel with colour lies in a block footprints reached)
+        let Some(&slot) = slot_of.get(block).filter(|&&k| k != u32::MAX) else {
+            return;
+        };
+        let at = slot as usize * bt + within_block(t);
+        let e = &mut px[4 * at..4 * at + 4];
         let alpha = alphas[e[3] as usize];
         // (x / 1 is x: most texels are fully known and most such denominators are 1)
         let d = beta + (1.0 - beta) * alpha;
@@ -117,9 +168,9 @@ pub fn blend_cell(
             e[k] = space.encode_u8((s * p[k] as f64 + (1.0 - s) * old) as f32);
         }
         e[3] = e[3].max(crate::fastmath::to_u8(beta * 255.0));
-        cv[t] = crate::fastmath::to_u8(s * 255.0);
+        cv[at] = crate::fastmath::to_u8(s * 255.0);
         // (stored wherever the photo had weight, even a share that rounds to 0)
-        stored[block_index(t)] = true;
+        stored[block] = true;
         let cov = covered.get(b).copied().unwrap_or(false);
         if s > 0.5 && cov {
             photo_texels += 1;
@@ -132,15 +183,57 @@ pub fn blend_cell(
             }
         }
     });
+    let kept: Vec<usize> = slots.iter().copied().filter(|&i| stored[i]).collect();
     Blended {
-        texture,
-        confidence: conf,
+        texture: atlas_of(&px, 4, &kept, &slot_of, [side, w, h]),
+        confidence: atlas_of(&cv, 1, &kept, &slot_of, [side, w, h]),
         block_side: side,
         blocks: PhotoBlocks::new(side, &stored),
         photo_texels,
         steep_texels,
         steep_photo_texels,
         supplied,
+    }
+}
+
+/// The atlas ([`crate::store::photo_texture::pack`]'s layout) of the blocks `kept`
+/// (row-major block numbers, ascending) of a texture of `[side, width, height]` whose
+/// blocks are stored block-major in `slots` (`ch` bytes per texel, block `i` in slot
+/// `slot_of[i]`); texels past a block cut by the texture's edge are 0.
+fn atlas_of<P: image::Pixel<Subpixel = u8>>(
+    slots: &[u8],
+    ch: usize,
+    kept: &[usize],
+    slot_of: &[u32],
+    [side, w, h]: [u32; 3],
+) -> image::ImageBuffer<P, Vec<u8>> {
+    let (cols, rows) = crate::store::photo_texture::atlas_blocks(kept.len());
+    let (sd, grid) = (side as usize, PhotoBlocks::grid(side, w) as usize);
+    let aw = cols * sd;
+    let mut atlas = vec![0u8; aw * rows * sd * ch];
+    for (k, &i) in kept.iter().enumerate() {
+        let (x0, y0) = ((i % grid) * sd, (i / grid) * sd);
+        let (bw, bh) = (sd.min(w as usize - x0), sd.min(h as usize - y0));
+        let src = &slots[slot_of[i] as usize * sd * sd * ch..][..sd * sd * ch];
+        let (ax, ay) = ((k % cols) * sd, (k / cols) * sd);
+        for r in 0..bh {
+            let d = ((ay + r) * aw + ax) * ch;
+            atlas[d..d + bw * ch].copy_from_slice(&src[r * sd * ch..(r * sd + bw) * ch]);
+        }
+    }
+    image::ImageBuffer::from_raw((aw) as u32, (rows * sd) as u32, atlas)
+        .unwrap_or_else(|| image::ImageBuffer::new(0, 0))
+}
+
+/// The position of texel `t` of a row-major texture `w` texels wide within its block of
+/// `side` texels (row-major in the block); shifts when both are powers of two.
+fn within_indexer(w: usize, side: usize) -> impl Fn(usize) -> usize + Copy {
+    let (w, side) = (w.max(1), side.max(1));
+    let shifts = (w.is_power_of_two() && side.is_power_of_two())
+        .then(|| (w.trailing_zeros(), side.trailing_zeros()));
+    move |t: usize| match shifts {
+        Some((lw, ls)) => (((t >> lw) & (side - 1)) << ls) + (t & (w - 1) & (side - 1)),
+        None => ((t / w) % side) * side + (t % w) % side,
     }
 }
 
@@ -220,8 +313,9 @@ mod tests {
             &covered,
             &steep,
         );
-        let r: Vec<u8> = (0..n).map(|i| b.texture.get_pixel(i, 0).0[0]).collect();
-        let s: Vec<u8> = (0..n).map(|i| b.confidence.get_pixel(i, 0).0[0]).collect();
+        let (texture, confidence) = b.compose(&existing, 1);
+        let r: Vec<u8> = (0..n).map(|i| texture.get_pixel(i, 0).0[0]).collect();
+        let s: Vec<u8> = (0..n).map(|i| confidence.get_pixel(i, 0).0[0]).collect();
         // where the photo is 4x finer: photo colour, share 255
         assert_eq!((r[0], s[0]), (250, 255));
         assert_eq!((r[15], s[15]), (250, 255), "{r:?}");
@@ -237,7 +331,7 @@ mod tests {
             assert_eq!((r[30], s[30]), (250, 255), "{r:?} {s:?}");
         }
         // rows the photo did not reach are unchanged
-        assert_eq!(b.texture.get_pixel(5, 3).0, [10, 10, 10, 255]);
+        assert_eq!(texture.get_pixel(5, 3).0, [10, 10, 10, 255]);
         assert_eq!(b.steep_texels, (n * n / 2) as u64);
         let photo = s.iter().filter(|&&v| v > 127).count() as u64;
         assert_eq!(b.photo_texels, photo);
@@ -308,10 +402,11 @@ mod tests {
             let mut acc = CellAccum::new(t, scale, BlendMode::Confidence, ctx.clone(), &params);
             acc.merge(&pa, 0);
             let b = blend_cell(&existing, &acc, &params, ColourSpace::Linear, &[], &[]);
-            assert_eq!(b.texture.dimensions(), (t, t));
+            let (texture, confidence) = b.compose(&existing, scale);
+            assert_eq!(texture.dimensions(), (t, t));
             shares.push((
                 scale,
-                b.confidence.clone(),
+                confidence,
                 (0..t * t)
                     .map(|i| acc.confidence(i as usize))
                     .collect::<Vec<f32>>(),
@@ -376,6 +471,8 @@ mod tests {
             for t in (0..w * w).step_by(13) {
                 let (x, y) = (t % w, t / w);
                 assert_eq!(f(t), (y / side) * grid + x / side, "{w} {side} {t}");
+                let g = within_indexer(w, side);
+                assert_eq!(g(t), (y % side) * side + x % side, "{w} {side} {t}");
             }
         }
     }

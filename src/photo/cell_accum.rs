@@ -7,6 +7,12 @@ use super::accumulate::PhotoAccum;
 use super::confidence::ConfidenceParams;
 use super::texel_tiles::{TexelSums, TexelTiles};
 
+/// The photo index of a record's label (1 + the index, 0 for none; see [`CellAccum`]).
+#[inline]
+fn label_photo(label: f32) -> Option<u16> {
+    (label >= 1.0).then(|| (label - 1.0) as u16)
+}
+
 /// How several photos' colours combine in a texel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BlendMode {
@@ -138,7 +144,9 @@ impl CellContext {
 /// fields standing for: `coverage` the highest single-photo coverage confidence; `weight`
 /// Σ selection weights (best mode: the best photo's); `colour` Σ weight · colour (best mode:
 /// the best photo's colour); `footprint` Σ weight · resolution (best mode: the best photo's
-/// resolution); `grazing` the largest single-photo selection weight.
+/// resolution); `grazing` the largest single-photo selection weight; `clear` the label of
+/// the photo with the largest selection weight (1 + its index, exactly as an f32; 0 where no
+/// photo gave colour), so that no per-texel array of the whole texture is needed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellAccum {
     /// Blend mode.
@@ -149,10 +157,6 @@ pub struct CellAccum {
     pub scale: u32,
     /// The cell's context of the resolution rule.
     pub context: CellContext,
-    /// Per texel: 1 + the index of the photo with the largest selection weight there (the
-    /// `photo` given to [`CellAccum::merge`]; 0 where no photo gave colour). Read it with
-    /// [`CellAccum::best_photo`].
-    best: Vec<u16>,
     /// γ of the selection weight `confidence · resolution^−γ`.
     sharpness: f32,
     merged: TexelTiles,
@@ -167,13 +171,11 @@ impl CellAccum {
         context: CellContext,
         params: &ConfidenceParams,
     ) -> CellAccum {
-        let n = texels as usize * texels as usize;
         CellAccum {
             mode,
             texels,
             scale: scale.max(1),
             context,
-            best: vec![0; n],
             sharpness: params.sharpness_power as f32,
             merged: TexelTiles::new(texels),
         }
@@ -192,15 +194,13 @@ impl CellAccum {
         let (texels, scale) = (p.texels, p.scale.max(1));
         let mut merged = p.sums;
         let sharpness = params.sharpness_power as f32;
-        let mut best = vec![0u16; merged.len()];
-        let label = photo.saturating_add(1);
+        let label = f32::from(photo.saturating_add(1));
         let mut written = 0;
         let base_index = context.base_indexer(texels, scale);
         merged.for_each_mut(|t, s| {
             match Self::photo_texel(s, &context, base_index(t), sharpness) {
                 Some((c, conf, res, w)) => {
                     written += 1;
-                    best[t] = label;
                     *s = match mode {
                         BlendMode::Confidence => TexelSums {
                             coverage: conf,
@@ -208,7 +208,7 @@ impl CellAccum {
                             colour: c.map(|v| w * v),
                             footprint: w * res,
                             grazing: w,
-                            clear: 0.0,
+                            clear: label,
                         },
                         BlendMode::Best => TexelSums {
                             coverage: conf,
@@ -216,7 +216,7 @@ impl CellAccum {
                             colour: c,
                             footprint: res,
                             grazing: w,
-                            clear: 0.0,
+                            clear: label,
                         },
                     };
                 }
@@ -229,7 +229,6 @@ impl CellAccum {
                 texels,
                 scale,
                 context,
-                best,
                 sharpness,
                 merged,
             },
@@ -265,7 +264,7 @@ impl CellAccum {
     /// it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
         let mut written = 0;
-        let label = photo.saturating_add(1);
+        let label = f32::from(photo.saturating_add(1));
         let n = self.merged.len().min(p.sums.len());
         let (ctx, texels, scale, sharpness, mode) = (
             &self.context,
@@ -274,7 +273,7 @@ impl CellAccum {
             self.sharpness,
             self.mode,
         );
-        let (merged, best) = (&mut self.merged, &mut self.best);
+        let merged = &mut self.merged;
         let base_index = ctx.base_indexer(texels, scale);
         p.sums.for_each(|t, ps| {
             if t >= n {
@@ -285,8 +284,8 @@ impl CellAccum {
                 return;
             };
             written += 1;
-            let first = best[t] == 0;
             let Some(s) = merged.get_mut(t) else { return };
+            let first = s.clear == 0.0;
             match mode {
                 BlendMode::Confidence => {
                     s.weight += w;
@@ -305,7 +304,7 @@ impl CellAccum {
                 }
             }
             if first || w > s.grazing {
-                best[t] = label;
+                s.clear = label;
                 s.grazing = w;
             }
             s.coverage = s.coverage.max(conf);
@@ -322,20 +321,20 @@ impl CellAccum {
     /// Whether some photo gave texel `t` colour.
     #[inline]
     pub fn has_colour(&self, t: usize) -> bool {
-        self.best.get(t).is_some_and(|&p| p != 0)
+        self.merged.get(t).clear != 0.0
     }
 
     /// The photo (the index given to [`CellAccum::merge`]) with the largest selection weight
     /// at texel `t`, if some photo gave it colour.
     #[inline]
     pub fn best_photo(&self, t: usize) -> Option<u16> {
-        self.best.get(t).and_then(|&p| p.checked_sub(1))
+        label_photo(self.merged.get(t).clear)
     }
 
     /// Texels of the texture (`texels²`).
     #[inline]
     pub fn len(&self) -> usize {
-        self.best.len()
+        self.merged.len()
     }
 
     /// Texels held by the tiles some photo reached (a measure of the cell's blending work).
@@ -346,7 +345,7 @@ impl CellAccum {
     /// Whether the texture has no texels.
     #[inline]
     pub fn is_empty(&self) -> bool {
-        self.best.is_empty()
+        self.merged.len() == 0
     }
 
     /// The highest single-photo coverage confidence at texel `t`, in [0, 1].
@@ -361,12 +360,9 @@ impl CellAccum {
     /// tiles footprints reached are visited.
     pub fn for_each_coloured(&self, mut f: impl FnMut(usize, [f32; 3], f32, f32, Option<u16>)) {
         self.merged.for_each(|t, s| {
-            let Some(&label) = self.best.get(t) else {
+            let Some(photo) = label_photo(s.clear) else {
                 return;
             };
-            if label == 0 {
-                return;
-            }
             let (colour, res) = match self.mode {
                 BlendMode::Confidence if s.weight > 0.0 => (
                     s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
@@ -382,7 +378,7 @@ impl CellAccum {
                     },
                 ),
             };
-            f(t, colour, s.coverage, res, Some(label - 1));
+            f(t, colour, s.coverage, res, Some(photo));
         });
     }
 

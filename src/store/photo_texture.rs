@@ -213,104 +213,134 @@ pub fn compose_confidence(
 /// texel centres (edges clamped), colour in linear light (as a GPU filters an sRGB texture),
 /// alpha as it is; `scale` 1 returns a copy.
 pub fn magnify(existing: &RgbaImage, scale: u32) -> RgbaImage {
-    magnify_blocks(existing, scale, None)
-}
-
-/// [`magnify`] computed only in the blocks `blocks = (side, present)` marks (row-major over
-/// the output's block grid); other texels are 0 (`scale` 1: a copy of `existing`, every
-/// texel). `None`: every texel. Each computed texel is bit for bit [`magnify`]'s.
-pub fn magnify_blocks(
-    existing: &RgbaImage,
-    scale: u32,
-    blocks: Option<(u32, &[bool])>,
-) -> RgbaImage {
     let (w, h) = existing.dimensions();
     if scale <= 1 || w == 0 || h == 0 {
         return existing.clone();
     }
-    let s = scale as f64;
-    // per output column / row: the two source texels and the weight of the second
-    let taps = |n: u32| -> Vec<(usize, usize, f32)> {
-        (0..n * scale)
-            .map(|i| {
-                let u = ((i as f64 + 0.5) / s - 0.5).clamp(0.0, (n - 1) as f64);
-                let i0 = u.floor() as usize;
-                (i0, (i0 + 1).min(n as usize - 1), (u - i0 as f64) as f32)
-            })
-            .collect()
-    };
-    let (cols, rows) = (taps(w), taps(h));
-    let src = existing.as_raw();
-    let lin: Vec<f32> = src
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) })
-        .collect();
-    let (ow, oh) = ((w * scale) as usize, (h * scale) as usize);
-    let row_len = w as usize * 4;
-    // Bands of output rows: one block row, or the `scale` rows one source row pair serves.
-    let (band, grid) = match blocks {
-        Some((side, _)) => (side.max(1) as usize, ow.div_ceil(side.max(1) as usize)),
-        None => (scale as usize, 1),
-    };
-    // Per band, the output column ranges to compute.
-    let ranges = |b: usize| -> Vec<(usize, usize)> {
-        match blocks {
-            None => vec![(0, ow)],
-            Some((_, present)) => (0..grid)
-                .filter(|&bx| present.get(b * grid + bx).copied().unwrap_or(false))
-                .map(|bx| (bx * band, ((bx + 1) * band).min(ow)))
+    let m = Magnifier::new(existing, scale);
+    let (ow, oh) = m.dimensions();
+    let (ow, band) = (ow as usize, scale as usize);
+    let mut out = vec![0u8; ow * oh as usize * 4];
+    // bands of the `scale` output rows one pair of source rows serves
+    out.par_chunks_mut(ow * 4 * band).enumerate().for_each_init(
+        MagnifyScratch::default,
+        |scratch, (b, chunk)| {
+            let rows = chunk.len() / (ow * 4);
+            m.fill([0, b * band], [ow, rows], chunk, ow, scratch);
+        },
+    );
+    RgbaImage::from_raw(w * scale, h * scale, out).unwrap_or_else(|| existing.clone())
+}
+
+/// [`magnify`] of one texture, texel rectangle by rectangle: [`Magnifier::fill`] writes
+/// bit for bit the texels [`magnify`] gives there.
+#[derive(Clone, Debug)]
+pub struct Magnifier {
+    /// The source texels, colour decoded to linear light, alpha as its 8-bit value.
+    lin: Vec<f32>,
+    /// Floats per source row.
+    row_len: usize,
+    /// Per output column / row: the two source texels and the weight of the second.
+    cols: Vec<(usize, usize, f32)>,
+    rows: Vec<(usize, usize, f32)>,
+}
+
+/// Reusable rows of [`Magnifier::fill`] (the two source rows interpolated along x).
+#[derive(Clone, Debug, Default)]
+pub struct MagnifyScratch {
+    top: Vec<f32>,
+    bottom: Vec<f32>,
+}
+
+impl Magnifier {
+    /// A magnifier of `existing` by `scale` (a power of two; 0 counts as 1).
+    pub fn new(existing: &RgbaImage, scale: u32) -> Magnifier {
+        let (w, h) = existing.dimensions();
+        let scale = scale.max(1);
+        let s = scale as f64;
+        let taps = |n: u32| -> Vec<(usize, usize, f32)> {
+            (0..n * scale)
+                .map(|i| {
+                    let u = ((i as f64 + 0.5) / s - 0.5).clamp(0.0, n.saturating_sub(1) as f64);
+                    let i0 = u.floor() as usize;
+                    (
+                        i0,
+                        (i0 + 1).min((n as usize).saturating_sub(1)),
+                        (u - i0 as f64) as f32,
+                    )
+                })
+                .collect()
+        };
+        Magnifier {
+            lin: existing
+                .as_raw()
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| if i % 4 == 3 { v as f32 } else { decode_u8(v) })
                 .collect(),
+            row_len: w as usize * 4,
+            cols: taps(w),
+            rows: taps(h),
         }
-    };
-    // Source row `y` interpolated along x over the output columns `r`.
-    let across = |y: usize, r: (usize, usize), buf: &mut Vec<f32>| {
-        let row = &lin[y * row_len..][..row_len];
-        buf.resize(ow * 4, 0.0);
-        for (x, &(x0, x1, fx)) in cols.iter().enumerate().take(r.1).skip(r.0) {
-            for k in 0..4 {
-                buf[4 * x + k] = row[4 * x0 + k] + (row[4 * x1 + k] - row[4 * x0 + k]) * fx;
+    }
+
+    /// The magnified texture's size (texels).
+    pub fn dimensions(&self) -> (u32, u32) {
+        (self.cols.len() as u32, self.rows.len() as u32)
+    }
+
+    /// Writes the magnified RGBA8 texels of the rectangle at `origin` (column, row) of
+    /// `size` (columns, rows) into `out`, row-major with `stride` texels per row (parts
+    /// outside the magnified texture are left as they are).
+    pub fn fill(
+        &self,
+        origin: [usize; 2],
+        size: [usize; 2],
+        out: &mut [u8],
+        stride: usize,
+        scratch: &mut MagnifyScratch,
+    ) {
+        let [x0, y0] = origin;
+        let x1 = (x0 + size[0]).min(self.cols.len());
+        let y1 = (y0 + size[1]).min(self.rows.len());
+        if x0 >= x1 || y0 >= y1 {
+            return;
+        }
+        let w = x1 - x0;
+        let (top, bottom) = (&mut scratch.top, &mut scratch.bottom);
+        top.resize(w * 4, 0.0);
+        bottom.resize(w * 4, 0.0);
+        // source row `y` interpolated along x over the columns x0..x1
+        let across = |y: usize, buf: &mut [f32]| {
+            let row = &self.lin[y * self.row_len..][..self.row_len];
+            for (b, &(c0, c1, fx)) in buf.chunks_exact_mut(4).zip(&self.cols[x0..x1]) {
+                for k in 0..4 {
+                    b[k] = row[4 * c0 + k] + (row[4 * c1 + k] - row[4 * c0 + k]) * fx;
+                }
+            }
+        };
+        let mut have = (usize::MAX, usize::MAX);
+        for (r, &(s0, s1, fy)) in self.rows[y0..y1].iter().enumerate() {
+            if have != (s0, s1) {
+                across(s0, top);
+                across(s1, bottom);
+                have = (s0, s1);
+            }
+            let Some(px) = out.get_mut(4 * r * stride..4 * (r * stride + w)) else {
+                return;
+            };
+            for ((p, t), b) in px
+                .chunks_exact_mut(4)
+                .zip(top.chunks_exact(4))
+                .zip(bottom.chunks_exact(4))
+            {
+                p[0] = encode_u8(t[0] + (b[0] - t[0]) * fy);
+                p[1] = encode_u8(t[1] + (b[1] - t[1]) * fy);
+                p[2] = encode_u8(t[2] + (b[2] - t[2]) * fy);
+                p[3] = (t[3] + (b[3] - t[3]) * fy + 0.5) as u8;
             }
         }
-    };
-    let mut out = vec![0u8; ow * oh * 4];
-    out.par_chunks_mut(ow * 4 * band)
-        .zip(rows.par_chunks(band))
-        .enumerate()
-        .for_each_init(
-            || (Vec::new(), Vec::new()),
-            |(top, bottom), (b, (chunk, band_rows))| {
-                let rs = ranges(b);
-                if rs.is_empty() {
-                    return;
-                }
-                let mut have = (usize::MAX, usize::MAX);
-                for (row, &(y0, y1, fy)) in chunk.chunks_exact_mut(ow * 4).zip(band_rows) {
-                    if have != (y0, y1) {
-                        for &r in &rs {
-                            across(y0, r, top);
-                            across(y1, r, bottom);
-                        }
-                        have = (y0, y1);
-                    }
-                    for &(x0, x1) in &rs {
-                        let px = &mut row[4 * x0..4 * x1];
-                        let (t, bt) = (&top[4 * x0..4 * x1], &bottom[4 * x0..4 * x1]);
-                        for ((p, t), b) in px
-                            .chunks_exact_mut(4)
-                            .zip(t.chunks_exact(4))
-                            .zip(bt.chunks_exact(4))
-                        {
-                            p[0] = encode_u8(t[0] + (b[0] - t[0]) * fy);
-                            p[1] = encode_u8(t[1] + (b[1] - t[1]) * fy);
-                            p[2] = encode_u8(t[2] + (b[2] - t[2]) * fy);
-                            p[3] = (t[3] + (b[3] - t[3]) * fy + 0.5) as u8;
-                        }
-                    }
-                }
-            },
-        );
-    RgbaImage::from_raw(w * scale, h * scale, out).unwrap_or_else(|| existing.clone())
+    }
 }
 
 #[cfg(test)]
@@ -391,22 +421,36 @@ mod tests {
     }
 
     #[test]
-    fn magnify_in_blocks_equals_magnify_there() {
+    fn magnifier_rectangles_equal_magnify_there() {
         let img = texture(9);
-        for (scale, side) in [(2u32, 4u32), (4, 8), (8, 16), (4, 5)] {
+        for scale in [1u32, 2, 4, 8] {
             let full = magnify(&img, scale);
-            let n = full.width();
-            let g = PhotoBlocks::grid(side, n) as usize;
-            let present: Vec<bool> = (0..g * g).map(|i| (i * 7) % 3 == 0).collect();
-            let part = magnify_blocks(&img, scale, Some((side, &present)));
-            for (x, y, p) in part.enumerate_pixels() {
-                let i = (y / side) as usize * g + (x / side) as usize;
-                let want = if present[i] {
-                    *full.get_pixel(x, y)
-                } else {
-                    image::Rgba([0; 4])
-                };
-                assert_eq!(*p, want, "scale {scale} side {side} at {x},{y}");
+            let m = Magnifier::new(&img, scale);
+            assert_eq!(m.dimensions(), full.dimensions());
+            let n = full.width() as usize;
+            let mut scratch = MagnifyScratch::default();
+            // rectangles inside, cut by the right and bottom edges, and past them
+            for (x0, y0, w, h) in [
+                (0, 0, 4, 4),
+                (3, 5, 7, 2),
+                (n - 3, n - 2, 8, 8),
+                (n, 0, 2, 2),
+            ] {
+                let stride = w + 1;
+                let mut out = vec![7u8; 4 * stride * h];
+                m.fill([x0, y0], [w, h], &mut out, stride, &mut scratch);
+                for r in 0..h {
+                    for c in 0..stride {
+                        let got = &out[4 * (r * stride + c)..][..4];
+                        let (x, y) = (x0 + c, y0 + r);
+                        if c < w && x < n && y < n {
+                            let want = full.get_pixel(x as u32, y as u32).0;
+                            assert_eq!(got, want, "scale {scale} at {x},{y}");
+                        } else {
+                            assert_eq!(got, [7; 4], "scale {scale}: written outside");
+                        }
+                    }
+                }
             }
         }
     }

@@ -35,7 +35,6 @@ use crate::photo::{
     for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
 };
 use crate::stats::texel_stretch;
-use crate::store::photo_texture::pack;
 use crate::store::{
     BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
     PhotoSettings, Store, active_texels, cell_stem, texcoord,
