@@ -25,6 +25,7 @@ pub use super::samples::PhotoSamples;
 use super::splat::{
     Deposit, MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited,
 };
+use super::strip::StripSplatter;
 pub use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::colour::ColourSpace;
 
@@ -141,8 +142,20 @@ impl PhotoAccum {
         footprints: impl IntoIterator<Item = &'f PixelFootprint>,
         photo: &PhotoSamples,
     ) {
+        STRIPS.with_borrow_mut(|strips| self.add_samples_with(footprints, photo, strips));
+    }
+
+    /// [`PhotoAccum::add_samples`] with the given run splatter (module [`super::strip`]):
+    /// runs of footprints that share side edges are splatted together, the others one by one.
+    fn add_samples_with<'f>(
+        &mut self,
+        footprints: impl IntoIterator<Item = &'f PixelFootprint>,
+        photo: &PhotoSamples,
+        strips: &mut StripSplatter,
+    ) {
         let (w, h) = photo.image.dimensions();
         let (raw, lut) = (photo.image.as_raw(), &photo.lut);
+        let sc = self.scale as f32;
         for fp in footprints {
             let [c, r] = fp.pixel;
             if c >= w || r >= h {
@@ -162,8 +175,41 @@ impl PhotoAccum {
                 self.kinds[2] += 1;
                 continue;
             }
+            let corners = if self.scale == 1 {
+                fp.corners
+            } else {
+                fp.corners.map(|c| [c[0] * sc, c[1] * sc])
+            };
+            let q = border;
+            let values = [
+                1.0,
+                q,
+                q * rgb[0],
+                q * rgb[1],
+                q * rgb[2],
+                q * footprint,
+                q * grazing,
+                q * clear,
+            ];
+            if corners.iter().flatten().all(|v| v.is_finite())
+                && strips.offer(corners, fp.pixel, values, &mut self.sums)
+            {
+                self.kinds[0] += 1;
+                continue;
+            }
+            {
+                use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+                static ALONE: AtomicUsize = AtomicUsize::new(0);
+                let a = ALONE.fetch_add(1, Relaxed) + 1;
+                if a % 200_000 == 0 {
+                    eprintln!("TMPALONE {a}");
+                }
+            }
+            // (alone, after the run it interrupts)
+            strips.flush(&mut self.sums);
             self.add_clear(fp, rgb, border, clear, footprint, grazing);
         }
+        strips.flush(&mut self.sums);
     }
 
     /// The photo's coverage confidence at texel `t`: `W / max(1, A)`, in [0, 1].
@@ -256,6 +302,11 @@ impl Deposit for SumsDeposit<'_> {
             k += n;
         }
     }
+}
+
+thread_local! {
+    /// The run splatter of [`PhotoAccum::add_samples`] (its buffers reused per thread).
+    static STRIPS: std::cell::RefCell<StripSplatter> = std::cell::RefCell::new(StripSplatter::default());
 }
 
 /// View cosines below this count as this (a ray grazing the surface).
@@ -541,7 +592,8 @@ mod tests {
     #[test]
     fn large_footprints_deposit_row_runs_as_single_texels() {
         // footprints of 5 to 30 texels, partly outside the texture: the rasterizer's row runs
-        // give the same records as depositing every texel's piece on its own
+        // give the same records as depositing every texel's piece on its own (the run
+        // splatter, which takes the footprints of up to 16 texels, up to f32 rounding)
         let img = RgbImage::from_fn(8, 8, |x, y| {
             image::Rgb([(x * 31) as u8, (y * 29) as u8, 77])
         });
@@ -592,7 +644,36 @@ mod tests {
             });
             assert_eq!(kind.kind, SplatKind::Exact);
         }
-        assert_eq!(acc.sums, single);
+        // (equal up to the f32 rounding of the run splatter's sums, `super::strip`)
+        for t in 0..64 * 64 {
+            let (a, b) = (acc.sums.get(t), single.get(t));
+            let (fa, fb) = (
+                [
+                    a.coverage,
+                    a.weight,
+                    a.colour[0],
+                    a.colour[1],
+                    a.colour[2],
+                    a.footprint,
+                ],
+                [
+                    b.coverage,
+                    b.weight,
+                    b.colour[0],
+                    b.colour[1],
+                    b.colour[2],
+                    b.footprint,
+                ],
+            );
+            for (x, y) in fa.iter().zip(&fb) {
+                assert!(
+                    (x - y).abs() <= 2e-5 * (1.0 + y.abs()),
+                    "texel {t}: {a:?} {b:?}"
+                );
+            }
+            assert!((a.grazing - b.grazing).abs() <= 2e-5 * (1.0 + b.grazing.abs()));
+            assert!((a.clear - b.clear).abs() <= 2e-5 * (1.0 + b.clear.abs()));
+        }
         let mut n = 0;
         acc.sums.for_each(|_, t| n += (t.weight > 0.0) as usize);
         assert!(n > 1500, "{n} texels");

@@ -47,6 +47,7 @@ mod scene;
 mod silhouette;
 mod sizing;
 mod splat;
+mod strip;
 mod texel_tiles;
 mod triangle;
 mod viewgrid;

@@ -1,0 +1,445 @@
+//! Splatting a run of footprints that share their side edges (neighbouring pixels of one
+//! photo row on the same cell) in one pass ([`StripSplatter`]).
+//!
+//! The pixels of a photo tile the surface, so neighbouring footprints share edges. Every
+//! footprint deposits `area(footprint ∩ texel) · v` into each texel, with `v` its 8 values
+//! per texel² (the [`TexelSums`] fields: 1, feather, feather × colour, …). By signed-area
+//! accumulation along texel rows (as font rasterizers, and [`super::splat`]'s row
+//! rasterizer, do for one polygon) an edge adds, per texel row it crosses, its signed height
+//! split between the columns it passes; a running sum along the row then gives each texel
+//! its covered area. The sum is linear in the values, so a run of `K` footprints is
+//! rasterized at once with vector values: each footprint's top and bottom edges carry its
+//! own `σ v` (`σ` = ±1 by its orientation, so that every footprint adds `+area · v`), the
+//! run's first left and last right edge theirs, and the `K − 1` shared edges the difference
+//! of the two sides' values, once. One running sum per texel row of the run then gives
+//! every texel `Σ area · v` over the run, deposited with one tile lookup per tile row.
+//!
+//! The result equals the footprint-by-footprint exact splat ([`super::splat`]) up to f32
+//! rounding of the sums (a test compares them); texels whose resolved coverage is below
+//! [`MIN_RESOLVED`] texels² (rounding noise of the running sums) get nothing. Only simple
+//! quads (not self-intersecting) whose area is at least [`super::MIN_SPLAT_AREA`] and whose
+//! box spans at most [`FOOTPRINT_BOX_MAX`] texels each way join a run; the rest take the
+//! footprint-by-footprint path.
+
+use super::texel_tiles::{TexelSums, TexelTiles};
+use crate::fastmath::{ceil_f, floor_f};
+
+/// A footprint's values per texel² of its area, in [`TexelSums`] field order: coverage,
+/// weight, colour (3), footprint, grazing, clear.
+pub(crate) type Values = [f32; 8];
+
+/// Footprints whose box spans more texels than this either way are splatted alone.
+pub(crate) const FOOTPRINT_BOX_MAX: f64 = 16.0;
+/// The most footprints in one run.
+const RUN_MAX: usize = 64;
+/// The largest box (texels, columns × rows) of one run.
+const RUN_BOX_MAX: usize = 4096;
+/// Resolved coverage (texels²) below which a texel gets nothing: the running sums' f32
+/// rounding (values of order 1 over tens of columns) stays far below it.
+pub(crate) const MIN_RESOLVED: f32 = 1e-5;
+
+/// One footprint of a run: its corners (texel units of the accumulator, in pixel order),
+/// values already multiplied by its orientation sign, and its photo pixel.
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    corners: [[f32; 2]; 4],
+    values: Values,
+    pixel: [u32; 2],
+}
+
+/// Collects runs of edge-sharing footprints and splats each run in one pass (module docs).
+/// Reusable: its buffers keep their capacity.
+#[derive(Default)]
+pub(crate) struct StripSplatter {
+    items: Vec<Item>,
+    /// Box of the current run: texel lines `[x0, x1] × [y0, y1]`.
+    bounds: [f64; 4],
+    /// Per texel of the run's box (plus one column), the vector signed-area deltas; all
+    /// zero between runs.
+    cells: Vec<Values>,
+    /// Per box row, the local columns written.
+    spans: Vec<[usize; 2]>,
+}
+
+/// Whether the quad is simple (not self-intersecting) and its signed doubled area (shoelace
+/// over the corners in order, y down).
+#[inline]
+fn simple_signed_area(q: &[[f32; 2]; 4]) -> (bool, f64) {
+    let p = q.map(|c| [c[0] as f64, c[1] as f64]);
+    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let (s012, s023) = (cross(p[0], p[1], p[2]), cross(p[0], p[2], p[3]));
+    if s012 * s023 >= 0.0 {
+        return (true, s012 + s023);
+    }
+    let (s123, s130) = (cross(p[1], p[2], p[3]), cross(p[1], p[3], p[0]));
+    (s123 * s130 >= 0.0, s012 + s023)
+}
+
+impl StripSplatter {
+    /// Offers footprint `corners` (finite, texel units of `sums`) of photo pixel `pixel` with
+    /// values `values` per texel²: `true` if it joined the current run (which it continues or
+    /// starts; a run it cannot continue is splatted into `sums` first), `false` if it must be
+    /// splatted alone (collapsed, self-intersecting or too large).
+    #[inline]
+    pub(crate) fn offer(
+        &mut self,
+        corners: [[f32; 2]; 4],
+        pixel: [u32; 2],
+        values: Values,
+        sums: &mut TexelTiles,
+    ) -> bool {
+        let (simple, twice) = simple_signed_area(&corners);
+        let area = 0.5 * twice.abs();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for c in &corners {
+            for a in 0..2 {
+                lo[a] = lo[a].min(c[a] as f64);
+                hi[a] = hi[a].max(c[a] as f64);
+            }
+        }
+        let box_ok = hi[0] - lo[0] <= FOOTPRINT_BOX_MAX && hi[1] - lo[1] <= FOOTPRINT_BOX_MAX;
+        if !(simple && area >= super::MIN_SPLAT_AREA && box_ok && area.is_finite()) {
+            return false;
+        }
+        // (the rasterizer's running sum gives −area for a quad of positive shoelace area)
+        let sigma = if twice > 0.0 { -1.0 } else { 1.0 };
+        let item = Item {
+            corners,
+            values: values.map(|v| sigma * v),
+            pixel,
+        };
+        let bounds = [floor_f(lo[0]), ceil_f(hi[0]), floor_f(lo[1]), ceil_f(hi[1])];
+        if let Some(last) = self.items.last() {
+            let joined = [
+                self.bounds[0].min(bounds[0]),
+                self.bounds[1].max(bounds[1]),
+                self.bounds[2].min(bounds[2]),
+                self.bounds[3].max(bounds[3]),
+            ];
+            let cols = joined[1] - joined[0] + 1.0;
+            let rows = joined[3] - joined[2];
+            let continues = pixel[1] == last.pixel[1]
+                && pixel[0] == last.pixel[0].wrapping_add(1)
+                && corners[0] == last.corners[1]
+                && corners[3] == last.corners[2]
+                && self.items.len() < RUN_MAX
+                && cols * rows <= RUN_BOX_MAX as f64;
+            if continues {
+                self.items.push(item);
+                self.bounds = joined;
+                return true;
+            }
+            self.flush(sums);
+        }
+        self.items.push(item);
+        self.bounds = bounds;
+        true
+    }
+
+    /// Splats the current run (if any) into `sums` and empties it.
+    pub(crate) fn flush(&mut self, sums: &mut TexelTiles) {
+        if self.items.is_empty() {
+            return;
+        }
+        let [x0, x1, y0, y1] = self.bounds;
+        let (w, h) = ((x1 - x0) as usize + 1, (y1 - y0) as usize);
+        if h == 0 || w < 2 {
+            self.items.clear();
+            return;
+        }
+        if self.cells.len() < w * h {
+            self.cells.resize(w * h, [0.0; 8]);
+        }
+        self.spans.clear();
+        self.spans.resize(h, [usize::MAX, 0]);
+        let items = std::mem::take(&mut self.items);
+        let local = |c: [f32; 2]| [c[0] as f64 - x0, c[1] as f64 - y0];
+        let n = items.len();
+        for (k, it) in items.iter().enumerate() {
+            let q = it.corners.map(local);
+            // top (corner 0 → 1) and bottom (2 → 3) edges: this footprint's own
+            self.edge(q[0], q[1], &it.values, w);
+            self.edge(q[2], q[3], &it.values, w);
+            if k == 0 {
+                // the run's first left edge (3 → 0)
+                self.edge(q[3], q[0], &it.values, w);
+            }
+            // the right edge (1 → 2): shared with the next footprint, whose left edge runs
+            // the other way
+            match items.get(k + 1) {
+                Some(next) if k + 1 < n => {
+                    let d: Values = std::array::from_fn(|i| it.values[i] - next.values[i]);
+                    self.edge(q[1], q[2], &d, w);
+                }
+                _ => self.edge(q[1], q[2], &it.values, w),
+            }
+        }
+        self.items = items;
+        self.items.clear();
+        self.resolve(sums, [x0, y0], w);
+    }
+
+    /// Adds the signed-area deltas of the edge `a → b` (local texel units of the run's box,
+    /// `w` columns) carrying values `v`.
+    #[inline]
+    fn edge(&mut self, a: [f64; 2], b: [f64; 2], v: &Values, w: usize) {
+        let dy_edge = b[1] - a[1];
+        if dy_edge == 0.0 {
+            return;
+        }
+        let h = self.spans.len();
+        let sign = dy_edge.signum();
+        let slope = (b[0] - a[0]) / dy_edge;
+        let (ylo, yhi) = (a[1].min(b[1]), a[1].max(b[1]));
+        let first = floor_f(ylo).max(0.0) as usize;
+        let last = (ceil_f(yhi) as usize).min(h);
+        let xmax = (w - 1) as f64;
+        for j in first..last {
+            let (y0, y1) = (ylo.max(j as f64), yhi.min(j as f64 + 1.0));
+            if !(y1 > y0) {
+                continue;
+            }
+            let dy = sign * (y1 - y0);
+            let xa = (a[0] + (y0 - a[1]) * slope).clamp(0.0, xmax);
+            let xb = (a[0] + (y1 - a[1]) * slope).clamp(0.0, xmax);
+            let (xl, xr) = (xa.min(xb), xa.max(xb));
+            // (xl >= 0: truncation is the floor)
+            let il = (xl as usize).min(w - 2);
+            let ir = (ceil_f(xr) as usize).max(il + 1).min(w - 1);
+            let span = &mut self.spans[j];
+            span[0] = span[0].min(il);
+            span[1] = span[1].max(ir + 1);
+            let row = &mut self.cells[j * w..][..w];
+            if ir - il == 1 {
+                let m = (0.5 * (xl + xr) - il as f64).clamp(0.0, 1.0);
+                add(&mut row[il], v, (dy * (1.0 - m)) as f32);
+                add(&mut row[il + 1], v, (dy * m) as f32);
+                continue;
+            }
+            // the piece in each column it crosses, its height in proportion to its width:
+            // column i gets the left share of its own piece and the right share of the
+            // previous column's, one vector add per column
+            let per_x = dy / (xr - xl);
+            let mut carry = 0.0f64;
+            for i in il..ir {
+                let (p0, p1) = (xl.max(i as f64), xr.min(i as f64 + 1.0));
+                let (mut left, mut right) = (0.0, 0.0);
+                if p1 > p0 {
+                    let d = per_x * (p1 - p0);
+                    let m = (0.5 * (p0 + p1) - i as f64).clamp(0.0, 1.0);
+                    left = d * (1.0 - m);
+                    right = d * m;
+                }
+                add(&mut row[i], v, (carry + left) as f32);
+                carry = right;
+            }
+            add(&mut row[ir], v, carry as f32);
+        }
+    }
+
+    /// Running sums along each row of the run's box (origin `o`, `w` columns), deposited
+    /// into `sums` where the texture is and the coverage reaches [`MIN_RESOLVED`]; clears the
+    /// deltas.
+    fn resolve(&mut self, sums: &mut TexelTiles, o: [f64; 2], w: usize) {
+        let side = sums.side() as i64;
+        let (ox, oy) = (o[0] as i64, o[1] as i64);
+        for (j, span) in self.spans.iter().enumerate() {
+            let [lo, hi] = *span;
+            if lo >= hi {
+                continue;
+            }
+            let row = &mut self.cells[j * w..][lo..hi];
+            let mut s = [0.0f32; 8];
+            for c in row.iter_mut() {
+                for k in 0..8 {
+                    s[k] += c[k];
+                }
+                *c = s;
+            }
+            let y = oy + j as i64;
+            // the texture's columns among lo..hi: ox + i in [0, side)
+            let a = (lo as i64).max(-ox);
+            let b = (hi as i64).min(side - ox);
+            if (0..side).contains(&y) && a < b {
+                let t0 = (y * side + ox + a) as usize;
+                deposit_run(
+                    sums,
+                    t0,
+                    &row[(a - lo as i64) as usize..(b - lo as i64) as usize],
+                );
+            }
+            row.fill([0.0; 8]);
+        }
+    }
+}
+
+/// `cell += v · f`, channel by channel.
+#[inline(always)]
+fn add(cell: &mut Values, v: &Values, f: f32) {
+    for k in 0..8 {
+        cell[k] += v[k] * f;
+    }
+}
+
+/// Adds the resolved values `vals` to texels `t, t + 1, …` of one row of `sums`, one tile
+/// row at a time, skipping texels whose coverage is below [`MIN_RESOLVED`] (a tile is
+/// allocated only for a texel that gets something).
+#[inline]
+fn deposit_run(sums: &mut TexelTiles, t: usize, vals: &[Values]) {
+    let mut k = 0;
+    while k < vals.len() {
+        let n = sums.run_len(t + k, vals.len() - k);
+        if n == 0 {
+            return;
+        }
+        let part = &vals[k..k + n];
+        if part.iter().any(|v| v[0] >= MIN_RESOLVED) {
+            if let Some(records) = sums.run_mut(t + k, n) {
+                for (r, v) in records.iter_mut().zip(part) {
+                    if v[0] >= MIN_RESOLVED {
+                        add_record(r, v);
+                    }
+                }
+            }
+        }
+        k += n;
+    }
+}
+
+/// Adds resolved values to a record (negative rounding noise clamped to 0).
+#[inline(always)]
+fn add_record(r: &mut TexelSums, v: &Values) {
+    r.coverage += v[0];
+    r.weight += v[1].max(0.0);
+    for c in 0..3 {
+        r.colour[c] += v[2 + c].max(0.0);
+    }
+    r.footprint += v[5].max(0.0);
+    r.grazing += v[6].max(0.0);
+    r.clear += v[7].max(0.0);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::splat::splat_footprint;
+    use super::*;
+
+    /// Corners of pixel `(c, r)` of a warped pixel mesh (shared between neighbours): pixels
+    /// `scale` texels wide, sheared and bent, shifted by `origin`; `mirror` flips x.
+    fn corner(c: u32, r: u32, scale: f64, origin: [f64; 2], mirror: bool) -> [f32; 2] {
+        let (x, y) = (c as f64, r as f64);
+        let u = scale * (x + 0.3 * y + 0.8 * (0.21 * y).sin() + 0.05 * x * x / 40.0);
+        let v = scale * (0.6 * y + 0.15 * x + 0.5 * (0.17 * x).cos());
+        let u = if mirror { -u } else { u };
+        [(origin[0] + u) as f32, (origin[1] + v) as f32]
+    }
+
+    /// Per texel, the 8 sums of footprint-by-footprint exact splats (f64).
+    fn reference(fps: &[([[f32; 2]; 4], Values)], texels: u32) -> Vec<[f64; 8]> {
+        let mut out = vec![[0.0f64; 8]; (texels * texels) as usize];
+        for (corners, v) in fps {
+            splat_footprint(corners, texels, |t, w| {
+                for k in 0..8 {
+                    out[t][k] += w * v[k] as f64;
+                }
+            });
+        }
+        out
+    }
+
+    #[test]
+    fn runs_equal_footprint_by_footprint_splats() {
+        let texels = 64u32;
+        for (scale, origin, mirror) in [
+            (0.45, [-3.0, 2.0], false),
+            (1.3, [-8.5, -4.25], false),
+            (2.6, [70.0, -10.0], true),
+            (5.5, [-20.0, 3.0], false),
+        ] {
+            let (cols, rows) = (40u32, 30u32);
+            let mut fps = Vec::new();
+            let mut pixels = Vec::new();
+            for r in 0..rows {
+                for c in 0..cols {
+                    let corners = [
+                        corner(c, r, scale, origin, mirror),
+                        corner(c + 1, r, scale, origin, mirror),
+                        corner(c + 1, r + 1, scale, origin, mirror),
+                        corner(c, r + 1, scale, origin, mirror),
+                    ];
+                    let q = 0.5 + 0.5 * ((c * 7 + r * 3) % 11) as f32 / 10.0;
+                    let g = ((c * 13 + r * 5) % 17) as f32 / 16.0;
+                    let v = [1.0, q, q * g, q * (1.0 - g), q * 0.3, q * 0.02, q * 1.7, q];
+                    fps.push((corners, v));
+                    pixels.push([c, r]);
+                }
+            }
+            let want = reference(&fps, texels);
+            let mut sums = TexelTiles::new(texels);
+            let mut strips = StripSplatter::default();
+            let mut alone = 0;
+            for ((corners, v), &p) in fps.iter().zip(&pixels) {
+                if !strips.offer(*corners, p, *v, &mut sums) {
+                    alone += 1;
+                }
+            }
+            strips.flush(&mut sums);
+            assert_eq!(alone, 0, "scale {scale}");
+            let mut covered = 0;
+            for (t, w) in want.iter().enumerate() {
+                let s = sums.get(t);
+                let got = [
+                    s.coverage,
+                    s.weight,
+                    s.colour[0],
+                    s.colour[1],
+                    s.colour[2],
+                    s.footprint,
+                    s.grazing,
+                    s.clear,
+                ];
+                covered += (w[0] > 0.5) as usize;
+                for k in 0..8 {
+                    assert!(
+                        (got[k] as f64 - w[k]).abs() <= 2e-5 * (1.0 + w[k].abs()),
+                        "scale {scale} texel {t} channel {k}: {} against {}",
+                        got[k],
+                        w[k]
+                    );
+                }
+            }
+            assert!(covered > 100, "scale {scale}: {covered} texels covered");
+        }
+    }
+
+    #[test]
+    fn folded_collapsed_and_large_footprints_are_refused() {
+        let mut sums = TexelTiles::new(32);
+        let mut strips = StripSplatter::default();
+        let v = [1.0; 8];
+        // self-intersecting (a bow tie)
+        let bow = [[1.0, 1.0], [3.0, 3.0], [3.0, 1.0], [1.0, 3.0]];
+        assert!(!strips.offer(bow, [0, 0], v, &mut sums));
+        // collapsed to a sliver
+        let sliver = [[1.0, 1.0], [2.0, 2.0], [3.0, 3.0], [2.0, 2.0]];
+        assert!(!strips.offer(sliver, [1, 0], v, &mut sums));
+        // a box beyond FOOTPRINT_BOX_MAX texels
+        let large = [[0.0, 0.0], [20.0, 0.0], [20.0, 2.0], [0.0, 2.0]];
+        assert!(!strips.offer(large, [2, 0], v, &mut sums));
+        // non-finite corners
+        let nan = [[f32::NAN, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert!(!strips.offer(nan, [3, 0], v, &mut sums));
+        strips.flush(&mut sums);
+        assert_eq!(sums.allocated(), 0);
+        // a run broken by a gap (pixel 5 missing) or by corners not shared is still exact
+        let sq = |x: f32| [[x, 4.0], [x + 1.5, 4.0], [x + 1.5, 6.0], [x, 6.0]];
+        for (p, x) in [(0u32, 2.0f32), (1, 3.5), (2, 5.0), (4, 8.0), (5, 9.6)] {
+            assert!(strips.offer(sq(x), [p, 7], v, &mut sums));
+        }
+        strips.flush(&mut sums);
+        let total: f32 = (0..32 * 32).map(|t| sums.get(t).coverage).sum();
+        assert!((total - 5.0 * 3.0).abs() < 1e-4, "{total}");
+    }
+}
