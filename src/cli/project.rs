@@ -40,6 +40,12 @@ pub struct Args {
     /// less detail; docs/projection.md "Texture sizes"). Default: no bound.
     #[arg(long, default_value_t = f64::INFINITY)]
     pub max_texels_per_photo_pixel: f64,
+    /// The largest screen-space error (pixels) views will draw the coarser levels at: their
+    /// photo textures get no detail finer than such views show (a texel of the cell's error
+    /// over PX metres). cliffmap's renderer and exported page draw at 0.5; `inf` sizes
+    /// coarser levels like the finest (e.g. for CesiumJS at its default 16 px).
+    #[arg(long, default_value_t = 2.0, value_name = "PX")]
+    pub coarse_sse: f64,
     /// Keep every photo texture at its active texture's size (no photo-driven sizes).
     #[arg(long)]
     pub fixed_photo_texels: bool,
@@ -109,6 +115,7 @@ pub fn options(a: &Args) -> ProjectOptions {
             budget_bytes: a.photo_texture_budget,
             texels_per_pixel: a.texels_per_pixel,
             texels_per_delivered: a.max_texels_per_photo_pixel,
+            coarse_sse_px: a.coarse_sse,
         },
         confidence: cliffmap::photo::ConfidenceParams {
             occlusion_margin_px: a.occlusion_margin,

@@ -404,7 +404,12 @@ fn build_cell(
     let stem = cell_stem(key.level, key.x, key.y);
     let mesh_ref = write_file(out, &format!("{stem}.mesh"), &lm.mesh.to_bytes())?;
     let tex_ref = write_png(out, &format!("{stem}.png"), &texture, opts.png_compression)?;
-    let nrm_ref = write_png(out, &format!("{stem}.normal.png"), &normal, opts.png_compression)?;
+    let nrm_ref = write_png(
+        out,
+        &format!("{stem}.normal.png"),
+        &normal,
+        opts.png_compression,
+    )?;
     let rec = CellRecord {
         id: key.id(),
         level: key.level,

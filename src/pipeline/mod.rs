@@ -23,7 +23,8 @@ pub use derived_ortho::derived_ortho;
 pub use mesh::{LocalMesh, local_mesh};
 pub use progress::progress_bar;
 pub use project::{
-    PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, project_store,
+    PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, coarse_scale_cap,
+    project_store,
 };
 pub use register::{
     PhotoRegistration, TieSettings, register_photos, register_photos_with, resolve_photo_entries,

@@ -8,9 +8,9 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::build::write_png;
-use crate::fsutil::PngCompression;
 use super::{progress_bar, write_stats};
 use crate::error::{Error, Result};
+use crate::fsutil::PngCompression;
 use crate::georef::GridGeoref;
 use crate::param::{ParamMesh, ParamOptions, chart_metrics, parameterize};
 use crate::resample::{ChartMesh, Mode, PixelMap, ResampleOptions, Source, resample};
@@ -334,8 +334,18 @@ fn reparam_cell(
             &format!("{stem}.reparam.mesh"),
             &new_mesh.to_bytes(),
         )?,
-        texture: write_png(&store.dir, &format!("{stem}.reparam.png"), &col.image, opts.png_compression)?,
-        normal: write_png(&store.dir, &format!("{stem}.reparam.normal.png"), &nrm_rgb, opts.png_compression)?,
+        texture: write_png(
+            &store.dir,
+            &format!("{stem}.reparam.png"),
+            &col.image,
+            opts.png_compression,
+        )?,
+        normal: write_png(
+            &store.dir,
+            &format!("{stem}.reparam.normal.png"),
+            &nrm_rgb,
+            opts.png_compression,
+        )?,
     };
     // Per-texel stretch relative to an ortho texel (base area / cell_texels²).
     let ratio = texels as f64 / t_old;

@@ -65,28 +65,14 @@ impl CellIndex {
     }
 }
 
-/// The error a cell makes, in world metres: the larger of its measured geometric error
-/// (`max_error`, or `epsilon` if that is not a finite non-negative number) and half a texel
-/// of its texture (the texture's own approximation error).
+/// The error a cell makes, in world metres ([`CellRecord::error`]).
 pub fn cell_error(rec: &CellRecord) -> f64 {
-    let geo = geometric_error(rec);
-    let texel = if rec.texels > 0 {
-        rec.extent.width().abs() / rec.texels as f64
-    } else {
-        0.0
-    };
-    geo.max(0.5 * texel)
+    rec.error()
 }
 
-/// A cell's geometric error in metres (≥ 0): its measured `max_error`, or `epsilon` if that is
-/// not a finite non-negative number — the largest height difference between its surface and
-/// the DEM samples it covers.
+/// A cell's geometric error in metres ([`CellRecord::geometric_error`]).
 pub fn geometric_error(rec: &CellRecord) -> f64 {
-    if rec.max_error.is_finite() && rec.max_error >= 0.0 {
-        rec.max_error
-    } else {
-        rec.epsilon.max(0.0)
-    }
+    rec.geometric_error()
 }
 
 /// Distance (metres, ≥ 0) from `p` to the nearest point of the cell's world bounding box.

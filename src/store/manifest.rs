@@ -168,6 +168,30 @@ pub struct ReparamSettings {
 }
 
 impl CellRecord {
+    /// The error the cell makes, in world metres (≥ 0), the one a renderer's screen-space
+    /// error is measured with: the larger of its geometric error
+    /// ([`CellRecord::geometric_error`]) and half a texel of its texture (the texture's own
+    /// approximation error).
+    pub fn error(&self) -> f64 {
+        let texel = if self.texels > 0 {
+            self.extent.width().abs() / self.texels as f64
+        } else {
+            0.0
+        };
+        self.geometric_error().max(0.5 * texel)
+    }
+
+    /// The cell's geometric error in metres (≥ 0): its measured `max_error`, or `epsilon` if
+    /// that is not a finite non-negative number — the largest height difference between its
+    /// surface and the DEM samples it covers.
+    pub fn geometric_error(&self) -> f64 {
+        if self.max_error.is_finite() && self.max_error >= 0.0 {
+            self.max_error
+        } else {
+            self.epsilon.max(0.0)
+        }
+    }
+
     /// The cell's quadtree key.
     pub fn key(&self) -> CellKey {
         CellKey {

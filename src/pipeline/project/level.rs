@@ -419,11 +419,20 @@ impl LevelRun<'_> {
         let level_cells: Vec<usize> = (0..cells.len())
             .filter(|&i| cells[i].level as usize == level)
             .collect();
+        // cells with finer children are drawn only from afar: no detail finer than such views
+        // show (`coarse_scale_cap`)
+        let keys: std::collections::HashSet<CellKey> = cells.iter().map(|c| c.key()).collect();
         let requests: Vec<SizeRequest> = level_cells
             .iter()
             .map(|&ci| {
-                let base = active_texels(&cells[ci]);
-                let max_scale = (topt.max_texels / base.max(1)).max(1);
+                let rec = &cells[ci];
+                let base = active_texels(rec);
+                let mut max_scale = (topt.max_texels / base.max(1)).max(1);
+                if rec.key().children().iter().any(|k| keys.contains(k)) {
+                    let texel = rec.extent.width().max(rec.extent.height()) / base.max(1) as f64;
+                    let cap = coarse_scale_cap(rec.error(), texel, topt.coarse_sse_px);
+                    max_scale = max_scale.min(cap);
+                }
                 match &bins[ci] {
                     Some(b) => SizeRequest {
                         base_texels: base,

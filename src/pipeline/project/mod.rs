@@ -24,6 +24,7 @@ use indicatif::{MultiProgress, ProgressBar};
 use rayon::prelude::*;
 
 use super::{progress_bar, write_stats};
+use crate::cells::CellKey;
 use crate::colour::ColourSpace;
 use crate::error::{Error, Result};
 use crate::fsutil::{PngCompression, encode_png};
@@ -106,6 +107,31 @@ pub struct PhotoTextureOptions {
     /// receives (> 0; a speed and memory knob: cells the photos cover only in part get
     /// smaller textures). Default infinite (no bound: sizes follow the finest detail).
     pub texels_per_delivered: f64,
+    /// The largest screen-space error (pixels) at which views will draw the store's cells
+    /// that have finer children, > 0. A renderer refines such a cell while its error `ε`
+    /// projects to more than this, so it draws the cell only from where a texel of `ε /
+    /// coarse_sse_px` metres or less covers at most a pixel: finer detail is never shown and
+    /// is not made ([`coarse_scale_cap`]). Default 2 (four times the 0.5 px cliffmap's
+    /// renderer and exported page use); infinite: coarser levels are sized like the finest
+    /// (e.g. for viewers at CesiumJS's default of 16 px).
+    pub coarse_sse_px: f64,
+}
+
+/// The largest photo texture scale (a power of two, ≥ 1) worth giving a cell with finer
+/// children, error `error` metres and an active texture of `active_texel` metres per texel
+/// (the ground size, the finest a texel is on the surface), for views that draw it at no
+/// more than `sse_px` of screen-space error: the texel must stay at least `error / sse_px`
+/// metres (docs/projection.md, "Texture sizes"). `u32::MAX` (no cap) for an infinite
+/// `sse_px` or a cell without a positive error.
+pub fn coarse_scale_cap(error: f64, active_texel: f64, sse_px: f64) -> u32 {
+    if !(error > 0.0 && active_texel > 0.0 && sse_px.is_finite() && sse_px > 0.0) {
+        return u32::MAX;
+    }
+    let ratio = active_texel * sse_px / error;
+    if ratio < 2.0 {
+        return 1;
+    }
+    1u32 << (ratio.log2().floor().min(16.0) as u32)
 }
 
 impl Default for PhotoTextureOptions {
@@ -116,6 +142,7 @@ impl Default for PhotoTextureOptions {
             budget_bytes: 1 << 30,
             texels_per_pixel: 1.0,
             texels_per_delivered: f64::INFINITY,
+            coarse_sse_px: 2.0,
         }
     }
 }
@@ -133,6 +160,12 @@ impl PhotoTextureOptions {
             return Err(Error::BadOption(format!(
                 "texels per delivered pixel must be positive, got {}",
                 self.texels_per_delivered
+            )));
+        }
+        if !(self.coarse_sse_px > 0.0) {
+            return Err(Error::BadOption(format!(
+                "--coarse-sse must be a positive number of pixels (or inf), got {}",
+                self.coarse_sse_px
             )));
         }
         if !(0.25..=4.0).contains(&self.texels_per_pixel) {
@@ -440,3 +473,30 @@ mod leveling;
 use finish::{finish_level, read_checked_active};
 use level::{LevelRun, LevelSizing, SIZING_STEPS, cell_context, splat_batch};
 use leveling::{MAX_CACHED_FOOTPRINTS, estimate_leveling, leveling_step};
+
+#[cfg(test)]
+mod tests {
+    use super::coarse_scale_cap;
+
+    #[test]
+    fn coarse_cap_keeps_texels_at_least_the_error_over_the_sse() {
+        // a cell of 1 m error, 1.5 m texels, drawn at up to 2 px: texels of >= 0.5 m, so 2x
+        assert_eq!(coarse_scale_cap(1.0, 1.5, 2.0), 2);
+        // at 0.5 px: texels of >= 2 m, so none finer than the active texture
+        assert_eq!(coarse_scale_cap(1.0, 1.5, 0.5), 1);
+        // at 16 px (CesiumJS's default): >= 6.25 cm, 24x -> 16x
+        assert_eq!(coarse_scale_cap(1.0, 1.5, 16.0), 16);
+        // exactly on a power of two
+        assert_eq!(coarse_scale_cap(0.25, 1.0, 1.0), 4);
+        for (e, t, s) in [(0.3, 0.7, 2.0), (2.0, 3.0, 0.5), (0.01, 1.0, 4.0)] {
+            let c = coarse_scale_cap(e, t, s);
+            assert!(c.is_power_of_two());
+            assert!(c == 1 || t / (c as f64) >= e / s, "{e} {t} {s}: {c}");
+            assert!(t / ((2 * c) as f64) < e / s, "{e} {t} {s}: {c} is not the largest");
+        }
+        // no cap: infinite SSE, no error, bad input
+        assert_eq!(coarse_scale_cap(1.0, 1.5, f64::INFINITY), u32::MAX);
+        assert_eq!(coarse_scale_cap(0.0, 1.5, 2.0), u32::MAX);
+        assert_eq!(coarse_scale_cap(f64::NAN, 1.5, 2.0), u32::MAX);
+    }
+}
