@@ -825,6 +825,61 @@ mod tests {
     }
 
     #[test]
+    fn a_deferred_photo_reads_as_its_settled_records() {
+        // one photo over part of a 40 x 40 texture: the deferred accumulator's visits and
+        // accessors equal those of `from_photo`'s records, bit for bit, in both modes
+        let img = RgbImage::from_fn(8, 8, |x, y| {
+            image::Rgb([(x * 30) as u8, (y * 30) as u8, 99])
+        });
+        let fps: Vec<PixelFootprint> = (0..8)
+            .flat_map(|r| (0..8).map(move |c| (c, r)))
+            .map(|(c, r)| {
+                fp(
+                    [c, r],
+                    square(0.5 + 1.7 * c as f32, 0.5 + 1.3 * r as f32, 1.6),
+                    0.5 + 0.05 * c as f32,
+                )
+            })
+            .collect();
+        let ctx = CellContext::flat(40, 0.1, 1.0);
+        for mode in [BlendMode::Confidence, BlendMode::Best] {
+            let photo = || {
+                let mut a = PhotoAccum::new(40);
+                a.add_samples(&fps, &srgb_samples(&img));
+                a
+            };
+            let (settled, written) =
+                CellAccum::from_photo(photo(), 3, mode, ctx.clone(), &params());
+            let mut deferred = CellAccum::deferred(photo(), 3, mode, ctx.clone(), &params());
+            assert_eq!(deferred.deferred_photo(), Some(3));
+            let visits = |acc: &CellAccum| {
+                let mut v = Vec::new();
+                acc.for_each_coloured(|t, c, conf, res, best| v.push((t, c, conf, res, best)));
+                v
+            };
+            let (a, b) = (visits(&settled), visits(&deferred));
+            assert_eq!(a, b);
+            assert_eq!(a.len() as u64, written);
+            for t in 0..1600 {
+                assert_eq!(settled.has_colour(t), deferred.has_colour(t));
+                assert_eq!(settled.colour_at(t), deferred.colour_at(t));
+                assert_eq!(settled.best_photo(t), deferred.best_photo(t));
+                assert_eq!(
+                    settled.confidence(t).to_bits(),
+                    deferred.confidence(t).to_bits()
+                );
+                assert_eq!(
+                    settled.resolution_at(t).to_bits(),
+                    deferred.resolution_at(t).to_bits()
+                );
+            }
+            assert_eq!(deferred.settle(), written);
+            assert_eq!(deferred, settled);
+            assert_eq!(deferred.settle(), 0, "settled twice");
+        }
+    }
+
+    #[test]
     fn resolution_rule_terms() {
         // a 2 x 2 existing texture: flat, 60°, vertical and 87°; ortho of 1 m, TIN error 0.5 m
         let ctx = CellContext {

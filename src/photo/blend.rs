@@ -50,6 +50,8 @@ pub struct Blended {
     /// Per photo (by the index given to [`CellAccum::merge`]): covered texels with `s > 0.5`
     /// whose heaviest photo it is.
     pub supplied: Vec<u64>,
+    /// Texels some photo gave colour (those [`CellAccum::for_each_coloured`] visits).
+    pub coloured: u64,
 }
 
 impl Blended {
@@ -137,7 +139,9 @@ pub fn blend_cell(
         .map(|b| ctx.existing_resolution(b) as f64)
         .collect();
     let alphas: [f64; 256] = std::array::from_fn(|a| a as f64 / 255.0);
+    let mut coloured = 0;
     acc.for_each_coloured(|t, p, confidence, resolution, best| {
+        coloured += 1;
         if t >= n {
             return;
         }
@@ -193,6 +197,7 @@ pub fn blend_cell(
         steep_texels,
         steep_photo_texels,
         supplied,
+        coloured,
     }
 }
 

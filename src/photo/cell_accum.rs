@@ -160,6 +160,10 @@ pub struct CellAccum {
     /// γ of the selection weight `confidence · resolution^−γ`.
     sharpness: f32,
     merged: TexelTiles,
+    /// `Some(photo)`: `merged` still holds that one photo's own sums (a [`PhotoAccum`]'s),
+    /// turned into this accumulator's records texel by texel as they are read
+    /// ([`CellAccum::deferred`]); `None`: the records described above.
+    raw: Option<u16>,
 }
 
 impl CellAccum {
@@ -178,6 +182,118 @@ impl CellAccum {
             context,
             sharpness: params.sharpness_power as f32,
             merged: TexelTiles::new(texels),
+            raw: None,
+        }
+    }
+
+    /// The accumulator of one photo's deposits `p` (photo number `photo`) without a pass
+    /// over its texels: every reader ([`CellAccum::for_each_coloured`] and the accessors)
+    /// sees the values [`CellAccum::from_photo`] gives, computed as it reads, bit for bit.
+    /// For a photo that no other joins (a lone photo's cells go straight to the blend); a
+    /// [`CellAccum::merge`] settles it first. [`CellAccum::settle`] gives the count of
+    /// texels `p` gave colour.
+    pub fn deferred(
+        p: PhotoAccum,
+        photo: u16,
+        mode: BlendMode,
+        context: CellContext,
+        params: &ConfidenceParams,
+    ) -> CellAccum {
+        CellAccum {
+            mode,
+            texels: p.texels,
+            scale: p.scale.max(1),
+            context,
+            sharpness: params.sharpness_power as f32,
+            merged: p.sums,
+            raw: Some(photo),
+        }
+    }
+
+    /// Whether the records still hold one photo's own sums ([`CellAccum::deferred`]), and
+    /// which photo.
+    pub fn deferred_photo(&self) -> Option<u16> {
+        self.raw
+    }
+
+    /// Turns a deferred accumulator's sums into records (as [`CellAccum::from_photo`]) and
+    /// returns how many texels its photo gave colour; 0 for one that is not deferred.
+    pub fn settle(&mut self) -> u64 {
+        let Some(photo) = self.raw.take() else {
+            return 0;
+        };
+        let (texels, scale, mode) = (self.texels, self.scale, self.mode);
+        let (context, sharpness) = (&self.context, self.sharpness);
+        let label = f32::from(photo.saturating_add(1));
+        let mut written = 0;
+        let base_index = context.base_indexer(texels, scale);
+        self.merged.for_each_mut(|t, s| {
+            match Self::photo_texel(s, context, base_index(t), sharpness) {
+                Some((c, conf, res, w)) => {
+                    written += 1;
+                    *s = Self::first_record(mode, c, conf, res, w, label);
+                }
+                None => *s = TexelSums::default(),
+            }
+        });
+        written
+    }
+
+    /// The record of a texel whose first photo (label `label`) has colour `c`, coverage
+    /// confidence `conf`, resolution `res` and selection weight `w` there.
+    #[inline]
+    fn first_record(
+        mode: BlendMode,
+        c: [f32; 3],
+        conf: f32,
+        res: f32,
+        w: f32,
+        label: f32,
+    ) -> TexelSums {
+        match mode {
+            BlendMode::Confidence => TexelSums {
+                coverage: conf,
+                weight: w,
+                colour: c.map(|v| w * v),
+                footprint: w * res,
+                grazing: w,
+                clear: label,
+            },
+            BlendMode::Best => TexelSums {
+                coverage: conf,
+                weight: w,
+                colour: c,
+                footprint: res,
+                grazing: w,
+                clear: label,
+            },
+        }
+    }
+
+    /// The record of texel `t` as the readers see it (turned from the raw sums if deferred).
+    #[inline]
+    fn record(&self, t: usize) -> TexelSums {
+        let s = self.merged.get(t);
+        match self.raw {
+            None => *s,
+            Some(photo) => self.settled(t, s, photo),
+        }
+    }
+
+    /// The record a deferred accumulator's raw sums `s` at texel `t` settle into.
+    #[inline]
+    fn settled(&self, t: usize, s: &TexelSums, photo: u16) -> TexelSums {
+        let b = self.context.base_index(t, self.texels, self.scale);
+        match Self::photo_texel(s, &self.context, b, self.sharpness) {
+            Some((c, conf, res, w)) => Self::first_record(
+                self.mode,
+                c,
+                conf,
+                res,
+                w,
+                f32::from(photo.saturating_add(1)),
+            ),
+            None => TexelSums::default(),
         }
     }
 
@@ -191,49 +307,9 @@ impl CellAccum {
         context: CellContext,
         params: &ConfidenceParams,
     ) -> (CellAccum, u64) {
-        let (texels, scale) = (p.texels, p.scale.max(1));
-        let mut merged = p.sums;
-        let sharpness = params.sharpness_power as f32;
-        let label = f32::from(photo.saturating_add(1));
-        let mut written = 0;
-        let base_index = context.base_indexer(texels, scale);
-        merged.for_each_mut(|t, s| {
-            match Self::photo_texel(s, &context, base_index(t), sharpness) {
-                Some((c, conf, res, w)) => {
-                    written += 1;
-                    *s = match mode {
-                        BlendMode::Confidence => TexelSums {
-                            coverage: conf,
-                            weight: w,
-                            colour: c.map(|v| w * v),
-                            footprint: w * res,
-                            grazing: w,
-                            clear: label,
-                        },
-                        BlendMode::Best => TexelSums {
-                            coverage: conf,
-                            weight: w,
-                            colour: c,
-                            footprint: res,
-                            grazing: w,
-                            clear: label,
-                        },
-                    };
-                }
-                None => *s = TexelSums::default(),
-            }
-        });
-        (
-            CellAccum {
-                mode,
-                texels,
-                scale,
-                context,
-                sharpness,
-                merged,
-            },
-            written,
-        )
+        let mut acc = CellAccum::deferred(p, photo, mode, context, params);
+        let written = acc.settle();
+        (acc, written)
     }
 
     /// A photo's colour, coverage confidence, resolution and selection weight at a texel
@@ -263,6 +339,7 @@ impl CellAccum {
     /// Adds the deposits of photo number `photo` (same texture size); returns how many texels
     /// it gave colour.
     pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
+        self.settle();
         let mut written = 0;
         let label = f32::from(photo.saturating_add(1));
         let n = self.merged.len().min(p.sums.len());
@@ -321,14 +398,14 @@ impl CellAccum {
     /// Whether some photo gave texel `t` colour.
     #[inline]
     pub fn has_colour(&self, t: usize) -> bool {
-        self.merged.get(t).clear != 0.0
+        self.record(t).clear != 0.0
     }
 
     /// The photo (the index given to [`CellAccum::merge`]) with the largest selection weight
     /// at texel `t`, if some photo gave it colour.
     #[inline]
     pub fn best_photo(&self, t: usize) -> Option<u16> {
-        label_photo(self.merged.get(t).clear)
+        label_photo(self.record(t).clear)
     }
 
     /// Texels of the texture (`texels²`).
@@ -351,7 +428,7 @@ impl CellAccum {
     /// The highest single-photo coverage confidence at texel `t`, in [0, 1].
     #[inline]
     pub fn confidence(&self, t: usize) -> f32 {
-        self.merged.get(t).coverage
+        self.record(t).coverage
     }
 
     /// Calls `f(t, colour, confidence, resolution, photo)` for every texel `t` some photo
@@ -359,11 +436,12 @@ impl CellAccum {
     /// [`CellAccum::resolution_at`] and [`CellAccum::best_photo`]), in tile order: only the
     /// tiles footprints reached are visited.
     pub fn for_each_coloured(&self, mut f: impl FnMut(usize, [f32; 3], f32, f32, Option<u16>)) {
-        self.merged.for_each(|t, s| {
+        let mode = self.mode;
+        let mut visit = |t: usize, s: &TexelSums| {
             let Some(photo) = label_photo(s.clear) else {
                 return;
             };
-            let (colour, res) = match self.mode {
+            let (colour, res) = match mode {
                 BlendMode::Confidence if s.weight > 0.0 => (
                     s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0)),
                     s.footprint / s.weight,
@@ -379,7 +457,23 @@ impl CellAccum {
                 ),
             };
             f(t, colour, s.coverage, res, Some(photo));
-        });
+        };
+        match self.raw {
+            None => self.merged.for_each(visit),
+            Some(photo) => {
+                // (the records `settle` would write, made as they are read)
+                let (ctx, sharpness) = (&self.context, self.sharpness);
+                let base_index = ctx.base_indexer(self.texels, self.scale);
+                let label = f32::from(photo.saturating_add(1));
+                self.merged.for_each(|t, s| {
+                    if let Some((c, conf, res, w)) =
+                        Self::photo_texel(s, ctx, base_index(t), sharpness)
+                    {
+                        visit(t, &Self::first_record(mode, c, conf, res, w, label));
+                    }
+                });
+            }
+        }
     }
 
     /// The combined photo colour (working space 0..1) at texel `t`, if any photo gave it colour.
@@ -387,7 +481,7 @@ impl CellAccum {
         if !self.has_colour(t) {
             return None;
         }
-        let s = self.merged.get(t);
+        let s = self.record(t);
         Some(match self.mode {
             BlendMode::Confidence if s.weight > 0.0 => {
                 s.colour.map(|c| (c / s.weight).clamp(0.0, 1.0))
@@ -400,7 +494,7 @@ impl CellAccum {
     /// The combined photo resolution (metres) at texel `t` (the weighted mean of the photos',
     /// or the best photo's); infinite without usable colour.
     pub fn resolution_at(&self, t: usize) -> f32 {
-        let s = self.merged.get(t);
+        let s = self.record(t);
         match self.mode {
             BlendMode::Confidence if s.weight > 0.0 => s.footprint / s.weight,
             BlendMode::Best if self.has_colour(t) && s.weight > 0.0 => s.footprint,

@@ -4,6 +4,16 @@
 
 use super::*;
 
+/// What [`finish_level`] gives back: the level's report, the photo records of its cells
+/// (manifest index), and per photo the texels it supplies (mostly its colour) and, for
+/// deferred accumulators, the texels it gave colour.
+pub(super) type LevelFinish = (
+    PhotoLevelReport,
+    Vec<(usize, PhotoCellRecord)>,
+    Vec<u64>,
+    Vec<u64>,
+);
+
 /// Blends and writes the photo textures of every cell of `level` from its accumulators
 /// `accs` (indexed by manifest cell): the level's report and the new cell records. Each
 /// cell's accumulator is dropped as soon as the cell is written, so its texel records go
@@ -16,7 +26,7 @@ pub(super) fn finish_level(
     sizing: &LevelSizing,
     opts: &ProjectOptions,
     writer: &BackgroundWriter,
-) -> Result<(PhotoLevelReport, Vec<(usize, PhotoCellRecord)>, Vec<u64>)> {
+) -> Result<LevelFinish> {
     let cells = &store.manifest.cells;
     let level_cells: Vec<usize> = (0..cells.len())
         .filter(|&i| cells[i].level as usize == level)
@@ -53,8 +63,16 @@ pub(super) fn finish_level(
     };
     let mut records = Vec::new();
     let mut supplied: Vec<u64> = Vec::new();
+    let mut written: Vec<u64> = Vec::new();
     for (&ci, r) in level_cells.iter().zip(results) {
         let o = r?;
+        if let Some((p, n)) = o.written {
+            let p = p as usize;
+            if written.len() <= p {
+                written.resize(p + 1, 0);
+            }
+            written[p] += n;
+        }
         if supplied.len() < o.supplied_base.len() {
             supplied.resize(o.supplied_base.len(), 0);
         }
@@ -70,7 +88,7 @@ pub(super) fn finish_level(
             records.push((ci, rec));
         }
     }
-    Ok((lr, records, supplied))
+    Ok((lr, records, supplied, written))
 }
 
 /// The cell's active texture, checked (with the normal map's side `normal_texels`, as its
@@ -109,6 +127,9 @@ pub(super) struct CellOutcome {
     /// Per photo, the covered texels it supplies (mostly photo colour, this photo the
     /// heaviest), in texels of the active texture.
     supplied_base: Vec<u64>,
+    /// A deferred accumulator's photo ([`CellAccum::deferred`]) and the texels it gave colour
+    /// (counted by the blend; other photos' counts were reported when merged).
+    written: Option<(u16, u64)>,
 }
 
 impl CellOutcome {
@@ -120,6 +141,7 @@ impl CellOutcome {
             steep_photo_base: 0,
             photo_base: 0,
             supplied_base: Vec::new(),
+            written: None,
         }
     }
 }
@@ -206,8 +228,12 @@ pub(super) fn finish_cell(
         .blocks
         .present(acc.texels)
         .map_err(|e| Error::store(&store.dir, e))?;
+    let written = acc.deferred_photo().map(|p| (p, b.coloured));
     if !present.contains(&true) {
-        return Ok(CellOutcome::without_photo(steep_texels));
+        return Ok(CellOutcome {
+            written,
+            ..CellOutcome::without_photo(steep_texels)
+        });
     }
     let stem = cell_stem(rec.level, rec.x, rec.y);
     let record = PhotoCellRecord {
@@ -237,5 +263,6 @@ pub(super) fn finish_cell(
         steep_photo_base: b.steep_photo_texels / area,
         photo_base: b.photo_texels / area,
         supplied_base: b.supplied.iter().map(|n| n / area).collect(),
+        written,
     })
 }

@@ -233,13 +233,21 @@ impl LevelRun<'_> {
                             Some(c) => c,
                             None => cell_context(self.store, &cells[ci])?,
                         };
-                        let (first, n) = CellAccum::from_photo(
-                            pa,
-                            pi as u16,
-                            accumulator_mode(self.opts.blend, self.pyramids.len()),
-                            ctx,
-                            &self.opts.confidence,
-                        );
+                        let mode = accumulator_mode(self.opts.blend, self.pyramids.len());
+                        if self.pyramids.len() == 1 {
+                            // a lone photo's sums go to the blend as they are (its written
+                            // texels are counted there)
+                            *acc = Some(CellAccum::deferred(
+                                pa,
+                                pi as u16,
+                                mode,
+                                ctx,
+                                &self.opts.confidence,
+                            ));
+                            return Ok(0);
+                        }
+                        let (first, n) =
+                            CellAccum::from_photo(pa, pi as u16, mode, ctx, &self.opts.confidence);
                         *acc = Some(first);
                         Ok(n)
                     }

@@ -394,12 +394,15 @@ pub fn project_store(
             },
         );
         if let Some((l, result, secs)) = finished {
-            let (lr, recs, supplied) = result?;
+            let (lr, recs, supplied, written) = result?;
             for (ci, rec) in recs {
                 records[ci] = Some(rec);
             }
             for (r, n) in reports.iter_mut().zip(supplied) {
                 r.texels_supplied += n;
+            }
+            for (r, n) in reports.iter_mut().zip(written) {
+                r.texels_written += n;
             }
             level_reports.push(lr);
             timer.note(
@@ -492,7 +495,10 @@ mod tests {
             let c = coarse_scale_cap(e, t, s);
             assert!(c.is_power_of_two());
             assert!(c == 1 || t / (c as f64) >= e / s, "{e} {t} {s}: {c}");
-            assert!(t / ((2 * c) as f64) < e / s, "{e} {t} {s}: {c} is not the largest");
+            assert!(
+                t / ((2 * c) as f64) < e / s,
+                "{e} {t} {s}: {c} is not the largest"
+            );
         }
         // no cap: infinite SSE, no error, bad input
         assert_eq!(coarse_scale_cap(1.0, 1.5, f64::INFINITY), u32::MAX);
