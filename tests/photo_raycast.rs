@@ -633,3 +633,68 @@ fn view_grid_and_bvh_give_the_same_footprints() {
         assert_eq!(run(accel), bvh, "{}", accel.name());
     }
 }
+
+/// `LevelScene::last_rows` bounds the rows of every footprint a cell receives (what lets a
+/// lone photo's cells be written before the rest of the photo is cast), with and without
+/// radial distortion, and is not looser than the image.
+#[test]
+fn last_rows_bound_every_footprint_row() {
+    // four terrain cells of a bumpy 80 m square, seen obliquely from one side
+    let bumps = |x: f64, y: f64| 3.0 * (0.2 * x).sin() * (0.13 * y).cos() + 0.05 * y;
+    let cells: Vec<SceneCell> = (0..4u32)
+        .map(|k| {
+            let (x0, y0) = (40.0 * (k % 2) as f64, 40.0 * (k / 2) as f64);
+            heightfield(k, x0, y0, 40.0, 24, DVec3::ZERO, bumps)
+        })
+        .collect();
+    for (k1, k2) in [(0.0, 0.0), (-0.25, 0.05), (0.2, 0.0)] {
+        let mut cam = camera(
+            DVec3::new(40.0, -25.0, 18.0),
+            DVec3::new(40.0, 45.0, 0.0),
+            160,
+            120,
+            70.0,
+        );
+        cam.k1 = k1;
+        cam.k2 = k2;
+        let scene = LevelScene::new(cells.clone(), cam.position, RayAccel::default());
+        let bounds = scene.last_rows(&cam);
+        let set = photo_footprints(&scene, &cam, &FootprintOptions::default());
+        assert!(set.len() > 3000, "{} footprints", set.len());
+        for (sc, bound) in scene.cells.iter().zip(&bounds) {
+            let bound = bound.expect("every vertex is in front of the camera");
+            assert!(bound <= cam.height + 2, "k1 {k1}: bound {bound}");
+            let rows: Vec<u32> = set
+                .cells
+                .iter()
+                .filter(|c| c.cell == sc.cell)
+                .flat_map(|c| c.iter().map(|f| f.pixel[1]))
+                .collect();
+            let last = rows.iter().max().copied().unwrap_or(0);
+            assert!(
+                last <= bound,
+                "k1 {k1} cell {}: row {last} past {bound}",
+                sc.cell
+            );
+            // the near cells are bounded inside the image, within a few rows of their last
+            if bound < cam.height {
+                assert!(
+                    bound - last <= 8,
+                    "k1 {k1} cell {}: {bound} for {last}",
+                    sc.cell
+                );
+            }
+        }
+        assert!(bounds.iter().any(|b| b.is_some_and(|b| b < cam.height)));
+    }
+    // a camera among the cells (vertices behind it): not bounded
+    let inside = camera(
+        DVec3::new(40.0, 40.0, 10.0),
+        DVec3::new(40.0, 80.0, 0.0),
+        64,
+        48,
+        60.0,
+    );
+    let scene = LevelScene::new(cells, inside.position, RayAccel::default());
+    assert!(scene.last_rows(&inside).iter().any(Option::is_none));
+}

@@ -129,6 +129,18 @@ pub fn for_each_footprint_batch_in(
     opts: &FootprintOptions,
     mut sink: impl FnMut(&mut FootprintSet) + Send,
 ) {
+    for_each_footprint_batch_rows_in(buffers, scene, camera, opts, |set, _| sink(set));
+}
+
+/// [`for_each_footprint_batch_in`] with each batch's pixel rows `[first, end)` given to
+/// `sink` too: no later batch holds a footprint of a row before `end`.
+pub fn for_each_footprint_batch_rows_in(
+    buffers: &FootprintBuffers,
+    scene: &LevelScene,
+    camera: &CameraModel,
+    opts: &FootprintOptions,
+    mut sink: impl FnMut(&mut FootprintSet, [u32; 2]) + Send,
+) {
     let (w, h) = (camera.width, camera.height);
     let origin = (camera.position - scene.frame_origin).as_vec3();
     if w == 0 || h == 0 || scene.triangle_count() == 0 || !origin.is_finite() {
@@ -161,15 +173,16 @@ pub fn for_each_footprint_batch_in(
         buffers,
     };
     let bands = h.div_ceil(BAND_ROWS);
-    let mut pending: Option<FootprintSet> = None;
+    let mut pending: Option<(FootprintSet, [u32; 2])> = None;
     let mut b0 = 0;
     while b0 < bands || pending.is_some() {
         let b1 = (b0 + BATCH_BANDS).min(bands);
+        let rows = [b0 * BAND_ROWS, (b1 * BAND_ROWS).min(h)];
         let (next, ()) = rayon::join(
-            || (b0 < b1).then(|| ctx.batch(b0..b1, &order)),
+            || (b0 < b1).then(|| (ctx.batch(b0..b1, &order), rows)),
             || {
-                if let Some(mut done) = pending.take() {
-                    sink(&mut done);
+                if let Some((mut done, done_rows)) = pending.take() {
+                    sink(&mut done, done_rows);
                     buffers.recycle(done);
                 }
             },

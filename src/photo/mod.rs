@@ -61,7 +61,7 @@ pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
 pub use footprint::{
     FootprintBuffers, FootprintOptions, for_each_footprint_batch, for_each_footprint_batch_in,
-    photo_footprints, photo_footprints_in,
+    for_each_footprint_batch_rows_in, photo_footprints, photo_footprints_in,
 };
 pub use input::{
     PhotoEntry, PhotoSpec, RoughPose, apply_rotation_delta, fit_camera_to_image, image_size,

@@ -14,6 +14,7 @@ use obvhs::triangle::Triangle;
 
 use super::viewgrid::to_triangles;
 use super::{RayAccel, TriangleBvh};
+use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 use crate::store::Store;
 
@@ -147,6 +148,70 @@ impl LevelScene {
             .map(|(index, rec)| scene_cell(store, index, rec))
             .collect::<Result<Vec<_>>>()?;
         Ok(LevelScene::new(cells, frame_origin, accel))
+    }
+
+    /// Per scene cell, the last pixel row of `camera`'s image that can hold a footprint on
+    /// it (a pixel whose corner or centre ray hits the cell), or `None` when that is not
+    /// bounded (a vertex not in front of the camera, an empty cell, non-finite values).
+    ///
+    /// The bound: the largest `y / z` of the cell's vertices in the camera frame (the
+    /// pinhole projection of a triangle is the triangle of its corners' projections), turned
+    /// into a distorted row with the largest (for `y ≥ 0`) or smallest (`y < 0`) radial
+    /// factor over the image's undistorted radii, plus two rows (the pixel corners half a
+    /// row away, a reconstructed corner's neighbour). Rows past the image mean every batch.
+    pub fn last_rows(&self, camera: &CameraModel) -> Vec<Option<u32>> {
+        let (w, h) = (camera.width as f64, camera.height as f64);
+        // the radial factor's range over the image's undistorted radii
+        let corners = [
+            (-0.5, -0.5),
+            (w - 0.5, -0.5),
+            (-0.5, h - 0.5),
+            (w - 0.5, h - 0.5),
+        ];
+        let mut r2max: f64 = 0.0;
+        for (u, v) in corners {
+            match camera.pixel_ray(u, v) {
+                Some(d) => {
+                    let c = camera.world_to_camera * d;
+                    if !(c.z > 0.0) {
+                        return vec![None; self.cells.len()];
+                    }
+                    r2max = r2max.max((c.x / c.z).powi(2) + (c.y / c.z).powi(2));
+                }
+                None => return vec![None; self.cells.len()],
+            }
+        }
+        let factor = |r2: f64| 1.0 + camera.k1 * r2 + camera.k2 * r2 * r2;
+        let mut at = vec![0.0, r2max];
+        if camera.k2 != 0.0 {
+            let stationary = -camera.k1 / (2.0 * camera.k2);
+            if stationary > 0.0 && stationary < r2max {
+                at.push(stationary);
+            }
+        }
+        let (dmin, dmax) = at
+            .iter()
+            .map(|&r2| factor(r2))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                (lo.min(d), hi.max(d))
+            });
+        self.cells
+            .iter()
+            .map(|c| {
+                let mut ymax = f64::NEG_INFINITY;
+                for p in &c.positions {
+                    let world = c.origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                    let q = camera.to_camera(world);
+                    if !(q.z > 0.0) {
+                        return None;
+                    }
+                    ymax = ymax.max(q.y / q.z);
+                }
+                let d = if ymax >= 0.0 { dmax } else { dmin };
+                let v = camera.fy * ymax * d + camera.cy;
+                (v.is_finite() && d > 0.0).then(|| (v + 0.5).floor().clamp(0.0, h + 2.0) as u32 + 2)
+            })
+            .collect()
     }
 
     /// Number of triangles in the BVH.

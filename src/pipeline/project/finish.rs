@@ -22,20 +22,31 @@ pub(super) type LevelFinish = (
 pub(super) fn finish_level(
     store: &Store,
     level: usize,
-    mut accs: Vec<Option<CellAccum>>,
-    sizing: &LevelSizing,
+    projection: LevelProjection,
     opts: &ProjectOptions,
     writer: &BackgroundWriter,
 ) -> Result<LevelFinish> {
+    let LevelProjection {
+        mut accs,
+        sizing,
+        early,
+    } = projection;
+    let sizing = &sizing;
     let cells = &store.manifest.cells;
     let level_cells: Vec<usize> = (0..cells.len())
         .filter(|&i| cells[i].level as usize == level)
         .collect();
-    let mut work: Vec<(usize, usize, Option<CellAccum>)> = level_cells
-        .iter()
-        .enumerate()
-        .map(|(k, &ci)| (k, ci, accs.get_mut(ci).and_then(Option::take)))
-        .collect();
+    // the cells written during the casts keep their outcomes
+    let mut early: std::collections::HashMap<usize, Result<CellOutcome>> =
+        early.into_iter().collect();
+    let mut done: Vec<(usize, Result<CellOutcome>)> = Vec::new();
+    let mut work: Vec<(usize, usize, Option<CellAccum>)> = Vec::new();
+    for (k, &ci) in level_cells.iter().enumerate() {
+        match early.remove(&ci) {
+            Some(outcome) => done.push((k, outcome)),
+            None => work.push((k, ci, accs.get_mut(ci).and_then(Option::take))),
+        }
+    }
     drop(accs);
     // the largest accumulators first, one task each (a 2048² cell takes as long as many
     // small ones; in index order it could start last); the results back in cell order
@@ -52,6 +63,7 @@ pub(super) fn finish_level(
             )
         })
         .collect();
+    results.extend(done);
     results.sort_by_key(|(k, _)| *k);
     let results = results.into_iter().map(|(_, r)| r);
     let mut lr = PhotoLevelReport {

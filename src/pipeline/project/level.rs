@@ -107,6 +107,18 @@ pub(super) struct LevelRun<'a> {
     pub(super) finest: usize,
     /// TIN error (metres) per manifest cell, for the occlusion margin.
     pub(super) cell_errors: Vec<f32>,
+    /// Where finished cells' photo textures go (cells a lone photo is done with are written
+    /// during its casts).
+    pub(super) writer: &'a BackgroundWriter,
+}
+
+/// One level's projection: per manifest cell its accumulator, the texture sizes, and the
+/// outcomes of the cells already written (a lone photo's cells that no later batch of rows
+/// could reach, blended and written while the rest were cast), by manifest index.
+pub(super) struct LevelProjection {
+    pub(super) accs: Vec<Option<CellAccum>>,
+    pub(super) sizing: LevelSizing,
+    pub(super) early: Vec<(usize, Result<CellOutcome>)>,
 }
 
 impl LevelRun<'_> {
@@ -122,8 +134,9 @@ impl LevelRun<'_> {
         first_scene: &mut Option<LevelScene>,
         reports: &mut [PhotoReport],
         timer: &mut StageTimer,
-    ) -> Result<(Vec<Option<CellAccum>>, LevelSizing)> {
+    ) -> Result<LevelProjection> {
         let step = self.finest - level;
+        let mut early: Vec<(usize, Result<CellOutcome>)> = Vec::new();
         let ncells = self.store.manifest.cells.len();
         let mut accs: Vec<Option<CellAccum>> = vec![None; ncells];
         // This level's scenes, one per photo, built once for the sizing and the main casts.
@@ -187,12 +200,23 @@ impl LevelRun<'_> {
                         )?,
                     };
                     let mut counts = FootprintSet::default();
-                    for_each_footprint_batch_in(
+                    // a lone photo's cells are finished as soon as no later rows can reach
+                    // them: their records go back to the spare chunks for the rest
+                    let mut last_row = vec![u32::MAX; cells.len()];
+                    if self.pyramids.len() == 1 {
+                        for (sc, r) in scene.cells.iter().zip(scene.last_rows(&cam)) {
+                            if let (Some(r), Some(l)) = (r, last_row.get_mut(sc.cell as usize)) {
+                                *l = r;
+                            }
+                        }
+                    }
+                    let contexts = &mut sizing.contexts;
+                    for_each_footprint_batch_rows_in(
                         self.buffers,
                         &scene,
                         &cam,
                         &self.opts.footprint,
-                        |batch| {
+                        |batch, rows| {
                             splat_batch(
                                 batch,
                                 &mut pas,
@@ -202,6 +226,17 @@ impl LevelRun<'_> {
                                 &samples,
                             );
                             counts.add_counts(batch);
+                            let done: Vec<(usize, PhotoAccum, Option<CellContext>)> = pas
+                                .iter_mut()
+                                .enumerate()
+                                .filter(|(ci, pa)| pa.is_some() && last_row[*ci] < rows[1])
+                                .filter_map(|(ci, pa)| {
+                                    pa.take().map(|pa| (ci, pa, contexts[ci].take()))
+                                })
+                                .collect();
+                            if !done.is_empty() {
+                                early.extend(self.finish_lone(done, pi));
+                            }
                         },
                     );
                     counts
@@ -259,7 +294,42 @@ impl LevelRun<'_> {
             self.bars[pi].inc(1);
             timer.lap(&format!("level {level} photo {pi}: merge"));
         }
-        Ok((accs, sizing))
+        Ok(LevelProjection {
+            accs,
+            sizing,
+            early,
+        })
+    }
+
+    /// Blends and writes the cells `done` (manifest index, the lone photo `pi`'s deposits,
+    /// the cell's context if loaded), costliest first, one task each.
+    fn finish_lone(
+        &self,
+        mut done: Vec<(usize, PhotoAccum, Option<CellContext>)>,
+        pi: usize,
+    ) -> Vec<(usize, Result<CellOutcome>)> {
+        let cells = &self.store.manifest.cells;
+        done.sort_by_key(|(ci, pa, _)| Reverse((pa.sums.allocated(), Reverse(*ci))));
+        done.into_par_iter()
+            .with_max_len(1)
+            .map(|(ci, pa, ctx)| {
+                let outcome = (|| {
+                    let ctx = match ctx {
+                        Some(c) => c,
+                        None => cell_context(self.store, &cells[ci])?,
+                    };
+                    let acc = CellAccum::deferred(
+                        pa,
+                        pi as u16,
+                        accumulator_mode(self.opts.blend, self.pyramids.len()),
+                        ctx,
+                        &self.opts.confidence,
+                    );
+                    finish_cell(self.store, &cells[ci], Some(&acc), self.opts, self.writer)
+                })();
+                (ci, outcome)
+            })
+            .collect()
     }
 
     /// Whether photos on `level` need occlusion maps: on the finest level, with several

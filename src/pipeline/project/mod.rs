@@ -33,7 +33,7 @@ use crate::photo::{
     ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
     OcclusionMap, PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS,
     SizeRequest, SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
-    for_each_footprint_batch_in, normal_cos_slope, photo_footprints_in, texture_bytes,
+    for_each_footprint_batch_rows_in, normal_cos_slope, photo_footprints_in, texture_bytes,
 };
 use crate::stats::texel_stretch;
 use crate::store::{
@@ -344,6 +344,9 @@ pub fn project_store(
     // Finest level first; the cells of each level are blended and written while the next
     // coarser level is cast and splatted (levels are independent, so the output is the same
     // as level by level).
+    // The photo textures are written on a thread of their own (the fsyncs do not hold up
+    // the workers); all are on disk before the manifest refers to them.
+    let writer = BackgroundWriter::new(dir);
     let run = LevelRun {
         store: &store,
         pyramids: &pyramids,
@@ -358,27 +361,25 @@ pub fn project_store(
             .iter()
             .map(|c| c.max_error.max(0.0) as f32)
             .collect(),
+        writer: &writer,
     };
-    let mut pending: Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))> = None;
-    // The photo textures are written on a thread of their own (the fsyncs do not hold up
-    // the workers); all are on disk before the manifest refers to them.
-    let writer = BackgroundWriter::new(dir);
+    let mut pending: Option<(usize, LevelProjection)> = None;
     // per photo, its occlusion map (made at the finest level when there are several
     // photos, used by every level)
     let mut occlusion: Vec<Option<OcclusionMap>> = photos.iter().map(|_| None).collect();
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
             || {
-                pending.take().map(|(l, (accs, sizing))| {
+                pending.take().map(|(l, p)| {
                     let t = std::time::Instant::now();
                     (
                         l,
-                        finish_level(&store, l, accs, &sizing, opts, &writer),
+                        finish_level(&store, l, p, opts, &writer),
                         t.elapsed().as_secs_f64(),
                     )
                 })
             },
-            || -> Result<Option<(usize, (Vec<Option<CellAccum>>, LevelSizing))>> {
+            || -> Result<Option<(usize, LevelProjection)>> {
                 let Some(level) = level else { return Ok(None) };
                 Ok(Some((
                     level,
@@ -473,8 +474,8 @@ mod finish;
 mod level;
 mod leveling;
 
-use finish::{finish_level, read_checked_active};
-use level::{LevelRun, LevelSizing, SIZING_STEPS, cell_context, splat_batch};
+use finish::{CellOutcome, finish_cell, finish_level, read_checked_active};
+use level::{LevelProjection, LevelRun, SIZING_STEPS, cell_context, splat_batch};
 use leveling::{MAX_CACHED_FOOTPRINTS, estimate_leveling, leveling_step};
 
 #[cfg(test)]
