@@ -197,14 +197,6 @@ impl PhotoAccum {
                 self.kinds[0] += 1;
                 continue;
             }
-            {
-                use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
-                static ALONE: AtomicUsize = AtomicUsize::new(0);
-                let a = ALONE.fetch_add(1, Relaxed) + 1;
-                if a % 200_000 == 0 {
-                    eprintln!("TMPALONE {a}");
-                }
-            }
             // (alone, after the run it interrupts)
             strips.flush(&mut self.sums);
             self.add_clear(fp, rgb, border, clear, footprint, grazing);
