@@ -1,11 +1,13 @@
 //! Splatting throughput: footprints per second deposited by `photo::PhotoAccum::add_all`
 //! (one thread, one 256² cell) for footprints of different sizes relative to a texel, with
 //! the bilinear-only deposit of the same footprints (centre point, collapsed path) as the
-//! peer measured in the same run. Prints two Markdown tables (medians of 5 runs): square
-//! footprints of a given side, and long thin oblique ones (foreshortened wall pixels in the
-//! enlarged photo textures, the common case of a real projection).
+//! peer measured in the same run. Prints three Markdown tables (medians of 5 runs): square
+//! footprints of a given side, long thin oblique ones (foreshortened wall pixels in the
+//! enlarged photo textures, the common case of a real projection), each footprint on its
+//! own, and the same shapes as a pixel mesh whose neighbours share corners (what the run
+//! splatter of `photo/strip.rs` takes in one pass).
 //!
-//! Run: `cargo run --release --example splat_bench`
+//! Run: `cargo run --release --example splat_bench [mesh]` (`mesh`: the third table only)
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;
@@ -75,12 +77,45 @@ fn footprints_shaped(n: u32, a: [f32; 2], b: [f32; 2], collapse: bool) -> Vec<Pi
         .collect()
 }
 
+/// A grid of `n × n` pixel footprints whose corners are shared with their neighbours (the
+/// corners of a sheared lattice of sides `a` and `b`, as a photo's pixel mesh gives them), in
+/// rows of `n` pixels wrapped into a 256² texture from texel (1, 1): what the run splatter
+/// (`photo/strip.rs`) takes in one pass.
+fn mesh_footprints(n: u32, a: [f32; 2], b: [f32; 2]) -> Vec<PixelFootprint> {
+    let span = 250.0f32;
+    // each pixel row starts where the lattice puts it, wrapped; corners along the row shared
+    (0..n)
+        .flat_map(|r| (0..n).map(move |c| (c, r)))
+        .map(|(c, r)| {
+            let row0 = [
+                1.0 + (r as f32 * b[0]).rem_euclid(span - 40.0),
+                1.0 + (r as f32 * b[1]).rem_euclid(span - 40.0),
+            ];
+            // (the row restarts every 24 pixels so that it stays inside the texture)
+            let k = (c % 24) as f32;
+            let p = |i: f32, j: f32| [row0[0] + i * a[0] + j * b[0], row0[1] + i * a[1] + j * b[1]];
+            PixelFootprint {
+                cell: 0,
+                pixel: [c, r],
+                corners: [p(k, 0.0), p(k + 1.0, 0.0), p(k + 1.0, 1.0), p(k, 1.0)],
+                cos_view: 0.9,
+                distance: 100.0,
+                reconstructed: 0,
+            }
+        })
+        .collect()
+}
+
 fn main() {
     let n = 1000u32; // 1 Mpixel per run
     let img = RgbImage::from_fn(n, n, |x, y| {
         image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x ^ y) % 256) as u8])
     });
     let params = ConfidenceParams::default();
+    if std::env::args().nth(1).as_deref() == Some("mesh") {
+        mesh_table(n, &img, &params);
+        return;
+    }
     println!(
         "| footprint side (texels) | exact splat, Mfootprints/s | bilinear peer, Mfootprints/s | ratio |"
     );
@@ -112,6 +147,29 @@ fn main() {
         println!(
             "| {short} × {long} at {angle}° | {exact:.2} | {bil:.2} | {:.2} |",
             bil / exact
+        );
+    }
+    mesh_table(n, &img, &params);
+}
+
+/// Footprints of neighbouring pixels (shared corners, runs of 24) at the thin shapes above.
+fn mesh_table(n: u32, img: &RgbImage, params: &ConfidenceParams) {
+    println!();
+    println!(
+        "| pixel mesh (shared corners), short × long side (texels) at angle | Mfootprints/s |"
+    );
+    println!("|---|---|");
+    for (short, long, angle) in [
+        (0.7f32, 0.7f32, 0.0f32),
+        (0.8, 2.5, 35.0),
+        (1.2, 5.0, 25.0),
+        (2.0, 8.0, 15.0),
+    ] {
+        let (sin, cos) = angle.to_radians().sin_cos();
+        let fps = mesh_footprints(n, [short * cos, short * sin], [-long * sin, long * cos]);
+        println!(
+            "| {short} × {long} at {angle}° | {:.2} |",
+            throughput(&fps, img, params)
         );
     }
 }

@@ -190,20 +190,31 @@ impl StripSplatter {
             return;
         }
         let h = self.spans.len();
-        let sign = dy_edge.signum();
-        let slope = (b[0] - a[0]) / dy_edge;
-        let (ylo, yhi) = (a[1].min(b[1]), a[1].max(b[1]));
-        let first = floor_f(ylo).max(0.0) as usize;
-        let last = (ceil_f(yhi) as usize).min(h);
+        // walked downwards, the sign kept for the deltas
+        let (top, bottom, sign) = if dy_edge > 0.0 {
+            (a, b, 1.0)
+        } else {
+            (b, a, -1.0)
+        };
+        let slope = (bottom[0] - top[0]) / (bottom[1] - top[1]);
+        let first = floor_f(top[1]).max(0.0) as usize;
+        let last = (ceil_f(bottom[1]) as usize).min(h);
         let xmax = (w - 1) as f64;
+        let x_at = |y: f64| (top[0] + (y - top[1]) * slope).clamp(0.0, xmax);
+        let mut y0 = top[1].max(first as f64);
+        let mut xa = x_at(y0);
         for j in first..last {
-            let (y0, y1) = (ylo.max(j as f64), yhi.min(j as f64 + 1.0));
-            if !(y1 > y0) {
+            let y1 = bottom[1].min(j as f64 + 1.0);
+            let xb = x_at(y1);
+            let dyv = y1 - y0;
+            let x_prev = xa;
+            y0 = y1;
+            xa = xb;
+            if !(dyv > 0.0) {
                 continue;
             }
-            let dy = sign * (y1 - y0);
-            let xa = (a[0] + (y0 - a[1]) * slope).clamp(0.0, xmax);
-            let xb = (a[0] + (y1 - a[1]) * slope).clamp(0.0, xmax);
+            let dy = sign * dyv;
+            let xa = x_prev;
             let (xl, xr) = (xa.min(xb), xa.max(xb));
             // (xl >= 0: truncation is the floor)
             let il = (xl as usize).min(w - 2);
