@@ -483,6 +483,33 @@ mod tests {
     use super::coarse_scale_cap;
 
     #[test]
+    fn texture_options_out_of_range_are_refused_by_name() {
+        use super::PhotoTextureOptions;
+        assert!(PhotoTextureOptions::default().validate().is_ok());
+        let inf = PhotoTextureOptions {
+            coarse_sse_px: f64::INFINITY,
+            ..PhotoTextureOptions::default()
+        };
+        assert!(inf.validate().is_ok());
+        for sse in [0.0, -1.0, f64::NAN] {
+            let bad = PhotoTextureOptions {
+                coarse_sse_px: sse,
+                ..PhotoTextureOptions::default()
+            };
+            let e = bad.validate().unwrap_err().to_string();
+            assert!(e.contains("--coarse-sse"), "{e}");
+        }
+        let e = PhotoTextureOptions {
+            max_texels: 3000,
+            ..PhotoTextureOptions::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("--max-photo-texels"), "{e}");
+    }
+
+    #[test]
     fn coarse_cap_keeps_texels_at_least_the_error_over_the_sse() {
         // a cell of 1 m error, 1.5 m texels, drawn at up to 2 px: texels of >= 0.5 m, so 2x
         assert_eq!(coarse_scale_cap(1.0, 1.5, 2.0), 2);
