@@ -43,7 +43,16 @@ pub(super) fn finish_level(
     let mut work: Vec<(usize, usize, Option<CellAccum>)> = Vec::new();
     for (k, &ci) in level_cells.iter().enumerate() {
         match early.remove(&ci) {
-            Some(outcome) => done.push((k, outcome)),
+            Some(outcome) => {
+                if accs.get(ci).is_some_and(Option::is_some) {
+                    // (not expected: the row bound of `LevelScene::last_rows` is conservative)
+                    tracing::warn!(
+                        "cell {}: footprints arrived after the cell was written; they are left out",
+                        cells[ci].id
+                    );
+                }
+                done.push((k, outcome))
+            }
             None => work.push((k, ci, accs.get_mut(ci).and_then(Option::take))),
         }
     }

@@ -112,6 +112,15 @@ pub(super) struct LevelRun<'a> {
     pub(super) writer: &'a BackgroundWriter,
 }
 
+/// A cell the last photo's remaining rows cannot reach, to be finished now: its deposits
+/// from that photo, what earlier photos left, and its context if loaded.
+pub(super) struct Finishing {
+    cell: usize,
+    photo: Option<PhotoAccum>,
+    acc: Option<CellAccum>,
+    context: Option<CellContext>,
+}
+
 /// One level's projection: per manifest cell its accumulator, the texture sizes, and the
 /// outcomes of the cells already written (a lone photo's cells that no later batch of rows
 /// could reach, blended and written while the rest were cast), by manifest index.
@@ -200,10 +209,11 @@ impl LevelRun<'_> {
                         )?,
                     };
                     let mut counts = FootprintSet::default();
-                    // a lone photo's cells are finished as soon as no later rows can reach
-                    // them: their records go back to the spare chunks for the rest
+                    // with the last photo (a lone one, or the last of several) a cell is
+                    // finished as soon as no later rows can reach it: its records go back
+                    // to the spare chunks for the rest
                     let mut last_row = vec![u32::MAX; cells.len()];
-                    if self.pyramids.len() == 1 {
+                    if pi + 1 == self.pyramids.len() {
                         for (sc, r) in scene.cells.iter().zip(scene.last_rows(&cam)) {
                             if let (Some(r), Some(l)) = (r, last_row.get_mut(sc.cell as usize)) {
                                 *l = r;
@@ -226,16 +236,25 @@ impl LevelRun<'_> {
                                 &samples,
                             );
                             counts.add_counts(batch);
-                            let done: Vec<(usize, PhotoAccum, Option<CellContext>)> = pas
+                            let done: Vec<Finishing> = pas
                                 .iter_mut()
+                                .zip(accs.iter_mut())
                                 .enumerate()
-                                .filter(|(ci, pa)| pa.is_some() && last_row[*ci] < rows[1])
-                                .filter_map(|(ci, pa)| {
-                                    pa.take().map(|pa| (ci, pa, contexts[ci].take()))
+                                .filter(|(ci, (pa, acc))| {
+                                    (pa.is_some() || acc.is_some()) && last_row[*ci] < rows[1]
+                                })
+                                .map(|(ci, (pa, acc))| Finishing {
+                                    cell: ci,
+                                    photo: pa.take(),
+                                    acc: acc.take(),
+                                    context: contexts[ci].take(),
                                 })
                                 .collect();
                             if !done.is_empty() {
-                                early.extend(self.finish_lone(done, pi));
+                                for (ci, outcome, written) in self.finish_early(done, pi) {
+                                    reports[pi].texels_written += written;
+                                    early.push((ci, outcome));
+                                }
                             }
                         },
                     );
@@ -301,33 +320,66 @@ impl LevelRun<'_> {
         })
     }
 
-    /// Blends and writes the cells `done` (manifest index, the lone photo `pi`'s deposits,
-    /// the cell's context if loaded), costliest first, one task each.
-    fn finish_lone(
+    /// Blends and writes the cells `done` that the last photo `pi`'s remaining rows cannot
+    /// reach (its deposits merged into what earlier photos left, as the merge stage would),
+    /// costliest first, one task each; per cell its outcome and the texels photo `pi` gave
+    /// colour where that is known now (a lone photo's are counted by the blend).
+    fn finish_early(
         &self,
-        mut done: Vec<(usize, PhotoAccum, Option<CellContext>)>,
+        mut done: Vec<Finishing>,
         pi: usize,
-    ) -> Vec<(usize, Result<CellOutcome>)> {
+    ) -> Vec<(usize, Result<CellOutcome>, u64)> {
         let cells = &self.store.manifest.cells;
-        done.sort_by_key(|(ci, pa, _)| Reverse((pa.sums.allocated(), Reverse(*ci))));
+        let cost = |f: &Finishing| {
+            f.photo.as_ref().map_or(0, |p| p.sums.allocated())
+                + f.acc.as_ref().map_or(0, CellAccum::allocated)
+        };
+        done.sort_by_key(|f| Reverse((cost(f), Reverse(f.cell))));
+        let mode = accumulator_mode(self.opts.blend, self.pyramids.len());
         done.into_par_iter()
             .with_max_len(1)
-            .map(|(ci, pa, ctx)| {
+            .map(|f| {
+                let ci = f.cell;
+                let mut written = 0;
                 let outcome = (|| {
-                    let ctx = match ctx {
-                        Some(c) => c,
-                        None => cell_context(self.store, &cells[ci])?,
+                    let acc = match (f.acc, f.photo) {
+                        (Some(mut acc), Some(pa)) => {
+                            written = acc.merge(&pa, pi as u16);
+                            acc
+                        }
+                        (Some(acc), None) => acc,
+                        (None, Some(pa)) => {
+                            let ctx = match f.context {
+                                Some(c) => c,
+                                None => cell_context(self.store, &cells[ci])?,
+                            };
+                            if self.pyramids.len() == 1 {
+                                CellAccum::deferred(pa, pi as u16, mode, ctx, &self.opts.confidence)
+                            } else {
+                                let (acc, n) = CellAccum::from_photo(
+                                    pa,
+                                    pi as u16,
+                                    mode,
+                                    ctx,
+                                    &self.opts.confidence,
+                                );
+                                written = n;
+                                acc
+                            }
+                        }
+                        (None, None) => {
+                            return finish_cell(
+                                self.store,
+                                &cells[ci],
+                                None,
+                                self.opts,
+                                self.writer,
+                            );
+                        }
                     };
-                    let acc = CellAccum::deferred(
-                        pa,
-                        pi as u16,
-                        accumulator_mode(self.opts.blend, self.pyramids.len()),
-                        ctx,
-                        &self.opts.confidence,
-                    );
                     finish_cell(self.store, &cells[ci], Some(&acc), self.opts, self.writer)
                 })();
-                (ci, outcome)
+                (ci, outcome, written)
             })
             .collect()
     }
