@@ -228,15 +228,26 @@ impl CellAccum {
         let mut written = 0;
         let base_index = context.base_indexer(texels, scale);
         self.merged.for_each_mut(|t, s| {
-            match Self::photo_texel(s, context, base_index(t), sharpness) {
-                Some((c, conf, res, w)) => {
-                    written += 1;
-                    *s = Self::first_record(mode, c, conf, res, w, label);
-                }
-                None => *s = TexelSums::default(),
-            }
+            let r = Self::raw_record(s, context, base_index(t), sharpness, mode, label);
+            written += r.is_some() as u64;
+            *s = r.unwrap_or_default();
         });
         written
+    }
+
+    /// The record one photo's raw sums `s` (label `label`) settle into over existing texel
+    /// `b`, `None` where the photo gives no colour.
+    #[inline]
+    fn raw_record(
+        s: &TexelSums,
+        ctx: &CellContext,
+        b: usize,
+        sharpness: f32,
+        mode: BlendMode,
+        label: f32,
+    ) -> Option<TexelSums> {
+        Self::photo_texel(s, ctx, b, sharpness)
+            .map(|(c, conf, res, w)| Self::first_record(mode, c, conf, res, w, label))
     }
 
     /// The record of a texel whose first photo (label `label`) has colour `c`, coverage
@@ -284,17 +295,8 @@ impl CellAccum {
     #[inline]
     fn settled(&self, t: usize, s: &TexelSums, photo: u16) -> TexelSums {
         let b = self.context.base_index(t, self.texels, self.scale);
-        match Self::photo_texel(s, &self.context, b, self.sharpness) {
-            Some((c, conf, res, w)) => Self::first_record(
-                self.mode,
-                c,
-                conf,
-                res,
-                w,
-                f32::from(photo.saturating_add(1)),
-            ),
-            None => TexelSums::default(),
-        }
+        let label = f32::from(photo.saturating_add(1));
+        Self::raw_record(s, &self.context, b, self.sharpness, self.mode, label).unwrap_or_default()
     }
 
     /// The accumulator of one photo's deposits `p` (photo number `photo`), as
@@ -466,10 +468,9 @@ impl CellAccum {
                 let base_index = ctx.base_indexer(self.texels, self.scale);
                 let label = f32::from(photo.saturating_add(1));
                 self.merged.for_each(|t, s| {
-                    if let Some((c, conf, res, w)) =
-                        Self::photo_texel(s, ctx, base_index(t), sharpness)
+                    if let Some(r) = Self::raw_record(s, ctx, base_index(t), sharpness, mode, label)
                     {
-                        visit(t, &Self::first_record(mode, c, conf, res, w, label));
+                        visit(t, &r);
                     }
                 });
             }

@@ -283,25 +283,7 @@ impl LevelRun<'_> {
                 .map(|(ci, acc, pa, ctx)| match acc.as_mut() {
                     Some(acc) => Ok(acc.merge(&pa, pi as u16)),
                     None => {
-                        let ctx = match ctx.take() {
-                            Some(c) => c,
-                            None => cell_context(self.store, &cells[ci])?,
-                        };
-                        let mode = accumulator_mode(self.opts.blend, self.pyramids.len());
-                        if self.pyramids.len() == 1 {
-                            // a lone photo's sums go to the blend as they are (its written
-                            // texels are counted there)
-                            *acc = Some(CellAccum::deferred(
-                                pa,
-                                pi as u16,
-                                mode,
-                                ctx,
-                                &self.opts.confidence,
-                            ));
-                            return Ok(0);
-                        }
-                        let (first, n) =
-                            CellAccum::from_photo(pa, pi as u16, mode, ctx, &self.opts.confidence);
+                        let (first, n) = self.first_accum(ci, pa, ctx.take(), pi)?;
                         *acc = Some(first);
                         Ok(n)
                     }
@@ -335,7 +317,6 @@ impl LevelRun<'_> {
                 + f.acc.as_ref().map_or(0, CellAccum::allocated)
         };
         done.sort_by_key(|f| Reverse((cost(f), Reverse(f.cell))));
-        let mode = accumulator_mode(self.opts.blend, self.pyramids.len());
         done.into_par_iter()
             .with_max_len(1)
             .map(|f| {
@@ -349,23 +330,9 @@ impl LevelRun<'_> {
                         }
                         (Some(acc), None) => acc,
                         (None, Some(pa)) => {
-                            let ctx = match f.context {
-                                Some(c) => c,
-                                None => cell_context(self.store, &cells[ci])?,
-                            };
-                            if self.pyramids.len() == 1 {
-                                CellAccum::deferred(pa, pi as u16, mode, ctx, &self.opts.confidence)
-                            } else {
-                                let (acc, n) = CellAccum::from_photo(
-                                    pa,
-                                    pi as u16,
-                                    mode,
-                                    ctx,
-                                    &self.opts.confidence,
-                                );
-                                written = n;
-                                acc
-                            }
+                            let (acc, n) = self.first_accum(ci, pa, f.context, pi)?;
+                            written = n;
+                            acc
                         }
                         (None, None) => {
                             return finish_cell(
@@ -382,6 +349,30 @@ impl LevelRun<'_> {
                 (ci, outcome, written)
             })
             .collect()
+    }
+
+    /// The accumulator of cell `ci` from its first photo `pi`'s deposits `pa` (`ctx`: the
+    /// cell's context if loaded) and the texels that photo gave colour: a lone photo's sums
+    /// go to the blend as they are ([`CellAccum::deferred`], its texels counted there: 0
+    /// here), otherwise they are turned into records now.
+    fn first_accum(
+        &self,
+        ci: usize,
+        pa: PhotoAccum,
+        ctx: Option<CellContext>,
+        pi: usize,
+    ) -> Result<(CellAccum, u64)> {
+        let ctx = match ctx {
+            Some(c) => c,
+            None => cell_context(self.store, &self.store.manifest.cells[ci])?,
+        };
+        let mode = accumulator_mode(self.opts.blend, self.pyramids.len());
+        let conf = &self.opts.confidence;
+        Ok(if self.pyramids.len() == 1 {
+            (CellAccum::deferred(pa, pi as u16, mode, ctx, conf), 0)
+        } else {
+            CellAccum::from_photo(pa, pi as u16, mode, ctx, conf)
+        })
     }
 
     /// Whether photos on `level` need occlusion maps: on the finest level, with several
