@@ -78,26 +78,37 @@ fn footprints_shaped(n: u32, a: [f32; 2], b: [f32; 2], collapse: bool) -> Vec<Pi
 }
 
 /// A grid of `n × n` pixel footprints whose corners are shared with their neighbours (the
-/// corners of a sheared lattice of sides `a` and `b`, as a photo's pixel mesh gives them), in
-/// rows of `n` pixels wrapped into a 256² texture from texel (1, 1): what the run splatter
-/// (`photo/strip.rs`) takes in one pass.
+/// corners of a sheared lattice of sides `a` and `b`, as a photo's pixel mesh gives them):
+/// tiles of 24 × 16 pixels, each placed inside a 256² texture, footprints in row-major
+/// order of the whole grid, as a cell receives them. What the strip splatter
+/// (`photo/strip.rs`) takes in blocks.
 fn mesh_footprints(n: u32, a: [f32; 2], b: [f32; 2]) -> Vec<PixelFootprint> {
-    let span = 250.0f32;
-    // each pixel row starts where the lattice puts it, wrapped; corners along the row shared
+    const TW: u32 = 24;
+    const TH: u32 = 16;
+    // the tile's extent and its lowest corner relative to its origin, per axis
+    let ext = |k: usize| TW as f32 * a[k].abs() + TH as f32 * b[k].abs();
+    let low = |k: usize| TW as f32 * a[k].min(0.0) + TH as f32 * b[k].min(0.0);
     (0..n)
         .flat_map(|r| (0..n).map(move |c| (c, r)))
         .map(|(c, r)| {
-            let row0 = [
-                1.0 + (r as f32 * b[0]).rem_euclid(span - 40.0),
-                1.0 + (r as f32 * b[1]).rem_euclid(span - 40.0),
-            ];
-            // (the row restarts every 24 pixels so that it stays inside the texture)
-            let k = (c % 24) as f32;
-            let p = |i: f32, j: f32| [row0[0] + i * a[0] + j * b[0], row0[1] + i * a[1] + j * b[1]];
+            // (the lattice restarts every tile so that it stays inside the texture; the
+            // tile's place moves with the tile)
+            let (tc, tr) = ((c / TW) as f32, (r / TH) as f32);
+            let place = [tc * 37.0 + tr * 11.0, tr * 29.0 + tc * 7.0];
+            let origin: [f32; 2] = std::array::from_fn(|k| {
+                1.0 + place[k].rem_euclid((254.0 - ext(k)).max(1.0)) - low(k)
+            });
+            let (i, j) = ((c % TW) as f32, (r % TH) as f32);
+            let p = |i: f32, j: f32| {
+                [
+                    origin[0] + i * a[0] + j * b[0],
+                    origin[1] + i * a[1] + j * b[1],
+                ]
+            };
             PixelFootprint {
                 cell: 0,
                 pixel: [c, r],
-                corners: [p(k, 0.0), p(k + 1.0, 0.0), p(k + 1.0, 1.0), p(k, 1.0)],
+                corners: [p(i, j), p(i + 1.0, j), p(i + 1.0, j + 1.0), p(i, j + 1.0)],
                 cos_view: 0.9,
                 distance: 100.0,
                 reconstructed: 0,

@@ -52,6 +52,7 @@
 pub mod camera;
 pub mod cells;
 pub mod colour;
+mod cpu;
 pub mod crs;
 pub mod dem;
 pub mod error;

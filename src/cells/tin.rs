@@ -137,7 +137,7 @@ fn detect_lanes() -> Lanes {
         }
         #[cfg(target_arch = "x86_64")]
         {
-            pulp::x86::V3::try_new()
+            crate::cpu::v3()
         }
         #[cfg(not(target_arch = "x86_64"))]
         {

@@ -146,7 +146,7 @@ impl PhotoAccum {
     }
 
     /// [`PhotoAccum::add_samples`] with the given run splatter (module [`super::strip`]):
-    /// runs of footprints that share side edges are splatted together, the others one by one.
+    /// strips of footprints that share edges are splatted together, the others one by one.
     fn add_samples_with<'f>(
         &mut self,
         footprints: impl IntoIterator<Item = &'f PixelFootprint>,
@@ -197,8 +197,7 @@ impl PhotoAccum {
                 self.kinds[0] += 1;
                 continue;
             }
-            // (alone, after the run it interrupts)
-            strips.flush(&mut self.sums);
+            // (alone; the strip goes on)
             self.add_clear(fp, rgb, border, clear, footprint, grazing);
         }
         strips.flush(&mut self.sums);
