@@ -4,8 +4,8 @@
 //! peer measured in the same run. Prints three Markdown tables (medians of 5 runs): square
 //! footprints of a given side, long thin oblique ones (foreshortened wall pixels in the
 //! enlarged photo textures, the common case of a real projection), each footprint on its
-//! own, and the same shapes as a pixel mesh whose neighbours share corners (what the run
-//! splatter of `photo/strip.rs` takes in one pass).
+//! own, and the same shapes as a pixel mesh whose neighbours share corners (what the strip
+//! splatter of `photo/strip.rs` takes in blocks).
 //!
 //! Run: `cargo run --release --example splat_bench [mesh]` (`mesh`: the third table only)
 
@@ -163,7 +163,8 @@ fn main() {
     mesh_table(n, &img, &params);
 }
 
-/// Footprints of neighbouring pixels (shared corners, runs of 24) at the thin shapes above.
+/// Footprints of neighbouring pixels (corners shared both ways, tiles of 24 × 16) at the thin
+/// shapes above.
 fn mesh_table(n: u32, img: &RgbImage, params: &ConfidenceParams) {
     println!();
     println!(

@@ -175,14 +175,27 @@ impl CellAccum {
         context: CellContext,
         params: &ConfidenceParams,
     ) -> CellAccum {
+        Self::holding(TexelTiles::new(texels), scale, None, mode, context, params)
+    }
+
+    /// An accumulator over the records `merged` (its side the texture's), `scale` times the
+    /// existing texture's; `raw`: the photo whose raw sums they are ([`CellAccum::deferred`]).
+    fn holding(
+        merged: TexelTiles,
+        scale: u32,
+        raw: Option<u16>,
+        mode: BlendMode,
+        context: CellContext,
+        params: &ConfidenceParams,
+    ) -> CellAccum {
         CellAccum {
             mode,
-            texels,
+            texels: merged.side(),
             scale: scale.max(1),
             context,
             sharpness: params.sharpness_power as f32,
-            merged: TexelTiles::new(texels),
-            raw: None,
+            merged,
+            raw,
         }
     }
 
@@ -199,15 +212,7 @@ impl CellAccum {
         context: CellContext,
         params: &ConfidenceParams,
     ) -> CellAccum {
-        CellAccum {
-            mode,
-            texels: p.texels,
-            scale: p.scale.max(1),
-            context,
-            sharpness: params.sharpness_power as f32,
-            merged: p.sums,
-            raw: Some(photo),
-        }
+        Self::holding(p.sums, p.scale, Some(photo), mode, context, params)
     }
 
     /// Whether the records still hold one photo's own sums ([`CellAccum::deferred`]), and
