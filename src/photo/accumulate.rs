@@ -146,7 +146,8 @@ impl PhotoAccum {
     }
 
     /// [`PhotoAccum::add_samples`] with the given run splatter (module [`super::strip`]):
-    /// strips of footprints that share edges are splatted together, the others one by one.
+    /// strips of footprints that share edges are splatted together, the others (and those
+    /// within 2 × 2 texels, [`super::strip::ALONE_TEXELS`]) one by one.
     fn add_samples_with<'f>(
         &mut self,
         footprints: impl IntoIterator<Item = &'f PixelFootprint>,
