@@ -614,6 +614,19 @@ fn register_refuses_bad_input_naming_it() {
         ],
         "k1",
     );
+    fails_naming(
+        &[
+            "register",
+            tmp.path().to_str().unwrap(),
+            "--photos",
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--position-search-m",
+            "0",
+        ],
+        "position search step",
+    );
     assert!(!out.exists());
 }
 

@@ -20,10 +20,18 @@ pub struct Args {
     out: PathBuf,
     /// Parameters the terrain search refines: yaw, pitch, roll, f (or fx, fy). It keeps the
     /// position (refining it against the terrain alone is not reliable yet:
-    /// docs/registration.md, "Position"); a resection against a placed photo fits the
-    /// position too.
+    /// docs/registration.md, "Position"; but see --position-search-m); a resection against
+    /// a placed photo fits the position too.
     #[arg(long, default_value = "yaw,pitch,roll,f")]
     free: String,
+    /// Also search the camera position, by the terrain score on the full photo, in steps of
+    /// M metres then M/2 along the view, across it and up (0 < M <= 50; about 1.5 for a GPS
+    /// position a few metres off). Experimental and slow (about 3 minutes per 12-MP photo):
+    /// on Engabreen it took a 3-m-off position's GCP RMSE from 14-25 px to 4.5-5.2 px; on
+    /// the demo scene it did not find the positions and the verdict refused every photo
+    /// (docs/registration.md, "Position by the score at full resolution").
+    #[arg(long)]
+    position_search_m: Option<f64>,
     /// Half-widths of the coarse search over yaw, pitch and roll, degrees "Y,P,R".
     #[arg(long, default_value = "4,2.5,2")]
     search_deg: String,
@@ -96,6 +104,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         free: parse_free(&a.free)?,
         search_deg: [v[0], v[1], v[2]],
         repeat_px: a.repeat_px,
+        position_search_m: a.position_search_m,
         labels: match a.textures {
             Textures::Active => LabelTexture::Active,
             Textures::Best => LabelTexture::Best,

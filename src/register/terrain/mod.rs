@@ -629,19 +629,41 @@ fn refine(
     grey: &GreyImage,
     step_px: f64,
 ) -> Result<(CameraParams, f64, usize)> {
+    let samples = cast_samples(terrain, from, grey)?;
+    Ok(refine_on(&samples, space, from, grey, step_px))
+}
+
+/// The samples [`refine`] scores `from` with: cast from it at `grey`'s scale, those in the
+/// band around silhouettes and one in [`INNER_STRIDE`]² of the others.
+fn cast_samples(
+    terrain: &TerrainScene,
+    from: &CameraParams,
+    grey: &GreyImage,
+) -> Result<Vec<Sample>> {
     let cam = scaled(&from.camera(), grey);
     let factor = (from.size.0 / grey.width.max(1)).max(1);
-    let samples = terrain.sample(&cam, 1.0, 0.06, Some(band_width(factor)))?;
+    terrain.sample(&cam, 1.0, 0.06, Some(band_width(factor)))
+}
+
+/// [`refine`] with the samples given (cast from another camera near `from`).
+fn refine_on(
+    samples: &[Sample],
+    space: &Space,
+    from: &CameraParams,
+    grey: &GreyImage,
+    step_px: f64,
+) -> (CameraParams, f64, usize) {
+    let cam = scaled(&from.camera(), grey);
     let mut f = |x: &[f64]| {
         let c = space.apply(from, x, &cam);
         if space.outside(&c, 1.0) {
             return 0.0;
         }
-        nmi(&samples, &scaled(&c.camera(), grey), grey)
+        nmi(samples, &scaled(&c.camera(), grey), grey)
     };
     let x0 = vec![0.0; space.free.len()];
     let (x, v, evals) = simplex::maximise(&mut f, &x0, step_px, 0.02, 1e-7, 150 * space.free.len());
-    Ok((space.apply(from, &x, &cam), v, evals))
+    (space.apply(from, &x, &cam), v, evals)
 }
 
 /// Half-width (grid steps) of the band of samples kept around silhouettes on a photo

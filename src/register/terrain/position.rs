@@ -8,17 +8,20 @@
 //! axes in turn (horizontal along the view, horizontal across it, vertical), the position
 //! is tried at `±h` and `±2h`; at each trial position the camera is first turned so that the
 //! point it looked at (the image centre at the view's median distance) stays in the centre,
-//! then its free angles and focal length are refitted (Nelder-Mead, samples re-cast from
-//! it). The scores are noisy, so the camera moves to the vertex of the least-squares
-//! parabola through the five scores ([`peak_offset`]), not to the best trial. `h` halves
-//! each round.
+//! then its free angles and focal length are refitted (Nelder-Mead). All five trials of an
+//! axis, the centre included, are scored on one set of samples cast from the centre camera
+//! (since 2026-12-06: samples cast from each trial camera made scores whose differences
+//! between sample sets were as large as the position's signal). The scores are still not a
+//! clean parabola, so the camera moves to the vertex of the least-squares parabola through
+//! the five scores ([`peak_offset`]), not to the best trial. `h` halves each round.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::mi::GreyImage;
+use super::view::Sample;
 use super::view::TerrainScene;
-use super::{Space, refine};
+use super::{Space, cast_samples, refine_on};
 use crate::camera::{rotation_look_at, yaw_pitch_roll_from_rotation};
 use crate::error::Result;
 use crate::register::params::CameraParams;
@@ -76,29 +79,36 @@ pub(super) fn search_position(
 ) -> Result<(CameraParams, f64, usize)> {
     let (mut best, mut best_score, mut evals) = (cam, score, 0usize);
     let depth = space.depth;
-    let trial = |from: &CameraParams, p: DVec3| -> Result<(CameraParams, f64, usize)> {
-        let moved = moved_keeping_target(from, p, depth);
-        refine(terrain, space, &moved, grey, 2.0)
+    let trial = |from: &CameraParams, p: DVec3, samples: &[Sample]| {
+        refine_on(
+            samples,
+            space,
+            &moved_keeping_target(from, p, depth),
+            grey,
+            2.0,
+        )
     };
     let mut h = step_m;
     for _ in 0..rounds {
         for axis in axes(best.camera().forward()) {
-            let (p0, s0, c0) = (best.position, best_score, best);
-            let offsets = [-2.0 * h, -h, h, 2.0 * h];
-            let trials: Vec<Result<(CameraParams, f64, usize)>> = offsets
+            let (p0, c0) = (best.position, best);
+            // one sample set per axis, the centre refitted on it like the others: scores
+            // of different sample sets differ by more than the position's signal
+            let samples = cast_samples(terrain, &c0, grey)?;
+            let offsets = [-2.0 * h, -h, 0.0, h, 2.0 * h];
+            let trials: Vec<(CameraParams, f64, usize)> = offsets
                 .par_iter()
                 .with_max_len(1)
-                .map(|&t| trial(&c0, p0 + axis * t))
+                .map(|&t| trial(&c0, p0 + axis * t, &samples))
                 .collect();
-            let mut points = vec![(0.0, s0)];
-            for (t, r) in offsets.iter().zip(trials) {
-                let (_, s, e) = r?;
+            let mut points = Vec::with_capacity(offsets.len());
+            for (t, (_, s, e)) in offsets.iter().zip(&trials) {
                 evals += e;
-                points.push((*t, s));
+                points.push((*t, *s));
             }
             let t = peak_offset(&points, 2.0 * h);
             if t != 0.0 {
-                let (c, s, e) = trial(&c0, p0 + axis * t)?;
+                let (c, s, e) = trial(&c0, p0 + axis * t, &samples);
                 evals += e;
                 (best, best_score) = (c, s);
             }
