@@ -17,7 +17,7 @@
 //! the store rendered from the camera found, the glacier masked out.
 //! `--position-search H` (an experiment, docs/registration.md "Position by the score at full
 //! resolution"): after the angle search, the position searched by the score itself, steps
-//! H, H/2, H/4 metres.
+//! H and H/2 metres (as `cliffmap register --position-search-m H`).
 //! `--focal-scale S`: the rough camera's focal length S times the fitted one.
 //! `--overlay PNG`: for the first start, the photo blended with the store rendered from the
 //! rough and from the registered camera, side by side, GCPs marked (docs/registration.md).

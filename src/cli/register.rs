@@ -201,6 +201,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             );
         }
         for r in &results {
+            let moved = r.fit.found.position - r.rough.position;
+            if r.fit.converged && a.position_search_m.is_some() && r.method.starts_with("terrain") {
+                println!(
+                    "note: {}: position moved by ({:+.2}, {:+.2}, {:+.2}) m (x, y, z) by the \
+                     experimental position search",
+                    r.name, moved.x, moved.y, moved.z
+                );
+            }
             if let (true, Some(p)) = (r.fit.converged, r.fit.position_kept_parallax_px_per_m) {
                 println!(
                     "note: {}: its given position was kept (only the view direction and focal \

@@ -71,7 +71,7 @@ pub struct TerrainOptions {
     /// finest scale, trials at `±h` and `±2h`, then at half those, metres along, across and
     /// up, `h` in (0, 50] (the module
     /// `position`; docs/registration.md, "Position by the score at full resolution"). An
-    /// experiment, off by default and not offered by the command.
+    /// experiment, off by default (`cliffmap register --position-search-m`).
     pub position_search_m: Option<f64>,
     /// Which textures give the terrain samples their grey when a caller builds the scene
     /// from these options ([`TerrainScene::for_options`]; `pipeline::register_photos_with`
@@ -189,8 +189,8 @@ pub struct TerrainFit {
     pub evaluations: usize,
     /// With the position free: the silhouette-edge stage's result (else `None`).
     pub edges: Option<EdgeSummary>,
-    /// With the position kept (not free): [`parallax_px_per_m`] of the camera found, what
-    /// each metre of error in the given position costs (else `None`).
+    /// With the position kept (not free, not searched): [`parallax_px_per_m`] of the camera
+    /// found, what each metre of error in the given position costs (else `None`).
     pub position_kept_parallax_px_per_m: Option<f64>,
     /// With label photos ([`TerrainScene::set_label_photos`]): the share (0..1) of the
     /// terrain samples of the final view whose labels came from their pixels (0: none of
@@ -466,7 +466,9 @@ pub fn register_to_terrain(
         None,
         t0,
     );
-    fit.position_kept_parallax_px_per_m = parallax_px_per_m(terrain, &found);
+    if opts.position_search_m.is_none() {
+        fit.position_kept_parallax_px_per_m = parallax_px_per_m(terrain, &found);
+    }
     fit.photo_label_share = photo_label_share;
     Ok(fit)
 }

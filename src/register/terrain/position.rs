@@ -1,7 +1,7 @@
 //! A search over the camera position by the mutual-information score itself, at the finest
 //! scale (docs/registration.md, "Position by the score at full resolution"): an experiment
-//! of the library ([`super::TerrainOptions::position_search_m`]), not offered by
-//! `cliffmap register`.
+//! ([`super::TerrainOptions::position_search_m`], `cliffmap register --position-search-m`,
+//! off by default).
 //!
 //! Input: the angle search's result (found with the rough position) and the finest photo
 //! scale. Output: the camera at the position found and its score. Per round, along three
