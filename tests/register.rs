@@ -575,58 +575,27 @@ fn register_against_projected_photo_textures() {
 #[test]
 fn register_refuses_bad_input_naming_it() {
     let tmp = tempfile::tempdir().unwrap();
-    let missing = tmp.path().join("nope.json");
+    let store = tmp.path().to_str().unwrap();
     let out = tmp.path().join("r.json");
-    fails_naming(
-        &[
-            "register",
-            tmp.path().to_str().unwrap(),
-            "--photos",
-            missing.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        "nope.json",
-    );
     std::fs::write(tmp.path().join("bad.json"), "{\"photos\": 3}").unwrap();
-    let bad = tmp.path().join("bad.json");
-    fails_naming(
-        &[
+    let (missing, bad) = (tmp.path().join("nope.json"), tmp.path().join("bad.json"));
+    // `cliffmap register STORE --photos PHOTOS --out OUT EXTRA...` fails naming `needle`
+    let refused = |photos: &std::path::Path, extra: &[&str], needle: &str| {
+        let mut args = vec![
             "register",
-            tmp.path().to_str().unwrap(),
+            store,
             "--photos",
-            bad.to_str().unwrap(),
+            photos.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-        ],
-        "bad.json",
-    );
-    fails_naming(
-        &[
-            "register",
-            tmp.path().to_str().unwrap(),
-            "--photos",
-            bad.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--free",
-            "k1",
-        ],
-        "k1",
-    );
-    fails_naming(
-        &[
-            "register",
-            tmp.path().to_str().unwrap(),
-            "--photos",
-            bad.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--position-search-m",
-            "0",
-        ],
-        "position search step",
-    );
+        ];
+        args.extend_from_slice(extra);
+        fails_naming(&args, needle);
+    };
+    refused(&missing, &[], "nope.json");
+    refused(&bad, &[], "bad.json");
+    refused(&bad, &["--free", "k1"], "k1");
+    refused(&bad, &["--position-search-m", "0"], "position search step");
     assert!(!out.exists());
 }
 

@@ -201,8 +201,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             );
         }
         for r in &results {
-            let moved = r.fit.found.position - r.rough.position;
             if r.fit.converged && a.position_search_m.is_some() && r.method.starts_with("terrain") {
+                let moved = r.fit.found.position - r.rough.position;
                 println!(
                     "note: {}: position moved by ({:+.2}, {:+.2}, {:+.2}) m (x, y, z) by the \
                      experimental position search",
