@@ -24,12 +24,13 @@ pub struct Args {
     /// a placed photo fits the position too.
     #[arg(long, default_value = "yaw,pitch,roll,f")]
     free: String,
-    /// Also search the camera position, by the terrain score on the full photo, in steps of
-    /// M metres then M/2 along the view, across it and up (0 < M <= 50; about 1.5 for a GPS
-    /// position a few metres off). Experimental and slow (about 3 minutes per 12-MP photo):
-    /// on Engabreen it took a 3-m-off position's GCP RMSE from 14-25 px to 4.5-5.2 px; on
-    /// the demo scene it did not find the positions and the verdict refused every photo
-    /// (docs/registration.md, "Position by the score at full resolution").
+    /// Also search the camera position, by the terrain score, in steps of M, M/2 and M/4
+    /// metres up, across the view and along it (0 < M <= 50; about 1.5 for a GPS position a
+    /// few metres off); a search that does not settle on a peak keeps the given camera.
+    /// Experimental and slow (3-5 minutes per photo): on the demo scene it brought 3 of 8
+    /// starts 3-5 m off to within half a metre and accepted one of them; on Engabreen a
+    /// 3-m-off position's GCP RMSE fell from 14-25 px to about 4 px (docs/registration.md,
+    /// "Position by the score at full resolution").
     #[arg(long)]
     position_search_m: Option<f64>,
     /// Half-widths of the coarse search over yaw, pitch and roll, degrees "Y,P,R".

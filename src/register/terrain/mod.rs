@@ -392,14 +392,18 @@ pub fn register_to_terrain(
         evals += e;
         (cam, score) = (c2, s2);
     }
+    let mut unsettled: Option<f64> = None;
     if let (Some(h), false) = (opts.position_search_m, opts.position_free()) {
-        let (c2, s2, e) = position::search_position(terrain, &space, cam, score, &grey, h, 2)?;
+        let (c2, s2, e, above) =
+            position::search_position(terrain, &space, cam, score, photo, finest, h, 3)?;
         evals += e;
         (cam, score) = (c2, s2);
-        // the angles once more with samples cast from the position found
-        let (c2, s2, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
-        evals += e;
-        if s2 >= score {
+        unsettled = (above > position::SETTLED).then_some(above);
+        // the angles once more at the finest scale from the position found (the search's
+        // scores are on another scale and sample set, so not compared with these)
+        for _ in 0..2 {
+            let (c2, s2, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
+            evals += e;
             (cam, score) = (c2, s2);
         }
     }
@@ -450,6 +454,18 @@ pub fn register_to_terrain(
             "restarts disagree by {repeat:.2} px (limit {:.2} px)",
             opts.repeat_px
         ))
+    } else if let Some(a) = unsettled {
+        Some(if a.is_finite() {
+            format!(
+                "the position search did not settle (a trial of its last round scored {a:.4} \
+                 above the position found; limit {})",
+                position::SETTLED
+            )
+        } else {
+            "the position search could not score every trial of its last round (turned \
+             beyond the search's bounds, or too little terrain in view)"
+                .to_string()
+        })
     } else if score <= score_start {
         Some(format!(
             "the score did not rise ({score_start:.4} -> {score:.4})"
@@ -676,7 +692,7 @@ fn band_width(factor: u32) -> usize {
 }
 
 /// `cam` resized to the grey image's size.
-fn scaled(cam: &CameraModel, grey: &GreyImage) -> CameraModel {
+pub(super) fn scaled(cam: &CameraModel, grey: &GreyImage) -> CameraModel {
     cam.resized(grey.width, grey.height)
 }
 
