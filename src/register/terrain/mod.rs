@@ -67,9 +67,9 @@ pub struct TerrainOptions {
     /// by the command: measured on the demo scene it recovers the position in only a few
     /// starts and can agree with itself on a wrong one (docs/registration.md, "Position").
     pub experimental_position: bool,
-    /// `Some(h)`: after the angle search, search the position by the score itself at the
-    /// finest scale, trials at `±h` and `±2h`, then at half those, metres along, across and
-    /// up, `h` in (0, 50] (the module
+    /// `Some(h)`: after the angle search, search the position by the score itself, trials
+    /// at `±h` and `±2h` metres up, across and along the view, then at half and a quarter
+    /// of those, `h` in (0, 50]; a search that does not settle is refused (the module
     /// `position`; docs/registration.md, "Position by the score at full resolution"). An
     /// experiment, off by default (`cliffmap register --position-search-m`).
     pub position_search_m: Option<f64>,
@@ -394,10 +394,9 @@ pub fn register_to_terrain(
     }
     let mut unsettled: Option<f64> = None;
     if let (Some(h), false) = (opts.position_search_m, opts.position_free()) {
-        let (c2, s2, e, above) =
-            position::search_position(terrain, &space, cam, score, photo, finest, h, 3)?;
+        let (c2, e, above) = position::search_position(terrain, &space, cam, photo, finest, h, 3)?;
         evals += e;
-        (cam, score) = (c2, s2);
+        cam = c2;
         unsettled = (above > position::SETTLED).then_some(above);
         // the angles once more at the finest scale from the position found (the search's
         // scores are on another scale and sample set, so not compared with these)

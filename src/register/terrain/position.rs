@@ -4,7 +4,7 @@
 //! off by default).
 //!
 //! Input: the angle search's result (found with the rough position) and the photo. Output:
-//! the camera at the position found and its score. Per round, along three axes in turn (up,
+//! the camera at the position found, and how far the search was from settling. Per round, along three axes in turn (up,
 //! horizontal across the view, horizontal along it), the position is tried at `±h` and
 //! `±2h`. A trial camera is first turned so that the point it looked at (the image centre
 //! at the view's median distance) stays in the centre, with the same horizon tilt; then the
@@ -68,10 +68,10 @@ fn axes(forward: DVec3) -> [DVec3; 3] {
     [along, across, DVec3::Z]
 }
 
-/// The search described in the module comment from `cam` (score `score`), on `photo`
-/// reduced at least `finest` times, steps `step_m`, `step_m / 2`, ... for `rounds` rounds;
-/// returns the camera found, its score (on the search's samples: not comparable with
-/// scores at another scale), the number of score evaluations, and the largest amount by
+/// The search described in the module comment from `cam`, on `photo` reduced at least
+/// `finest` times, steps `step_m`, `step_m / 2`, ... for `rounds` rounds; returns the
+/// camera found (its score on the search's samples is not comparable with scores at
+/// another scale, so not returned), the number of score evaluations, and the largest amount by
 /// which a trial of the last round scored above its axis's centre (near 0 when the search
 /// settled on a peak along every axis; infinite when a trial of that round could not be
 /// scored; see [`SETTLED`]).
@@ -79,13 +79,12 @@ pub(super) fn search_position(
     terrain: &TerrainScene,
     space: &Space,
     cam: CameraParams,
-    score: f64,
     photo: &image::RgbImage,
     finest: u32,
     step_m: f64,
     rounds: usize,
-) -> Result<(CameraParams, f64, usize, f64)> {
-    let (mut best, mut best_score, mut evals) = (cam, score, 0usize);
+) -> Result<(CameraParams, usize, f64)> {
+    let (mut best, mut evals) = (cam, 0usize);
     let mut above = 0.0f64;
     let depth = space.depth;
     let factor = dense_factor(photo.width(), photo.height()).max(finest);
@@ -127,17 +126,17 @@ pub(super) fn search_position(
                     above = f64::INFINITY;
                 }
             }
-            let (c, s, e) = if t == 0.0 {
+            let (c, _, e) = if t == 0.0 {
                 trials[2]
             } else {
                 trial(&c0, p0 + axis * t)?
             };
             evals += e;
-            (best, best_score) = (c, s);
+            best = c;
         }
         h /= 2.0;
     }
-    Ok((best, best_score, evals, above))
+    Ok((best, evals, above))
 }
 
 /// How far (normalised mutual information) a trial of the search's last round may score
