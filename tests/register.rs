@@ -71,6 +71,36 @@ fn scene_with_photos(dir: &Path) -> std::path::PathBuf {
         .unwrap()
 }
 
+/// The demo scene with photos written under `dir` (its photo list and store), photo
+/// `index` of it, that photo's true camera, and the camera moved by `offset` metres and
+/// turned `yaw_deg` degrees in yaw.
+struct MovedPhoto {
+    list: std::path::PathBuf,
+    store: cliffmap::store::Store,
+    photo: cliffmap::photo::PhotoInput,
+    truth: CameraParams,
+    rough: CameraParams,
+}
+
+fn moved_photo(dir: &Path, index: usize, offset: glam::DVec3, yaw_deg: f64) -> MovedPhoto {
+    let list = scene_with_photos(dir);
+    let store = cliffmap::store::Store::open(&dir.join("store")).unwrap();
+    let photo = cliffmap::photo::read_photo_list(&list)
+        .unwrap()
+        .swap_remove(index);
+    let truth = CameraParams::from_camera(&photo.camera);
+    let mut rough = truth;
+    rough.position += offset;
+    rough.angles[0] += yaw_deg.to_radians();
+    MovedPhoto {
+        list,
+        store,
+        photo,
+        truth,
+        rough,
+    }
+}
+
 /// The report `cliffmap register --out OUT` wrote beside `OUT` (`registered.report.json`
 /// for `registered.json`).
 fn read_report(out: &Path) -> serde_json::Value {
@@ -605,14 +635,13 @@ fn register_refuses_bad_input_naming_it() {
 fn silhouette_edges_move_a_camera_towards_its_position_and_the_command_refuses_it() {
     use cliffmap::register::{EdgeOptions, TerrainScene, refine_edges};
     let tmp = tempfile::tempdir().unwrap();
-    let list = scene_with_photos(tmp.path());
-    let store = cliffmap::store::Store::open(&tmp.path().join("store")).unwrap();
-    let photos = cliffmap::photo::read_photo_list(&list).unwrap();
-    let p = &photos[0];
-    let truth = CameraParams::from_camera(&p.camera);
-    let mut rough = truth;
-    rough.position += glam::DVec3::new(1.2, -0.8, 0.3);
-    rough.angles[0] += 0.1f64.to_radians();
+    let MovedPhoto {
+        list,
+        store,
+        photo: p,
+        truth,
+        rough,
+    } = moved_photo(tmp.path(), 0, glam::DVec3::new(1.2, -0.8, 0.3), 0.1);
     let terrain = TerrainScene::new(&store, p.camera.position).unwrap();
     let fit = refine_edges(
         &terrain,
@@ -837,14 +866,13 @@ fn the_position_search_moves_a_camera_back_towards_its_position() {
     // "Position by the score at full resolution")
     use cliffmap::register::{TerrainOptions, TerrainScene, register_to_terrain};
     let tmp = tempfile::tempdir().unwrap();
-    let list = scene_with_photos(tmp.path());
-    let store = cliffmap::store::Store::open(&tmp.path().join("store")).unwrap();
-    let photos = cliffmap::photo::read_photo_list(&list).unwrap();
-    let p = &photos[2];
-    let truth = CameraParams::from_camera(&p.camera);
-    let mut rough = truth;
-    rough.position += glam::DVec3::new(1.5, -1.8, 0.8);
-    rough.angles[0] += 0.3f64.to_radians();
+    let MovedPhoto {
+        store,
+        photo: p,
+        truth,
+        rough,
+        ..
+    } = moved_photo(tmp.path(), 2, glam::DVec3::new(1.5, -1.8, 0.8), 0.3);
     let terrain = TerrainScene::new(&store, p.camera.position).unwrap();
     let search = |h: Option<f64>| {
         let opts = TerrainOptions {
