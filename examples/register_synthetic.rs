@@ -132,6 +132,9 @@ fn main() -> anyhow::Result<()> {
     for n in names.iter().chain(std::iter::once(&"all".to_string())) {
         let sel: Vec<&(String, bool, bool, f64)> =
             rows.iter().filter(|r| n == "all" || &r.0 == n).collect();
+        if sel.is_empty() {
+            continue; // --starts 0: the scene is only built
+        }
         let mut t: Vec<f64> = sel.iter().map(|r| r.3).collect();
         t.sort_by(f64::total_cmp);
         let count = |f: &dyn Fn(bool, bool) -> bool| sel.iter().filter(|r| f(r.1, r.2)).count();

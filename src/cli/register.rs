@@ -27,8 +27,8 @@ pub struct Args {
     /// Also search the camera position, by the terrain score, in steps of M, M/2 and M/4
     /// metres up, across the view and along it (0 < M <= 50; about 1.5 for a GPS position a
     /// few metres off); a search that does not settle on a peak keeps the given camera.
-    /// Experimental and slow (3-5 minutes per photo): on the demo scene it brought 3 of 8
-    /// starts 3-5 m off to within half a metre and accepted one of them; on Engabreen a
+    /// Experimental and slow (3-6 minutes per photo): on the demo scene it registered 2 of 8
+    /// starts 3-5 m off, each about half a metre from the truth; on Engabreen a
     /// 3-m-off position's GCP RMSE fell from 14-25 px to about 4 px (docs/registration.md,
     /// "Position by the score at full resolution").
     #[arg(long)]

@@ -346,7 +346,7 @@ pub fn register_to_terrain(
 
     // Nelder-Mead from each peak on photos reduced 2 and 4 times less than the grid's; the
     // best goes on through every finer scale.
-    let space = Space {
+    let mut space = Space {
         base: start,
         free: mi_free.clone(),
         depth,
@@ -397,6 +397,7 @@ pub fn register_to_terrain(
         let (c2, e, above) = position::search_position(terrain, &space, cam, photo, finest, h, 3)?;
         evals += e;
         cam = c2;
+        space = space.moved_to(cam.position);
         unsettled = (above > position::SETTLED).then_some(above);
         // the angles once more at the finest scale from the position found (the search's
         // scores are on another scale and sample set, so not compared with these)
@@ -613,6 +614,19 @@ impl Space {
             Param::Roll => 1.0 / half,
             Param::F | Param::Fx | Param::Fy => self.base.focal[0] / half,
             _ => self.depth / f,
+        }
+    }
+
+    /// This space with its base camera moved to `position`, turned so that the point it
+    /// looked at (the view's median depth ahead) stays in the image centre, horizon tilt
+    /// kept: the bounds then count how far a camera turned from where the rough camera would
+    /// look from there, not the turn the move itself asks for.
+    fn moved_to(&self, position: DVec3) -> Space {
+        Space {
+            base: position::moved_keeping_target(&self.base, position, self.depth),
+            free: self.free.clone(),
+            depth: self.depth,
+            bounds: self.bounds,
         }
     }
 

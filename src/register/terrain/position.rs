@@ -93,6 +93,9 @@ pub(super) fn search_position(
     // a trial: moved, sampled on the full grid, refitted, sampled and refitted again
     let trial = |from: &CameraParams, p: DVec3| -> Result<(CameraParams, f64, usize)> {
         let c = moved_keeping_target(from, p, depth);
+        // bounds from the rough camera as it would look from `p` (since session 28: from
+        // the rough camera itself, trials that had to turn for the move fell outside them)
+        let space = &space.moved_to(p);
         let s = dense_samples(terrain, &c, grey)?;
         let (c1, _, e1) = refine_on(&s, space, &c, grey, 2.0);
         let s = dense_samples(terrain, &c1, grey)?;
@@ -243,6 +246,32 @@ mod tests {
             "{:?}",
             moved.angles
         );
+    }
+
+    #[test]
+    fn bounds_follow_the_turn_a_move_asks_for() {
+        use crate::register::params::Param;
+        // a camera 20 m from its target moved 6 m sideways turns about 16 degrees to keep
+        // it in view: beyond 8-degree bounds from the rough camera, inside them from the
+        // rough camera moved the same way
+        let (pos, target) = (DVec3::new(0.0, -20.0, 5.0), DVec3::ZERO);
+        let rot = crate::camera::rotation_look_at(pos, target).expect("distinct points");
+        let base = CameraParams::from_camera(&CameraModel::pinhole(pos, rot, 800, 600, 1000.0));
+        let depth = (target - pos).length();
+        let space = Space {
+            base,
+            free: vec![Param::Yaw, Param::Pitch, Param::Roll],
+            depth,
+            bounds: [8.0, 0.08, 50.0],
+        };
+        let p = pos + DVec3::new(6.0, 0.0, 0.0);
+        let moved = moved_keeping_target(&base, p, depth);
+        assert!(space.outside(&moved, 1.0), "{:?}", moved.angles);
+        assert!(!space.moved_to(p).outside(&moved, 1.0));
+        // and a turn of 9 degrees more is still outside the moved bounds
+        let mut turned = moved;
+        turned.angles[0] += 9f64.to_radians();
+        assert!(space.moved_to(p).outside(&turned, 1.0));
     }
 
     #[test]
