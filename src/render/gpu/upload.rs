@@ -1,0 +1,211 @@
+//! A cell onto the GPU: vertex, UV, morph-target and index buffers, its mipmapped colour
+//! texture (sRGB) and normal map, its bounding-box lines, and the bytes it holds.
+
+use glam::DVec3;
+use wgpu::util::DeviceExt;
+
+use super::{CellData, GpuCell, TerrainRenderer, f32_bytes};
+use crate::error::{Error, Result};
+use crate::store::CellRecord;
+
+impl TerrainRenderer {
+    fn texture(
+        &self,
+        label: &str,
+        mips: &[image::RgbaImage],
+        format: wgpu::TextureFormat,
+    ) -> (wgpu::Texture, u64) {
+        let (w, h) = mips[0].dimensions();
+        let tex = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: mips.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let mut bytes = 0;
+        for (level, img) in mips.iter().enumerate() {
+            let (mw, mh) = img.dimensions();
+            self.ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &tex,
+                    mip_level: level as u32,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                img.as_raw(),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(4 * mw),
+                    rows_per_image: Some(mh),
+                },
+                wgpu::Extent3d {
+                    width: mw,
+                    height: mh,
+                    depth_or_array_layers: 1,
+                },
+            );
+            bytes += img.as_raw().len() as u64;
+        }
+        (tex, bytes)
+    }
+
+    /// Uploads a cell. Fails on an empty mesh or texture, or a texture over the device limit.
+    pub fn upload(&self, rec: &CellRecord, data: &CellData) -> Result<GpuCell> {
+        let max = self.ctx.device.limits().max_texture_dimension_2d;
+        for (what, mips) in [
+            ("texture", &data.colour_mips),
+            ("normal map", &data.normal_mips),
+        ] {
+            let (w, h) = mips.first().map(|m| m.dimensions()).unwrap_or((0, 0));
+            if w == 0 || h == 0 || w > max || h > max {
+                return Err(Error::Gpu(format!(
+                    "cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})",
+                    rec.id
+                )));
+            }
+        }
+        if data.mesh.triangles.is_empty() {
+            return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
+        }
+        if let Some(m) = &data.morph {
+            if m.targets.len() != data.mesh.positions.len() {
+                return Err(Error::Gpu(format!(
+                    "cell {}: {} morph targets for {} vertices",
+                    rec.id,
+                    m.targets.len(),
+                    data.mesh.positions.len()
+                )));
+            }
+        }
+        let device = &self.ctx.device;
+        let pos: Vec<f32> = data.mesh.positions.iter().flatten().copied().collect();
+        let idx: Vec<u8> = data
+            .mesh
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let positions = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("positions"),
+            contents: &f32_bytes(&pos),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uvs = data.uvs.as_ref().map(|uv| {
+            let flat: Vec<f32> = uv.iter().flatten().copied().collect();
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("uvs"),
+                contents: &f32_bytes(&flat),
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+        });
+        let morph = data.morph.as_ref().map(|m| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("morph targets"),
+                contents: &f32_bytes(m.targets.as_flattened()),
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("indices"),
+            contents: &idx,
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let (colour, cb) = self.texture(
+            "colour",
+            &data.colour_mips,
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        );
+        let (normal, nb) =
+            self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
+        let cv = colour.create_view(&Default::default());
+        let nv = normal.create_view(&Default::default());
+        let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&rec.id),
+            layout: &self.cell_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&cv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        let origin = DVec3::from(rec.origin);
+        let (lo, hi) = (
+            (DVec3::from(rec.bbox_min) - origin).as_vec3(),
+            (DVec3::from(rec.bbox_max) - origin).as_vec3(),
+        );
+        let corner = |k: usize| {
+            [
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            ]
+        };
+        let mut lines = Vec::with_capacity(72);
+        for a in 0..8usize {
+            for bit in [1, 2, 4] {
+                if a & bit == 0 {
+                    lines.extend(corner(a));
+                    lines.extend(corner(a | bit));
+                }
+            }
+        }
+        let box_lines = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("bbox lines"),
+            contents: &f32_bytes(&lines),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let e = rec.extent;
+        let bytes = pos.len() as u64 * 4
+            + idx.len() as u64
+            + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+            + data
+                .morph
+                .as_ref()
+                .map_or(0, |m| m.targets.len() as u64 * 12)
+            + cb
+            + nb;
+        Ok(GpuCell {
+            positions,
+            uvs,
+            morph,
+            mip_shift: data
+                .morph
+                .as_ref()
+                .map_or([0.0; 2], |m| [m.colour_shift, m.normal_shift]),
+            indices,
+            index_count: data.mesh.triangles.len() as u32 * 3,
+            box_lines,
+            textures,
+            colour_view: cv,
+            normal_view: nv,
+            origin,
+            extent_rel: [
+                (e.min_x - origin.x) as f32,
+                (e.max_y - origin.y) as f32,
+                e.width() as f32,
+                e.height() as f32,
+            ],
+            level: rec.level,
+            triangles: data.mesh.triangles.len() as u32,
+            bytes,
+        })
+    }
+}
