@@ -4,11 +4,11 @@
 
 use glam::DVec3;
 
-use super::super::camera::RenderCamera;
-use super::super::distortion::DistortedView;
-use super::super::target::RenderTarget;
 use super::{CellDraw, DRAW_STRIDE, FrameOptions, TerrainRenderer, f32_bytes};
 use crate::error::{Error, Result};
+use crate::render::camera::RenderCamera;
+use crate::render::distortion::DistortedView;
+use crate::render::target::RenderTarget;
 
 fn level_tint(level: u8) -> [f32; 4] {
     const T: [[f32; 3]; 8] = [

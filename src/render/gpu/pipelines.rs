@@ -2,10 +2,10 @@
 //! without morph targets, and the bounding-box lines), created once per renderer, and the
 //! bind groups the frames rebuild.
 
-use super::super::distort_pass::DistortPass;
-use super::super::target::{DEPTH_FORMAT, OPAQUE_TARGET, RenderTarget};
 use super::{DRAW_BYTES, DRAW_STRIDE, GpuContext, TerrainRenderer, check_size};
 use crate::error::Result;
+use crate::render::distort_pass::DistortPass;
+use crate::render::target::{DEPTH_FORMAT, OPAQUE_TARGET, RenderTarget};
 
 impl TerrainRenderer {
     /// Creates pipelines and a `width × height` target (each in 1..=max texture size).
