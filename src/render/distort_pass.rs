@@ -3,7 +3,7 @@
 
 use super::context::GpuContext;
 use super::distortion::{DistortedView, NEWTON_STEPS};
-use super::target::{OPAQUE_TARGET, RenderTarget};
+use super::target::{OPAQUE_TARGET, RenderTarget, fragment_sampler_entry, fragment_texture_entry};
 
 /// Pipeline, sampler and uniform buffer of the distortion pass.
 pub(crate) struct DistortPass {
@@ -36,22 +36,8 @@ impl DistortPass {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
+                fragment_texture_entry(1),
+                fragment_sampler_entry(2),
             ],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

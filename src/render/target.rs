@@ -12,6 +12,30 @@ pub(crate) const OPAQUE_TARGET: [Option<wgpu::ColorTargetState>; 1] =
         blend: None,
         write_mask: wgpu::ColorWrites::ALL,
     })];
+/// Bind-group-layout entry of a filterable 2-D float texture read by the fragment stage.
+pub(crate) fn fragment_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// Bind-group-layout entry of a filtering sampler used by the fragment stage.
+pub(crate) fn fragment_sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        count: None,
+    }
+}
+
 /// Depth format (reverse-Z: cleared to 0, closer = larger).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 

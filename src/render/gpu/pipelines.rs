@@ -5,7 +5,9 @@
 use super::{DRAW_BYTES, DRAW_STRIDE, GpuContext, TerrainRenderer, check_size};
 use crate::error::Result;
 use crate::render::distort_pass::DistortPass;
-use crate::render::target::{DEPTH_FORMAT, OPAQUE_TARGET, RenderTarget};
+use crate::render::target::{
+    DEPTH_FORMAT, OPAQUE_TARGET, RenderTarget, fragment_sampler_entry, fragment_texture_entry,
+};
 
 impl TerrainRenderer {
     /// Creates pipelines and a `width × height` target (each in 1..=max texture size).
@@ -30,28 +32,10 @@ impl TerrainRenderer {
             label: Some("frame"),
             entries: &[uniform(0, false), uniform(1, true)],
         });
-        let tex = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let tex = fragment_texture_entry;
         let cell_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cell"),
-            entries: &[
-                tex(0),
-                tex(1),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
+            entries: &[tex(0), tex(1), fragment_sampler_entry(2)],
         });
         let parent_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("parent textures"),
