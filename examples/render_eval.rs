@@ -5,7 +5,8 @@
 //! draped at the exact hit points).
 //!
 //! ```text
-//! cargo run --release --example render_eval -- OUT [--scene demo|tall] [--max-error M]
+//! cargo run --release --example render_eval -- OUT [--scene demo|tall] [--seed N]
+//!     [--relief PLATEAU,CANYON,ESCARPMENT] [--photo-distance F] [--max-error M]
 //!     [--cell-texels T] [--mixed-resolution] [--photo-width W] [--photo-supersample N]
 //!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
@@ -15,6 +16,9 @@
 //!     [--register [--include-unregistered] [--textures active|best]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
 //! ```
+//! `--seed`, `--relief` (wall heights, m) and `--photo-distance` (factor on the cameras'
+//! distances) change the chosen scene into one no one has tuned on (docs/evaluation.md,
+//! "Scenes no one tuned on").
 //! `--second-photos` projects and scores second photos of the demo photos' targets taken
 //! elsewhere (`DemoScene::second_shots`) instead of the demo photos; with `--register` the
 //! demo photos (exact) are `--known` anchors the second photos are resected against.

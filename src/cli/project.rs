@@ -60,6 +60,12 @@ pub struct Args {
     /// lone photo needs no map); 0 switches it off.
     #[arg(long, default_value_t = 2.0, value_name = "PX")]
     pub occlusion_margin: f64,
+    /// Border feather: a photo's pixels within F × its shorter side of the image's edge
+    /// fade out, in [0, 0.5]. Default 0: a photo's colour reaches the edge of its frame, as
+    /// ideal projective texturing's does (0.01, the default before 2026-12-06, cost up to 9 % of
+    /// the photos' gain; docs/projection.md, "Confidence and resolution").
+    #[arg(long, default_value_t = 0.0, value_name = "F")]
+    pub feather: f64,
     /// Colour space photo colours are averaged and blended in.
     #[arg(long, default_value = "linear", value_parser = ["linear", "srgb"])]
     pub colour_space: String,
@@ -119,6 +125,7 @@ pub fn options(a: &Args) -> ProjectOptions {
         },
         confidence: cliffmap::photo::ConfidenceParams {
             occlusion_margin_px: a.occlusion_margin,
+            feather: a.feather,
             ..Default::default()
         },
         png_compression: a.png_compression,

@@ -3,8 +3,8 @@
 //!
 //! - **Border feather** (per photo pixel): `smoothstep(d / (feather · min(w, h)))` with `d`
 //!   the distance (pixels) from the pixel centre to the nearest image edge, so photo coverage
-//!   fades out towards the image border instead of ending in a seam (and vignetting is
-//!   avoided).
+//!   can fade out towards the image border instead of ending in a seam. Off by default
+//!   (`feather` 0): every band measured handed photo detail to a coarser source.
 //! - **Coverage confidence** (per texel and photo): the feathered fraction of the texel the
 //!   photo's footprints cover, `Σ a·φ / max(1, Σ a)` ([`super::accumulate`]). The weight of
 //!   photo colour rises with it along [`ConfidenceParams::blend_weight`], a smoothstep ramp
@@ -28,8 +28,10 @@ use crate::error::{Error, Result};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConfidenceParams {
     /// Width of the border feather as a fraction of the image's shorter side, in [0, 0.5]
-    /// (0 = no feather). Default 0.01 (12 px of a 1200-px photo: a 5 % band cost 2–10 % of
-    /// the photos' gain in the render-space evaluation, docs/evaluation.md).
+    /// (0 = no feather: coverage still fades over the last texel through the coverage ramp).
+    /// Default 0: in the render-space evaluation (docs/evaluation.md) every band cost
+    /// photo detail, 5 % of the shorter side 2–10 % of the oracle's gain and 1 % (the
+    /// default until 2026-12-06) up to 9 %, since it hands a photo's edge to a coarser source.
     pub feather: f64,
     /// Coverage confidence at which photo colour starts to count, and at which it counts
     /// fully; `0 <= ramp[0] < ramp[1] <= 1`. Default `[0.05, 0.35]`.
@@ -53,7 +55,7 @@ pub struct ConfidenceParams {
 impl Default for ConfidenceParams {
     fn default() -> Self {
         ConfidenceParams {
-            feather: 0.01,
+            feather: 0.0,
             ramp: [0.05, 0.35],
             resolution_ramp: [0.0, 2.0],
             sharpness_power: 4.0,
@@ -241,7 +243,10 @@ mod tests {
     fn terms_and_ramps() {
         let p = ConfidenceParams::default();
         p.validate().unwrap();
-        // the border pixel is (almost) untrusted, and the feather rises monotonically
+        // no band by default: every pixel, the border one too, counts fully
+        assert_eq!(p.border_term([0, 400], 1000, 800), 1.0);
+        // with a band the border pixel is (almost) untrusted, and the feather rises monotonically
+        let p = ConfidenceParams { feather: 0.01, ..p };
         assert!(p.border_term([0, 400], 1000, 800) < 0.02);
         let f: Vec<f64> = (0..50)
             .map(|c| p.border_term([c, 400], 1000, 800))
@@ -301,7 +306,7 @@ mod tests {
         let d = ConfidenceParams::default();
         for p in [
             d,
-            ConfidenceParams { feather: 0.0, ..d },
+            ConfidenceParams { feather: 0.01, ..d },
             ConfidenceParams { feather: 0.5, ..d },
         ] {
             for (w, h) in [(1000u32, 800u32), (7, 300), (1, 1)] {
