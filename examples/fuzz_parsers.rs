@@ -7,8 +7,7 @@
 //! fuzz/crashes/NAME-*.bin. `--write-corpus` writes the generated seeds to fuzz/corpus/NAME/.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
-mod common;
+mod common; // its own `#![allow(dead_code)]` covers the helpers this example does not use
 #[path = "../tests/fuzz/mod.rs"]
 mod fuzz;
 
