@@ -8,13 +8,18 @@
 //!
 //! ```text
 //! cargo run --release --example register_score_profile -- STORE PHOTOS.json NAME [STEP_DEG] [N]
-//!     [--truth demo|tall [--blur M | --ortho DX,DY]] [--binary | --no-grey | --steep-no-grey]
+//!     [--truth demo|tall [--seed N] [--relief P,C,E] [--blur M | --ortho DX,DY]]
+//!     [--binary | --no-grey | --steep-no-grey]
 //! ```
 //! `--truth`: the samples' greys from the scene's true colour at their points (`--blur M`:
 //! averaged over an M × M box on the true surface; `--ortho DX,DY`: from the scene's ortho,
 //! bilinear, shifted by DX, DY metres). `--binary`: labels sky or terrain only;
 //! `--no-grey`: without the grey; `--steep-no-grey`: without it on steep samples.
 //! PHOTOS.json: a photo list with exact cameras (e.g. `render_eval`'s `OUT/photos/photos.json`).
+#[path = "bench_util/scene_args.rs"]
+#[allow(dead_code)] // this example uses only `scene_overrides`
+mod scene_args;
+
 use cliffmap::register::CameraParams;
 use cliffmap::register::terrain::{GREY_CLASSES, GreyImage, SKY, Sample, TerrainScene, nmi};
 
@@ -40,17 +45,20 @@ fn main() -> anyhow::Result<()> {
     // --truth demo|tall: grey labels from the scene's solid texture at each sample's point
     // instead of the store's texture (geometry and classes kept)
     if let Some(i) = a.iter().position(|x| x == "--truth") {
-        let scene = match a.get(i + 1).map(String::as_str) {
-            Some("tall") => cliffmap::scene::DemoScene::tall_walls(),
-            _ => cliffmap::scene::DemoScene::default(),
-        };
-        let colour = scene.surface_colour_fn();
-        let (dem, ortho_image) = scene.generate()?;
         let flag = |name: &str| {
             a.iter()
                 .position(|x| x == name)
                 .map(|j| a.get(j + 1).map_or("", String::as_str))
         };
+        let scene = scene_args::scene_overrides(
+            match a.get(i + 1).map(String::as_str) {
+                Some("tall") => cliffmap::scene::DemoScene::tall_walls(),
+                _ => cliffmap::scene::DemoScene::default(),
+            },
+            flag,
+        )?;
+        let colour = scene.surface_colour_fn();
+        let (dem, ortho_image) = scene.generate()?;
         let blur: f64 = flag("--blur").map_or(Ok(0.0), str::parse)?;
         // --ortho DX,DY: grey from the scene's ortho image (bilinear, shifted by DX, DY m)
         let ortho = match flag("--ortho") {

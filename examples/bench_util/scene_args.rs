@@ -54,35 +54,44 @@ impl SceneArgs {
     /// tuned on: `--seed N` (the noise), `--relief PLATEAU,CANYON,ESCARPMENT` (wall heights,
     /// metres), `--photo-distance F` (factor on the cameras' distances).
     pub fn scene(&self) -> anyhow::Result<DemoScene> {
-        let mut scene = match self.flag("--scene").unwrap_or("demo") {
+        let scene = match self.flag("--scene").unwrap_or("demo") {
             "demo" => DemoScene::default(),
             "tall" => DemoScene::tall_walls(),
             s => anyhow::bail!("unknown --scene {s} (demo or tall)"),
         };
-        if let Some(seed) = self.flag("--seed") {
-            scene.seed = seed.parse()?;
-        }
-        if let Some(r) = self.flag("--relief") {
-            let h: Vec<f64> = r.split(',').map(str::parse).collect::<Result<_, _>>()?;
-            anyhow::ensure!(
-                h.len() == 3 && h.iter().all(|v| v.is_finite() && *v >= 0.0),
-                "--relief wants PLATEAU,CANYON,ESCARPMENT metres (>= 0), not {r:?}"
-            );
-            scene.relief = cliffmap::scene::Relief {
-                plateau: h[0],
-                canyon: h[1],
-                escarpment: h[2],
-            };
-        }
-        if let Some(f) = self.flag("--photo-distance") {
-            scene.photo_distance = f.parse()?;
-            anyhow::ensure!(
-                scene.photo_distance.is_finite() && scene.photo_distance > 0.0,
-                "--photo-distance wants a factor > 0, not {f:?}"
-            );
-        }
-        Ok(scene)
+        scene_overrides(scene, |n| self.flag(n))
     }
+}
+
+/// `scene` with the overrides `--seed N`, `--relief PLATEAU,CANYON,ESCARPMENT` and
+/// `--photo-distance F` that `flag` finds applied.
+pub fn scene_overrides<'a>(
+    mut scene: DemoScene,
+    flag: impl Fn(&str) -> Option<&'a str>,
+) -> anyhow::Result<DemoScene> {
+    if let Some(seed) = flag("--seed") {
+        scene.seed = seed.parse()?;
+    }
+    if let Some(r) = flag("--relief") {
+        let h: Vec<f64> = r.split(',').map(str::parse).collect::<Result<_, _>>()?;
+        anyhow::ensure!(
+            h.len() == 3 && h.iter().all(|v| v.is_finite() && *v >= 0.0),
+            "--relief wants PLATEAU,CANYON,ESCARPMENT metres (>= 0), not {r:?}"
+        );
+        scene.relief = cliffmap::scene::Relief {
+            plateau: h[0],
+            canyon: h[1],
+            escarpment: h[2],
+        };
+    }
+    if let Some(f) = flag("--photo-distance") {
+        scene.photo_distance = f.parse()?;
+        anyhow::ensure!(
+            scene.photo_distance.is_finite() && scene.photo_distance > 0.0,
+            "--photo-distance wants a factor > 0, not {f:?}"
+        );
+    }
+    Ok(scene)
 }
 
 /// The setting of the benchmarks that place a second photo of each demo photo's target
