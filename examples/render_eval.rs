@@ -11,7 +11,7 @@
 //!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
-//!     [--render-supersample N] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
+//!     [--render-supersample N] [--no-relief-mapping] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
 //!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--known-focal]
 //!     [--register [--include-unregistered] [--textures active|best]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
@@ -322,6 +322,7 @@ fn main() -> anyhow::Result<()> {
         supersample: ss,
         render_supersample: flag("--render-supersample").unwrap_or("2").parse()?,
         sigma_px: sigma,
+        relief: !has("--no-relief-mapping"),
         ..EvalOptions::default()
     };
     let t = Instant::now();

@@ -6,7 +6,8 @@
 //! sample of the cell. [`LevelBorders`] holds the simplified cell sides of one level, shared
 //! by neighbouring cells so their TINs are crack-free. Per-cell images: [`ortho_texture`]
 //! (RGBA colour + coverage) and [`normal_map`] (world-frame normals from the
-//! full-resolution DEM), both covering the cell's [`nominal_extent`].
+//! full-resolution DEM) and [`relief_map`] (the DEM's height above the cell's TIN), all
+//! covering the cell's [`nominal_extent`].
 //!
 //! Entry points: [`build_level`] (all cells of a level, parallel), [`build_tin`] (one
 //! rectangle with a given border), [`build_dem_tin`] (one TIN for the whole DEM) and
@@ -19,6 +20,7 @@ mod halfedge;
 pub mod normals;
 mod quadtree;
 mod raster;
+pub mod relief;
 #[cfg(target_arch = "x86_64")]
 mod scan_x4;
 mod taps;
@@ -30,6 +32,7 @@ pub use border::{LevelBorders, simplify_rect_border};
 pub use extent::{clipped_extent, nominal_extent};
 pub use normals::normal_map;
 pub use quadtree::{CellKey, Quadtree, SampleRect};
+pub use relief::{ReliefMap, relief_map};
 pub use texture::ortho_texture;
 pub use tin::{build_dem_tin, build_level, build_tin, level_epsilon, measure_max_error};
 

@@ -46,6 +46,10 @@ pub struct Args {
     /// distorted like the photo, pixel for pixel).
     #[arg(long)]
     no_distortion: bool,
+    /// Look textures up where the view ray meets the TIN, not where it meets the DEM surface
+    /// the store's relief maps describe (relief mapping is on by default; docs/rendering.md).
+    #[arg(long)]
+    no_relief: bool,
     /// Samples per pixel side (1..=4): the frame is rendered this many times larger and
     /// averaged in linear light (the LOD stays that of the output size).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=4))]
@@ -148,6 +152,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         } else {
             DistortionMode::Auto
         },
+        relief: !a.no_relief,
         ..Default::default()
     };
     let mut scene = TerrainScene::open(&a.store, w, h, opts)?;

@@ -32,7 +32,7 @@ pub use reference::{
     VISIBILITY_TOLERANCE_REL, finest_photo, finest_photo_with, oracle_colour, ortho_colour,
     reference_images,
 };
-pub use render::render_views;
+pub use render::{render_views, render_views_relief};
 pub use run::{
     EvalOptions, MODES, TIN_BASELINE, TIN_ORACLE, ViewImages, evaluate_views, write_view_images,
 };

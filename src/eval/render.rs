@@ -20,6 +20,18 @@ pub fn render_views(
     sse_px: f64,
     supersample: u32,
 ) -> Result<Vec<Vec<RgbImage>>> {
+    render_views_relief(dir, cameras, modes, sse_px, supersample, true)
+}
+
+/// [`render_views`] with relief mapping on or off ([`SceneOptions::relief`]).
+pub fn render_views_relief(
+    dir: &Path,
+    cameras: &[CameraModel],
+    modes: &[UvMode],
+    sse_px: f64,
+    supersample: u32,
+    relief: bool,
+) -> Result<Vec<Vec<RgbImage>>> {
     let Some(first) = cameras.first() else {
         return Ok(vec![Vec::new(); modes.len()]);
     };
@@ -40,6 +52,7 @@ pub fn render_views(
                 lit: false,
                 ..FrameOptions::default()
             },
+            relief,
             ..SceneOptions::default()
         };
         let mut scene = TerrainScene::open(dir, w * s, h * s, opts)?;

@@ -6,7 +6,7 @@ use std::path::Path;
 use image::RgbImage;
 
 use super::reference::{Reference, ReferenceSources, reference_images};
-use super::render::render_views;
+use super::render::render_views_relief;
 use super::score::{ViewReport, score_view};
 use super::tin::{TinTracer, tin_references};
 use crate::error::Result;
@@ -42,6 +42,9 @@ pub struct EvalOptions {
     /// Also score the references on the store's finest TIN: the ortho draped on it (method
     /// `tin_baseline`) and ideal projective texturing through it (method `tin_oracle`).
     pub tin_baseline: bool,
+    /// Relief mapping in cliffmap's renders ([`crate::render::SceneOptions::relief`]).
+    /// Default on, as `cliffmap render`.
+    pub relief: bool,
 }
 
 impl Default for EvalOptions {
@@ -52,6 +55,7 @@ impl Default for EvalOptions {
             sse_px: 0.5,
             sigma_px: 2.0,
             tin_baseline: true,
+            relief: true,
         }
     }
 }
@@ -77,12 +81,13 @@ pub fn evaluate_views(
     opts: &EvalOptions,
 ) -> Result<(Vec<ViewReport>, Vec<ViewImages>)> {
     let cams: Vec<_> = views.iter().map(|v| v.camera).collect();
-    let renders = render_views(
+    let renders = render_views_relief(
         dir,
         &cams,
         &MODES.map(|m| m.1),
         opts.sse_px,
         opts.render_supersample,
+        opts.relief,
     )?;
     let tin = if opts.tin_baseline {
         let store = Store::open(dir)?;

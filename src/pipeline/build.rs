@@ -368,7 +368,8 @@ fn resume_record(out: &Path, key: CellKey) -> Option<CellRecord> {
     let f = &rec.files;
     (rec.key() == key
         && [&f.mesh, &f.texture, &f.normal]
-            .iter()
+            .into_iter()
+            .chain(rec.relief.as_ref().map(|r| &r.file))
             .all(|r| store::is_intact(out, r)))
     .then_some(rec)
 }
@@ -399,6 +400,16 @@ fn build_cell(
     let extent = cells::nominal_extent(tree, &dem.georef, key);
     let texture = cells::ortho_texture(ortho, dem, extent, opts.cell_texels);
     let normal = cells::normal_map(dem, extent, opts.cell_texels);
+    // at most twice the measured TIN error (cells::relief: walls would waste the 8 bits)
+    let relief_limit = 2.0 * eps.max(tin.max_error);
+    let relief = cells::relief_map(
+        dem,
+        extent,
+        opts.cell_texels,
+        &lm.mesh,
+        lm.origin,
+        relief_limit,
+    );
     let cell_stats = stats::cell_stats(dem, tree, key, &tin, opts.cell_texels);
 
     let stem = cell_stem(key.level, key.x, key.y);
@@ -408,6 +419,12 @@ fn build_cell(
         out,
         &format!("{stem}.normal.png"),
         &normal,
+        opts.png_compression,
+    )?;
+    let relief_ref = write_png(
+        out,
+        &format!("{stem}.relief.png"),
+        &relief.image,
         opts.png_compression,
     )?;
     let rec = CellRecord {
@@ -435,6 +452,10 @@ fn build_cell(
         stats: cell_stats,
         reparam: None,
         photo: None,
+        relief: Some(store::ReliefRecord {
+            file: relief_ref,
+            range_m: relief.range_m,
+        }),
     };
     write_atomic(
         &out.join(format!("{stem}.json")),

@@ -13,8 +13,11 @@ pub struct CellData {
     /// Colour texture, full mip chain (level 0 first, down to 1×1, averaged in linear light),
     /// sRGB RGBA8.
     pub colour_mips: Vec<image::RgbaImage>,
-    /// Normal map (RGB in the cell-local frame, n·0.5+0.5; A = 255), full mip chain.
+    /// Normal map (RGB in the cell-local frame, n·0.5+0.5), full mip chain; A = 255, or with
+    /// a relief map ([`CellData::set_relief`]) its encoded height of the DEM above the TIN.
     pub normal_mips: Vec<image::RgbaImage>,
+    /// Largest height of the relief map in the normal map's alpha, metres (0: no relief).
+    pub relief_m: f32,
     /// Geomorphing data (towards the parent cell), when the scene morphs and the cell has a parent.
     pub morph: Option<MorphData>,
 }
@@ -74,8 +77,34 @@ impl CellData {
             uvs,
             colour_mips: colour_mip_chain(colour),
             normal_mips: mip_chain(normal),
+            relief_m: 0.0,
             morph: None,
         }
+    }
+
+    /// Puts `relief` (the cell's relief map, orthographic layout) into the normal map's alpha
+    /// and its range into [`CellData::relief_m`], for relief mapping. Only for cells drawn with
+    /// orthographic texture coordinates (`uvs` is `None`); a map whose size differs from the
+    /// normal map's is resampled to it (nearest texel).
+    pub fn set_relief(&mut self, relief: &crate::cells::ReliefMap) {
+        if self.uvs.is_some() || relief.range_m <= 0.0 || self.normal_mips.is_empty() {
+            return;
+        }
+        let mut base = self.normal_mips[0].clone();
+        let (w, h) = base.dimensions();
+        let (rw, rh) = relief.image.dimensions();
+        if rw == 0 || rh == 0 {
+            return;
+        }
+        for (x, y, p) in base.enumerate_pixels_mut() {
+            let (rx, ry) = (
+                ((x as u64 * rw as u64) / w as u64) as u32,
+                ((y as u64 * rh as u64) / h as u64) as u32,
+            );
+            p.0[3] = relief.image.get_pixel(rx, ry).0[0];
+        }
+        self.normal_mips = mip_chain(base);
+        self.relief_m = relief.range_m as f32;
     }
 }
 

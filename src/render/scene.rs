@@ -42,6 +42,10 @@ pub struct SceneOptions {
     pub geomorph: GeomorphOptions,
     /// When the camera's radial distortion is applied (default: when it has one).
     pub distortion: DistortionMode,
+    /// Relief mapping (default on): on cells drawn with orthographic texture coordinates
+    /// that have a relief map, textures are looked up where the view ray meets the DEM
+    /// surface (the TIN plus the relief map) instead of where it meets the TIN.
+    pub relief: bool,
 }
 
 impl Default for SceneOptions {
@@ -55,6 +59,7 @@ impl Default for SceneOptions {
             frame: FrameOptions::default(),
             geomorph: GeomorphOptions::default(),
             distortion: DistortionMode::Auto,
+            relief: true,
         }
     }
 }
@@ -164,6 +169,7 @@ impl TerrainScene {
         let loader_store = Arc::clone(store);
         let index = index.clone();
         let (mode, overlay, morph) = (opts.uv_mode, opts.overlay, opts.geomorph.enabled);
+        let relief = opts.relief;
         Streamer::new(opts.loader_threads, move |i| {
             let st = &loader_store;
             let rec = &st.manifest.cells[i];
@@ -202,7 +208,22 @@ impl TerrainScene {
                 }
                 None => None,
             };
+            // The relief map is in the orthographic layout: used where the cell is drawn with
+            // orthographic texture coordinates.
+            let ortho_drawn = match mode {
+                UvMode::Ortho => true,
+                UvMode::Mixed | UvMode::Photo => rec.reparam.is_none(),
+                UvMode::Reparam => false,
+            };
+            let relief_map = if relief && ortho_drawn {
+                st.read_relief_map(rec)?
+            } else {
+                None
+            };
             let mut data = CellData::new(rec, mesh, colour, normal, mode);
+            if let Some(r) = relief_map {
+                data.set_relief(&r);
+            }
             data.morph = morph_data;
             Ok(data)
         })

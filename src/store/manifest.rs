@@ -90,6 +90,20 @@ pub struct CellRecord {
     /// The photo-enhanced texture, if `cliffmap project` wrote one for this cell.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub photo: Option<PhotoCellRecord>,
+    /// The DEM's height above the cell's TIN (absent in stores built before 2026-12-06).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relief: Option<ReliefRecord>,
+}
+
+/// A cell's relief map ([`crate::cells::relief`]): per texel of the nominal square (the
+/// orthographic layout, `CellRecord::texels` square), the height of the full-resolution DEM
+/// surface above the cell's TIN at the texel centre.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReliefRecord {
+    /// 8-bit greyscale PNG: `height = (v / 255 · 2 − 1) · range_m`.
+    pub file: FileRef,
+    /// Largest absolute height of the map, world units (0: the TIN is exact at every texel).
+    pub range_m: f64,
 }
 
 /// A cell's photo-enhanced texture: the active parameterization's texture (reparameterized

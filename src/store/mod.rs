@@ -11,6 +11,7 @@
 //! STORE/cells/{level}/{x}-{y}.mesh        CellMesh (binary, cell-local f32)
 //! STORE/cells/{level}/{x}-{y}.png         RGBA8 colour texture
 //! STORE/cells/{level}/{x}-{y}.normal.png  RGB8 normal map
+//! STORE/cells/{level}/{x}-{y}.relief.png  L8 height of the DEM above the TIN (`ReliefRecord`)
 //! STORE/cells/{level}/{x}-{y}.json        CellRecord of a finished cell (resume marker)
 //! STORE/cells/{level}/{x}-{y}.photo.png       RGBA8 photo-enhanced texture (`cliffmap project`;
 //!                                             the atlas of its blocks, see `photo_texture`)
@@ -33,8 +34,8 @@ pub use files::{crc32_hex, is_intact, read_verified, write_file};
 pub use lock::StoreLock;
 pub use manifest::{
     CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, PhotoCellRecord,
-    PhotoLevelReport, PhotoReport, PhotoSettings, ReparamRecord, ReparamSettings, STORE_FORMAT,
-    STORE_VERSION,
+    PhotoLevelReport, PhotoReport, PhotoSettings, ReliefRecord, ReparamRecord, ReparamSettings,
+    STORE_FORMAT, STORE_VERSION,
 };
 pub use mesh::CellMesh;
 pub use obj::obj_text;
@@ -129,6 +130,35 @@ impl Store {
     /// Reads and verifies a cell's normal map.
     pub fn read_normal_map(&self, rec: &CellRecord) -> Result<image::RgbImage> {
         self.read_png(&rec.files.normal).map(|i| i.to_rgb8())
+    }
+
+    /// Reads and verifies a cell's relief map (`None` for a cell without one), checked to be
+    /// the orthographic layout's `rec.texels` square.
+    pub fn read_relief_map(&self, rec: &CellRecord) -> Result<Option<crate::cells::ReliefMap>> {
+        let Some(r) = &rec.relief else {
+            return Ok(None);
+        };
+        let image = self.read_png(&r.file)?.to_luma8();
+        if image.dimensions() != (rec.texels, rec.texels)
+            || !(r.range_m.is_finite() && r.range_m >= 0.0)
+        {
+            return Err(Error::store(
+                self.dir.join(&r.file.path),
+                format!(
+                    "relief map of cell {} is {}x{} with range {} m; expected {}x{} and a finite range >= 0",
+                    rec.id,
+                    image.width(),
+                    image.height(),
+                    r.range_m,
+                    rec.texels,
+                    rec.texels
+                ),
+            ));
+        }
+        Ok(Some(crate::cells::ReliefMap {
+            image,
+            range_m: r.range_m,
+        }))
     }
 
     /// Reads and verifies a cell's photo-enhanced texture and its confidence map (photo

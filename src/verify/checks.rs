@@ -69,6 +69,9 @@ pub fn verify_store(dir: &Path) -> VerifyReport {
         check_mesh(dir, c, &f.mesh, Layer::Base, false, &mut rep);
         check_png(dir, c, &f.texture, Layer::Base, c.texels, &mut rep);
         check_png(dir, c, &f.normal, Layer::Base, c.texels, &mut rep);
+        if let Some(r) = &c.relief {
+            check_png(dir, c, &r.file, Layer::Base, c.texels, &mut rep);
+        }
         if let Some(r) = &c.reparam {
             check_mesh(dir, c, &r.files.mesh, Layer::Reparam, true, &mut rep);
             check_png(dir, c, &r.files.texture, Layer::Reparam, r.texels, &mut rep);

@@ -85,6 +85,7 @@ pub fn record(s: &Synth, key: CellKey) -> CellRecord {
         stats: Default::default(),
         reparam: None,
         photo: None,
+        relief: None,
     }
 }
 

@@ -68,6 +68,9 @@ impl TerrainRenderer {
                 v.extend_from_slice(&level_tint(c.level));
                 let has_parent = f32::from(u8::from(d.parent.is_some()));
                 v.extend_from_slice(&[morph_of(d), c.mip_shift[0], c.mip_shift[1], has_parent]);
+                // relief: range (0 = off) and the eye in the cell-local frame (f64 difference)
+                let eye = (cam.model.position - c.origin).as_vec3();
+                v.extend_from_slice(&[c.relief_m, eye.x, eye.y, eye.z]);
                 let b = f32_bytes(&v);
                 bytes[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
                     .copy_from_slice(&b);

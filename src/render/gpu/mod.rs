@@ -19,8 +19,8 @@ use super::target::RenderTarget;
 pub use super::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::error::{Error, Result};
 
-/// Bytes of the shader's per-draw `Draw` uniform (mvp, extent, tint, morph).
-const DRAW_BYTES: u64 = 112;
+/// Bytes of the shader's per-draw `Draw` uniform (mvp, extent, tint, morph, relief).
+const DRAW_BYTES: u64 = 128;
 /// Byte stride of the per-draw uniform slots (the dynamic-offset alignment wgpu guarantees).
 const DRAW_STRIDE: u64 = 256;
 
@@ -42,6 +42,8 @@ pub struct GpuCell {
     pub extent_rel: [f32; 4],
     /// Quadtree level (for the overlay).
     pub level: u8,
+    /// Range of the relief map in the normal map's alpha, metres (0: no relief mapping).
+    pub relief_m: f32,
     /// Triangles drawn (surface + skirt).
     pub triangles: u32,
     /// GPU bytes held (buffers and textures with mips).

@@ -204,6 +204,7 @@ impl TerrainRenderer {
                 e.height() as f32,
             ],
             level: rec.level,
+            relief_m: data.relief_m,
             triangles: data.mesh.triangles.len() as u32,
             bytes,
         })

@@ -19,6 +19,9 @@ struct Draw {
     // textures); w = 1 if the parent's textures are bound (group 2), else y / z = LOD shift of
     // the colour texture / normal map to the parent's texel density, mip levels (fallback).
     morph: vec4<f32>,
+    // Relief mapping: x = range of the relief map in the normal map's alpha, metres (0: off;
+    // only cells drawn with orthographic texture coordinates); yzw = the eye, cell-local.
+    relief: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -35,15 +38,23 @@ struct VOut {
     @location(0) uv: vec2<f32>,
     // The parent's texture coordinates of the same surface point (geomorphing only).
     @location(1) puv: vec2<f32>,
+    // The drawn surface point, cell-local metres (relief mapping).
+    @location(2) lp: vec3<f32>,
 };
 
-// Orthographic cells: u east, v south over the nominal square.
+// Orthographic texture coordinates of a cell-local point: u east, v south over the nominal square.
+fn planar_uv(p: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>((p.x - draw.extent.x) / draw.extent.z, (draw.extent.y - p.y) / draw.extent.w);
+}
+
+// Orthographic cells.
 @vertex
 fn vs_ortho(@location(0) p: vec3<f32>) -> VOut {
     var o: VOut;
     o.pos = draw.mvp * vec4<f32>(p, 1.0);
-    o.uv = vec2<f32>((p.x - draw.extent.x) / draw.extent.z, (draw.extent.y - p.y) / draw.extent.w);
+    o.uv = planar_uv(p.xy);
     o.puv = o.uv;
+    o.lp = p;
     return o;
 }
 
@@ -54,6 +65,7 @@ fn vs_uv(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>) -> VOut {
     o.pos = draw.mvp * vec4<f32>(p, 1.0);
     o.uv = uv;
     o.puv = uv;
+    o.lp = p;
     return o;
 }
 
@@ -64,8 +76,9 @@ fn vs_ortho_morph(@location(0) p: vec3<f32>, @location(2) m: vec3<f32>) -> VOut 
     var o: VOut;
     let q = vec3<f32>(p.xy, mix(p.z, m.x, draw.morph.x));
     o.pos = draw.mvp * vec4<f32>(q, 1.0);
-    o.uv = vec2<f32>((p.x - draw.extent.x) / draw.extent.z, (draw.extent.y - p.y) / draw.extent.w);
+    o.uv = planar_uv(p.xy);
     o.puv = m.yz;
+    o.lp = q;
     return o;
 }
 
@@ -76,6 +89,7 @@ fn vs_uv_morph(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>, @location(
     o.pos = draw.mvp * vec4<f32>(q, 1.0);
     o.uv = uv;
     o.puv = m.yz;
+    o.lp = q;
     return o;
 }
 
@@ -95,27 +109,125 @@ fn morph_grad_scale(gx: vec2<f32>, gy: vec2<f32>, size: vec2<f32>, shift: f32, t
     return exp2(t * max(shift - lod, 0.0));
 }
 
+// The relief map's height (metres above the TIN) at cell-local point `p`.
+fn relief_at(p: vec2<f32>, range: f32) -> f32 {
+    // bilinear between texel centres by hand: four loads (cheaper than a filtered sample
+    // under software rasterizers, whose sampler is anisotropic)
+    let size = vec2<i32>(textureDimensions(normal_tex, 0));
+    let x = planar_uv(p) * vec2<f32>(size) - vec2<f32>(0.5);
+    let x0 = floor(x);
+    let w = x - x0;
+    let hi = size - vec2<i32>(1);
+    let i0 = clamp(vec2<i32>(x0), vec2<i32>(0), hi);
+    let i1 = clamp(vec2<i32>(x0) + vec2<i32>(1), vec2<i32>(0), hi);
+    let a00 = textureLoad(normal_tex, i0, 0).a;
+    let a10 = textureLoad(normal_tex, vec2<i32>(i1.x, i0.y), 0).a;
+    let a01 = textureLoad(normal_tex, vec2<i32>(i0.x, i1.y), 0).a;
+    let a11 = textureLoad(normal_tex, i1, 0).a;
+    let v = mix(mix(a00, a10, w.x), mix(a01, a11, w.x), w.y);
+    return (v * 2.0 - 1.0) * range;
+}
+
+// Relief mapping: the orthographic texture coordinates of the point where the ray from the
+// eye through the drawn point `lp` (on the TIN triangle of unit upward normal `n`) meets the
+// surface "TIN plane + relief", the relief map (alpha of the normal map: the DEM's height
+// above the TIN, within ±`range` metres) searched between the ray's heights +range and
+// −range above the triangle's plane in steps of about 4 texels, the first crossing refined
+// by false position. Steep triangles, rays along the plane and fragments where the hit can move
+// less than a quarter of the pixel's `footprint` (metres) keep `lp`'s coordinates.
+fn relief_uv(lp: vec3<f32>, n: vec3<f32>, range: f32, footprint: f32) -> vec2<f32> {
+    let d = lp - draw.relief.yzw;
+    // height above the plane gained per unit of s along p(s) = lp + s·d (s = 0 at lp)
+    let k = dot(d, n) / max(n.z, 1e-6);
+    if n.z < 0.25 || k > -1e-4 * length(d) {
+        return planar_uv(lp.xy);
+    }
+    let s0 = range / k;
+    let s1 = -range / k;
+    // The hit moves at most half the search's ground span from lp: skip what no pixel shows.
+    let ground_span = abs(s1 - s0) * length(d.xy);
+    if 0.5 * ground_span < 0.25 * footprint {
+        return planar_uv(lp.xy);
+    }
+    // A coarse search (steps of about 4 texels of the relief map, at most 8) brackets the
+    // first crossing; two false-position steps inside the bracket refine it.
+    let size = vec2<f32>(textureDimensions(normal_tex, 0));
+    let span = abs(s1 - s0) * length(d.xy / draw.extent.zw * size);
+    // Far beyond the drawn triangle the TIN bends away from its plane: searches longer than
+    // 48 texels of the relief map (very grazing rays) are left out (docs/rendering.md).
+    if span > 48.0 {
+        return planar_uv(lp.xy);
+    }
+    let steps = i32(clamp(ceil(span / 4.0), 1.0, 8.0));
+    var a = s0;
+    var fa = 0.0;
+    var b = s1;
+    var fb = -1.0;
+    for (var j = 0; j <= steps; j = j + 1) {
+        let s = mix(s0, s1, f32(j) / f32(steps));
+        let f = s * k - relief_at(lp.xy + s * d.xy, range);
+        if f <= 0.0 {
+            b = s;
+            fb = f;
+            break;
+        }
+        a = s;
+        fa = f;
+    }
+    var hit = b;
+    if fa > 0.0 {
+        for (var j = 0; j < 2; j = j + 1) {
+            let s = a + (b - a) * fa / max(fa - fb, 1e-12);
+            let f = s * k - relief_at(lp.xy + s * d.xy, range);
+            if f > 0.0 {
+                a = s;
+                fa = f;
+            } else {
+                b = s;
+                fb = f;
+            }
+        }
+        hit = a + (b - a) * fa / max(fa - fb, 1e-12);
+    }
+    return planar_uv(lp.xy + hit * d.xy);
+}
+
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     var c: vec4<f32>;
     var n_raw: vec3<f32>;
     let t = draw.morph.x;
+    // Derivatives first (uniform control flow): texture coordinates, the triangle's normal.
+    let gx = dpdx(i.uv);
+    let gy = dpdy(i.uv);
+    let px = dpdx(i.lp);
+    let py = dpdy(i.lp);
+    var nf = cross(px, py);
+    if nf.z < 0.0 {
+        nf = -nf;
+    }
+    let range = draw.relief.x * (1.0 - t);
+    var uv = i.uv;
+    if range > 0.0 && dot(nf, nf) > 0.0 {
+        uv = relief_uv(i.lp, normalize(nf), range, max(length(px), length(py)));
+    }
     if t > 0.0 && draw.morph.w > 0.5 {
         // Blend towards the parent's textures at the same surface point.
-        let cc = textureSample(colour_tex, samp, i.uv);
+        let cc = textureSampleGrad(colour_tex, samp, uv, gx, gy);
         let cp = textureSample(parent_colour, samp, i.puv);
         c = mix(cc, cp, t);
-        let nc = textureSample(normal_tex, samp, i.uv).xyz;
+        let nc = textureSampleGrad(normal_tex, samp, uv, gx, gy).xyz;
         let np = textureSample(parent_normal, samp, i.puv).xyz;
         n_raw = mix(nc, np, t) * 2.0 - vec3<f32>(1.0);
     } else if t > 0.0 {
         // Parent not resident: the cell's own textures at up to the parent's texel density.
-        let gx = dpdx(i.uv);
-        let gy = dpdy(i.uv);
         let sc = morph_grad_scale(gx, gy, vec2<f32>(textureDimensions(colour_tex, 0)), draw.morph.y, t);
         let sn = morph_grad_scale(gx, gy, vec2<f32>(textureDimensions(normal_tex, 0)), draw.morph.z, t);
-        c = textureSampleGrad(colour_tex, samp, i.uv, gx * sc, gy * sc);
-        n_raw = textureSampleGrad(normal_tex, samp, i.uv, gx * sn, gy * sn).xyz * 2.0 - vec3<f32>(1.0);
+        c = textureSampleGrad(colour_tex, samp, uv, gx * sc, gy * sc);
+        n_raw = textureSampleGrad(normal_tex, samp, uv, gx * sn, gy * sn).xyz * 2.0 - vec3<f32>(1.0);
+    } else if range > 0.0 {
+        c = textureSampleGrad(colour_tex, samp, uv, gx, gy);
+        n_raw = textureSampleGrad(normal_tex, samp, uv, gx, gy).xyz * 2.0 - vec3<f32>(1.0);
     } else {
         c = textureSample(colour_tex, samp, i.uv);
         n_raw = textureSample(normal_tex, samp, i.uv).xyz * 2.0 - vec3<f32>(1.0);
