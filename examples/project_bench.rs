@@ -19,7 +19,8 @@
 //! `ACCELS` is a comma-separated list of variants `ACCEL[+TEXTURES]`: a `--ray-accel` value,
 //! optionally with the photo texture sizes `fixed` (the cells' own sizes,
 //! `--fixed-photo-texels`), `tpdN` (`--max-texels-per-photo-pixel N`) or `kK`
-//! (`--texels-per-pixel K`); default
+//! (`--texels-per-pixel K`), and a suffix `@tin` projects onto the TIN instead of the relief
+//! surface (`cliffmap project --no-relief`); default
 //! `grid,bvh:fast` (photo-driven sizes, the defaults of `cliffmap project`). The table also
 //! gives the photo texture memory each variant wrote (GPU, RGBA8 with mips) and the bytes
 //! of its photo texture files.
@@ -64,13 +65,14 @@ fn main() -> anyhow::Result<()> {
     let mut disk = vec![0u64; n];
     let mut stages: Vec<Vec<Vec<(String, f64)>>> = vec![Vec::new(); n];
     for run in 0..runs {
-        for (k, (_, accel, texture)) in variants.iter().enumerate() {
+        for (k, (name, accel, texture)) in variants.iter().enumerate() {
             let work = tmp.path().join(format!("run{run}-{k}"));
             bench_util::copy_dir(&dir, &work)?;
             let opts = ProjectOptions {
                 ray: *accel,
                 texture: *texture,
                 quiet: true,
+                onto_relief: !name.ends_with("@tin"),
                 ..ProjectOptions::default()
             };
             let (c0, t0) = (cpu_seconds(), Instant::now());
@@ -142,7 +144,8 @@ fn main() -> anyhow::Result<()> {
 }
 
 /// A variant `ACCEL[+fixed|+tpdN|+kK]` (see the module docs).
-fn parse_variant(v: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptions)> {
+fn parse_variant(name: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptions)> {
+    let v = name.strip_suffix("@tin").unwrap_or(name);
     let (accel, texture) = v.split_once('+').map_or((v, None), |(a, t)| (a, Some(t)));
     let accel =
         RayAccel::parse(accel).ok_or_else(|| anyhow::anyhow!("bad acceleration {accel}"))?;
@@ -163,5 +166,5 @@ fn parse_variant(v: &str) -> anyhow::Result<(String, RayAccel, PhotoTextureOptio
             opts.texels_per_delivered = n;
         }
     }
-    Ok((v.replace(':', " "), accel, opts))
+    Ok((name.replace(':', " "), accel, opts))
 }

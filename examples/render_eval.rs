@@ -11,7 +11,7 @@
 //!     [--view-size WxH] [--supersample N] [--sigma S] [--reuse] [--colour-space srgb]
 //!     [--fixed-photo-texels] [--max-photo-texels N] [--texels-per-pixel K]
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
-//!     [--render-supersample N] [--no-relief-mapping] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
+//!     [--render-supersample N] [--no-relief-mapping] [--project-onto-tin] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
 //!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--known-focal]
 //!     [--register [--include-unregistered] [--textures active|best]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
@@ -256,6 +256,7 @@ fn main() -> anyhow::Result<()> {
         let t = Instant::now();
         let mut popts = ProjectOptions {
             quiet: true,
+            onto_relief: !has("--project-onto-tin"),
             ..ProjectOptions::default()
         };
         if flag("--colour-space") == Some("srgb") {

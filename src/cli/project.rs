@@ -49,6 +49,10 @@ pub struct Args {
     /// Keep every photo texture at its active texture's size (no photo-driven sizes).
     #[arg(long)]
     pub fixed_photo_texels: bool,
+    /// Project onto the TIN, not onto the DEM surface the store's relief maps describe (the
+    /// surface the renderer's relief mapping looks textures up on; docs/projection.md).
+    #[arg(long)]
+    pub no_relief: bool,
     /// Also project photos a registered list marks `"registered": false` (their cameras
     /// could not be confirmed by `cliffmap register`); by default they are left out with a
     /// warning, since a wrong pose makes the terrain worse than no photo.
@@ -123,6 +127,7 @@ pub fn options(a: &Args) -> ProjectOptions {
             texels_per_delivered: a.max_texels_per_photo_pixel,
             coarse_sse_px: a.coarse_sse,
         },
+        onto_relief: !a.no_relief,
         confidence: cliffmap::photo::ConfidenceParams {
             occlusion_margin_px: a.occlusion_margin,
             feather: a.feather,

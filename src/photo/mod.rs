@@ -42,6 +42,7 @@ mod level;
 mod occlusion;
 mod pyramid;
 mod reconstruct;
+mod relief;
 mod samples;
 mod scene;
 mod silhouette;

@@ -63,6 +63,9 @@ pub struct LevelScene {
     /// Per BVH triangle: the BVH triangle across edge k (`v[k] → v[k+1]`) in the same cell,
     /// or [`NO_TRI`].
     adjacency: Vec<[u32; 3]>,
+    /// Per cell (index into `cells`), its relief map when projecting onto the relief surface
+    /// ([`LevelScene::load_reliefs`]); empty: none.
+    reliefs: Vec<Option<super::relief::CellRelief>>,
 }
 
 impl LevelScene {
@@ -111,7 +114,38 @@ impl LevelScene {
             tri_ref,
             info,
             adjacency,
+            reliefs: Vec::new(),
         }
+    }
+
+    /// Loads the relief maps of the cells whose active texture is orthographic (relief maps
+    /// are in that layout) from `store`, so that hits are moved onto the relief surface
+    /// ([`super::relief::CellRelief::project`]). Cells without a relief map (stores built
+    /// before 2026-12-06) keep their TIN hits. Errors name a damaged file.
+    pub fn load_reliefs(&mut self, store: &Store) -> Result<()> {
+        let cells = &store.manifest.cells;
+        self.reliefs = self
+            .cells
+            .par_iter()
+            .map(|c| {
+                let Some(rec) = cells.get(c.cell as usize) else {
+                    return Ok(None);
+                };
+                if rec.reparam.is_some() || c.texels != rec.texels {
+                    return Ok(None);
+                }
+                Ok(store.read_relief_map(rec)?.and_then(|m| {
+                    super::relief::CellRelief::new(&m, rec.extent.width(), rec.extent.height())
+                }))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(())
+    }
+
+    /// The relief map of scene cell `cell`, if loaded.
+    #[inline]
+    pub(crate) fn relief(&self, cell: u32) -> Option<&super::relief::CellRelief> {
+        self.reliefs.get(cell as usize).and_then(|r| r.as_ref())
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of

@@ -201,12 +201,7 @@ impl LevelRun<'_> {
                     cached[pi] = other;
                     let scene = match scenes[pi].take() {
                         Some(scene) => scene,
-                        None => LevelScene::from_store(
-                            self.store,
-                            level as u8,
-                            cam.position,
-                            self.opts.ray,
-                        )?,
+                        None => level_scene(self.store, level as u8, cam.position, self.opts)?,
                     };
                     let mut counts = FootprintSet::default();
                     // with the last photo (a lone one, or the last of several) a cell is
@@ -398,11 +393,11 @@ impl LevelRun<'_> {
         let (img, cam) = pyr.level(step);
         let scene = match scene {
             Some(s) => s,
-            None => scene.insert(LevelScene::from_store(
+            None => scene.insert(level_scene(
                 self.store,
                 level as u8,
                 cam.position,
-                self.opts.ray,
+                self.opts,
             )?),
         };
         let fs = photo_footprints_in(self.buffers, scene, &cam, &self.opts.footprint);
@@ -456,9 +451,7 @@ impl LevelRun<'_> {
             }
             let scene = match scenes[pi].take() {
                 Some(s) => s,
-                None => {
-                    LevelScene::from_store(self.store, level as u8, cam.position, self.opts.ray)?
-                }
+                None => level_scene(self.store, level as u8, cam.position, self.opts)?,
             };
             let coarse = (step + SIZING_STEPS).min(pyr.steps());
             let (_, ccam) = pyr.level(coarse);

@@ -21,7 +21,7 @@ pub(super) fn estimate_leveling(
     for step in attempts {
         let level = finest - step;
         let (img, cam) = pyr.level(step);
-        let scene = LevelScene::from_store(store, level as u8, cam.position, opts.ray)?;
+        let scene = super::level_scene(store, level as u8, cam.position, opts)?;
         let fs = photo_footprints_in(buffers, &scene, &cam, &opts.footprint);
         drop(scene);
         let cells = &store.manifest.cells;

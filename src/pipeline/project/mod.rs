@@ -69,6 +69,9 @@ pub struct ProjectOptions {
     pub png_compression: PngCompression,
     /// Hide progress bars.
     pub quiet: bool,
+    /// Project onto the relief surface (the TIN plus each orthographic cell's relief map,
+    /// `photo::CellRelief`), as the renderer draws it; `false`: onto the TIN. Default on.
+    pub onto_relief: bool,
 }
 
 impl Default for ProjectOptions {
@@ -85,8 +88,24 @@ impl Default for ProjectOptions {
             texture: PhotoTextureOptions::default(),
             png_compression: PngCompression::default(),
             quiet: false,
+            onto_relief: true,
         }
     }
+}
+
+/// The photo stage's scene of `level` seen from `position`: [`LevelScene::from_store`], with
+/// the relief maps loaded when `opts.onto_relief`.
+pub(crate) fn level_scene(
+    store: &Store,
+    level: u8,
+    position: glam::DVec3,
+    opts: &ProjectOptions,
+) -> Result<LevelScene> {
+    let mut scene = LevelScene::from_store(store, level, position, opts.ray)?;
+    if opts.onto_relief {
+        scene.load_reliefs(store)?;
+    }
+    Ok(scene)
 }
 
 /// How large the photo textures are (docs/projection.md, "Texture sizes").
@@ -315,7 +334,7 @@ pub fn project_store(
         || {
             let first = photos.first().filter(|_| prebuild);
             first
-                .map(|p| LevelScene::from_store(&store, finest as u8, p.camera.position, opts.ray))
+                .map(|p| level_scene(&store, finest as u8, p.camera.position, opts))
                 .transpose()
         },
     );
