@@ -53,13 +53,7 @@ pub fn decode(v: u8, range_m: f64) -> f64 {
 /// `(row, col)`, clamped to the grid: the two triangles per quad of samples that
 /// [`crate::scene::DemTracer`] casts against (the quad split from (r, c) to (r+1, c+1)).
 pub fn grid_surface_height(dem: &Dem, row: f64, col: f64) -> f64 {
-    let r = row.clamp(0.0, (dem.height - 1) as f64);
-    let c = col.clamp(0.0, (dem.width - 1) as f64);
-    let r0 = (r.floor() as usize).min(dem.height - 2);
-    let c0 = (c.floor() as usize).min(dem.width - 2);
-    let (fr, fc) = (r - r0 as f64, c - c0 as f64);
-    let h = |rr: usize, cc: usize| dem.at(rr, cc) as f64;
-    let (h00, h01, h10, h11) = (h(r0, c0), h(r0, c0 + 1), h(r0 + 1, c0), h(r0 + 1, c0 + 1));
+    let ([h00, h01, h10, h11], fr, fc) = dem.quad_at(row, col);
     if fr >= fc {
         h00 + fr * (h10 - h00) + fc * (h11 - h10)
     } else {
@@ -204,16 +198,21 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_plane_on_its_own_tin_has_no_relief() {
-        let plane = |x: f64, y: f64| 100.0 + 0.3 * (x - 1000.0) - 0.2 * (y - 2000.0);
-        let d = dem(plane, 33);
-        let ext = WorldRect {
+    /// The 64-m square both map tests cover.
+    fn square() -> WorldRect {
+        WorldRect {
             min_x: 1000.0,
             min_y: 1936.0,
             max_x: 1064.0,
             max_y: 2000.0,
-        };
+        }
+    }
+
+    #[test]
+    fn a_plane_on_its_own_tin_has_no_relief() {
+        let plane = |x: f64, y: f64| 100.0 + 0.3 * (x - 1000.0) - 0.2 * (y - 2000.0);
+        let d = dem(plane, 33);
+        let ext = square();
         let origin = [1032.0, 1968.0, 95.0];
         let m = relief_map(&d, ext, 16, &square_mesh(ext, origin, plane), origin, 1.0);
         assert_eq!(m.range_m, 0.0);
@@ -225,12 +224,7 @@ mod tests {
         // DEM: a ridge along y, 3 m high; TIN: the flat plane z = 50 (misses the ridge)
         let ridge = |x: f64, _y: f64| 50.0 + 3.0 * (-((x - 1032.0) / 8.0).powi(2)).exp();
         let d = dem(ridge, 33);
-        let ext = WorldRect {
-            min_x: 1000.0,
-            min_y: 1936.0,
-            max_x: 1064.0,
-            max_y: 2000.0,
-        };
+        let ext = square();
         let origin = [1032.0, 1968.0, 50.0];
         let flat = square_mesh(ext, origin, |_, _| 50.0);
         // a limit below the bump saturates it

@@ -159,16 +159,27 @@ impl Dem {
         self.void[row * self.width + col]
     }
 
-    /// Bilinear height at a fractional grid position, clamped to the grid.
-    pub fn bilinear(&self, row: f64, col: f64) -> f64 {
+    /// The quad of samples around a fractional grid position, clamped to the grid: its
+    /// corner heights `[h(r0, c0), h(r0, c0+1), h(r0+1, c0), h(r0+1, c0+1)]` and the
+    /// position's fractions `(fr, fc)` in [0, 1] within it.
+    pub fn quad_at(&self, row: f64, col: f64) -> ([f64; 4], f64, f64) {
         let r = row.clamp(0.0, (self.height - 1) as f64);
         let c = col.clamp(0.0, (self.width - 1) as f64);
         let r0 = (r.floor() as usize).min(self.height - 2);
         let c0 = (c.floor() as usize).min(self.width - 2);
-        let (fr, fc) = (r - r0 as f64, c - c0 as f64);
         let h = |rr: usize, cc: usize| self.at(rr, cc) as f64;
-        let top = h(r0, c0) * (1.0 - fc) + h(r0, c0 + 1) * fc;
-        let bot = h(r0 + 1, c0) * (1.0 - fc) + h(r0 + 1, c0 + 1) * fc;
+        (
+            [h(r0, c0), h(r0, c0 + 1), h(r0 + 1, c0), h(r0 + 1, c0 + 1)],
+            r - r0 as f64,
+            c - c0 as f64,
+        )
+    }
+
+    /// Bilinear height at a fractional grid position, clamped to the grid.
+    pub fn bilinear(&self, row: f64, col: f64) -> f64 {
+        let ([h00, h01, h10, h11], fr, fc) = self.quad_at(row, col);
+        let top = h00 * (1.0 - fc) + h01 * fc;
+        let bot = h10 * (1.0 - fc) + h11 * fc;
         top * (1.0 - fr) + bot * fr
     }
 
