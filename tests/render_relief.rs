@@ -55,8 +55,12 @@ fn store(dir: &Path, z: f64, relief: Option<(u8, f64)>) {
 }
 
 fn render(dir: &Path, relief: bool, cam: &CameraModel) -> image::RgbaImage {
+    render_as(dir, relief, cam, UvMode::Ortho)
+}
+
+fn render_as(dir: &Path, relief: bool, cam: &CameraModel, uv_mode: UvMode) -> image::RgbaImage {
     let opts = SceneOptions {
-        uv_mode: UvMode::Ortho,
+        uv_mode,
         frame: FrameOptions {
             lit: false,
             ..Default::default()
@@ -112,6 +116,16 @@ fn a_constant_relief_looks_like_the_raised_surface() {
     // without relief mapping the lookup is metres off (the ramp moves ~2.5 levels per metre)
     assert!(off > 3.0, "the test scene must show the shift: {off}");
     assert!(on < 0.1 * off && on < 0.6, "relief on: {on}, off: {off}");
+    // the same with texture coordinates from a vertex stream: the lookup moves through the
+    // triangle's map from (x, y) to texture coordinates (as on reparameterized charts)
+    let stream_on = render_as(with.path(), true, &cam, UvMode::Reparam);
+    let stream_raised = render_as(raised.path(), false, &cam, UvMode::Reparam);
+    let stream = mean_diff(&stream_on, &stream_raised);
+    eprintln!("vertex-stream coordinates: relief on {stream:.3}");
+    assert!(
+        stream < 0.1 * off && stream < 0.6,
+        "stream: {stream}, off: {off}"
+    );
 }
 
 #[test]

@@ -21,6 +21,7 @@ pub mod normals;
 mod quadtree;
 mod raster;
 pub mod relief;
+pub mod relief_reach;
 #[cfg(target_arch = "x86_64")]
 mod scan_x4;
 mod taps;
@@ -33,6 +34,7 @@ pub use extent::{clipped_extent, nominal_extent};
 pub use normals::normal_map;
 pub use quadtree::{CellKey, Quadtree, SampleRect};
 pub use relief::{ReliefMap, relief_map};
+pub use relief_reach::relief_reach;
 pub use texture::ortho_texture;
 pub use tin::{build_dem_tin, build_level, build_tin, level_epsilon, measure_max_error};
 

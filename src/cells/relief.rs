@@ -27,6 +27,27 @@ use crate::store::CellMesh;
 /// Ranges below this (metres) are stored as 0: the f32 rounding of cell-local positions.
 pub const MIN_RANGE_M: f64 = 1e-3;
 
+/// Relief mapping leaves out triangles whose unit normal has a smaller up component than
+/// this where the texture is in the orthographic layout (slopes over 75.5°): the map samples
+/// a wall too coarsely in (x, y). Used alike by the renderer and the photo projection.
+pub const ORTHO_MIN_NORMAL_Z: f32 = 0.25;
+
+/// The same limit where the texture is a reparameterized chart: slopes over 45° are left
+/// out. Charts give walls their texels, and a wall's relief, sampled on the orthographic
+/// grid and capped at twice the TIN error, moved wall lookups away from the photos' colour
+/// (docs/rendering.md); gentler ground gains as orthographic cells do.
+pub const CHART_MIN_NORMAL_Z: f32 = std::f32::consts::FRAC_1_SQRT_2;
+
+/// Longest relief search along a ray, in texels of the relief map (the renderer's and the
+/// projection's cap: beyond it the drawn triangle's plane no longer stands for the TIN).
+pub const MAX_SEARCH_TEXELS: f32 = 48.0;
+
+/// The longest (x, y) move a relief search can give on a map of `side` texels over a nominal
+/// square `width` metres wide, metres (the cap of [`crate::cells::relief_reach`]).
+pub fn max_shift_m(width: f64, side: u32) -> f32 {
+    (MAX_SEARCH_TEXELS as f64 * width / side.max(1) as f64) as f32
+}
+
 /// A cell's relief map and its scale (see the [module docs](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReliefMap {

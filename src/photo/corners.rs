@@ -165,14 +165,13 @@ fn finish_hit(scene: &LevelScene, dir: Vec3, hit: Option<TriHit>) -> CornerHit {
     }
     let tc = scene.tri_texcoords(hit.triangle);
     let b = hit.bary;
-    let mut tex = [
+    let tex = [
         b[0] * tc[0][0] + b[1] * tc[1][0] + b[2] * tc[2][0],
         b[0] * tc[0][1] + b[1] * tc[1][1] + b[2] * tc[2][1],
     ];
     let cell = scene.cell_of(hit.triangle);
-    if let Some(r) = scene.relief(cell) {
-        tex = r.project(tex, dir, [p[0], p[1], p[2]]);
-    }
+    let d = scene.relief_texel_shift(hit.triangle, b, dir);
+    let tex = [tex[0] + d[0], tex[1] + d[1]];
     if !(tex[0].is_finite() && tex[1].is_finite()) {
         return CornerHit::MISS;
     }

@@ -118,12 +118,15 @@ impl LevelScene {
         }
     }
 
-    /// Loads the relief maps of the cells whose active texture is orthographic (relief maps
-    /// are in that layout) from `store`, so that hits are moved onto the relief surface
-    /// ([`super::relief::CellRelief::project`]). Cells without a relief map (stores built
-    /// before 2026-12-06) keep their TIN hits. Errors name a damaged file.
+    /// Loads the relief maps of the cells whose active texture is orthographic from `store`,
+    /// so that hits are moved onto the relief surface ([`super::relief::CellRelief::shift`],
+    /// slopes up to 75.5°, as the renderer). Reparameterized cells keep their TIN hits: the
+    /// renderer does not relief-map their photo textures (docs/rendering.md: projecting charts
+    /// onto the relief surface put wall colour into ground texels). Cells without a relief map
+    /// (stores built before 2026-12-06) keep their TIN hits too. Errors name a damaged file.
     pub fn load_reliefs(&mut self, store: &Store) -> Result<()> {
         let cells = &store.manifest.cells;
+        let o = self.frame_origin;
         self.reliefs = self
             .cells
             .par_iter()
@@ -131,21 +134,44 @@ impl LevelScene {
                 let Some(rec) = cells.get(c.cell as usize) else {
                     return Ok(None);
                 };
-                if rec.reparam.is_some() || c.texels != rec.texels {
+                if rec.reparam.is_some() {
                     return Ok(None);
                 }
-                Ok(store.read_relief_map(rec)?.and_then(|m| {
-                    super::relief::CellRelief::new(&m, rec.extent.width(), rec.extent.height())
-                }))
+                // the map's north-west corner in the scene's frame
+                let corner = [rec.extent.min_x - o.x, rec.extent.max_y - o.y];
+                let (w, h) = (rec.extent.width(), rec.extent.height());
+                let min_z = crate::cells::relief::ORTHO_MIN_NORMAL_Z;
+                Ok(store
+                    .read_relief_map(rec)?
+                    .and_then(|m| super::relief::CellRelief::new(&m, corner, w, h, min_z)))
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(())
     }
 
-    /// The relief map of scene cell `cell`, if loaded.
+    /// The texel move (in the cell's texture) of the hit at barycentrics `bary` on BVH
+    /// triangle `tri` by a ray along unit `dir`, from the TIN onto the cell's relief
+    /// surface; `[0, 0]` where the cell has no relief map loaded or the triangle is left out.
     #[inline]
-    pub(crate) fn relief(&self, cell: u32) -> Option<&super::relief::CellRelief> {
-        self.reliefs.get(cell as usize).and_then(|r| r.as_ref())
+    pub(crate) fn relief_texel_shift(&self, tri: u32, bary: [f32; 3], dir: Vec3) -> [f32; 2] {
+        const NONE: [f32; 2] = [0.0, 0.0];
+        let info = &self.info[tri as usize];
+        let Some(r) = self
+            .reliefs
+            .get(info.cell as usize)
+            .and_then(|r| r.as_ref())
+        else {
+            return NONE;
+        };
+        let t = &self.tris[tri as usize];
+        let v = [t.v0, t.v1, t.v2];
+        let xy = [0, 1].map(|k| bary[0] * v[0][k] + bary[1] * v[1][k] + bary[2] * v[2][k]);
+        let n = [info.plane[0], info.plane[1], info.plane[2]];
+        let d = r.shift(xy, dir, n);
+        if d == NONE {
+            return NONE;
+        }
+        super::relief::texel_shift(v.map(|q| q.to_array()), info.tex, d).unwrap_or(NONE)
     }
 
     /// Builds the scene from the active meshes (reparameterized if present) of every cell of

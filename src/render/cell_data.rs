@@ -13,11 +13,20 @@ pub struct CellData {
     /// Colour texture, full mip chain (level 0 first, down to 1×1, averaged in linear light),
     /// sRGB RGBA8.
     pub colour_mips: Vec<image::RgbaImage>,
-    /// Normal map (RGB in the cell-local frame, n·0.5+0.5), full mip chain; A = 255, or with
-    /// a relief map ([`CellData::set_relief`]) its encoded height of the DEM above the TIN.
+    /// Normal map (RGB in the cell-local frame, n·0.5+0.5, A = 255), full mip chain.
     pub normal_mips: Vec<image::RgbaImage>,
-    /// Largest height of the relief map in the normal map's alpha, metres (0: no relief).
+    /// The cell's relief map (encoded heights of the DEM above the TIN, orthographic layout
+    /// over the nominal square, whatever the texture's layout), for relief mapping
+    /// ([`CellData::set_relief`]); `None`: none.
+    pub relief: Option<image::GrayImage>,
+    /// Largest height of [`CellData::relief`], metres (0: no relief mapping).
     pub relief_m: f32,
+    /// Triangles whose unit normal has a smaller up component are not relief-mapped
+    /// ([`crate::cells::relief::ORTHO_MIN_NORMAL_Z`] or `CHART_MIN_NORMAL_Z`).
+    pub relief_min_normal_z: f32,
+    /// Per vertex, how far relief mapping may move a lookup, metres
+    /// ([`crate::cells::relief_reach`]); `None`: unbounded (orthographic layouts).
+    pub relief_reach: Option<Vec<f32>>,
     /// Geomorphing data (towards the parent cell), when the scene morphs and the cell has a parent.
     pub morph: Option<MorphData>,
 }
@@ -77,34 +86,42 @@ impl CellData {
             uvs,
             colour_mips: colour_mip_chain(colour),
             normal_mips: mip_chain(normal),
+            relief: None,
             relief_m: 0.0,
+            relief_min_normal_z: 1.0,
+            relief_reach: None,
             morph: None,
         }
     }
 
-    /// Puts `relief` (the cell's relief map, orthographic layout) into the normal map's alpha
-    /// and its range into [`CellData::relief_m`], for relief mapping. Only for cells drawn with
-    /// orthographic texture coordinates (`uvs` is `None`); a map whose size differs from the
-    /// normal map's is resampled to it (nearest texel).
-    pub fn set_relief(&mut self, relief: &crate::cells::ReliefMap) {
-        if self.uvs.is_some() || relief.range_m <= 0.0 || self.normal_mips.is_empty() {
-            return;
-        }
-        let mut base = self.normal_mips[0].clone();
-        let (w, h) = base.dimensions();
+    /// Sets the cell's relief map for relief mapping of triangles whose unit normal's up
+    /// component is at least `min_normal_z` (the limit of the drawn texture's layout). On a
+    /// chart (`chart`: the texture coordinates are a reparameterization) lookups move at most
+    /// each vertex's reach ([`crate::cells::relief_reach`]) over the nominal square `width`
+    /// metres wide. A map of range 0 or without texels is ignored.
+    pub fn set_relief(
+        &mut self,
+        relief: crate::cells::ReliefMap,
+        min_normal_z: f32,
+        chart: bool,
+        width: f64,
+    ) {
         let (rw, rh) = relief.image.dimensions();
-        if rw == 0 || rh == 0 {
+        if !(relief.range_m > 0.0) || rw == 0 || rh == 0 {
             return;
         }
-        for (x, y, p) in base.enumerate_pixels_mut() {
-            let (rx, ry) = (
-                ((x as u64 * rw as u64) / w as u64) as u32,
-                ((y as u64 * rh as u64) / h as u64) as u32,
-            );
-            p.0[3] = relief.image.get_pixel(rx, ry).0[0];
+        if chart && self.uvs.is_some() {
+            let cap = crate::cells::relief::max_shift_m(width, rw);
+            self.relief_reach = Some(crate::cells::relief_reach(
+                &self.mesh.positions,
+                self.mesh.surface(),
+                min_normal_z,
+                cap,
+            ));
         }
-        self.normal_mips = mip_chain(base);
+        self.relief = Some(relief.image);
         self.relief_m = relief.range_m as f32;
+        self.relief_min_normal_z = min_normal_z;
     }
 }
 

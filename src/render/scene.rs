@@ -42,9 +42,11 @@ pub struct SceneOptions {
     pub geomorph: GeomorphOptions,
     /// When the camera's radial distortion is applied (default: when it has one).
     pub distortion: DistortionMode,
-    /// Relief mapping (default on): on cells drawn with orthographic texture coordinates
-    /// that have a relief map, textures are looked up where the view ray meets the DEM
-    /// surface (the TIN plus the relief map) instead of where it meets the TIN.
+    /// Relief mapping (default on): on cells that have a relief map, textures are looked up
+    /// where the view ray meets the DEM surface (the TIN plus the relief map) instead of
+    /// where it meets the TIN, on triangles up to 75.5° (orthographic textures) or 45°
+    /// (reparameterized charts) of slope; not on charts drawn with a photo texture (those
+    /// are projected onto the TIN).
     pub relief: bool,
 }
 
@@ -208,21 +210,28 @@ impl TerrainScene {
                 }
                 None => None,
             };
-            // The relief map is in the orthographic layout: used where the cell is drawn with
-            // orthographic texture coordinates.
-            let ortho_drawn = match mode {
-                UvMode::Ortho => true,
-                UvMode::Mixed | UvMode::Photo => rec.reparam.is_none(),
-                UvMode::Reparam => false,
+            // The relief map is in the orthographic layout whatever the drawn texture's; the
+            // slope limit follows the drawn texture's layout (docs/rendering.md). Photo
+            // textures of charts are projected onto the TIN (photo::LevelScene::load_reliefs),
+            // so they are drawn without relief mapping.
+            let chart_drawn = match mode {
+                UvMode::Ortho => false,
+                UvMode::Mixed | UvMode::Photo | UvMode::Reparam => rec.reparam.is_some(),
             };
-            let relief_map = if relief && ortho_drawn {
+            let photo_chart = chart_drawn && mode == UvMode::Photo && rec.photo.is_some();
+            let relief_map = if relief && !photo_chart {
                 st.read_relief_map(rec)?
             } else {
                 None
             };
             let mut data = CellData::new(rec, mesh, colour, normal, mode);
             if let Some(r) = relief_map {
-                data.set_relief(&r);
+                let min_z = if chart_drawn {
+                    crate::cells::relief::CHART_MIN_NORMAL_Z
+                } else {
+                    crate::cells::relief::ORTHO_MIN_NORMAL_Z
+                };
+                data.set_relief(r, min_z, chart_drawn, rec.extent.width());
             }
             data.morph = morph_data;
             Ok(data)

@@ -70,7 +70,8 @@ pub struct ProjectOptions {
     /// Hide progress bars.
     pub quiet: bool,
     /// Project onto the relief surface (the TIN plus each orthographic cell's relief map,
-    /// `photo::CellRelief`), as the renderer draws it; `false`: onto the TIN. Default on.
+    /// `photo::CellRelief`, slopes up to 75.5°), as the renderer draws it; `false`: onto the
+    /// TIN. Reparameterized cells are projected onto the TIN either way. Default on.
     pub onto_relief: bool,
 }
 

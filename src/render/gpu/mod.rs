@@ -19,8 +19,9 @@ use super::target::RenderTarget;
 pub use super::target::{COLOR_FORMAT, DEPTH_FORMAT};
 use crate::error::{Error, Result};
 
-/// Bytes of the shader's per-draw `Draw` uniform (mvp, extent, tint, morph, relief).
-const DRAW_BYTES: u64 = 128;
+/// Bytes of the shader's per-draw `Draw` uniform (mvp, extent, tint, morph, relief,
+/// relief_limits).
+const DRAW_BYTES: u64 = 144;
 /// Byte stride of the per-draw uniform slots (the dynamic-offset alignment wgpu guarantees).
 const DRAW_STRIDE: u64 = 256;
 
@@ -42,8 +43,10 @@ pub struct GpuCell {
     pub extent_rel: [f32; 4],
     /// Quadtree level (for the overlay).
     pub level: u8,
-    /// Range of the relief map in the normal map's alpha, metres (0: no relief mapping).
+    /// Range of the relief map, metres (0: no relief mapping).
     pub relief_m: f32,
+    /// Smallest up component of a relief-mapped triangle's unit normal.
+    pub relief_min_normal_z: f32,
     /// Triangles drawn (surface + skirt).
     pub triangles: u32,
     /// GPU bytes held (buffers and textures with mips).

@@ -35,7 +35,7 @@ impl TerrainRenderer {
         let tex = fragment_texture_entry;
         let cell_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cell"),
-            entries: &[tex(0), tex(1), fragment_sampler_entry(2)],
+            entries: &[tex(0), tex(1), fragment_sampler_entry(2), tex(3)],
         });
         let parent_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("parent textures"),
@@ -59,11 +59,12 @@ impl TerrainRenderer {
                 shader_location: 0,
             }],
         };
+        // texture coordinates and the vertex's relief reach
         let uv_layout = wgpu::VertexBufferLayout {
-            array_stride: 8,
+            array_stride: 12,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &[wgpu::VertexAttribute {
-                format: wgpu::VertexFormat::Float32x2,
+                format: wgpu::VertexFormat::Float32x3,
                 offset: 0,
                 shader_location: 1,
             }],

@@ -8,6 +8,10 @@ use super::{CellData, GpuCell, TerrainRenderer, f32_bytes};
 use crate::error::{Error, Result};
 use crate::store::CellRecord;
 
+/// The relief reach of vertices that have none (orthographic coordinates: unbounded), as the
+/// shader's `NO_REACH`.
+const NO_REACH: f32 = 1.0e9;
+
 impl TerrainRenderer {
     fn texture(
         &self,
@@ -72,6 +76,15 @@ impl TerrainRenderer {
                 )));
             }
         }
+        if let Some(r) = &data.relief {
+            let (w, h) = r.dimensions();
+            if w == 0 || h == 0 || w > max || h > max {
+                return Err(Error::Gpu(format!(
+                    "cell {}: relief map of {w}x{h} texels cannot be uploaded (limit {max})",
+                    rec.id
+                )));
+            }
+        }
         if data.mesh.triangles.is_empty() {
             return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
         }
@@ -100,7 +113,13 @@ impl TerrainRenderer {
             usage: wgpu::BufferUsages::VERTEX,
         });
         let uvs = data.uvs.as_ref().map(|uv| {
-            let flat: Vec<f32> = uv.iter().flatten().copied().collect();
+            // (u, v, relief reach) per vertex; without a reach, unbounded
+            let reach = data.relief_reach.as_deref().unwrap_or(&[]);
+            let flat: Vec<f32> = uv
+                .iter()
+                .enumerate()
+                .flat_map(|(k, t)| [t[0], t[1], reach.get(k).copied().unwrap_or(NO_REACH)])
+                .collect();
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("uvs"),
                 contents: &f32_bytes(&flat),
@@ -128,6 +147,30 @@ impl TerrainRenderer {
             self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
         let cv = colour.create_view(&Default::default());
         let nv = normal.create_view(&Default::default());
+        // the relief map (R8, one level, read texel by texel), or a 1×1 placeholder
+        let placeholder = image::GrayImage::from_pixel(1, 1, image::Luma([128]));
+        let relief_img = data.relief.as_ref().unwrap_or(&placeholder);
+        let relief = self.ctx.device.create_texture_with_data(
+            &self.ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("relief"),
+                size: wgpu::Extent3d {
+                    width: relief_img.width(),
+                    height: relief_img.height(),
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R8Unorm,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            relief_img.as_raw(),
+        );
+        let rb = relief_img.as_raw().len() as u64;
+        let rv = relief.create_view(&Default::default());
         let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&rec.id),
             layout: &self.cell_layout,
@@ -143,6 +186,10 @@ impl TerrainRenderer {
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&rv),
                 },
             ],
         });
@@ -175,13 +222,14 @@ impl TerrainRenderer {
         let e = rec.extent;
         let bytes = pos.len() as u64 * 4
             + idx.len() as u64
-            + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 8)
+            + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 12)
             + data
                 .morph
                 .as_ref()
                 .map_or(0, |m| m.targets.len() as u64 * 12)
             + cb
-            + nb;
+            + nb
+            + rb;
         Ok(GpuCell {
             positions,
             uvs,
@@ -204,7 +252,12 @@ impl TerrainRenderer {
                 e.height() as f32,
             ],
             level: rec.level,
-            relief_m: data.relief_m,
+            relief_m: if data.relief.is_some() {
+                data.relief_m
+            } else {
+                0.0
+            },
+            relief_min_normal_z: data.relief_min_normal_z,
             triangles: data.mesh.triangles.len() as u32,
             bytes,
         })

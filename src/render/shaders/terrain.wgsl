@@ -19,9 +19,12 @@ struct Draw {
     // textures); w = 1 if the parent's textures are bound (group 2), else y / z = LOD shift of
     // the colour texture / normal map to the parent's texel density, mip levels (fallback).
     morph: vec4<f32>,
-    // Relief mapping: x = range of the relief map in the normal map's alpha, metres (0: off;
-    // only cells drawn with orthographic texture coordinates); yzw = the eye, cell-local.
+    // Relief mapping: x = range of the relief map, metres (0: off); yzw = the eye, cell-local.
     relief: vec4<f32>,
+    // x = smallest up component of a relief-mapped triangle's unit normal; y = 1 if texture
+    // coordinates come from a vertex stream (the lookup then moves through the triangle's
+    // own map from (x, y) to texture coordinates), 0 if they are orthographic (planar_uv).
+    relief_limits: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -29,6 +32,9 @@ struct Draw {
 @group(1) @binding(0) var colour_tex: texture_2d<f32>;
 @group(1) @binding(1) var normal_tex: texture_2d<f32>;
 @group(1) @binding(2) var samp: sampler;
+// The relief map (R8: the DEM's height above the TIN, encoded over ±draw.relief.x metres), in
+// the orthographic layout of the nominal square whatever the colour texture's layout.
+@group(1) @binding(3) var relief_tex: texture_2d<f32>;
 // The parent cell's textures (placeholders unless morphing with a resident parent).
 @group(2) @binding(0) var parent_colour: texture_2d<f32>;
 @group(2) @binding(1) var parent_normal: texture_2d<f32>;
@@ -40,7 +46,12 @@ struct VOut {
     @location(1) puv: vec2<f32>,
     // The drawn surface point, cell-local metres (relief mapping).
     @location(2) lp: vec3<f32>,
+    // Longest relief shift, metres (cells/relief_reach.rs; charts only, else unbounded).
+    @location(3) reach: f32,
 };
+
+// The reach of orthographic texture coordinates: unbounded (the layout is continuous).
+const NO_REACH: f32 = 1.0e9;
 
 // Orthographic texture coordinates of a cell-local point: u east, v south over the nominal square.
 fn planar_uv(p: vec2<f32>) -> vec2<f32> {
@@ -55,17 +66,20 @@ fn vs_ortho(@location(0) p: vec3<f32>) -> VOut {
     o.uv = planar_uv(p.xy);
     o.puv = o.uv;
     o.lp = p;
+    o.reach = NO_REACH;
     return o;
 }
 
-// Cells with stored texture coordinates (reparameterized charts).
+// Cells with stored texture coordinates (reparameterized charts): `uvr.xy` the coordinates,
+// `uvr.z` the vertex's relief reach.
 @vertex
-fn vs_uv(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>) -> VOut {
+fn vs_uv(@location(0) p: vec3<f32>, @location(1) uvr: vec3<f32>) -> VOut {
     var o: VOut;
     o.pos = draw.mvp * vec4<f32>(p, 1.0);
-    o.uv = uv;
-    o.puv = uv;
+    o.uv = uvr.xy;
+    o.puv = uvr.xy;
     o.lp = p;
+    o.reach = uvr.z;
     return o;
 }
 
@@ -79,17 +93,19 @@ fn vs_ortho_morph(@location(0) p: vec3<f32>, @location(2) m: vec3<f32>) -> VOut 
     o.uv = planar_uv(p.xy);
     o.puv = m.yz;
     o.lp = q;
+    o.reach = NO_REACH;
     return o;
 }
 
 @vertex
-fn vs_uv_morph(@location(0) p: vec3<f32>, @location(1) uv: vec2<f32>, @location(2) m: vec3<f32>) -> VOut {
+fn vs_uv_morph(@location(0) p: vec3<f32>, @location(1) uvr: vec3<f32>, @location(2) m: vec3<f32>) -> VOut {
     var o: VOut;
     let q = vec3<f32>(p.xy, mix(p.z, m.x, draw.morph.x));
     o.pos = draw.mvp * vec4<f32>(q, 1.0);
-    o.uv = uv;
+    o.uv = uvr.xy;
     o.puv = m.yz;
     o.lp = q;
+    o.reach = uvr.z;
     return o;
 }
 
@@ -113,50 +129,53 @@ fn morph_grad_scale(gx: vec2<f32>, gy: vec2<f32>, size: vec2<f32>, shift: f32, t
 fn relief_at(p: vec2<f32>, range: f32) -> f32 {
     // bilinear between texel centres by hand: four loads (cheaper than a filtered sample
     // under software rasterizers, whose sampler is anisotropic)
-    let size = vec2<i32>(textureDimensions(normal_tex, 0));
+    let size = vec2<i32>(textureDimensions(relief_tex, 0));
     let x = planar_uv(p) * vec2<f32>(size) - vec2<f32>(0.5);
     let x0 = floor(x);
     let w = x - x0;
     let hi = size - vec2<i32>(1);
     let i0 = clamp(vec2<i32>(x0), vec2<i32>(0), hi);
     let i1 = clamp(vec2<i32>(x0) + vec2<i32>(1), vec2<i32>(0), hi);
-    let a00 = textureLoad(normal_tex, i0, 0).a;
-    let a10 = textureLoad(normal_tex, vec2<i32>(i1.x, i0.y), 0).a;
-    let a01 = textureLoad(normal_tex, vec2<i32>(i0.x, i1.y), 0).a;
-    let a11 = textureLoad(normal_tex, i1, 0).a;
+    let a00 = textureLoad(relief_tex, i0, 0).r;
+    let a10 = textureLoad(relief_tex, vec2<i32>(i1.x, i0.y), 0).r;
+    let a01 = textureLoad(relief_tex, vec2<i32>(i0.x, i1.y), 0).r;
+    let a11 = textureLoad(relief_tex, i1, 0).r;
     let v = mix(mix(a00, a10, w.x), mix(a01, a11, w.x), w.y);
     return (v * 2.0 - 1.0) * range;
 }
 
-// Relief mapping: the orthographic texture coordinates of the point where the ray from the
-// eye through the drawn point `lp` (on the TIN triangle of unit upward normal `n`) meets the
-// surface "TIN plane + relief", the relief map (alpha of the normal map: the DEM's height
-// above the TIN, within ±`range` metres) searched between the ray's heights +range and
-// −range above the triangle's plane in steps of about 4 texels, the first crossing refined
-// by false position. Steep triangles, rays along the plane and fragments where the hit can move
-// less than a quarter of the pixel's `footprint` (metres) keep `lp`'s coordinates.
-fn relief_uv(lp: vec3<f32>, n: vec3<f32>, range: f32, footprint: f32) -> vec2<f32> {
+// Relief mapping: how far, in cell-local (x, y) metres, the point where the ray from the eye
+// through the drawn point `lp` (on the TIN triangle of unit upward normal `n`) meets the
+// surface "TIN plane + relief" lies from `lp`: the relief map (the DEM's height above the
+// TIN, within ±`range` metres) searched between the ray's heights +range and −range above the
+// triangle's plane in steps of about 4 texels, the first crossing refined by false position.
+// Triangles steeper than the cell's limit, rays along the plane and fragments where the hit
+// can move less than a quarter of the pixel's `footprint` (metres) give (0, 0).
+// photo/relief.rs (CellRelief::shift) is the same search on the CPU: the projection puts a
+// photo's colour where this lookup finds it.
+fn relief_shift(lp: vec3<f32>, n: vec3<f32>, range: f32, footprint: f32) -> vec2<f32> {
+    let none = vec2<f32>(0.0);
     let d = lp - draw.relief.yzw;
     // height above the plane gained per unit of s along p(s) = lp + s·d (s = 0 at lp)
     let k = dot(d, n) / max(n.z, 1e-6);
-    if n.z < 0.25 || k > -1e-4 * length(d) {
-        return planar_uv(lp.xy);
+    if n.z < draw.relief_limits.x || k > -1e-4 * length(d) {
+        return none;
     }
     let s0 = range / k;
     let s1 = -range / k;
     // The hit moves at most half the search's ground span from lp: skip what no pixel shows.
     let ground_span = abs(s1 - s0) * length(d.xy);
     if 0.5 * ground_span < 0.25 * footprint {
-        return planar_uv(lp.xy);
+        return none;
     }
     // A coarse search (steps of about 4 texels of the relief map, at most 8) brackets the
     // first crossing; two false-position steps inside the bracket refine it.
-    let size = vec2<f32>(textureDimensions(normal_tex, 0));
+    let size = vec2<f32>(textureDimensions(relief_tex, 0));
     let span = abs(s1 - s0) * length(d.xy / draw.extent.zw * size);
     // Far beyond the drawn triangle the TIN bends away from its plane: searches longer than
     // 48 texels of the relief map (very grazing rays) are left out (docs/rendering.md).
     if span > 48.0 {
-        return planar_uv(lp.xy);
+        return none;
     }
     let steps = i32(clamp(ceil(span / 4.0), 1.0, 8.0));
     var a = s0;
@@ -189,7 +208,28 @@ fn relief_uv(lp: vec3<f32>, n: vec3<f32>, range: f32, footprint: f32) -> vec2<f3
         }
         hit = a + (b - a) * fa / max(fa - fb, 1e-12);
     }
-    return planar_uv(lp.xy + hit * d.xy);
+    return hit * d.xy;
+}
+
+// The texture coordinates of the drawn point `lp` (texture coordinates `uv`, screen
+// derivatives `gx`, `gy` of uv and `px`, `py` of lp) moved by `shift` metres in (x, y):
+// orthographic cells through planar_uv; vertex-stream cells through the triangle's affine map
+// from (x, y) to uv, `[gx gy] · [px.xy py.xy]⁻¹` (the projection's texel_shift), kept as
+// they are where the triangle is edge-on in (x, y).
+fn shifted_uv(lp: vec3<f32>, uv: vec2<f32>, shift: vec2<f32>, gx: vec2<f32>, gy: vec2<f32>,
+              px: vec3<f32>, py: vec3<f32>) -> vec2<f32> {
+    if draw.relief_limits.y < 0.5 {
+        return planar_uv(lp.xy + shift);
+    }
+    let det = px.x * py.y - py.x * px.y;
+    let scale = max(dot(px.xy, px.xy), dot(py.xy, py.xy));
+    if !(abs(det) > 1e-6 * scale) {
+        return uv;
+    }
+    // shift = a·px.xy + b·py.xy; uv moves by a·gx + b·gy
+    let a = (shift.x * py.y - py.x * shift.y) / det;
+    let b = (px.x * shift.y - shift.x * px.y) / det;
+    return uv + a * gx + b * gy;
 }
 
 @fragment
@@ -209,7 +249,14 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     let range = draw.relief.x * (1.0 - t);
     var uv = i.uv;
     if range > 0.0 && dot(nf, nf) > 0.0 {
-        uv = relief_uv(i.lp, normalize(nf), range, max(length(px), length(py)));
+        var shift = relief_shift(i.lp, normalize(nf), range, max(length(px), length(py)));
+        // on charts, only within the reach (the triangle's map holds that far); a longer
+        // move is dropped, as the projection drops it (a shortened one would be neither the
+        // relief surface's point nor the TIN's)
+        if length(shift) > i.reach {
+            shift = vec2<f32>(0.0);
+        }
+        uv = shifted_uv(i.lp, i.uv, shift, gx, gy, px, py);
     }
     if t > 0.0 && draw.morph.w > 0.5 {
         // Blend towards the parent's textures at the same surface point.
