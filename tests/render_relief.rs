@@ -128,6 +128,128 @@ fn a_constant_relief_looks_like_the_raised_surface() {
     );
 }
 
+/// A flat mesh of `n × n` squares over the cell's nominal square (at the height of
+/// `flat_mesh`, without a skirt) with orthographic texture coordinates: interior vertices
+/// lie away from the chart's seams, so relief mapping may move lookups there.
+fn grid_mesh(rec: &cliffmap::store::CellRecord, n: u32) -> cliffmap::store::CellMesh {
+    let flat = render_support::flat_mesh(rec, true);
+    let (o, e) = (rec.origin, rec.extent);
+    let z = flat.positions[0][2];
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+            let x = e.min_x + u * e.width() - o[0];
+            let y = e.max_y - v * e.height() - o[1];
+            positions.push([x as f32, y as f32, z]);
+            uvs.push([u as f32, v as f32]);
+        }
+    }
+    let mut triangles = Vec::new();
+    let k = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            triangles.push([k(i, j), k(i, j + 1), k(i + 1, j + 1)]);
+            triangles.push([k(i, j), k(i + 1, j + 1), k(i + 1, j)]);
+        }
+    }
+    cliffmap::store::CellMesh {
+        surface_vertices: positions.len() as u32,
+        surface_triangles: triangles.len() as u32,
+        positions,
+        uvs: Some(uvs),
+        triangles,
+    }
+}
+
+/// Makes every cell of the store in `dir` a chart (the same flat mesh with stored texture
+/// coordinates, its texture as the chart's own) drawn with a photo texture twice its size:
+/// the chart texture magnified, as the projection leaves texels no photo reached, with the
+/// photo share `confidence` (0..255) in every texel.
+fn make_photo_charts(dir: &Path, confidence: u8) {
+    let path = dir.join("manifest.json");
+    let mut m: cliffmap::store::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for rec in &mut m.cells {
+        let stem = cell_stem(rec.level, rec.x, rec.y);
+        let mesh = grid_mesh(rec, 8);
+        let mesh_file = write_file(dir, &format!("{stem}.uv.mesh"), &mesh.to_bytes()).unwrap();
+        let texels = m.cell_texels;
+        let png = |img: image::DynamicImage| {
+            let mut c = std::io::Cursor::new(Vec::new());
+            img.write_to(&mut c, image::ImageFormat::Png).unwrap();
+            c.into_inner()
+        };
+        let photo = cliffmap::store::magnify(&ramp(texels), 2);
+        let conf = image::GrayImage::from_pixel(2 * texels, 2 * texels, image::Luma([confidence]));
+        let texture = write_file(dir, &format!("{stem}.photo.png"), &png(photo.into())).unwrap();
+        let confidence = write_file(dir, &format!("{stem}.conf.png"), &png(conf.into())).unwrap();
+        rec.reparam = Some(cliffmap::store::ReparamRecord {
+            texels,
+            files: cliffmap::store::CellFiles {
+                mesh: mesh_file,
+                texture: rec.files.texture.clone(),
+                normal: rec.files.normal.clone(),
+            },
+            metrics: Default::default(),
+            rel_texel: 1.0,
+            texel_stretch: Default::default(),
+            bilinear_fallbacks: 0,
+        });
+        rec.photo = Some(cliffmap::store::PhotoCellRecord {
+            texels: 2 * texels,
+            texture,
+            confidence,
+            photo_texels: 0,
+            steep_texels: 0,
+            steep_photo_texels: 0,
+            blocks: None,
+        });
+    }
+    let text = serde_json::to_string_pretty(&m).unwrap();
+    cliffmap::fsutil::write_atomic(&path, text.as_bytes()).unwrap();
+}
+
+#[test]
+fn on_photo_charts_only_the_chart_textures_share_follows_the_relief() {
+    let z = 1234.0;
+    let (v, range) = (223u8, 8.0);
+    let r = (v as f64 / 255.0 * 2.0 - 1.0) * range;
+    let raised = tempfile::tempdir().unwrap();
+    store(raised.path(), z + r, None);
+    let centre = DVec3::new(X0 + 50.0, Y0 - 50.0, z);
+    let pos = centre + DVec3::new(-30.0, -25.0, 48.0);
+    let rot = rotation_look_at(pos, centre).unwrap();
+    let cam = CameraModel::with_fov(pos, rot, SIZE, SIZE, 50f64.to_radians());
+    let raised_img = render_as(raised.path(), false, &cam, UvMode::Reparam);
+    // photo share 0: the texture is the chart's own everywhere, so it moves like the chart
+    let base = tempfile::tempdir().unwrap();
+    store(base.path(), z, Some((v, range)));
+    make_photo_charts(base.path(), 0);
+    let off = mean_diff(
+        &render_as(base.path(), false, &cam, UvMode::Photo),
+        &raised_img,
+    );
+    let on = mean_diff(
+        &render_as(base.path(), true, &cam, UvMode::Photo),
+        &raised_img,
+    );
+    eprintln!("photo share 0: relief on {on:.3}, off {off:.3} from the raised surface");
+    assert!(off > 3.0, "the test scene must show the shift: {off}");
+    assert!(on < 0.1 * off && on < 0.6, "relief on: {on}, off: {off}");
+    // photo share 1: the photo's colour stays where the projection put it (on the TIN)
+    let photo = tempfile::tempdir().unwrap();
+    store(photo.path(), z, Some((v, range)));
+    make_photo_charts(photo.path(), 255);
+    let unmapped = render_as(photo.path(), false, &cam, UvMode::Photo);
+    let mapped = render_as(photo.path(), true, &cam, UvMode::Photo);
+    let moved = mean_diff(&mapped, &unmapped);
+    eprintln!("photo share 1: relief on vs off {moved:.3}");
+    assert!(moved < 0.05, "photo colour moved: {moved}");
+    assert!(mean_diff(&mapped, &raised_img) > 3.0);
+}
+
 #[test]
 fn a_store_without_relief_maps_renders_as_before() {
     let dir = tempfile::tempdir().unwrap();

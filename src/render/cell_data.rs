@@ -27,6 +27,10 @@ pub struct CellData {
     /// Per vertex, how far relief mapping may move a lookup, metres
     /// ([`crate::cells::relief_reach`]); `None`: unbounded (orthographic layouts).
     pub relief_reach: Option<Vec<f32>>,
+    /// For a chart drawn with its photo texture: the chart's own (reparameterized) texture's
+    /// mip chain, whose share of each photo texel (the photo texture's alpha, `1 − s`) is
+    /// relief-mapped; `None` otherwise.
+    pub base_mips: Option<Vec<image::RgbaImage>>,
     /// Geomorphing data (towards the parent cell), when the scene morphs and the cell has a parent.
     pub morph: Option<MorphData>,
 }
@@ -90,6 +94,7 @@ impl CellData {
             relief_m: 0.0,
             relief_min_normal_z: 1.0,
             relief_reach: None,
+            base_mips: None,
             morph: None,
         }
     }
@@ -123,6 +128,26 @@ impl CellData {
         self.relief_m = relief.range_m as f32;
         self.relief_min_normal_z = min_normal_z;
     }
+}
+
+/// Puts into each texel's alpha of a photo-enhanced `texture` the share of the chart's own
+/// texture in its colour, `255 − confidence` (the photo's share; 0..255 = 0..1), which relief
+/// mapping moves (docs/rendering.md, "Charts"). Fails if the two images differ in size.
+pub fn set_base_share(
+    texture: &mut image::RgbaImage,
+    confidence: &image::GrayImage,
+) -> std::result::Result<(), String> {
+    if texture.dimensions() != confidence.dimensions() {
+        return Err(format!(
+            "confidence map of {:?} texels for a photo texture of {:?}",
+            confidence.dimensions(),
+            texture.dimensions()
+        ));
+    }
+    for (t, c) in texture.pixels_mut().zip(confidence.pixels()) {
+        t.0[3] = 255 - c.0[0];
+    }
+    Ok(())
 }
 
 /// The full mip chain of `img` (level 0 = `img`): each level the previous one's 2 × 2 box

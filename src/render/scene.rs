@@ -8,6 +8,7 @@ use glam::DVec3;
 
 use super::cache::LruCache;
 use super::camera::RenderCamera;
+use super::cell_data::{colour_mip_chain, set_base_share};
 use super::distortion::{DistortedView, DistortionMode};
 use super::geomorph::{GeomorphOptions, mip_shift, morph_factor, morph_targets};
 use super::gpu::{
@@ -45,8 +46,8 @@ pub struct SceneOptions {
     /// Relief mapping (default on): on cells that have a relief map, textures are looked up
     /// where the view ray meets the DEM surface (the TIN plus the relief map) instead of
     /// where it meets the TIN, on triangles up to 75.5° (orthographic textures) or 45°
-    /// (reparameterized charts) of slope; not on charts drawn with a photo texture (those
-    /// are projected onto the TIN).
+    /// (reparameterized charts) of slope. On a chart drawn with its photo texture (projected
+    /// onto the TIN) only the share of each texel that is the chart's own texture moves.
     pub relief: bool,
 }
 
@@ -178,9 +179,27 @@ impl TerrainScene {
             let files = active_files(rec, mode);
             let bytes = st.read_file(&files.mesh)?;
             let mesh = CellMesh::from_bytes(&bytes, &st.dir.join(&files.mesh.path))?;
+            // The relief map is in the orthographic layout whatever the drawn texture's; the
+            // slope limit follows the drawn texture's layout (docs/rendering.md).
+            let chart_drawn = match mode {
+                UvMode::Ortho => false,
+                UvMode::Mixed | UvMode::Photo | UvMode::Reparam => rec.reparam.is_some(),
+            };
             // The photo-enhanced texture has the layout of the active (reparam or ortho) one.
+            // A chart's photo texture was projected onto the TIN (photo::LevelScene::
+            // load_reliefs): relief mapping moves only the share of each texel that is the
+            // chart's own texture (the base, bound beside it), the photo's colour stays.
+            let mut base = None;
             let mut colour = match (&rec.photo, mode) {
-                (Some(p), UvMode::Photo) => st.read_photo_texture(rec, p)?.0,
+                (Some(p), UvMode::Photo) => {
+                    let (mut texture, confidence) = st.read_photo_texture(rec, p)?;
+                    if relief && chart_drawn && overlay != Overlay::Stretch {
+                        set_base_share(&mut texture, &confidence)
+                            .map_err(|e| Error::store(st.dir.join(&p.confidence.path), e))?;
+                        base = Some(st.read_png(&files.texture)?.to_rgba8());
+                    }
+                    texture
+                }
                 _ => st.read_png(&files.texture)?.to_rgba8(),
             };
             if overlay == Overlay::Stretch {
@@ -210,16 +229,9 @@ impl TerrainScene {
                 }
                 None => None,
             };
-            // The relief map is in the orthographic layout whatever the drawn texture's; the
-            // slope limit follows the drawn texture's layout (docs/rendering.md). Photo
-            // textures of charts are projected onto the TIN (photo::LevelScene::load_reliefs),
-            // so they are drawn without relief mapping.
-            let chart_drawn = match mode {
-                UvMode::Ortho => false,
-                UvMode::Mixed | UvMode::Photo | UvMode::Reparam => rec.reparam.is_some(),
-            };
+            // (a photo chart without its base, e.g. under the stretch overlay: not mapped)
             let photo_chart = chart_drawn && mode == UvMode::Photo && rec.photo.is_some();
-            let relief_map = if relief && !photo_chart {
+            let relief_map = if relief && (!photo_chart || base.is_some()) {
                 st.read_relief_map(rec)?
             } else {
                 None
@@ -233,6 +245,7 @@ impl TerrainScene {
                 };
                 data.set_relief(r, min_z, chart_drawn, rec.extent.width());
             }
+            data.base_mips = base.map(colour_mip_chain);
             data.morph = morph_data;
             Ok(data)
         })

@@ -74,7 +74,12 @@ impl TerrainRenderer {
                 // relief limits: slope limit, and 1 if texture coordinates are a vertex
                 // stream (the lookup moves through the triangle's map, not planar_uv)
                 let stream = f32::from(u8::from(c.uvs.is_some()));
-                v.extend_from_slice(&[c.relief_min_normal_z, stream, 0.0, 0.0]);
+                v.extend_from_slice(&[
+                    c.relief_min_normal_z,
+                    stream,
+                    f32::from(u8::from(c.share_relief)),
+                    0.0,
+                ]);
                 let b = f32_bytes(&v);
                 bytes[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]
                     .copy_from_slice(&b);

@@ -47,6 +47,10 @@ pub struct GpuCell {
     pub relief_m: f32,
     /// Smallest up component of a relief-mapped triangle's unit normal.
     pub relief_min_normal_z: f32,
+    /// Whether the colour texture's alpha is the share of the base texture (group 1,
+    /// binding 4: the chart's own texture under its photo texture) in each texel, the part
+    /// relief mapping moves.
+    pub share_relief: bool,
     /// Triangles drawn (surface + skirt).
     pub triangles: u32,
     /// GPU bytes held (buffers and textures with mips).

@@ -76,6 +76,18 @@ impl TerrainRenderer {
                 )));
             }
         }
+        if let Some((w, h)) = data
+            .base_mips
+            .as_ref()
+            .map(|m| m.first().map_or((0, 0), |i| i.dimensions()))
+        {
+            if w == 0 || h == 0 || w > max || h > max {
+                return Err(Error::Gpu(format!(
+                    "cell {}: chart texture of {w}x{h} texels cannot be uploaded (limit {max})",
+                    rec.id
+                )));
+            }
+        }
         if let Some(r) = &data.relief {
             let (w, h) = r.dimensions();
             if w == 0 || h == 0 || w > max || h > max {
@@ -171,6 +183,18 @@ impl TerrainRenderer {
         );
         let rb = relief_img.as_raw().len() as u64;
         let rv = relief.create_view(&Default::default());
+        // the base texture whose share relief mapping moves, or a 1×1 placeholder
+        let base_placeholder = vec![image::RgbaImage::from_pixel(
+            1,
+            1,
+            image::Rgba([0, 0, 0, 255]),
+        )];
+        let (base, bb) = self.texture(
+            "base colour",
+            data.base_mips.as_ref().unwrap_or(&base_placeholder),
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        );
+        let bv = base.create_view(&Default::default());
         let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&rec.id),
             layout: &self.cell_layout,
@@ -190,6 +214,10 @@ impl TerrainRenderer {
                 wgpu::BindGroupEntry {
                     binding: 3,
                     resource: wgpu::BindingResource::TextureView(&rv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&bv),
                 },
             ],
         });
@@ -229,7 +257,8 @@ impl TerrainRenderer {
                 .map_or(0, |m| m.targets.len() as u64 * 12)
             + cb
             + nb
-            + rb;
+            + rb
+            + bb;
         Ok(GpuCell {
             positions,
             uvs,
@@ -258,6 +287,7 @@ impl TerrainRenderer {
                 0.0
             },
             relief_min_normal_z: data.relief_min_normal_z,
+            share_relief: data.base_mips.is_some() && data.relief.is_some(),
             triangles: data.mesh.triangles.len() as u32,
             bytes,
         })

@@ -23,7 +23,9 @@ struct Draw {
     relief: vec4<f32>,
     // x = smallest up component of a relief-mapped triangle's unit normal; y = 1 if texture
     // coordinates come from a vertex stream (the lookup then moves through the triangle's
-    // own map from (x, y) to texture coordinates), 0 if they are orthographic (planar_uv).
+    // own map from (x, y) to texture coordinates), 0 if they are orthographic (planar_uv);
+    // z = 1 if the colour texture's alpha is the share of base_tex in each texel (a chart
+    // drawn with its photo texture: only that share moves), else 0.
     relief_limits: vec4<f32>,
 };
 
@@ -35,6 +37,9 @@ struct Draw {
 // The relief map (R8: the DEM's height above the TIN, encoded over ±draw.relief.x metres), in
 // the orthographic layout of the nominal square whatever the colour texture's layout.
 @group(1) @binding(3) var relief_tex: texture_2d<f32>;
+// A photo-textured chart's own (reparameterized) texture: its share of each photo texel (the
+// photo texture's alpha) is relief-mapped; a placeholder elsewhere.
+@group(1) @binding(4) var base_tex: texture_2d<f32>;
 // The parent cell's textures (placeholders unless morphing with a resident parent).
 @group(2) @binding(0) var parent_colour: texture_2d<f32>;
 @group(2) @binding(1) var parent_normal: texture_2d<f32>;
@@ -273,8 +278,27 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
         c = textureSampleGrad(colour_tex, samp, uv, gx * sc, gy * sc);
         n_raw = textureSampleGrad(normal_tex, samp, uv, gx * sn, gy * sn).xyz * 2.0 - vec3<f32>(1.0);
     } else if range > 0.0 {
-        c = textureSampleGrad(colour_tex, samp, uv, gx, gy);
-        n_raw = textureSampleGrad(normal_tex, samp, uv, gx, gy).xyz * 2.0 - vec3<f32>(1.0);
+        // Lookups relief mapping leaves in place sample with implicit derivatives, as
+        // without relief mapping: explicit ones read a coarse mip at silhouette fragments
+        // (lavapipe; single pixels of a texture's mean colour along walls' edges).
+        c = textureSample(colour_tex, samp, i.uv);
+        var nt = textureSample(normal_tex, samp, i.uv);
+        let moved = any(uv != i.uv);
+        if draw.relief_limits.z > 0.5 {
+            // A chart drawn with its photo texture: the photo's colour stays where the
+            // projection put it; the chart texture's share of the texel (alpha) moves.
+            let b0 = textureSample(base_tex, samp, i.uv);
+            if moved {
+                let b1 = textureSampleGrad(base_tex, samp, uv, gx, gy);
+                c = vec4<f32>(clamp(c.rgb + c.a * (b1.rgb - b0.rgb), vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+            }
+        } else if moved {
+            c = textureSampleGrad(colour_tex, samp, uv, gx, gy);
+        }
+        if moved {
+            nt = textureSampleGrad(normal_tex, samp, uv, gx, gy);
+        }
+        n_raw = nt.xyz * 2.0 - vec3<f32>(1.0);
     } else {
         c = textureSample(colour_tex, samp, i.uv);
         n_raw = textureSample(normal_tex, samp, i.uv).xyz * 2.0 - vec3<f32>(1.0);
