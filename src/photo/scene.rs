@@ -121,8 +121,10 @@ impl LevelScene {
     /// Loads the relief maps of the cells whose active texture is orthographic from `store`,
     /// so that hits are moved onto the relief surface ([`super::relief::CellRelief::shift`],
     /// slopes up to 75.5°, as the renderer). Reparameterized cells keep their TIN hits: the
-    /// renderer does not relief-map their photo textures (docs/rendering.md: projecting charts
-    /// onto the relief surface put wall colour into ground texels). Cells without a relief map
+    /// renderer leaves the photo's colour of their photo textures where it was projected and
+    /// relief-maps only the chart texture's share (docs/rendering.md, "Photo charts by
+    /// share"; projecting charts onto the relief surface put wall colour into ground
+    /// texels). Cells without a relief map
     /// (stores built before 2026-12-06) keep their TIN hits too. Errors name a damaged file.
     pub fn load_reliefs(&mut self, store: &Store) -> Result<()> {
         let cells = &store.manifest.cells;
