@@ -76,17 +76,18 @@ impl TerrainRenderer {
                 )));
             }
         }
-        if let Some((w, h)) = data
+        // the chart texture under a photo texture (relief mapping by share)
+        let base = data
             .base_mips
             .as_ref()
-            .map(|m| m.first().map_or((0, 0), |i| i.dimensions()))
+            .map(|m| m.first().map_or((0, 0), |i| i.dimensions()));
+        if let Some((w, h)) = base
+            && (w == 0 || h == 0 || w > max || h > max)
         {
-            if w == 0 || h == 0 || w > max || h > max {
-                return Err(Error::Gpu(format!(
-                    "cell {}: chart texture of {w}x{h} texels cannot be uploaded (limit {max})",
-                    rec.id
-                )));
-            }
+            return Err(Error::Gpu(format!(
+                "cell {}: chart texture of {w}x{h} texels cannot be uploaded (limit {max})",
+                rec.id
+            )));
         }
         if let Some(r) = &data.relief {
             let (w, h) = r.dimensions();
