@@ -250,6 +250,78 @@ fn on_photo_charts_only_the_chart_textures_share_follows_the_relief() {
     assert!(mean_diff(&mapped, &raised_img) > 3.0);
 }
 
+/// Makes every cell of the store in `dir` a chart (the 8 × 8 grid mesh) whose own texture is
+/// the ramp at `texels` texels with blue `blue`, so that a render tells which texture it read.
+fn make_charts(dir: &Path, texels: u32, blue: u8) {
+    let path = dir.join("manifest.json");
+    let mut m: cliffmap::store::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for rec in &mut m.cells {
+        let stem = cell_stem(rec.level, rec.x, rec.y);
+        let mesh = grid_mesh(rec, 8);
+        let mesh_file = write_file(dir, &format!("{stem}.uv.mesh"), &mesh.to_bytes()).unwrap();
+        let mut tex = ramp(texels);
+        tex.pixels_mut().for_each(|p| p.0[2] = blue);
+        let mut c = std::io::Cursor::new(Vec::new());
+        tex.write_to(&mut c, image::ImageFormat::Png).unwrap();
+        let texture = write_file(dir, &format!("{stem}.chart.png"), &c.into_inner()).unwrap();
+        rec.reparam = Some(cliffmap::store::ReparamRecord {
+            texels,
+            files: cliffmap::store::CellFiles {
+                mesh: mesh_file,
+                texture,
+                normal: rec.files.normal.clone(),
+            },
+            metrics: Default::default(),
+            rel_texel: 1.0,
+            texel_stretch: Default::default(),
+            bilinear_fallbacks: 0,
+        });
+    }
+    let text = serde_json::to_string_pretty(&m).unwrap();
+    cliffmap::fsutil::write_atomic(&path, text.as_bytes()).unwrap();
+}
+
+/// Mean blue over the central half of the frame.
+fn mean_blue(img: &image::RgbaImage) -> f64 {
+    let (lo, hi) = (SIZE / 4, 3 * SIZE / 4);
+    let mut sum = 0.0;
+    for y in lo..hi {
+        for x in lo..hi {
+            sum += img.get_pixel(x, y).0[2] as f64;
+        }
+    }
+    sum / ((hi - lo) * (hi - lo)) as f64
+}
+
+#[test]
+fn relief_mapped_charts_read_the_finer_of_chart_and_orthographic_texture() {
+    let z = 1234.0;
+    let centre = DVec3::new(X0 + 50.0, Y0 - 50.0, z);
+    let pos = centre + DVec3::new(-30.0, -25.0, 48.0);
+    let rot = rotation_look_at(pos, centre).unwrap();
+    let cam = CameraModel::with_fov(pos, rot, SIZE, SIZE, 50f64.to_radians());
+    // the orthographic texture is the ramp at 64 texels with blue 90; flat charts of 16 and
+    // of 256 texels with blue 200
+    for (texels, expect_ortho) in [(16, true), (256, false)] {
+        let dir = tempfile::tempdir().unwrap();
+        store(dir.path(), z, Some((223, 8.0)));
+        make_charts(dir.path(), texels, 200);
+        let on = mean_blue(&render_as(dir.path(), true, &cam, UvMode::Reparam));
+        let off = mean_blue(&render_as(dir.path(), false, &cam, UvMode::Reparam));
+        eprintln!(
+            "chart of {texels} texels: mean blue {on:.1} with relief mapping, {off:.1} without"
+        );
+        // without relief mapping the chart is drawn as it is
+        assert!((off - 200.0).abs() < 1.0, "{off}");
+        let want = if expect_ortho { 90.0 } else { 200.0 };
+        assert!(
+            (on - want).abs() < 1.0,
+            "chart of {texels}: {on}, want {want}"
+        );
+    }
+}
+
 #[test]
 fn a_store_without_relief_maps_renders_as_before() {
     let dir = tempfile::tempdir().unwrap();

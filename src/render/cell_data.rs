@@ -31,6 +31,9 @@ pub struct CellData {
     /// mip chain, whose share of each photo texel (the photo texture's alpha, `1 − s`) is
     /// relief-mapped; `None` otherwise.
     pub base_mips: Option<Vec<image::RgbaImage>>,
+    /// For a chart with relief mapping: its cell's orthographic texture's mip chain, read
+    /// where it resolves the surface more finely than the chart; `None` otherwise.
+    pub ortho_mips: Option<Vec<image::RgbaImage>>,
     /// Geomorphing data (towards the parent cell), when the scene morphs and the cell has a parent.
     pub morph: Option<MorphData>,
 }
@@ -95,6 +98,7 @@ impl CellData {
             relief_min_normal_z: 1.0,
             relief_reach: None,
             base_mips: None,
+            ortho_mips: None,
             morph: None,
         }
     }

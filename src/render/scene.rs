@@ -47,7 +47,9 @@ pub struct SceneOptions {
     /// where the view ray meets the DEM surface (the TIN plus the relief map) instead of
     /// where it meets the TIN, on triangles up to 75.5° (orthographic textures) or 45°
     /// (reparameterized charts) of slope. On a chart drawn with its photo texture (projected
-    /// onto the TIN) only the share of each texel that is the chart's own texture moves.
+    /// onto the TIN) only the share of each texel that is the chart's own texture moves; a
+    /// chart's own share is read from its cell's orthographic texture where that has more
+    /// texels per pixel.
     pub relief: bool,
 }
 
@@ -246,6 +248,13 @@ impl TerrainScene {
                 data.set_relief(r, min_z, chart_drawn, rec.extent.width());
             }
             data.base_mips = base.map(colour_mip_chain);
+            // A relief-mapped chart also reads its cell's orthographic texture where that has
+            // more texels per pixel (flat ground, docs/rendering.md "Photo charts by share").
+            if data.relief.is_some() && chart_drawn && overlay != Overlay::Stretch {
+                data.ortho_mips = Some(colour_mip_chain(
+                    st.read_png(&rec.files.texture)?.to_rgba8(),
+                ));
+            }
             data.morph = morph_data;
             Ok(data)
         })

@@ -78,7 +78,7 @@ impl TerrainRenderer {
                     c.relief_min_normal_z,
                     stream,
                     f32::from(u8::from(c.share_relief)),
-                    0.0,
+                    f32::from(u8::from(c.ortho_beside)),
                 ]);
                 let b = f32_bytes(&v);
                 bytes[i * DRAW_STRIDE as usize..i * DRAW_STRIDE as usize + b.len()]

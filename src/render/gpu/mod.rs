@@ -51,6 +51,8 @@ pub struct GpuCell {
     /// binding 4: the chart's own texture under its photo texture) in each texel, the part
     /// relief mapping moves.
     pub share_relief: bool,
+    /// Whether group 1, binding 5 holds the chart's orthographic texture.
+    pub ortho_beside: bool,
     /// Triangles drawn (surface + skirt).
     pub triangles: u32,
     /// GPU bytes held (buffers and textures with mips).

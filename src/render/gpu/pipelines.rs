@@ -35,7 +35,7 @@ impl TerrainRenderer {
         let tex = fragment_texture_entry;
         let cell_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cell"),
-            entries: &[tex(0), tex(1), fragment_sampler_entry(2), tex(3), tex(4)],
+            entries: &[tex(0), tex(1), fragment_sampler_entry(2), tex(3), tex(4), tex(5)],
         });
         let parent_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("parent textures"),

@@ -196,6 +196,12 @@ impl TerrainRenderer {
             wgpu::TextureFormat::Rgba8UnormSrgb,
         );
         let bv = base.create_view(&Default::default());
+        let (ortho, ob) = self.texture(
+            "chart's orthographic colour",
+            data.ortho_mips.as_ref().unwrap_or(&base_placeholder),
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        );
+        let ov = ortho.create_view(&Default::default());
         let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&rec.id),
             layout: &self.cell_layout,
@@ -219,6 +225,10 @@ impl TerrainRenderer {
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::TextureView(&bv),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&ov),
                 },
             ],
         });
@@ -259,7 +269,8 @@ impl TerrainRenderer {
             + cb
             + nb
             + rb
-            + bb;
+            + bb
+            + ob;
         Ok(GpuCell {
             positions,
             uvs,
@@ -289,6 +300,7 @@ impl TerrainRenderer {
             },
             relief_min_normal_z: data.relief_min_normal_z,
             share_relief: data.base_mips.is_some() && data.relief.is_some(),
+            ortho_beside: data.ortho_mips.is_some() && data.relief.is_some(),
             triangles: data.mesh.triangles.len() as u32,
             bytes,
         })

@@ -25,7 +25,8 @@ struct Draw {
     // coordinates come from a vertex stream (the lookup then moves through the triangle's
     // own map from (x, y) to texture coordinates), 0 if they are orthographic (planar_uv);
     // z = 1 if the colour texture's alpha is the share of base_tex in each texel (a chart
-    // drawn with its photo texture: only that share moves), else 0.
+    // drawn with its photo texture: only that share moves), else 0; w = 1 if ortho_tex holds
+    // the chart's orthographic texture, else 0.
     relief_limits: vec4<f32>,
 };
 
@@ -40,6 +41,9 @@ struct Draw {
 // A photo-textured chart's own (reparameterized) texture: its share of each photo texel (the
 // photo texture's alpha) is relief-mapped; a placeholder elsewhere.
 @group(1) @binding(4) var base_tex: texture_2d<f32>;
+// A chart's orthographic texture (its cell's texture before reparameterization), read where it
+// resolves the surface more finely than the chart; a placeholder elsewhere.
+@group(1) @binding(5) var ortho_tex: texture_2d<f32>;
 // The parent cell's textures (placeholders unless morphing with a resident parent).
 @group(2) @binding(0) var parent_colour: texture_2d<f32>;
 @group(2) @binding(1) var parent_normal: texture_2d<f32>;
@@ -253,8 +257,11 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     }
     let range = draw.relief.x * (1.0 - t);
     var uv = i.uv;
+    // the relief move, unbounded by the chart's reach (for orthographic lookups)
+    var oshift = vec2<f32>(0.0);
     if range > 0.0 && dot(nf, nf) > 0.0 {
         var shift = relief_shift(i.lp, normalize(nf), range, max(length(px), length(py)));
+        oshift = shift;
         // on charts, only within the reach (the triangle's map holds that far); a longer
         // move is dropped, as the projection drops it (a shortened one would be neither the
         // relief surface's point nor the TIN's)
@@ -284,14 +291,35 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
         c = textureSample(colour_tex, samp, i.uv);
         var nt = textureSample(normal_tex, samp, i.uv);
         let moved = any(uv != i.uv);
+        // On a chart, the orthographic texture where it has more texels per pixel than the
+        // chart (flat ground, which a chart gives fewer texels than the orthophoto has).
+        let ogx = vec2<f32>(px.x / draw.extent.z, -px.y / draw.extent.w);
+        let ogy = vec2<f32>(py.x / draw.extent.z, -py.y / draw.extent.w);
+        var cdim = vec2<f32>(textureDimensions(colour_tex, 0));
+        if draw.relief_limits.z > 0.5 {
+            cdim = vec2<f32>(textureDimensions(base_tex, 0));
+        }
+        let odim = vec2<f32>(textureDimensions(ortho_tex, 0));
+        let chart_density = abs(gx.x * gy.y - gx.y * gy.x) * cdim.x * cdim.y;
+        let ortho_density = abs(ogx.x * ogy.y - ogx.y * ogy.x) * odim.x * odim.y;
+        let use_ortho = draw.relief_limits.w > 0.5 && ortho_density >= chart_density;
+        var o = textureSample(ortho_tex, samp, planar_uv(i.lp.xy));
+        if use_ortho && any(oshift != vec2<f32>(0.0)) {
+            o = textureSampleGrad(ortho_tex, samp, planar_uv(i.lp.xy + oshift), ogx, ogy);
+        }
         if draw.relief_limits.z > 0.5 {
             // A chart drawn with its photo texture: the photo's colour stays where the
             // projection put it; the chart texture's share of the texel (alpha) moves.
             let b0 = textureSample(base_tex, samp, i.uv);
-            if moved {
-                let b1 = textureSampleGrad(base_tex, samp, uv, gx, gy);
-                c = vec4<f32>(clamp(c.rgb + c.a * (b1.rgb - b0.rgb), vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+            var b1 = b0;
+            if use_ortho {
+                b1 = o;
+            } else if moved {
+                b1 = textureSampleGrad(base_tex, samp, uv, gx, gy);
             }
+            c = vec4<f32>(clamp(c.rgb + c.a * (b1.rgb - b0.rgb), vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+        } else if use_ortho {
+            c = o;
         } else if moved {
             c = textureSampleGrad(colour_tex, samp, uv, gx, gy);
         }
