@@ -163,40 +163,64 @@ fn grid_mesh(rec: &cliffmap::store::CellRecord, n: u32) -> cliffmap::store::Cell
     }
 }
 
-/// Makes every cell of the store in `dir` a chart (the same flat mesh with stored texture
-/// coordinates, its texture as the chart's own) drawn with a photo texture twice its size:
-/// the chart texture magnified, as the projection leaves texels no photo reached, with the
-/// photo share `confidence` (0..255) in every texel.
-fn make_photo_charts(dir: &Path, confidence: u8) {
+/// PNG bytes of `img`.
+fn png(img: impl Into<image::DynamicImage>) -> Vec<u8> {
+    let mut c = std::io::Cursor::new(Vec::new());
+    img.into()
+        .write_to(&mut c, image::ImageFormat::Png)
+        .unwrap();
+    c.into_inner()
+}
+
+/// Rewrites the manifest of the store in `dir` after `edit(record, cell_texels)` on each cell.
+fn edit_cells(dir: &Path, mut edit: impl FnMut(&mut cliffmap::store::CellRecord, u32)) {
     let path = dir.join("manifest.json");
     let mut m: cliffmap::store::Manifest =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     for rec in &mut m.cells {
+        edit(rec, m.cell_texels);
+    }
+    let text = serde_json::to_string_pretty(&m).unwrap();
+    cliffmap::fsutil::write_atomic(&path, text.as_bytes()).unwrap();
+}
+
+/// A chart record for `rec`: the 8 × 8 grid mesh (written to `dir`) with `texture` of
+/// `texels` texels as the chart's own texture.
+fn chart(
+    dir: &Path,
+    rec: &cliffmap::store::CellRecord,
+    texels: u32,
+    texture: cliffmap::store::FileRef,
+) -> cliffmap::store::ReparamRecord {
+    let stem = cell_stem(rec.level, rec.x, rec.y);
+    let mesh = grid_mesh(rec, 8);
+    let mesh_file = write_file(dir, &format!("{stem}.uv.mesh"), &mesh.to_bytes()).unwrap();
+    cliffmap::store::ReparamRecord {
+        texels,
+        files: cliffmap::store::CellFiles {
+            mesh: mesh_file,
+            texture,
+            normal: rec.files.normal.clone(),
+        },
+        metrics: Default::default(),
+        rel_texel: 1.0,
+        texel_stretch: Default::default(),
+        bilinear_fallbacks: 0,
+    }
+}
+
+/// Makes every cell of the store in `dir` a chart (the grid mesh with stored texture
+/// coordinates, its texture as the chart's own) drawn with a photo texture twice its size:
+/// the chart texture magnified, as the projection leaves texels no photo reached, with the
+/// photo share `confidence` (0..255) in every texel.
+fn make_photo_charts(dir: &Path, confidence: u8) {
+    edit_cells(dir, |rec, texels| {
         let stem = cell_stem(rec.level, rec.x, rec.y);
-        let mesh = grid_mesh(rec, 8);
-        let mesh_file = write_file(dir, &format!("{stem}.uv.mesh"), &mesh.to_bytes()).unwrap();
-        let texels = m.cell_texels;
-        let png = |img: image::DynamicImage| {
-            let mut c = std::io::Cursor::new(Vec::new());
-            img.write_to(&mut c, image::ImageFormat::Png).unwrap();
-            c.into_inner()
-        };
         let photo = cliffmap::store::magnify(&ramp(texels), 2);
         let conf = image::GrayImage::from_pixel(2 * texels, 2 * texels, image::Luma([confidence]));
-        let texture = write_file(dir, &format!("{stem}.photo.png"), &png(photo.into())).unwrap();
-        let confidence = write_file(dir, &format!("{stem}.conf.png"), &png(conf.into())).unwrap();
-        rec.reparam = Some(cliffmap::store::ReparamRecord {
-            texels,
-            files: cliffmap::store::CellFiles {
-                mesh: mesh_file,
-                texture: rec.files.texture.clone(),
-                normal: rec.files.normal.clone(),
-            },
-            metrics: Default::default(),
-            rel_texel: 1.0,
-            texel_stretch: Default::default(),
-            bilinear_fallbacks: 0,
-        });
+        let texture = write_file(dir, &format!("{stem}.photo.png"), &png(photo)).unwrap();
+        let confidence = write_file(dir, &format!("{stem}.conf.png"), &png(conf)).unwrap();
+        rec.reparam = Some(chart(dir, rec, texels, rec.files.texture.clone()));
         rec.photo = Some(cliffmap::store::PhotoCellRecord {
             texels: 2 * texels,
             texture,
@@ -206,9 +230,7 @@ fn make_photo_charts(dir: &Path, confidence: u8) {
             steep_photo_texels: 0,
             blocks: None,
         });
-    }
-    let text = serde_json::to_string_pretty(&m).unwrap();
-    cliffmap::fsutil::write_atomic(&path, text.as_bytes()).unwrap();
+    });
 }
 
 #[test]
@@ -253,33 +275,13 @@ fn on_photo_charts_only_the_chart_textures_share_follows_the_relief() {
 /// Makes every cell of the store in `dir` a chart (the 8 × 8 grid mesh) whose own texture is
 /// the ramp at `texels` texels with blue `blue`, so that a render tells which texture it read.
 fn make_charts(dir: &Path, texels: u32, blue: u8) {
-    let path = dir.join("manifest.json");
-    let mut m: cliffmap::store::Manifest =
-        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    for rec in &mut m.cells {
+    edit_cells(dir, |rec, _| {
         let stem = cell_stem(rec.level, rec.x, rec.y);
-        let mesh = grid_mesh(rec, 8);
-        let mesh_file = write_file(dir, &format!("{stem}.uv.mesh"), &mesh.to_bytes()).unwrap();
         let mut tex = ramp(texels);
         tex.pixels_mut().for_each(|p| p.0[2] = blue);
-        let mut c = std::io::Cursor::new(Vec::new());
-        tex.write_to(&mut c, image::ImageFormat::Png).unwrap();
-        let texture = write_file(dir, &format!("{stem}.chart.png"), &c.into_inner()).unwrap();
-        rec.reparam = Some(cliffmap::store::ReparamRecord {
-            texels,
-            files: cliffmap::store::CellFiles {
-                mesh: mesh_file,
-                texture,
-                normal: rec.files.normal.clone(),
-            },
-            metrics: Default::default(),
-            rel_texel: 1.0,
-            texel_stretch: Default::default(),
-            bilinear_fallbacks: 0,
-        });
-    }
-    let text = serde_json::to_string_pretty(&m).unwrap();
-    cliffmap::fsutil::write_atomic(&path, text.as_bytes()).unwrap();
+        let texture = write_file(dir, &format!("{stem}.chart.png"), &png(tex)).unwrap();
+        rec.reparam = Some(chart(dir, rec, texels, texture));
+    });
 }
 
 /// Mean blue over the central half of the frame.
