@@ -312,6 +312,10 @@ fn e2e_reparam_drops_photo_textures() {
             let (img, conf) = store.read_photo_texture(c, p).unwrap();
             assert_eq!((img.width(), img.height()), (p.texels, p.texels));
             assert_eq!(conf.dimensions(), img.dimensions());
+            // the renderer's single read of the texture and the active one under it
+            let (img2, conf2, active) = store.read_photo_texture_and_active(c, p).unwrap();
+            assert!(img2 == img && conf2 == conf);
+            assert!(active == store.read_active_texture(c).unwrap());
             // stored in blocks of photo colour: the atlas holds those blocks only
             let b = p
                 .blocks

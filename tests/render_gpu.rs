@@ -203,3 +203,60 @@ fn corrupt_cells_fail_with_the_file_named() {
     let e = scene.frame(&cam, true).unwrap_err().to_string();
     assert!(e.contains("0-0.mesh"), "{e}");
 }
+
+#[test]
+fn uploads_name_the_texture_they_cannot_take_and_share_placeholders() {
+    use cliffmap::render::{CellData, GpuContext, TerrainRenderer};
+    let s = Synth {
+        levels: 1,
+        size: 100.0,
+        z: 0.0,
+        finest_error: 0.1,
+        texels: 16,
+    };
+    let rec = render_support::record(
+        &s,
+        cliffmap::cells::CellKey {
+            level: 0,
+            x: 0,
+            y: 0,
+        },
+    );
+    let ctx = GpuContext::new().unwrap_or_else(|e| panic!("no headless GPU: {e}"));
+    let renderer = TerrainRenderer::new(ctx, 32, 32).unwrap();
+    let data = || {
+        CellData::new(
+            &rec,
+            render_support::flat_mesh(&rec, false),
+            image::RgbaImage::from_pixel(16, 16, image::Rgba([10, 20, 30, 255])),
+            image::RgbImage::from_pixel(16, 16, image::Rgb([128, 128, 255])),
+            UvMode::Mixed,
+        )
+    };
+    // cells without relief map, chart or orthographic texture all upload (one shared
+    // placeholder of each kind, counted in no cell's bytes)
+    let plain = renderer.upload(&rec, &data()).unwrap();
+    let again = renderer.upload(&rec, &data()).unwrap();
+    assert_eq!(plain.bytes, again.bytes);
+    let mut with_ortho = data();
+    with_ortho.ortho_mips = Some(vec![image::RgbaImage::new(8, 8)]);
+    let extra = renderer.upload(&rec, &with_ortho).unwrap();
+    assert_eq!(extra.bytes, plain.bytes + 8 * 8 * 4);
+    // an empty optional texture is an error naming it, not a panic
+    let mut bad = data();
+    bad.ortho_mips = Some(Vec::new());
+    let e = renderer
+        .upload(&rec, &bad)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("orthographic texture of 0x0"), "{e}");
+    let mut bad = data();
+    bad.base_mips = Some(vec![image::RgbaImage::new(0, 4)]);
+    let e = renderer
+        .upload(&rec, &bad)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("chart texture of 0x4"), "{e}");
+}

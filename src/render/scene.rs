@@ -194,13 +194,17 @@ impl TerrainScene {
             let mut base = None;
             let mut colour = match (&rec.photo, mode) {
                 (Some(p), UvMode::Photo) => {
-                    let (mut texture, confidence) = st.read_photo_texture(rec, p)?;
                     if relief && chart_drawn && overlay != Overlay::Stretch {
+                        // (the chart's texture is the active one: read once for both)
+                        let (mut texture, confidence, active) =
+                            st.read_photo_texture_and_active(rec, p)?;
                         set_base_share(&mut texture, &confidence)
                             .map_err(|e| Error::store(st.dir.join(&p.confidence.path), e))?;
-                        base = Some(st.read_png(&files.texture)?.to_rgba8());
+                        base = Some(active);
+                        texture
+                    } else {
+                        st.read_photo_texture(rec, p)?.0
                     }
-                    texture
                 }
                 _ => st.read_png(&files.texture)?.to_rgba8(),
             };

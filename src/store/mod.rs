@@ -169,12 +169,46 @@ impl Store {
         rec: &CellRecord,
         p: &PhotoCellRecord,
     ) -> Result<(image::RgbaImage, image::GrayImage)> {
+        let active = match p.blocks {
+            Some(_) => Some(self.read_active_texture(rec)?),
+            None => None,
+        };
+        self.photo_texture_over(rec, p, active.as_ref())
+    }
+
+    /// [`Store::read_photo_texture`] and the cell's active texture ([`Store::read_active_texture`])
+    /// under it, each file read and decoded once.
+    pub fn read_photo_texture_and_active(
+        &self,
+        rec: &CellRecord,
+        p: &PhotoCellRecord,
+    ) -> Result<(image::RgbaImage, image::GrayImage, image::RgbaImage)> {
+        let active = self.read_active_texture(rec)?;
+        let (texture, confidence) = self.photo_texture_over(rec, p, Some(&active))?;
+        Ok((texture, confidence, active))
+    }
+
+    /// The photo texture of `p`, its blocks (if stored in blocks) composed over `active`
+    /// (the cell's active texture; required then).
+    fn photo_texture_over(
+        &self,
+        rec: &CellRecord,
+        p: &PhotoCellRecord,
+        active: Option<&image::RgbaImage>,
+    ) -> Result<(image::RgbaImage, image::GrayImage)> {
         let texture = self.read_png(&p.texture)?.to_rgba8();
         let confidence = self.read_png(&p.confidence)?.to_luma8();
         let Some(blocks) = &p.blocks else {
             return Ok((texture, confidence));
         };
-        let active = self.read_active_texture(rec)?;
+        let owned;
+        let active = match active {
+            Some(a) => a,
+            None => {
+                owned = self.read_active_texture(rec)?;
+                &owned
+            }
+        };
         let path = self.dir.join(&p.texture.path);
         let (w, h) = active.dimensions();
         if w != h || w == 0 || p.texels % w != 0 || !(p.texels / w).is_power_of_two() {
@@ -186,7 +220,7 @@ impl Store {
                 ),
             ));
         }
-        photo_texture::compose(&active, p.texels / w, blocks, &texture, &confidence)
+        photo_texture::compose(active, p.texels / w, blocks, &texture, &confidence)
             .map_err(|e| Error::store(path, e))
     }
 

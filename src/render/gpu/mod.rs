@@ -129,6 +129,10 @@ pub struct TerrainRenderer {
     parent_layout: wgpu::BindGroupLayout,
     /// Group 2 of draws without parent textures (1×1 placeholders).
     no_parent: wgpu::BindGroup,
+    /// Group 1's relief map of cells without one: 1×1 R8, the TIN's own height (128).
+    no_relief: wgpu::TextureView,
+    /// Group 1's chart or orthographic texture of cells without one: 1×1 sRGB black.
+    no_colour: wgpu::TextureView,
     frame_layout: wgpu::BindGroupLayout,
     frame_buf: wgpu::Buffer,
     draw_buf: wgpu::Buffer,

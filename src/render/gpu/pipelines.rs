@@ -2,6 +2,8 @@
 //! without morph targets, and the bounding-box lines), created once per renderer, and the
 //! bind groups the frames rebuild.
 
+use wgpu::util::DeviceExt;
+
 use super::{DRAW_BYTES, DRAW_STRIDE, GpuContext, TerrainRenderer, check_size};
 use crate::error::Result;
 use crate::render::distort_pass::DistortPass;
@@ -35,7 +37,14 @@ impl TerrainRenderer {
         let tex = fragment_texture_entry;
         let cell_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cell"),
-            entries: &[tex(0), tex(1), fragment_sampler_entry(2), tex(3), tex(4), tex(5)],
+            entries: &[
+                tex(0),
+                tex(1),
+                fragment_sampler_entry(2),
+                tex(3),
+                tex(4),
+                tex(5),
+            ],
         });
         let parent_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("parent textures"),
@@ -177,6 +186,16 @@ impl TerrainRenderer {
         });
         let pv = placeholder.create_view(&Default::default());
         let no_parent = Self::parent_group(device, &parent_layout, &pv, &pv);
+        // one placeholder of each kind for every cell that lacks the texture (never sampled
+        // by such a cell's draw, but every binding of group 1 needs a view)
+        let no_relief =
+            Self::one_texel(&ctx, "no relief map", wgpu::TextureFormat::R8Unorm, &[128]);
+        let no_colour = Self::one_texel(
+            &ctx,
+            "no chart or orthographic texture",
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            &[0, 0, 0, 255],
+        );
         let target = RenderTarget::new(device, width, height);
         let distort = DistortPass::new(device);
         let draw_capacity = 64;
@@ -196,6 +215,8 @@ impl TerrainRenderer {
             cell_layout,
             parent_layout,
             no_parent,
+            no_relief,
+            no_colour,
             frame_layout,
             frame_buf,
             draw_buf,
@@ -203,6 +224,36 @@ impl TerrainRenderer {
             frame_group,
             sampler,
         })
+    }
+
+    /// A view of a 1×1 texture of `format` holding `texel`.
+    fn one_texel(
+        ctx: &GpuContext,
+        label: &str,
+        format: wgpu::TextureFormat,
+        texel: &[u8],
+    ) -> wgpu::TextureView {
+        ctx.device
+            .create_texture_with_data(
+                &ctx.queue,
+                &wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                },
+                wgpu::util::TextureDataOrder::LayerMajor,
+                texel,
+            )
+            .create_view(&Default::default())
     }
 
     pub(super) fn parent_group(

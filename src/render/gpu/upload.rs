@@ -64,36 +64,24 @@ impl TerrainRenderer {
     /// Uploads a cell. Fails on an empty mesh or texture, or a texture over the device limit.
     pub fn upload(&self, rec: &CellRecord, data: &CellData) -> Result<GpuCell> {
         let max = self.ctx.device.limits().max_texture_dimension_2d;
-        for (what, mips) in [
-            ("texture", &data.colour_mips),
-            ("normal map", &data.normal_mips),
+        let first = |m: &[image::RgbaImage]| m.first().map_or((0, 0), |i| i.dimensions());
+        // the chart texture under a photo texture (relief mapping by share), the chart's
+        // orthographic texture and the relief map are optional
+        for (what, size) in [
+            ("texture", Some(first(&data.colour_mips))),
+            ("normal map", Some(first(&data.normal_mips))),
+            ("chart texture", data.base_mips.as_deref().map(first)),
+            (
+                "orthographic texture",
+                data.ortho_mips.as_deref().map(first),
+            ),
+            ("relief map", data.relief.as_ref().map(|r| r.dimensions())),
         ] {
-            let (w, h) = mips.first().map(|m| m.dimensions()).unwrap_or((0, 0));
-            if w == 0 || h == 0 || w > max || h > max {
+            if let Some((w, h)) = size
+                && (w == 0 || h == 0 || w > max || h > max)
+            {
                 return Err(Error::Gpu(format!(
                     "cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})",
-                    rec.id
-                )));
-            }
-        }
-        // the chart texture under a photo texture (relief mapping by share)
-        let base = data
-            .base_mips
-            .as_ref()
-            .map(|m| m.first().map_or((0, 0), |i| i.dimensions()));
-        if let Some((w, h)) = base
-            && (w == 0 || h == 0 || w > max || h > max)
-        {
-            return Err(Error::Gpu(format!(
-                "cell {}: chart texture of {w}x{h} texels cannot be uploaded (limit {max})",
-                rec.id
-            )));
-        }
-        if let Some(r) = &data.relief {
-            let (w, h) = r.dimensions();
-            if w == 0 || h == 0 || w > max || h > max {
-                return Err(Error::Gpu(format!(
-                    "cell {}: relief map of {w}x{h} texels cannot be uploaded (limit {max})",
                     rec.id
                 )));
             }
@@ -160,48 +148,49 @@ impl TerrainRenderer {
             self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
         let cv = colour.create_view(&Default::default());
         let nv = normal.create_view(&Default::default());
-        // the relief map (R8, one level, read texel by texel), or a 1×1 placeholder
-        let placeholder = image::GrayImage::from_pixel(1, 1, image::Luma([128]));
-        let relief_img = data.relief.as_ref().unwrap_or(&placeholder);
-        let relief = self.ctx.device.create_texture_with_data(
-            &self.ctx.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("relief"),
-                size: wgpu::Extent3d {
-                    width: relief_img.width(),
-                    height: relief_img.height(),
-                    depth_or_array_layers: 1,
+        // the relief map (R8, one level, read texel by texel), else the shared placeholder
+        let relief = data.relief.as_ref().map(|img| {
+            let tex = self.ctx.device.create_texture_with_data(
+                &self.ctx.queue,
+                &wgpu::TextureDescriptor {
+                    label: Some("relief"),
+                    size: wgpu::Extent3d {
+                        width: img.width(),
+                        height: img.height(),
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: wgpu::TextureFormat::R8Unorm,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
                 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R8Unorm,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            relief_img.as_raw(),
-        );
-        let rb = relief_img.as_raw().len() as u64;
-        let rv = relief.create_view(&Default::default());
-        // the base texture whose share relief mapping moves, or a 1×1 placeholder
-        let base_placeholder = vec![image::RgbaImage::from_pixel(
-            1,
-            1,
-            image::Rgba([0, 0, 0, 255]),
-        )];
-        let (base, bb) = self.texture(
-            "base colour",
-            data.base_mips.as_ref().unwrap_or(&base_placeholder),
-            wgpu::TextureFormat::Rgba8UnormSrgb,
-        );
-        let bv = base.create_view(&Default::default());
-        let (ortho, ob) = self.texture(
-            "chart's orthographic colour",
-            data.ortho_mips.as_ref().unwrap_or(&base_placeholder),
-            wgpu::TextureFormat::Rgba8UnormSrgb,
-        );
-        let ov = ortho.create_view(&Default::default());
+                wgpu::util::TextureDataOrder::LayerMajor,
+                img.as_raw(),
+            );
+            (
+                tex.create_view(&Default::default()),
+                img.as_raw().len() as u64,
+            )
+        });
+        // the base texture whose share relief mapping moves and the chart's orthographic
+        // texture, else the shared placeholder
+        let colour_extra = |label: &str, mips: &Option<Vec<image::RgbaImage>>| {
+            mips.as_ref().map(|m| {
+                let (tex, bytes) = self.texture(label, m, wgpu::TextureFormat::Rgba8UnormSrgb);
+                (tex.create_view(&Default::default()), bytes)
+            })
+        };
+        let base = colour_extra("base colour", &data.base_mips);
+        let ortho = colour_extra("chart's orthographic colour", &data.ortho_mips);
+        let rv = relief.as_ref().map_or(&self.no_relief, |(v, _)| v);
+        let bv = base.as_ref().map_or(&self.no_colour, |(v, _)| v);
+        let ov = ortho.as_ref().map_or(&self.no_colour, |(v, _)| v);
+        let extra_bytes: u64 = [&relief, &base, &ortho]
+            .iter()
+            .filter_map(|t| t.as_ref().map(|(_, b)| *b))
+            .sum();
         let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&rec.id),
             layout: &self.cell_layout,
@@ -220,15 +209,15 @@ impl TerrainRenderer {
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&rv),
+                    resource: wgpu::BindingResource::TextureView(rv),
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&bv),
+                    resource: wgpu::BindingResource::TextureView(bv),
                 },
                 wgpu::BindGroupEntry {
                     binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&ov),
+                    resource: wgpu::BindingResource::TextureView(ov),
                 },
             ],
         });
@@ -268,9 +257,7 @@ impl TerrainRenderer {
                 .map_or(0, |m| m.targets.len() as u64 * 12)
             + cb
             + nb
-            + rb
-            + bb
-            + ob;
+            + extra_bytes;
         Ok(GpuCell {
             positions,
             uvs,
