@@ -1,14 +1,17 @@
 //! Relief mapping (docs/rendering.md): a flat TIN whose relief map says the DEM lies `r`
 //! metres above it everywhere must look, in an oblique view, like the same TIN raised by
 //! `r` drawn without relief mapping: the texture is looked up where the view ray meets the
-//! raised surface. Headless (Mesa lavapipe in CI); fails, never skips, without an adapter.
+//! raised surface. The same synthetic photo charts check the photo-share overlay. Headless
+//! (Mesa lavapipe in CI); fails, never skips, without an adapter.
 
 mod render_support;
 
 use std::path::Path;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
-use cliffmap::render::{FrameOptions, SceneOptions, TerrainScene, UvMode};
+use cliffmap::render::{
+    FrameOptions, NO_PHOTO_COLOUR, Overlay, SceneOptions, TerrainScene, UvMode, share_colour,
+};
 use cliffmap::store::{ReliefRecord, cell_stem, write_file};
 use glam::DVec3;
 use render_support::{Synth, X0, Y0, write_store_textured};
@@ -59,8 +62,19 @@ fn render(dir: &Path, relief: bool, cam: &CameraModel) -> image::RgbaImage {
 }
 
 fn render_as(dir: &Path, relief: bool, cam: &CameraModel, uv_mode: UvMode) -> image::RgbaImage {
+    render_overlay(dir, relief, cam, uv_mode, Overlay::None)
+}
+
+fn render_overlay(
+    dir: &Path,
+    relief: bool,
+    cam: &CameraModel,
+    uv_mode: UvMode,
+    overlay: Overlay,
+) -> image::RgbaImage {
     let opts = SceneOptions {
         uv_mode,
+        overlay,
         frame: FrameOptions {
             lit: false,
             ..Default::default()
@@ -322,6 +336,35 @@ fn relief_mapped_charts_read_the_finer_of_chart_and_orthographic_texture() {
             "chart of {texels}: {on}, want {want}"
         );
     }
+}
+
+#[test]
+fn the_photo_share_overlay_shows_each_texels_share() {
+    let dir = tempfile::tempdir().unwrap();
+    store(dir.path(), 0.0, Some((128, 4.0)));
+    make_photo_charts(dir.path(), 200);
+    let centre = DVec3::new(X0 + 50.0, Y0 - 50.0, 0.0);
+    let pos = centre + DVec3::new(0.0, 0.0, 120.0);
+    let cam = CameraModel::with_fov(
+        pos,
+        rotation_look_at(pos, centre).unwrap(),
+        SIZE,
+        SIZE,
+        40f64.to_radians(),
+    );
+    let at_centre = |mode| {
+        let img = render_overlay(dir.path(), true, &cam, mode, Overlay::PhotoShare);
+        img.get_pixel(SIZE / 2, SIZE / 2).0
+    };
+    let near = |a: [u8; 4], b: [u8; 4]| (0..3).all(|k| (a[k] as i32 - b[k] as i32).abs() <= 2);
+    // the photo texture's layout is the chart's: its share shows wherever charts are drawn
+    for mode in [UvMode::Photo, UvMode::Mixed] {
+        let c = at_centre(mode);
+        assert!(near(c, share_colour(200)), "{mode:?}: {c:?}");
+    }
+    // in the orthographic layout the chart's share map does not fit: no photo shown
+    let c = at_centre(UvMode::Ortho);
+    assert!(near(c, NO_PHOTO_COLOUR), "{c:?}");
 }
 
 #[test]

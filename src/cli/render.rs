@@ -36,7 +36,8 @@ pub struct Args {
     /// orthographic; the default), or force the reparameterized or orthographic one.
     #[arg(long, value_enum, default_value_t = TextureMode::Photo)]
     mode: TextureMode,
-    /// Overlay: level colours + bounding boxes, or the per-texel stretch heat map.
+    /// Overlay: level colours + bounding boxes, the per-texel stretch heat map, or the
+    /// per-texel photo share.
     #[arg(long, value_enum, default_value_t = OverlayArg::None)]
     overlay: OverlayArg,
     /// Blend cells towards their parents' shape and texel density near LOD switches.
@@ -87,6 +88,9 @@ pub enum OverlayArg {
     Levels,
     /// Per-texel stretch heat map (blue 1, yellow 2, red ≥ 4).
     Stretch,
+    /// Per-texel photo share: yellow where the projected photos supply the colour, green
+    /// half, blue none (the cell's existing texture), grey cells without a photo texture.
+    PhotoShare,
 }
 
 impl OverlayArg {
@@ -96,6 +100,7 @@ impl OverlayArg {
             OverlayArg::None => Overlay::None,
             OverlayArg::Levels => Overlay::Levels,
             OverlayArg::Stretch => Overlay::Stretch,
+            OverlayArg::PhotoShare => Overlay::PhotoShare,
         }
     }
 }
@@ -130,7 +135,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (w, h) = (ow * ss, oh * ss);
     let cam = camera_from_json_file(&a.camera, (ow, oh))?.resized(w, h);
     let overlay = match (a.unlit, a.levels, a.overlay.overlay()) {
-        // --unlit is the texture colour alone: no overlays.
+        // --unlit is the texture colour alone: no tint or boxes, but an overlay that replaces
+        // the texture is shown as it is (unshaded)
+        (true, _, o) if o.replaces_texture() => o,
         (true, _, _) => Overlay::None,
         (false, true, _) => Overlay::Levels,
         (false, false, o) => o,

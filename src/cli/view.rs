@@ -4,8 +4,8 @@
 //! surface, read back and written into the surface texture (a copy, so the renderer stays
 //! headless); the surface and the render target follow window resizes. Keys: WASD move, Q/E
 //! down/up, Shift faster, mouse drag look, Tab or right button capture the mouse for mouse
-//! look, G geomorphing, L levels + boxes, H stretch heat map, M texture mode, +/− threshold,
-//! Esc release the mouse / quit.
+//! look, G geomorphing, L levels + boxes, H stretch heat map, P photo share, M texture mode,
+//! +/− threshold, Esc release the mouse / quit.
 
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -293,11 +293,11 @@ impl ViewState {
             KeyCode::Escape => return Ok(false),
             KeyCode::Tab => self.toggle_capture(),
             KeyCode::KeyG => self.toggle_geomorph(),
-            KeyCode::KeyL | KeyCode::KeyH => {
-                let o = if code == KeyCode::KeyL {
-                    Overlay::Levels
-                } else {
-                    Overlay::Stretch
+            KeyCode::KeyL | KeyCode::KeyH | KeyCode::KeyP => {
+                let o = match code {
+                    KeyCode::KeyL => Overlay::Levels,
+                    KeyCode::KeyH => Overlay::Stretch,
+                    _ => Overlay::PhotoShare,
                 };
                 self.overlay = if self.overlay == o { Overlay::None } else { o };
                 self.scene.set_mode(modes[self.mode], self.overlay);
@@ -382,6 +382,7 @@ impl ViewState {
             Overlay::None => "",
             Overlay::Levels => " + levels",
             Overlay::Stretch => " + stretch",
+            Overlay::PhotoShare => " + photo share",
         };
         self.window.set_title(&format!(
             "cliffmap view — {:.1} ms ({:.1} fps), {} cells, {} triangles, {}{}{}, SSE {:.3} px{}",

@@ -29,7 +29,9 @@ pub use lod::{
     CellIndex, LodSelection, cell_error, distance_to_bbox, geometric_error, screen_space_error,
     select_cells, select_cells_with_margin,
 };
-pub use overlay::{Overlay, heat_colour, stretch_heatmap};
+pub use overlay::{
+    NO_PHOTO_COLOUR, Overlay, heat_colour, share_colour, share_map, stretch_heatmap,
+};
 pub use stream::{DrawList, Streamer, resolve_draw_list};
 pub use supersample::downsample_rgba;
 

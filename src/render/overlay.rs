@@ -13,6 +13,45 @@ pub enum Overlay {
     Levels,
     /// Per-texel stretch heat map instead of the colour texture (see [`stretch_heatmap`]).
     Stretch,
+    /// Per-texel photo share instead of the colour texture (see [`share_map`]): where the
+    /// projected photos supply the colour a cell shows.
+    PhotoShare,
+}
+
+impl Overlay {
+    /// Whether the overlay replaces the cells' colour textures (so switching to or from it
+    /// reloads the cells).
+    pub fn replaces_texture(self) -> bool {
+        matches!(self, Overlay::Stretch | Overlay::PhotoShare)
+    }
+}
+
+/// The colour of texels of cells that have no photo texture in [`Overlay::PhotoShare`]
+/// (mid grey).
+pub const NO_PHOTO_COLOUR: [u8; 4] = [128, 128, 128, 255];
+
+/// Colour (sRGB RGBA8) of a photo share `s` (0..=255 as stored in a confidence map, 255 =
+/// the photo's colour alone): dark blue 0 (the existing texture), through green (one half)
+/// to yellow (the photo alone).
+pub fn share_colour(s: u8) -> [u8; 4] {
+    const STOPS: [[f32; 3]; 3] = [[0.05, 0.1, 0.55], [0.1, 0.8, 0.2], [0.95, 0.9, 0.1]];
+    let t = s as f32 / 255.0 * 2.0;
+    let (a, b, f) = if t <= 1.0 {
+        (STOPS[0], STOPS[1], t)
+    } else {
+        (STOPS[1], STOPS[2], t - 1.0)
+    };
+    let c = [0, 1, 2].map(|i| ((a[i] + f * (b[i] - a[i])) * 255.0).round() as u8);
+    [c[0], c[1], c[2], 255]
+}
+
+/// The photo-share map of a cell: [`share_colour`] of each texel of its confidence map
+/// (the photo texture's layout and size).
+pub fn share_map(confidence: &image::GrayImage) -> image::RgbaImage {
+    let (w, h) = confidence.dimensions();
+    image::RgbaImage::from_fn(w, h, |x, y| {
+        image::Rgba(share_colour(confidence.get_pixel(x, y).0[0]))
+    })
 }
 
 /// Heat-map colour of a stretch value (sRGB RGBA8): 1 (optimal) dark blue, through cyan (1.25),
@@ -65,5 +104,21 @@ mod tests {
         assert_eq!(heat_colour(9.0), heat_colour(4.0));
         // Redder with more stretch.
         assert!(heat_colour(3.0)[1] < heat_colour(2.0)[1]);
+    }
+
+    #[test]
+    fn share_colours_run_from_blue_to_yellow() {
+        assert_eq!(share_colour(0), [13, 26, 140, 255]);
+        assert_eq!(share_colour(255), [242, 230, 26, 255]);
+        let mid = share_colour(128);
+        assert!(mid[1] > 190 && mid[0] < 40 && mid[2] < 70, "{mid:?}");
+        // more photo: redder and greener up to the top, never grey
+        assert!(share_colour(200)[0] > share_colour(128)[0]);
+        assert_ne!(share_colour(128), NO_PHOTO_COLOUR);
+        let map = share_map(&image::GrayImage::from_fn(2, 1, |x, _| {
+            image::Luma([x as u8 * 255])
+        }));
+        assert_eq!(map.get_pixel(0, 0).0, share_colour(0));
+        assert_eq!(map.get_pixel(1, 0).0, share_colour(255));
     }
 }

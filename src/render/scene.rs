@@ -17,7 +17,7 @@ use super::gpu::{
 use super::lod::{
     CellIndex, distance_to_bbox, geometric_error, screen_space_error, select_cells_with_margin,
 };
-use super::overlay::{Overlay, stretch_heatmap};
+use super::overlay::{NO_PHOTO_COLOUR, Overlay, share_map, stretch_heatmap};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
@@ -193,8 +193,9 @@ impl TerrainScene {
             // chart's own texture (the base, bound beside it), the photo's colour stays.
             let mut base = None;
             let mut colour = match (&rec.photo, mode) {
+                _ if overlay == Overlay::PhotoShare => photo_share_texture(st, rec, mode)?,
                 (Some(p), UvMode::Photo) => {
-                    if relief && chart_drawn && overlay != Overlay::Stretch {
+                    if relief && chart_drawn && !overlay.replaces_texture() {
                         // (the chart's texture is the active one: read once for both)
                         let (mut texture, confidence, active) =
                             st.read_photo_texture_and_active(rec, p)?;
@@ -254,7 +255,7 @@ impl TerrainScene {
             data.base_mips = base.map(colour_mip_chain);
             // A relief-mapped chart also reads its cell's orthographic texture where that has
             // more texels per pixel (flat ground, docs/rendering.md "Photo charts by share").
-            if data.relief.is_some() && chart_drawn && overlay != Overlay::Stretch {
+            if data.relief.is_some() && chart_drawn && !overlay.replaces_texture() {
                 data.ortho_mips = Some(colour_mip_chain(
                     st.read_png(&rec.files.texture)?.to_rgba8(),
                 ));
@@ -300,7 +301,8 @@ impl TerrainScene {
     /// background) when the cell data changes; the level tint applies at once.
     pub fn set_mode(&mut self, uv_mode: UvMode, overlay: Overlay) {
         let reload = uv_mode != self.opts.uv_mode
-            || (overlay == Overlay::Stretch) != (self.opts.overlay == Overlay::Stretch);
+            || (overlay != self.opts.overlay
+                && (overlay.replaces_texture() || self.opts.overlay.replaces_texture()));
         self.opts.uv_mode = uv_mode;
         self.opts.overlay = overlay;
         self.opts.frame.level_overlay = overlay == Overlay::Levels;
@@ -552,6 +554,24 @@ impl TerrainScene {
 
 /// The files a cell is drawn from in `mode`: its reparameterized variant where it has one,
 /// unless the baseline orthographic rendering is asked for.
+/// The [`Overlay::PhotoShare`] texture of a cell drawn in `mode`: its photo share where it
+/// has a photo texture in the drawn texture's layout (every mode but `Ortho`, and `Ortho` on
+/// cells that were not reparameterized), else [`NO_PHOTO_COLOUR`] at the drawn size.
+fn photo_share_texture(st: &Store, rec: &CellRecord, mode: UvMode) -> Result<image::RgbaImage> {
+    let same_layout = mode != UvMode::Ortho || rec.reparam.is_none();
+    match &rec.photo {
+        Some(p) if same_layout => Ok(share_map(&st.read_photo_confidence(p)?)),
+        _ => {
+            let n = drawn_texels(rec, mode).1;
+            Ok(image::RgbaImage::from_pixel(
+                n,
+                n,
+                image::Rgba(NO_PHOTO_COLOUR),
+            ))
+        }
+    }
+}
+
 fn active_files(rec: &CellRecord, mode: UvMode) -> &crate::store::CellFiles {
     match (&rec.reparam, mode) {
         (Some(r), UvMode::Mixed | UvMode::Reparam | UvMode::Photo) => &r.files,
