@@ -48,6 +48,16 @@ fn demo_runs_whole_pipeline_and_is_deterministic_across_threads() {
     let store = a.join("store");
     assert!(store.join("manifest.json").is_file() && store.join("stats.json").is_file());
     assert!(store.join("stats_histogram.png").is_file());
+    // the frame and its photo share (GPU tests need Mesa anyway)
+    let share = image::open(a.join("frame_photo_share.png"))
+        .unwrap()
+        .to_rgb8();
+    assert!(a.join("frame.png").is_file());
+    let yellow = share
+        .pixels()
+        .filter(|p| p.0[0] > 200 && p.0[1] > 200 && p.0[2] < 60)
+        .count();
+    assert!(yellow > 0, "no texel shows photo colour alone");
     assert_eq!(
         all_files(&a.join("store")),
         all_files(&b.join("store")),

@@ -11,13 +11,16 @@ use cliffmap::scene::{DemoScene, TextureChoice, texel_truth, texel_truth_covered
 
 use super::stats::print_summary;
 
-/// Renders the middle camera of the store's default flight to `out` (960x540, lit).
+/// Renders the middle camera of the store's default flight to `out` (960x540, lit) and,
+/// when the store has photo textures, the same view's photo share (`--overlay photo-share
+/// --unlit`) to `share_out`.
 fn render_view(
     store: &std::path::Path,
     m: &cliffmap::store::Manifest,
     out: &std::path::Path,
+    share_out: &std::path::Path,
 ) -> anyhow::Result<String> {
-    use cliffmap::render::{FlightPath, SceneOptions, TerrainScene};
+    use cliffmap::render::{FlightPath, FrameOptions, Overlay, SceneOptions, TerrainScene};
     let (w, h) = (960, 540);
     let cams = FlightPath::default_for(m)?.cameras(9, w, h);
     let cam = cams
@@ -26,13 +29,31 @@ fn render_view(
     let mut scene = TerrainScene::open(store, w, h, SceneOptions::default())?;
     let r = scene.frame(cam, true)?;
     write_png_atomic(out, &scene.read_rgba()?)?;
-    Ok(format!(
+    let mut msg = format!(
         "rendered {} ({} cells, {} triangles) on {}",
         out.display(),
         r.drawn,
         r.triangles,
         scene.gpu().describe()
-    ))
+    );
+    if m.cells.iter().any(|c| c.photo.is_some()) {
+        let opts = SceneOptions {
+            overlay: Overlay::PhotoShare,
+            frame: FrameOptions {
+                lit: false,
+                ..Default::default()
+            },
+            ..SceneOptions::default()
+        };
+        let mut scene = TerrainScene::open(store, w, h, opts)?;
+        scene.frame(cam, true)?;
+        write_png_atomic(share_out, &scene.read_rgba()?)?;
+        msg += &format!(
+            "; its photo share (yellow photo, blue existing texture, grey no photo) in {}",
+            share_out.display()
+        );
+    }
+    Ok(msg)
 }
 
 /// Renders the scene's novel views from the store in three texture modes and scores them
@@ -239,7 +260,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         photo_stage(&scene, &dem, &ortho, &a, &store)?;
     }
     // Render a view along the default flight (needs a GPU or Mesa's software drivers).
-    match render_view(&store, &st.manifest, &a.out.join("frame.png")) {
+    let st = cliffmap::store::Store::open(&store)?;
+    let (frame, share) = (a.out.join("frame.png"), a.out.join("frame_photo_share.png"));
+    match render_view(&store, &st.manifest, &frame, &share) {
         Ok(msg) if !a.quiet => println!("{msg}"),
         Ok(_) => {}
         Err(e) => eprintln!(
