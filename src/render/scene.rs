@@ -552,8 +552,6 @@ impl TerrainScene {
     }
 }
 
-/// The files a cell is drawn from in `mode`: its reparameterized variant where it has one,
-/// unless the baseline orthographic rendering is asked for.
 /// The [`Overlay::PhotoShare`] texture of a cell drawn in `mode`: its photo share where it
 /// has a photo texture in the drawn texture's layout (every mode but `Ortho`, and `Ortho` on
 /// cells that were not reparameterized), else [`NO_PHOTO_COLOUR`] at the drawn size.
@@ -572,6 +570,8 @@ fn photo_share_texture(st: &Store, rec: &CellRecord, mode: UvMode) -> Result<ima
     }
 }
 
+/// The files a cell is drawn from in `mode`: its reparameterized variant where it has one,
+/// unless the baseline orthographic rendering is asked for.
 fn active_files(rec: &CellRecord, mode: UvMode) -> &crate::store::CellFiles {
     match (&rec.reparam, mode) {
         (Some(r), UvMode::Mixed | UvMode::Reparam | UvMode::Photo) => &r.files,
