@@ -31,6 +31,17 @@ fn looking_down(centre: DVec3, height: f64, size: u32) -> CameraModel {
     CameraModel::with_fov(pos, r, size, size, 60f64.to_radians())
 }
 
+/// One flat 100-m cell at z = 0 with 16-texel textures.
+fn one_cell() -> Synth {
+    Synth {
+        levels: 1,
+        size: 100.0,
+        z: 0.0,
+        finest_error: 0.1,
+        texels: 16,
+    }
+}
+
 fn close(a: [u8; 4], b: [u8; 3], tol: i32) -> bool {
     (0..3).all(|i| (a[i] as i32 - b[i] as i32).abs() <= tol)
 }
@@ -148,13 +159,7 @@ fn refines_to_children_and_draws_stored_uvs() {
 #[test]
 fn lighting_darkens_surfaces_facing_away_from_the_sun() {
     let dir = tempfile::tempdir().unwrap();
-    let s = Synth {
-        levels: 1,
-        size: 100.0,
-        z: 0.0,
-        finest_error: 0.1,
-        texels: 16,
-    };
+    let s = one_cell();
     write_store(dir.path(), &s, |_| [200, 200, 200, 255], |_| false);
     let cam = looking_down(DVec3::new(X0 + 50.0, Y0 - 50.0, 0.0), 100.0, 64);
     let mut lit_high = open(dir.path(), 64, true, UvMode::Mixed);
@@ -188,13 +193,7 @@ fn lighting_darkens_surfaces_facing_away_from_the_sun() {
 #[test]
 fn corrupt_cells_fail_with_the_file_named() {
     let dir = tempfile::tempdir().unwrap();
-    let s = Synth {
-        levels: 1,
-        size: 100.0,
-        z: 0.0,
-        finest_error: 0.1,
-        texels: 16,
-    };
+    let s = one_cell();
     let m = write_store(dir.path(), &s, |_| [1, 2, 3, 255], |_| false);
     let mesh = dir.path().join(&m.cells[0].files.mesh.path);
     std::fs::write(&mesh, b"CLIFMESH garbage").unwrap();
@@ -207,13 +206,7 @@ fn corrupt_cells_fail_with_the_file_named() {
 #[test]
 fn uploads_name_the_texture_they_cannot_take_and_share_placeholders() {
     use cliffmap::render::{CellData, GpuContext, TerrainRenderer};
-    let s = Synth {
-        levels: 1,
-        size: 100.0,
-        z: 0.0,
-        finest_error: 0.1,
-        texels: 16,
-    };
+    let s = one_cell();
     let rec = render_support::record(
         &s,
         cliffmap::cells::CellKey {

@@ -170,21 +170,13 @@ impl TerrainRenderer {
             anisotropy_clamp: 8,
             ..Default::default()
         });
-        let placeholder = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("no parent"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let pv = placeholder.create_view(&Default::default());
+        // (zero texels: draws without a parent never sample it)
+        let pv = Self::one_texel(
+            &ctx,
+            "no parent",
+            wgpu::TextureFormat::Rgba8Unorm,
+            &[0, 0, 0, 0],
+        );
         let no_parent = Self::parent_group(device, &parent_layout, &pv, &pv);
         // one placeholder of each kind for every cell that lacks the texture (never sampled
         // by such a cell's draw, but every binding of group 1 needs a view)
