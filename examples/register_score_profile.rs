@@ -10,18 +10,28 @@
 //! cargo run --release --example register_score_profile -- STORE PHOTOS.json NAME [STEP_DEG] [N]
 //!     [--truth demo|tall [--seed N] [--relief P,C,E] [--blur M | --ortho DX,DY]]
 //!     [--binary | --no-grey | --steep-no-grey]
+//!     [--match G [--kernel box|bspline] --lift demo|tall]
 //! ```
 //! `--truth`: the samples' greys from the scene's true colour at their points (`--blur M`:
 //! averaged over an M × M box on the true surface; `--ortho DX,DY`: from the scene's ortho,
 //! bilinear, shifted by DX, DY metres). `--binary`: labels sky or terrain only;
 //! `--no-grey`: without the grey; `--steep-no-grey`: without it on steep samples.
+//! `--match G`: each terrain sample's photo value averaged over the image of the patch its
+//! label averages (a G × G ground box, or with `--kernel bspline` that box convolved with a
+//! G-wide tent, lifted onto the scene's DEM: `--lift` names the scene, or `--truth` does);
+//! with `--truth --blur G` the label is averaged over the same points. Prints the search's
+//! samples only.
 //! PHOTOS.json: a photo list with exact cameras (e.g. `render_eval`'s `OUT/photos/photos.json`).
 #[path = "bench_util/scene_args.rs"]
 #[allow(dead_code)] // this example uses only `scene_overrides`
 mod scene_args;
 
 use cliffmap::register::CameraParams;
-use cliffmap::register::terrain::{GREY_CLASSES, GreyImage, SKY, Sample, TerrainScene, nmi};
+use cliffmap::register::terrain::{
+    GREY_CLASSES, GreyImage, SKY, Sample, SampleAt, TerrainScene, nmi, nmi_by,
+};
+use glam::DVec3;
+use rayon::prelude::*;
 
 fn main() -> anyhow::Result<()> {
     let a: Vec<String> = std::env::args().skip(1).collect();
@@ -42,14 +52,90 @@ fn main() -> anyhow::Result<()> {
     let grey = GreyImage::from_photo(&p.image, 1);
     let cam = p.camera.resized(grey.width, grey.height);
     let mut band = terrain.sample(&cam, 1.0, 0.04, Some(24))?;
+    let flag = |name: &str| {
+        a.iter()
+            .position(|x| x == name)
+            .map(|j| a.get(j + 1).map_or("", String::as_str))
+    };
+    // --match G [--kernel box|bspline] --lift demo|tall (or --truth): each terrain sample's
+    // photo value averaged over the image of the surface patch its label averages, a G × G
+    // ground box (box) or that box convolved with a G-wide tent (bspline: what a G-metre
+    // ortho read bilinearly averages; support 3G), lifted onto the scene's DEM
+    let patches: Option<Vec<Vec<(DVec3, f32)>>> = match flag("--match") {
+        None => None,
+        Some(g) => {
+            let g: f64 = g.parse()?;
+            let bspline = flag("--kernel") == Some("bspline");
+            let which = flag("--truth").or(flag("--lift"));
+            let scene = scene_args::scene_overrides(
+                match which {
+                    Some("tall") => cliffmap::scene::DemoScene::tall_walls(),
+                    Some("demo") => cliffmap::scene::DemoScene::default(),
+                    _ => anyhow::bail!("--match needs --lift demo|tall or --truth"),
+                },
+                flag,
+            )?;
+            let (dem, _) = scene.generate()?;
+            let h = |x: f64, y: f64| {
+                dem.bilinear(
+                    (scene.origin_y - y) / scene.spacing,
+                    (x - scene.origin_x) / scene.spacing,
+                )
+            };
+            let half = if bspline { 1.5 * g } else { 0.5 * g };
+            let weight = |t: f64| -> f64 {
+                if !bspline {
+                    return 1.0;
+                }
+                let t = (t / g).abs();
+                if t < 0.5 {
+                    0.75 - t * t
+                } else if t < 1.5 {
+                    0.5 * (1.5 - t) * (1.5 - t)
+                } else {
+                    0.0
+                }
+            };
+            let lift = |x: f64, y: f64| DVec3::new(x, y, h(x, y));
+            let px_dist = |p: DVec3, q: DVec3| match (cam.project(p), cam.project(q)) {
+                (Some(u), Some(v)) => (u[0] - v[0]).hypot(u[1] - v[1]),
+                _ => 0.0,
+            };
+            Some(
+                band.par_iter()
+                    .map(|s| match s.at {
+                        SampleAt::Point(p) => {
+                            let ex = px_dist(lift(p.x - half, p.y), lift(p.x + half, p.y));
+                            let ey = px_dist(lift(p.x, p.y - half), lift(p.x, p.y + half));
+                            let (kx, ky) = (
+                                (ex.ceil() as usize).clamp(1, 16),
+                                (ey.ceil() as usize).clamp(1, 16),
+                            );
+                            let mut pts = Vec::with_capacity(kx * ky);
+                            let mut sum = 0.0;
+                            for j in 0..ky {
+                                let dy = ((j as f64 + 0.5) / ky as f64 * 2.0 - 1.0) * half;
+                                for i in 0..kx {
+                                    let dx = ((i as f64 + 0.5) / kx as f64 * 2.0 - 1.0) * half;
+                                    let w = weight(dx) * weight(dy);
+                                    sum += w;
+                                    pts.push((lift(p.x + dx, p.y + dy), w as f32));
+                                }
+                            }
+                            for q in &mut pts {
+                                q.1 /= sum as f32;
+                            }
+                            pts
+                        }
+                        SampleAt::Sky(_) => Vec::new(),
+                    })
+                    .collect(),
+            )
+        }
+    };
     // --truth demo|tall: grey labels from the scene's solid texture at each sample's point
     // instead of the store's texture (geometry and classes kept)
     if let Some(i) = a.iter().position(|x| x == "--truth") {
-        let flag = |name: &str| {
-            a.iter()
-                .position(|x| x == name)
-                .map(|j| a.get(j + 1).map_or("", String::as_str))
-        };
         let scene = scene_args::scene_overrides(
             match a.get(i + 1).map(String::as_str) {
                 Some("tall") => cliffmap::scene::DemoScene::tall_walls(),
@@ -73,8 +159,9 @@ fn main() -> anyhow::Result<()> {
         };
         let classes = GREY_CLASSES;
         let grey: Vec<Option<f64>> = band
-            .iter()
-            .map(|s| match s.at {
+            .par_iter()
+            .enumerate()
+            .map(|(si, s)| match s.at {
                 cliffmap::register::terrain::SampleAt::Point(p) => {
                     let (gx, gy) = (
                         scene.height(p.x + 0.25, p.y) - scene.height(p.x - 0.25, p.y),
@@ -107,6 +194,28 @@ fn main() -> anyhow::Result<()> {
                                 (a00[k] * (1.0 - fx) + a10[k] * fx) * (1.0 - fy)
                                     + (a01[k] * (1.0 - fx) + a11[k] * fx) * fy
                             })
+                        }
+                        None if blur > 0.0 && patches.is_some() => {
+                            // the same points and weights the photo is averaged over
+                            let mut acc = [0.0; 3];
+                            for &(q, w) in patches.as_ref().map_or(&[][..], |v| &v[si][..]) {
+                                let hb = |x: f64, y: f64| {
+                                    dem.bilinear(
+                                        (scene.origin_y - y) / scene.spacing,
+                                        (x - scene.origin_x) / scene.spacing,
+                                    )
+                                };
+                                let (gx, gy) = (
+                                    hb(q.x + 0.25, q.y) - hb(q.x - 0.25, q.y),
+                                    hb(q.x, q.y + 0.25) - hb(q.x, q.y - 0.25),
+                                );
+                                let sl = (gx.hypot(gy) / 0.5).atan().to_degrees();
+                                let c = colour(q.x, q.y, q.z, sl);
+                                for k in 0..3 {
+                                    acc[k] += c[k] * w as f64;
+                                }
+                            }
+                            acc
                         }
                         None if blur > 0.0 => {
                             // the scene's colour averaged over a blur × blur box around (x, y)
@@ -177,15 +286,19 @@ fn main() -> anyhow::Result<()> {
     let far = |s: &Sample| s.label != SKY && (s.label - 1) / classes % 4 >= 2;
     let steep = |s: &Sample| s.label != SKY && (s.label - 1) / classes % 2 == 1;
     let pick = |f: &dyn Fn(&Sample) -> bool| band.iter().copied().filter(|s| f(s)).collect();
-    let subsets: Vec<(&str, Vec<Sample>)> = vec![
-        ("search (band + 1/9 inner)", band.clone()),
-        ("every pixel", all.clone()),
-        ("no sky", pick(&|s| s.label != SKY)),
-        ("near + sky", pick(&|s| !far(s))),
-        ("far + sky", pick(&|s| s.label == SKY || far(s))),
-        ("flat + sky", pick(&|s| !steep(s))),
-        ("steep + sky", pick(&|s| s.label == SKY || steep(s))),
-    ];
+    let subsets: Vec<(&str, Vec<Sample>)> = if patches.is_some() {
+        vec![("search, photo matched", band.clone())]
+    } else {
+        vec![
+            ("search (band + 1/9 inner)", band.clone()),
+            ("every pixel", all.clone()),
+            ("no sky", pick(&|s| s.label != SKY)),
+            ("near + sky", pick(&|s| !far(s))),
+            ("far + sky", pick(&|s| s.label == SKY || far(s))),
+            ("flat + sky", pick(&|s| !steep(s))),
+            ("steep + sky", pick(&|s| s.label == SKY || steep(s))),
+        ]
+    };
     let truth = CameraParams::from_camera(&p.camera);
     for (axis, k) in [("yaw", 0usize), ("pitch", 1), ("roll", 2)] {
         println!("\n{name}: {axis} offset (°) -> score per subset (peak marked *)");
@@ -197,7 +310,33 @@ fn main() -> anyhow::Result<()> {
                 .map(|d| {
                     let mut c = truth;
                     c.angles[k] += d.to_radians();
-                    nmi(s, &c.camera().resized(grey.width, grey.height), &grey)
+                    let cm = c.camera().resized(grey.width, grey.height);
+                    match &patches {
+                        None => nmi(s, &cm, &grey),
+                        Some(pp) => nmi_by(s.len(), |i| {
+                            let smp = &s[i];
+                            let v = match smp.at {
+                                SampleAt::Sky(d) => cm
+                                    .project(cm.position + d * 1e7)
+                                    .and_then(|px| grey.at(px[0], px[1])),
+                                SampleAt::Point(_) => {
+                                    let mut acc = [0.0f32; 2];
+                                    let mut wsum = 0.0f32;
+                                    for &(q, w) in &pp[i] {
+                                        if let Some(v) =
+                                            cm.project(q).and_then(|px| grey.at(px[0], px[1]))
+                                        {
+                                            acc[0] += w * v[0];
+                                            acc[1] += w * v[1];
+                                            wsum += w;
+                                        }
+                                    }
+                                    (wsum > 0.0).then(|| [acc[0] / wsum, acc[1] / wsum])
+                                }
+                            };
+                            (smp.label, v)
+                        }),
+                    }
                 })
                 .collect();
             table.push(row);

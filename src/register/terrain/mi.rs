@@ -88,9 +88,9 @@ impl GreyImage {
     }
 
     /// Bilinear (luma, chroma) at pixel position (u, v) (pixel-centre convention), `None`
-    /// outside.
+    /// outside. Luma in 0 ..= 7, chroma in 0 ..= 3 (the classes, continuous).
     #[inline]
-    fn at(&self, u: f64, v: f64) -> Option<[f32; 2]> {
+    pub fn at(&self, u: f64, v: f64) -> Option<[f32; 2]> {
         if !(u >= 0.0 && v >= 0.0 && u <= (self.width - 1) as f64 && v <= (self.height - 1) as f64)
         {
             return None;
@@ -116,17 +116,29 @@ impl GreyImage {
 /// the photo or behind the camera fall in a class of their own. 1.0 when fewer than 64 samples land. Deterministic whatever the thread count.
 pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
     let r = cam.world_to_camera;
-    let hists: Vec<Vec<f32>> = samples
-        .par_chunks(CHUNK)
-        .map(|chunk| {
+    nmi_by(samples.len(), |i| {
+        let s = &samples[i];
+        let px = match s.at {
+            SampleAt::Point(p) => cam.project(p),
+            SampleAt::Sky(d) => project_dir(cam, r * d),
+        };
+        (s.label, px.and_then(|px| photo.at(px[0], px[1])))
+    })
+}
+
+/// The normalised mutual information of `n` (label, photo value) pairs given by `value(i)`
+/// (the photo value as [`GreyImage::at`] gives it, `None` where the sample misses the
+/// photo), as [`nmi`] scores them. Deterministic whatever the thread count.
+pub fn nmi_by(n: usize, value: impl Fn(usize) -> (u8, Option<[f32; 2]>) + Sync) -> f64 {
+    let chunks = n.div_ceil(CHUNK);
+    let hists: Vec<Vec<f32>> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
             let mut joint = vec![0.0f32; LABELS * BINS];
-            for s in chunk {
-                let px = match s.at {
-                    SampleAt::Point(p) => cam.project(p),
-                    SampleAt::Sky(d) => project_dir(cam, r * d),
-                };
-                let row = s.label as usize * BINS;
-                let Some(g) = px.and_then(|px| photo.at(px[0], px[1])) else {
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                let (label, g) = value(i);
+                let row = label as usize * BINS;
+                let Some(g) = g else {
                     if OUTSIDE_BIN {
                         joint[row + BINS - 1] += 1.0;
                     }
