@@ -28,7 +28,7 @@ mod scene_args;
 
 use cliffmap::register::CameraParams;
 use cliffmap::register::terrain::{
-    GREY_CLASSES, GreyImage, SKY, Sample, SampleAt, TerrainScene, nmi, nmi_by,
+    GREY_CLASSES, GreyImage, SKY, Sample, SampleAt, TerrainScene, nmi, nmi_by, sample_pixel,
 };
 use glam::DVec3;
 use rayon::prelude::*;
@@ -316,9 +316,9 @@ fn main() -> anyhow::Result<()> {
                         Some(pp) => nmi_by(s.len(), |i| {
                             let smp = &s[i];
                             let v = match smp.at {
-                                SampleAt::Sky(d) => cm
-                                    .project(cm.position + d * 1e7)
-                                    .and_then(|px| grey.at(px[0], px[1])),
+                                SampleAt::Sky(_) => {
+                                    sample_pixel(smp, &cm).and_then(|px| grey.at(px[0], px[1]))
+                                }
                                 SampleAt::Point(_) => {
                                     let mut acc = [0.0f32; 2];
                                     let mut wsum = 0.0f32;

@@ -236,20 +236,19 @@ fn uploads_name_the_texture_they_cannot_take_and_share_placeholders() {
     let extra = renderer.upload(&rec, &with_ortho).unwrap();
     assert_eq!(extra.bytes, plain.bytes + 8 * 8 * 4);
     // an empty optional texture is an error naming it, not a panic
+    let upload_error = |bad| {
+        renderer
+            .upload(&rec, &bad)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
     let mut bad = data();
     bad.ortho_mips = Some(Vec::new());
-    let e = renderer
-        .upload(&rec, &bad)
-        .map(|_| ())
-        .unwrap_err()
-        .to_string();
+    let e = upload_error(bad);
     assert!(e.contains("orthographic texture of 0x0"), "{e}");
     let mut bad = data();
     bad.base_mips = Some(vec![image::RgbaImage::new(0, 4)]);
-    let e = renderer
-        .upload(&rec, &bad)
-        .map(|_| ())
-        .unwrap_err()
-        .to_string();
+    let e = upload_error(bad);
     assert!(e.contains("chart texture of 0x4"), "{e}");
 }

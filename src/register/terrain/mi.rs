@@ -115,15 +115,23 @@ impl GreyImage {
 /// chroma, partial-volume) where `cam` (sized like `photo`) projects them; samples outside
 /// the photo or behind the camera fall in a class of their own. 1.0 when fewer than 64 samples land. Deterministic whatever the thread count.
 pub fn nmi(samples: &[Sample], cam: &CameraModel, photo: &GreyImage) -> f64 {
-    let r = cam.world_to_camera;
     nmi_by(samples.len(), |i| {
         let s = &samples[i];
-        let px = match s.at {
-            SampleAt::Point(p) => cam.project(p),
-            SampleAt::Sky(d) => project_dir(cam, r * d),
-        };
-        (s.label, px.and_then(|px| photo.at(px[0], px[1])))
+        (
+            s.label,
+            sample_pixel(s, cam).and_then(|px| photo.at(px[0], px[1])),
+        )
     })
+}
+
+/// Where `cam` shows a sample (pixel position, with distortion): a terrain point projected,
+/// a sky direction turned by the camera's rotation alone; `None` behind the camera.
+#[inline]
+pub fn sample_pixel(s: &Sample, cam: &CameraModel) -> Option<[f64; 2]> {
+    match s.at {
+        SampleAt::Point(p) => cam.project(p),
+        SampleAt::Sky(d) => project_dir(cam, cam.world_to_camera * d),
+    }
 }
 
 /// The normalised mutual information of `n` (label, photo value) pairs given by `value(i)`

@@ -38,7 +38,7 @@ use glam::DVec3;
 use image::RgbImage;
 
 pub use edges::{ContourPoint, EdgeFit, EdgeImage, EdgeOptions, contour, refine_edges};
-pub use mi::{GreyImage, nmi, nmi_by};
+pub use mi::{GreyImage, nmi, nmi_by, sample_pixel};
 pub use view::{GREY_CLASSES, LABELS, LabelTexture, RayEnd, SKY, Sample, SampleAt, TerrainScene};
 
 use super::params::{CameraParams, Param};
