@@ -35,6 +35,8 @@ use cliffmap::register::{
 };
 use glam::DVec3;
 
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let flag = |name: &str| {

@@ -408,7 +408,7 @@ fn rough_list(
     position_m: f64,
     known_focal: bool,
 ) -> anyhow::Result<PathBuf> {
-    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5DEE_CE66_D;
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5_DEEC_E66D;
     let mut rnd = move || {
         state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = state;

@@ -77,6 +77,8 @@ impl Chart {
 /// (d = unit direction, e = d rotated +90°, a_i = (i - n/2) step), heights from `z`,
 /// parameterized by arc length along d per row (u, normalised by the longest row) and
 /// b (v, down). Positions are relative to `centre`.
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 fn arc_length_chart(
     n: usize,
     step: f64,
@@ -552,7 +554,7 @@ fn main() -> Result<()> {
         let ratios = |f: &dyn Fn(&Row) -> f64| {
             let mut v: Vec<f64> = sel
                 .iter()
-                .map(|r| f(r) / exact_row(r.case).map_or(f64::NAN, |e| f(e)))
+                .map(|r| f(r) / exact_row(r.case).map_or(f64::NAN, f))
                 .collect();
             v.sort_by(f64::total_cmp);
             (v[v.len() / 2], v[0])

@@ -48,6 +48,8 @@
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// Negated comparisons like `!(x > 0.0)` are how this crate makes NaN fail a check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod camera;
 pub mod cells;

@@ -23,6 +23,7 @@ fn accels() -> [RayAccel; 3] {
 /// A vertical wall in the plane y = `y` (front face towards −y) over x ∈ [x0, x1],
 /// z ∈ [z0, z1], as an n × n grid, translated by `shift`. Texture: x right from x0, y down
 /// from z1, `TEXELS / (x1 − x0)` texels per metre on both axes.
+#[allow(clippy::too_many_arguments)] // a test helper: the wall's extent, spelled out
 fn wall(cell: u32, x0: f64, x1: f64, y: f64, z0: f64, z1: f64, n: u32, shift: DVec3) -> SceneCell {
     let s = TEXELS as f64 / (x1 - x0);
     let mut positions = Vec::new();

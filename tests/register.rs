@@ -336,6 +336,8 @@ fn register_starts_from_a_rough_pose_and_exif() {
 /// 800 × 600 into `photos/IMAGE`, and writes `photos/ROUGH` with its camera turned by
 /// `turn_deg` (yaw, pitch, roll), the focal length scaled by `focal` and moved by `moved`
 /// metres; returns the true camera.
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 fn second_photo(
     photos: &Path,
     shot: &str,

@@ -506,11 +506,13 @@ fn bad_input_is_an_error_not_a_panic() {
 }
 
 #[test]
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 fn fills_never_touch_known_texels_and_leave_nothing_empty() {
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let img = random_image(40, 30, 7);
     let assigned: Vec<bool> = (0..1200)
-        .map(|k| (k % 40 > 10 && k % 40 < 25 && k / 40 > 5) || rng.next() % 17 == 0)
+        .map(|k| (k % 40 > 10 && k % 40 < 25 && k / 40 > 5) || rng.next().is_multiple_of(17))
         .collect();
     // average border colour, computed independently
     let (mut s, mut n) = ([0u64; 3], 0u64);
@@ -616,7 +618,7 @@ fn fills_never_touch_known_texels_and_leave_nothing_empty() {
 
 fn chessboard(w: u32, h: u32, square: u32) -> RgbaImage {
     RgbaImage::from_fn(w, h, |c, r| {
-        let v = if (c / square + r / square) % 2 == 0 {
+        let v = if (c / square + r / square).is_multiple_of(2) {
             0
         } else {
             255
@@ -669,6 +671,8 @@ fn subtexel_estimate_converges_to_exact() {
 }
 
 #[test]
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 fn orthographic_chart_is_area_average_downsampling() {
     let img = random_image(60, 60, 3);
     // chart = the whole image; texel = block of 3x3 pixels, or 1.5 x 1.5 pixels

@@ -141,7 +141,11 @@ pub fn fractal(n: usize, seed: u64) -> cliffmap::Dem {
             }
         }
         for y in (0..n).step_by(half) {
-            let x0 = if (y / half) % 2 == 0 { half } else { 0 };
+            let x0 = if (y / half).is_multiple_of(2) {
+                half
+            } else {
+                0
+            };
             for x in (x0..n).step_by(step) {
                 let mut sum = 0.0;
                 let mut cnt = 0.0;

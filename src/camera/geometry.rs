@@ -148,7 +148,7 @@ mod tests {
         bad.cy = f64::NAN;
         assert!(bad.problem().unwrap().contains("non-finite"));
         bad = c;
-        bad.world_to_camera = bad.world_to_camera * 1.01;
+        bad.world_to_camera *= 1.01;
         assert!(bad.problem().unwrap().contains("orthonormal"));
         bad = c;
         bad.height = 0;

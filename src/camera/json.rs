@@ -195,13 +195,13 @@ fn cliffmap(
     let explicit = size(obj, path)?;
     let (w, h) = explicit.unwrap_or(default_size);
     let fov = num(obj, "fov_y_deg", path)?;
-    if let Some(f) = fov {
-        if !(f > 0.0 && f < 180.0) {
-            return Err(Error::bad_input(
-                path,
-                format!("\"fov_y_deg\" must be in (0, 180), got {f}"),
-            ));
-        }
+    if let Some(f) = fov
+        && !(f > 0.0 && f < 180.0)
+    {
+        return Err(Error::bad_input(
+            path,
+            format!("\"fov_y_deg\" must be in (0, 180), got {f}"),
+        ));
     }
     let (fx, fy) = (num(obj, "fx", path)?, num(obj, "fy", path)?);
     let mut cam = match (fx.or(fy), fov) {

@@ -27,7 +27,7 @@ fn next(e: u32) -> u32 {
 
 #[inline]
 fn prev(e: u32) -> u32 {
-    if e % 3 == 0 { e + 2 } else { e - 1 }
+    if e.is_multiple_of(3) { e + 2 } else { e - 1 }
 }
 
 /// Twice the signed area of `(a, b, c)` in world orientation (> 0: counter-clockwise),

@@ -101,7 +101,7 @@ pub fn relief_reach(
     let rings = 8usize;
     for (v, r) in reach.iter_mut().enumerate() {
         let p = positions[v];
-        if !used[v] || !(p[0].is_finite() && p[1].is_finite()) {
+        if !(used[v] && p[0].is_finite() && p[1].is_finite()) {
             continue;
         }
         let (bx, by) = (bin(p[0], 0) as isize, bin(p[1], 1) as isize);

@@ -50,6 +50,8 @@ impl LatticeTiles {
                 let rest = fours.remainder();
                 for (tile, four) in out.iter_mut().zip(fours) {
                     let dst = &mut tile.0[rj..rj + 4];
+                    // kept as an element loop (see above) rather than `copy_from_slice`
+                    #[allow(clippy::manual_memcpy)]
                     for k in 0..4 {
                         dst[k] = four[k];
                     }

@@ -35,10 +35,10 @@ pub struct Args {
 
 /// Runs `export-glb`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    if let Some(m) = a.max_error {
-        if !(m.is_finite() && m > 0.0) {
-            anyhow::bail!("--max-error must be a positive number of metres, got {m}");
-        }
+    if let Some(m) = a.max_error
+        && !(m.is_finite() && m > 0.0)
+    {
+        anyhow::bail!("--max-error must be a positive number of metres, got {m}");
     }
     let region = match &a.region {
         None => None,

@@ -54,10 +54,10 @@ pub struct Args {
 
 /// Runs `export-tiles`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    if let Some(m) = a.geoid_offset {
-        if !(m.is_finite() && m.abs() < 200.0) {
-            anyhow::bail!("--geoid-offset must be a height in metres within ±200, got {m}");
-        }
+    if let Some(m) = a.geoid_offset
+        && !(m.is_finite() && m.abs() < 200.0)
+    {
+        anyhow::bail!("--geoid-offset must be a height in metres within ±200, got {m}");
     }
     let mut views = Vec::new();
     for v in &a.view {

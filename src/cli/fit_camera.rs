@@ -159,14 +159,14 @@ fn start_camera(
     }
     let (w, h) = image_size(a)?;
     let mut focal = a.focal_px;
-    if let (None, Some(img)) = (focal, &a.image) {
-        if let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)? {
-            eprintln!(
-                "start focal length {:.1} px from EXIF ({})",
-                e.focal_px, e.source
-            );
-            focal = Some(e.focal_px);
-        }
+    if let (None, Some(img)) = (focal, &a.image)
+        && let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)?
+    {
+        eprintln!(
+            "start focal length {:.1} px from EXIF ({})",
+            e.focal_px, e.source
+        );
+        focal = Some(e.focal_px);
     }
     let position = match (position, &a.crs, &a.image) {
         (None, Some(crs), Some(img)) => gps_position(img, crs, w, h, gcps, focal)?,

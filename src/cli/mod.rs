@@ -74,14 +74,13 @@ pub fn run() -> ExitCode {
         )
         .with_writer(std::io::stderr)
         .try_init();
-    if let Some(n) = cli.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new()
+    if let Some(n) = cli.threads
+        && let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
             .build_global()
-        {
-            eprintln!("error: cannot set up {n} threads: {e}");
-            return ExitCode::from(2);
-        }
+    {
+        eprintln!("error: cannot set up {n} threads: {e}");
+        return ExitCode::from(2);
     }
     let result = match cli.command {
         Command::Demo(a) => demo::run(a),

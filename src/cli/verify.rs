@@ -196,6 +196,8 @@ fn repair(dir: &Path, report: &VerifyReport) -> anyhow::Result<()> {
 }
 
 /// Re-runs the recorded `cliffmap build` into `dir` (resuming: only damaged cells are rebuilt).
+// a false positive: the closure `abs` is called once and also passed to `map`
+#[allow(clippy::redundant_closure_call)]
 fn rebuild_base(dir: &Path) -> anyhow::Result<()> {
     let path = dir.join("recipe.json");
     let bytes = std::fs::read(&path).with_context(|| {

@@ -499,10 +499,10 @@ impl ApplicationHandler for App {
             }
             WindowEvent::RedrawRequested => {
                 let r = s.redraw(&self.modes);
-                if let Ok(true) = r {
-                    if s.smoke {
-                        s.script(s.presented);
-                    }
+                if let Ok(true) = r
+                    && s.smoke
+                {
+                    s.script(s.presented);
                 }
                 match self.exit_after {
                     Some(n) if s.presented >= n || s.attempts >= 20 * n => el.exit(),

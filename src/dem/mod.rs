@@ -258,42 +258,42 @@ fn validate_options(path: &Path, opts: &DemLoadOptions) -> Result<()> {
             path.display()
         )))
     };
-    if let Some(s) = opts.spacing {
-        if !(s.is_finite() && s > 0.0) {
-            return bad(
-                "--spacing",
-                s.to_string(),
-                "must be a positive finite number of metres",
-            );
-        }
+    if let Some(s) = opts.spacing
+        && !(s.is_finite() && s > 0.0)
+    {
+        return bad(
+            "--spacing",
+            s.to_string(),
+            "must be a positive finite number of metres",
+        );
     }
-    if let Some((x, y)) = opts.origin {
-        if !(x.is_finite() && y.is_finite()) {
-            return bad(
-                "--origin",
-                format!("{x},{y}"),
-                "must be two finite coordinates",
-            );
-        }
+    if let Some((x, y)) = opts.origin
+        && !(x.is_finite() && y.is_finite())
+    {
+        return bad(
+            "--origin",
+            format!("{x},{y}"),
+            "must be two finite coordinates",
+        );
     }
-    if let Some(z) = opts.z_scale {
-        if !(z.is_finite() && z != 0.0) {
-            return bad(
-                "--z-scale",
-                z.to_string(),
-                "must be a finite non-zero number",
-            );
-        }
+    if let Some(z) = opts.z_scale
+        && !(z.is_finite() && z != 0.0)
+    {
+        return bad(
+            "--z-scale",
+            z.to_string(),
+            "must be a finite non-zero number",
+        );
     }
-    if let Some(z) = opts.z_offset {
-        if !z.is_finite() {
-            return bad("--z-offset", z.to_string(), "must be finite");
-        }
+    if let Some(z) = opts.z_offset
+        && !z.is_finite()
+    {
+        return bad("--z-offset", z.to_string(), "must be finite");
     }
-    if let Some(nd) = opts.nodata {
-        if nd.is_infinite() {
-            return bad("--nodata", nd.to_string(), "must be a number or nan");
-        }
+    if let Some(nd) = opts.nodata
+        && nd.is_infinite()
+    {
+        return bad("--nodata", nd.to_string(), "must be a number or nan");
     }
     for (flag, v) in [("--width", opts.width), ("--height", opts.height)] {
         if v == Some(0) {

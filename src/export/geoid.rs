@@ -27,12 +27,12 @@ impl GeoidGrid {
     pub fn read(path: &Path) -> Result<GeoidGrid> {
         let bad = |why: String| Error::BadOption(format!("geoid grid {}: {why}", path.display()));
         let dem = load_dem(path, &DemLoadOptions::default())?;
-        if let Some(crs) = &dem.crs {
-            if !matches!(crs.as_str(), "EPSG:4326" | "EPSG:4979" | "EPSG:4258") {
-                return Err(bad(format!(
-                    "declares {crs}; a geoid grid must be in geographic longitude/latitude (EPSG:4326)"
-                )));
-            }
+        if let Some(crs) = &dem.crs
+            && !matches!(crs.as_str(), "EPSG:4326" | "EPSG:4979" | "EPSG:4258")
+        {
+            return Err(bad(format!(
+                "declares {crs}; a geoid grid must be in geographic longitude/latitude (EPSG:4326)"
+            )));
         }
         let g = &dem.georef;
         let (w, h) = (dem.width as f64, dem.height as f64);
@@ -79,6 +79,8 @@ impl GeoidGrid {
 
     /// Geoid height N (metres) at longitude `lon`, latitude `lat` (degrees): bilinear in the
     /// grid. Errors outside the grid or next to a no-data sample.
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     pub fn undulation(&self, lon: f64, lat: f64) -> Result<f64> {
         let g = &self.dem.georef;
         let (w, h) = (self.dem.width, self.dem.height);

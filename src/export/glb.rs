@@ -356,7 +356,7 @@ fn push_view(
     let offset = bin.len();
     let len = bytes.len();
     bin.extend(bytes);
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     root.push(json::buffer::View {

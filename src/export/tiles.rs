@@ -304,8 +304,8 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
             let rec = &cells[i];
             let path = out.join(tile_path_for(mode, rec.level, rec.x, rec.y));
             ctx.progress.inc(1);
-            if ctx.resume {
-                if let Ok(m) = std::fs::metadata(&path) {
+            if ctx.resume
+                && let Ok(m) = std::fs::metadata(&path) {
                     // written by the interrupted run (GLBs are written atomically): only its
                     // bounding box is needed
                     let (positions, source) = read_export_positions(store, rec, mode)?;
@@ -317,7 +317,6 @@ fn write_tileset(ctx: &TilesetContext, mode: TextureSource) -> Result<TilesRepor
                     }
                     return Ok((i, [a, b], source, m.len(), true));
                 }
-            }
             let mut cell: ExportCell = read_export_cell_as(store, rec, mode)?;
             if ctx.lit {
                 cell.make_lit(store)?;

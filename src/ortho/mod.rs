@@ -86,18 +86,17 @@ pub fn load_ortho(
         d.tags.as_ref(),
         dem,
     )?;
-    if placement == OrthoPlacement::FromFile {
-        if let (Some(t), Some(dc)) = (
+    if placement == OrthoPlacement::FromFile
+        && let (Some(t), Some(dc)) = (
             d.tags.as_ref().and_then(|t| t.crs.as_deref()),
             dem.crs.as_deref(),
-        ) {
-            if t != dc {
-                return Err(Error::bad_input(
-                    path,
-                    format!("ortho CRS {t} differs from the DEM's {dc}; reproject one of them"),
-                ));
-            }
-        }
+        )
+        && t != dc
+    {
+        return Err(Error::bad_input(
+            path,
+            format!("ortho CRS {t} differs from the DEM's {dc}; reproject one of them"),
+        ));
     }
     let ortho = Ortho {
         image: d.image,

@@ -12,6 +12,7 @@
 //! - twist: U [[0,−1],[1,0]] Vᵀ/√2, eigenvalue (Ψ1 + Ψ2)/(σ1 + σ2)
 //!   = 2 − 2(σ1² − σ1σ2 + σ2²)/(σ1σ2)³, the only one that can be negative; it is clamped
 //!   at 0, which is exactly the projection of the Hessian onto the PSD cone.
+//!
 //! Matrices are flattened row-major: (F00, F01, F10, F11).
 
 /// Ψ, ∂Ψ/∂F (row-major) and the PSD-projected ∂²Ψ/∂F² (4x4) of one Jacobian; `None` if
@@ -83,9 +84,12 @@ pub(crate) fn energy(f: &[[f64; 2]; 2]) -> f64 {
     fro + fro / (d * d)
 }
 
+/// A signed SVD (U, σ1, σ2, V) of a 2x2 matrix, as [`svd2`] returns it.
+pub(crate) type Svd2 = ([[f64; 2]; 2], f64, f64, [[f64; 2]; 2]);
+
 /// Signed SVD of a 2x2 matrix with positive determinant: F = U diag(σ1, σ2) Vᵀ with U, V
 /// rotations and σ1 >= σ2 > 0; `None` if det F <= 0 or not finite.
-pub(crate) fn svd2(f: &[[f64; 2]; 2]) -> Option<([[f64; 2]; 2], f64, f64, [[f64; 2]; 2])> {
+pub(crate) fn svd2(f: &[[f64; 2]; 2]) -> Option<Svd2> {
     let (a, b, c, d) = (f[0][0], f[0][1], f[1][0], f[1][1]);
     let e = 0.5 * (a + d);
     let ff = 0.5 * (a - d);

@@ -74,6 +74,8 @@ impl RayAccel {
 }
 
 /// Nearest-hit queries for the rays of one photo.
+// one per photo, built and used in place: boxing the grid would only add an allocation
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Caster<'a> {
     Grid(ViewGrid),
     Bvh(&'a TriangleBvh),

@@ -282,12 +282,12 @@ impl Deposit for SumsDeposit<'_> {
             }
             let part = &ws[k..k + n];
             // (a tile is allocated only for a positive weight, as by single texels)
-            if part.iter().any(|&w| w > 0.0) {
-                if let Some(records) = self.sums.run_mut(t + k, n) {
-                    for (s, &w) in records.iter_mut().zip(part) {
-                        if w > 0.0 {
-                            self.pixel.add_to(s, w);
-                        }
+            if part.iter().any(|&w| w > 0.0)
+                && let Some(records) = self.sums.run_mut(t + k, n)
+            {
+                for (s, &w) in records.iter_mut().zip(part) {
+                    if w > 0.0 {
+                        self.pixel.add_to(s, w);
                     }
                 }
             }
@@ -481,6 +481,8 @@ mod tests {
     }
 
     #[test]
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     fn texel_aligned_and_finer_footprints_reproduce_a_texture() {
         let tex = RgbImage::from_fn(6, 6, |x, y| {
             image::Rgb([(x * 40) as u8, (y * 40) as u8, ((x * y) * 7) as u8])
@@ -776,6 +778,8 @@ mod tests {
     }
 
     #[test]
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     fn coloured_texels_visit_what_the_accessors_give() {
         // two photos over parts of a 40 x 40 texture (several tiles, some untouched)
         let img = RgbImage::from_fn(8, 8, |x, y| {

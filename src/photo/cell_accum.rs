@@ -10,7 +10,7 @@ use super::texel_tiles::{TexelSums, TexelTiles};
 /// The photo index of a record's label (1 + the index, 0 for none; see [`CellAccum`]).
 #[inline]
 fn label_photo(label: f32) -> Option<u16> {
-    (label >= 1.0).then(|| (label - 1.0) as u16)
+    (label >= 1.0).then_some((label - 1.0) as u16)
 }
 
 /// How several photos' colours combine in a texel.
@@ -345,6 +345,8 @@ impl CellAccum {
 
     /// Adds the deposits of photo number `photo` (same texture size); returns how many texels
     /// it gave colour.
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     pub fn merge(&mut self, p: &PhotoAccum, photo: u16) -> u64 {
         self.settle();
         let mut written = 0;

@@ -220,12 +220,12 @@ impl RoughPose {
     /// nor 3 values, a negative focal length or sensor width, angles beyond ±360°).
     pub fn problem(&self) -> Option<String> {
         let finite = |v: f64| v.is_finite();
-        if let Some(p) = &self.position {
-            if !(p.len() == 2 || p.len() == 3) || !p.iter().all(|v| finite(*v)) {
-                return Some(format!(
-                    "\"position\" must be [x, y] or [x, y, z], finite, got {p:?}"
-                ));
-            }
+        if let Some(p) = &self.position
+            && (!(p.len() == 2 || p.len() == 3) || !p.iter().all(|v| finite(*v)))
+        {
+            return Some(format!(
+                "\"position\" must be [x, y] or [x, y, z], finite, got {p:?}"
+            ));
         }
         for (name, v) in [
             ("heading_deg", self.heading_deg),
@@ -370,15 +370,15 @@ pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
                 ));
             }
         };
-        if let Some(d) = e.rotation_delta_deg {
-            if d.iter().any(|v| !v.is_finite() || v.abs() > 180.0) {
-                return Err(Error::bad_input(
-                    path,
-                    format!(
-                        "photo {i}: \"rotation_delta_deg\" must be three finite angles in [-180, 180], got {d:?}"
-                    ),
-                ));
-            }
+        if let Some(d) = e.rotation_delta_deg
+            && d.iter().any(|v| !v.is_finite() || v.abs() > 180.0)
+        {
+            return Err(Error::bad_input(
+                path,
+                format!(
+                    "photo {i}: \"rotation_delta_deg\" must be three finite angles in [-180, 180], got {d:?}"
+                ),
+            ));
         }
         let size = image_size(&image)?;
         let mut cam = camera_from_json_file(&cam_file, size)?;

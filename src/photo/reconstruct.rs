@@ -97,6 +97,8 @@ mod tests {
     }
 
     #[test]
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     fn affine_maps_are_reconstructed_exactly() {
         let (i0, j0) = (10, 20);
         let truth: [[f32; 2]; 4] = CORNER_OFFSETS.map(|[a, b]| affine(i0 + a, j0 + b));

@@ -582,6 +582,8 @@ fn grid_splat(
 
 /// [`grid_splat`] for `nx × ny` texels (inlined, so constant sizes unroll).
 #[inline(always)]
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 fn grid_splat_n(
     poly: &[[f64; 2]; 4],
     c: [f64; 2],
@@ -627,6 +629,8 @@ fn grid_splat_n(
 /// The parameters `s ∈ [0, 1]` with `da + (db − da)·s <= 0`, as `[s0, s1]` (`s1 < s0` or
 /// `s1 = s0` if none).
 #[inline(always)]
+// not `clamp`: `max(0.0).min(1.0)` maps a NaN ratio (da = dd = 0) to 0, `clamp` keeps NaN
+#[allow(clippy::manual_clamp)]
 fn below_interval(da: f64, db: f64) -> [f64; 2] {
     let dd = db - da;
     let s = (-da / dd).max(0.0).min(1.0);

@@ -341,6 +341,8 @@ impl StripSplatter {
     /// Adds the signed-area deltas of the edge `a → b` (local texel units of the run's box,
     /// `w` columns) carrying values `v`.
     #[inline(always)]
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     fn edge(&mut self, a: [f64; 2], b: [f64; 2], v: &Values, w: usize) {
         let dy_edge = b[1] - a[1];
         if dy_edge == 0.0 {
@@ -478,12 +480,12 @@ fn deposit_run(sums: &mut TexelTiles, t: usize, vals: &[Values]) {
             return;
         }
         let part = &vals[k..k + n];
-        if part.iter().any(|v| v[0] >= MIN_RESOLVED) {
-            if let Some(records) = sums.run_mut(t + k, n) {
-                for (r, v) in records.iter_mut().zip(part) {
-                    if v[0] >= MIN_RESOLVED {
-                        add_record(r, v);
-                    }
+        if part.iter().any(|v| v[0] >= MIN_RESOLVED)
+            && let Some(records) = sums.run_mut(t + k, n)
+        {
+            for (r, v) in records.iter_mut().zip(part) {
+                if v[0] >= MIN_RESOLVED {
+                    add_record(r, v);
                 }
             }
         }

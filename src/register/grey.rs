@@ -106,10 +106,10 @@ impl Grey {
         let mut best: Option<(i64, i64, f64)> = None;
         for y in c.1 - rad..=c.1 + rad {
             for x in c.0 - rad..=c.0 + rad {
-                if let Some(s) = self.ncc(t, tn, x, y, r) {
-                    if best.is_none_or(|b| s > b.2) {
-                        best = Some((x, y, s));
-                    }
+                if let Some(s) = self.ncc(t, tn, x, y, r)
+                    && best.is_none_or(|b| s > b.2)
+                {
+                    best = Some((x, y, s));
                 }
             }
         }

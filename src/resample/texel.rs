@@ -31,6 +31,8 @@ pub(crate) struct AreaSum {
 impl AreaSum {
     /// Adds overlap `a` (> 0) with a pixel of colour `px` (`None`: unknown).
     #[inline]
+    // indexed loops: each index serves more than one array or lookup
+    #[allow(clippy::needless_range_loop)]
     pub(crate) fn add(&mut self, a: f64, px: Option<[u8; 3]>) {
         self.total += a;
         if let Some(px) = px {

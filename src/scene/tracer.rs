@@ -116,7 +116,7 @@ pub(crate) fn sees_with(
 fn corners(w: usize, i: usize) -> [(usize, usize); 3] {
     let q = i / 2;
     let (r, c) = (q / (w - 1), q % (w - 1));
-    if i % 2 == 0 {
+    if i.is_multiple_of(2) {
         [(r, c), (r + 1, c), (r + 1, c + 1)]
     } else {
         [(r, c), (r + 1, c + 1), (r, c + 1)]

@@ -149,6 +149,32 @@ pub(crate) fn bin_index(edges: &[f64], v: f64) -> usize {
     edges.partition_point(|&e| e <= v).saturating_sub(1)
 }
 
+/// [`texel_stretch`] of a stored cell drawn with `mesh` (its surface triangles, texture
+/// coordinates from [`crate::store::texcoord`]) on a `texels × texels` texture budgeted for
+/// the cell's nominal square.
+pub fn cell_texel_stretch(
+    rec: &crate::store::CellRecord,
+    mesh: &crate::store::CellMesh,
+    texels: u32,
+) -> Vec<f32> {
+    let n = (mesh.surface_vertices as usize).min(mesh.positions.len());
+    let positions: Vec<[f64; 3]> = mesh.positions[..n]
+        .iter()
+        .map(|p| p.map(f64::from))
+        .collect();
+    let uvs: Vec<[f64; 2]> = (0..n)
+        .map(|i| crate::store::texcoord(rec, mesh, i).map(f64::from))
+        .collect();
+    let tris: Vec<[u32; 3]> = mesh
+        .surface()
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&k| (k as usize) < n))
+        .collect();
+    let base_area = (rec.extent.width() * rec.extent.height()).abs();
+    texel_stretch(&positions, &tris, &uvs, texels.max(1), base_area)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -228,30 +254,4 @@ mod tests {
         assert_eq!(s.percentiles.max, 3.0);
         assert_eq!(s.percentiles.mean, 1.5);
     }
-}
-
-/// [`texel_stretch`] of a stored cell drawn with `mesh` (its surface triangles, texture
-/// coordinates from [`crate::store::texcoord`]) on a `texels × texels` texture budgeted for
-/// the cell's nominal square.
-pub fn cell_texel_stretch(
-    rec: &crate::store::CellRecord,
-    mesh: &crate::store::CellMesh,
-    texels: u32,
-) -> Vec<f32> {
-    let n = (mesh.surface_vertices as usize).min(mesh.positions.len());
-    let positions: Vec<[f64; 3]> = mesh.positions[..n]
-        .iter()
-        .map(|p| p.map(f64::from))
-        .collect();
-    let uvs: Vec<[f64; 2]> = (0..n)
-        .map(|i| crate::store::texcoord(rec, mesh, i).map(f64::from))
-        .collect();
-    let tris: Vec<[u32; 3]> = mesh
-        .surface()
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&k| (k as usize) < n))
-        .collect();
-    let base_area = (rec.extent.width() * rec.extent.height()).abs();
-    texel_stretch(&positions, &tris, &uvs, texels.max(1), base_area)
 }

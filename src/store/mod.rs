@@ -211,7 +211,7 @@ impl Store {
         };
         let path = self.dir.join(&p.texture.path);
         let (w, h) = active.dimensions();
-        if w != h || w == 0 || p.texels % w != 0 || !(p.texels / w).is_power_of_two() {
+        if w != h || w == 0 || !p.texels.is_multiple_of(w) || !(p.texels / w).is_power_of_two() {
             return Err(Error::store(
                 path,
                 format!(

@@ -65,7 +65,7 @@ pub(super) fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContex
     let t = active_texels(rec);
     if normals.dimensions() != (t, t) {
         return Err(Error::store(
-            store.dir.join(&active_normal_path(rec)),
+            store.dir.join(active_normal_path(rec)),
             format!(
                 "normal map {:?} is not the cell's {t}x{t} texels",
                 normals.dimensions()
@@ -442,12 +442,12 @@ impl LevelRun<'_> {
         for (pi, pyr) in self.pyramids.iter().enumerate() {
             let (_, cam) = pyr.level(step);
             let focal = (cam.fx * cam.fy).sqrt();
-            if let Some((l, fs)) = &cached[pi] {
-                if *l == level {
-                    sets.push((std::borrow::Cow::Borrowed(fs), 1.0, focal));
-                    cast_steps.push(step);
-                    continue;
-                }
+            if let Some((l, fs)) = &cached[pi]
+                && *l == level
+            {
+                sets.push((std::borrow::Cow::Borrowed(fs), 1.0, focal));
+                cast_steps.push(step);
+                continue;
             }
             let scene = match scenes[pi].take() {
                 Some(s) => s,

@@ -8,6 +8,10 @@ use super::*;
 pub(super) const MAX_CACHED_FOOTPRINTS: usize = 8 << 20;
 
 /// The leveling transform of one photo, its sample count and the footprints it was fitted
+/// on with their level, as [`estimate_leveling`] returns them.
+pub(super) type Leveled = (ColourTransform, usize, Option<(usize, FootprintSet)>);
+
+/// The leveling transform of one photo, its sample count and the footprints it was fitted
 /// on with their level (see the module docs).
 pub(super) fn estimate_leveling(
     store: &Store,
@@ -15,7 +19,7 @@ pub(super) fn estimate_leveling(
     finest: usize,
     opts: &ProjectOptions,
     buffers: &FootprintBuffers,
-) -> Result<(ColourTransform, usize, Option<(usize, FootprintSet)>)> {
+) -> Result<Leveled> {
     let k_est = leveling_step(pyr, finest, opts);
     let attempts: Vec<usize> = if k_est > 0 { vec![k_est, 0] } else { vec![0] };
     for step in attempts {

@@ -323,7 +323,7 @@ pub fn project_store(
             .first()
             .is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
     let (leveled, first_scene) = rayon::join(
-        || -> Result<Vec<(ColourTransform, usize, Option<(usize, FootprintSet)>)>> {
+        || -> Result<Vec<leveling::Leveled>> {
             if !opts.level_colours {
                 return Ok(Vec::new());
             }
@@ -340,11 +340,11 @@ pub fn project_store(
         },
     );
     for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
-        if let Some((level, fs)) = fs {
-            if cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS {
-                cached_len += fs.len();
-                cached[i] = Some((level, fs));
-            }
+        if let Some((level, fs)) = fs
+            && cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS
+        {
+            cached_len += fs.len();
+            cached[i] = Some((level, fs));
         }
         transforms[i] = t;
         reports[i].colour_gain = t.gain;

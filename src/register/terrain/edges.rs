@@ -44,6 +44,10 @@ pub struct ContourPoint {
 /// layers (the nearer one occludes the farther).
 const JUMP: f64 = 1.25;
 
+/// One located crossing of [`contour`]: the grazing point (world metres), its pixel and the
+/// image axis from the near side towards the far side.
+type Crossing = (DVec3, [f64; 2], [f64; 2]);
+
 /// Silhouettes of the terrain seen by `cam`: crossings between neighbouring rays of a grid
 /// of `step` pixels (inset by `margin` pixels) from terrain to sky or to terrain more than
 /// 1.25× farther, each located by 10 bisections of the ray between them (the last ray on
@@ -98,7 +102,7 @@ pub fn contour(
             }
         }
     }
-    let located: Vec<Option<(DVec3, [f64; 2], [f64; 2])>> = pairs
+    let located: Vec<Option<Crossing>> = pairs
         .par_iter()
         .map(|&(a, b)| {
             let (mut pa, mut pb) = (at(a % nu, a / nu), at(b % nu, b / nu));
@@ -128,7 +132,7 @@ pub fn contour(
             Some((xa, [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])], axis))
         })
         .collect();
-    let pts: Vec<(DVec3, [f64; 2], [f64; 2])> = located.into_iter().flatten().collect();
+    let pts: Vec<Crossing> = located.into_iter().flatten().collect();
     // normals from the neighbouring crossings (a bucket grid of 2.5-step cells)
     let cell = 2.5 * step;
     let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
@@ -498,6 +502,10 @@ impl Residuals for Problem<'_> {
     }
 }
 
+/// What [`fit_matches`] returns: the camera, the median and robust scale of the absolute
+/// point-to-edge distances (working pixels), and each free parameter's standard deviation.
+type MatchFit = (CameraParams, f64, f64, Vec<(Param, f64)>);
+
 /// Fits the free parameters to the matches (Huber IRLS, 4 rounds): the camera, the median
 /// and robust scale of the absolute point-to-edge distances (working pixels), and each free
 /// parameter's standard deviation.
@@ -508,7 +516,7 @@ fn fit_matches(
     opts: &EdgeOptions,
     w: u32,
     h: u32,
-) -> Result<(CameraParams, f64, f64, Vec<(Param, f64)>)> {
+) -> Result<MatchFit> {
     let mut problem = Problem {
         base: *start,
         prior: *prior,

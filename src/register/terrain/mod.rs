@@ -257,6 +257,8 @@ const POSITION_REPEAT_M: f64 = 0.5;
 /// module docs. Errors for parameters that cannot be registered this way or a camera not
 /// sized like the photo; a search that does not converge is a result with
 /// `converged: false`, not an error.
+// indexed loops: each index serves more than one array or lookup
+#[allow(clippy::needless_range_loop)]
 pub fn register_to_terrain(
     terrain: &TerrainScene,
     photo: &RgbImage,
@@ -725,10 +727,10 @@ fn view_depths(terrain: &TerrainScene, cam: &CameraModel) -> Vec<f64> {
                 cam.width as f64 * i as f64 / 16.0,
                 cam.height as f64 * j as f64 / 16.0,
             );
-            if let Some(dir) = cam.pixel_ray(u, v) {
-                if let Some(p) = terrain.hit(cam.position, dir) {
-                    d.push((p - cam.position).length());
-                }
+            if let Some(dir) = cam.pixel_ray(u, v)
+                && let Some(p) = terrain.hit(cam.position, dir)
+            {
+                d.push((p - cam.position).length());
             }
         }
     }

@@ -380,7 +380,9 @@ impl<'a> TerrainScene<'a> {
         // grey class boundaries per source (texture, label photo): quantiles of the view's
         // own greys; with label photos and a band, over the uniform one-in-`INNER_STRIDE`²
         // grid of samples (kept, so their source is known; an unbiased subset of the view)
-        let uniform = |i: usize| (i / nu) % INNER_STRIDE == 0 && (i % nu) % INNER_STRIDE == 0;
+        let uniform = |i: usize| {
+            (i / nu).is_multiple_of(INNER_STRIDE) && (i % nu).is_multiple_of(INNER_STRIDE)
+        };
         let quantile_set = |i: usize| self.label_photos.is_empty() || band.is_none() || uniform(i);
         let cuts_of = |photo: bool| -> Vec<f32> {
             let mut greys: Vec<f32> = out_at
@@ -564,35 +566,6 @@ fn jitter(i: u64) -> (f64, f64) {
     )
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dilation_marks_exactly_the_square_around_each_set_cell() {
-        let (nu, nv) = (9, 7);
-        let mut m = vec![false; nu * nv];
-        m[3 * nu + 4] = true;
-        m[0] = true;
-        let d = dilate(&m, nu, nv, 2);
-        for r in 0..nv {
-            for c in 0..nu {
-                let want = (r.abs_diff(3) <= 2 && c.abs_diff(4) <= 2) || (r <= 2 && c <= 2);
-                assert_eq!(d[r * nu + c], want, "({c}, {r})");
-            }
-        }
-    }
-
-    #[test]
-    fn jitter_stays_inside_the_cell_and_repeats() {
-        for i in 0..1000 {
-            let (a, b) = jitter(i);
-            assert!((-0.5..0.5).contains(&a) && (-0.5..0.5).contains(&b));
-            assert_eq!(jitter(i), (a, b));
-        }
-    }
-}
-
 /// A photo with a trusted camera as grey levels for labelling terrain samples.
 struct LabelPhoto {
     camera: CameraModel,
@@ -621,5 +594,34 @@ impl LabelPhoto {
         let top = l[y0 * w + x0] * (1.0 - fx) + l[y0 * w + x1] * fx;
         let bot = l[y1 * w + x0] * (1.0 - fx) + l[y1 * w + x1] * fx;
         Some(top * (1.0 - fy) + bot * fy)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dilation_marks_exactly_the_square_around_each_set_cell() {
+        let (nu, nv) = (9, 7);
+        let mut m = vec![false; nu * nv];
+        m[3 * nu + 4] = true;
+        m[0] = true;
+        let d = dilate(&m, nu, nv, 2);
+        for r in 0..nv {
+            for c in 0..nu {
+                let want = (r.abs_diff(3) <= 2 && c.abs_diff(4) <= 2) || (r <= 2 && c <= 2);
+                assert_eq!(d[r * nu + c], want, "({c}, {r})");
+            }
+        }
+    }
+
+    #[test]
+    fn jitter_stays_inside_the_cell_and_repeats() {
+        for i in 0..1000 {
+            let (a, b) = jitter(i);
+            assert!((-0.5..0.5).contains(&a) && (-0.5..0.5).contains(&b));
+            assert_eq!(jitter(i), (a, b));
+        }
     }
 }

@@ -89,15 +89,15 @@ impl TerrainRenderer {
         if data.mesh.triangles.is_empty() {
             return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
         }
-        if let Some(m) = &data.morph {
-            if m.targets.len() != data.mesh.positions.len() {
-                return Err(Error::Gpu(format!(
-                    "cell {}: {} morph targets for {} vertices",
-                    rec.id,
-                    m.targets.len(),
-                    data.mesh.positions.len()
-                )));
-            }
+        if let Some(m) = &data.morph
+            && m.targets.len() != data.mesh.positions.len()
+        {
+            return Err(Error::Gpu(format!(
+                "cell {}: {} morph targets for {} vertices",
+                rec.id,
+                m.targets.len(),
+                data.mesh.positions.len()
+            )));
         }
         let device = &self.ctx.device;
         let pos: Vec<f32> = data.mesh.positions.iter().flatten().copied().collect();
