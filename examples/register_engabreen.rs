@@ -19,6 +19,11 @@
 //! resolution"): after the angle search, the position searched by the score itself, steps
 //! H and H/2 metres (as `cliffmap register --position-search-m H`).
 //! `--focal-scale S`: the rough camera's focal length S times the fitted one.
+//! `--gcp-on-dem`: also every GCP moved vertically onto the store's DEM (bilinear at its
+//! x, y), the surface the terrain search aligns the photo with: the fitted camera's and each
+//! result's RMSE on those points, and the GCP fit (yaw, pitch, roll, fx, fy, k1, position
+//! fixed, as ImGRAFT's) to them, so a result can be compared with the best any camera does
+//! on the DEM's surface (docs/registration.md, "Where issue #17's goals stand").
 //! `--overlay PNG`: for the first start, the photo blended with the store rendered from the
 //! rough and from the registered camera, side by side, GCPs marked (docs/registration.md).
 //! STORE_DIR is built (default build + reparam) when it holds no store.
@@ -105,6 +110,52 @@ fn main() -> anyhow::Result<()> {
         "fitted camera (ImGRAFT, from the GCPs): GCP RMSE {:.2} px\n",
         bench_util::gcp_rmse(&fitted, &gcps)
     );
+    // --gcp-on-dem: the GCPs moved onto the DEM's surface, and the best fit to them
+    let gcps_dem = if args.iter().any(|a| a == "--gcp-on-dem") {
+        let dem = bench_util::engabreen_dem()?;
+        let moved: Vec<cliffmap::register::Gcp> = gcps
+            .iter()
+            .map(|g| {
+                let (row, col) = dem.georef.grid(g.world.x, g.world.y);
+                let mut m = g.clone();
+                m.world.z = dem.bilinear(row, col);
+                m
+            })
+            .collect();
+        let mut dz: Vec<f64> = gcps
+            .iter()
+            .zip(&moved)
+            .map(|(g, m)| g.world.z - m.world.z)
+            .collect();
+        dz.sort_by(f64::total_cmp);
+        let mean = dz.iter().sum::<f64>() / dz.len() as f64;
+        let sd = (dz.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / dz.len() as f64).sqrt();
+        let refit = cliffmap::register::fit_camera(
+            &fitted,
+            &moved,
+            &cliffmap::register::FitOptions {
+                free: parse_free("yaw,pitch,roll,fx,fy,k1")?,
+                robust: false,
+                ..Default::default()
+            },
+        )?;
+        println!(
+            "GCP heights minus the DEM's: median {:+.2} m, mean {:+.2} m, sd {:.2} m, range {:+.2} .. {:+.2} m",
+            dz[dz.len() / 2],
+            mean,
+            sd,
+            dz[0],
+            dz[dz.len() - 1]
+        );
+        println!(
+            "GCPs on the DEM: fitted camera {:.2} px; refitted to them (yaw, pitch, roll, fx, fy, k1) {:.2} px\n",
+            bench_util::gcp_rmse(&fitted, &moved),
+            refit.rmse_px
+        );
+        Some(moved)
+    } else {
+        None
+    };
     println!(
         "| start | yaw/pitch/roll change (°) | position change (m) | GCP RMSE start (px) | after (px) | position after, from the fitted (m) | repeat (px) | verdict | s |"
     );
@@ -209,6 +260,12 @@ fn main() -> anyhow::Result<()> {
             },
             fit.seconds
         );
+        if let Some(moved) = &gcps_dem {
+            println!(
+                "  start {s}: RMSE on the GCPs moved onto the DEM {:.2} px",
+                bench_util::gcp_rmse(&fit.found, moved)
+            );
+        }
         finals.push(after);
     }
     finals.sort_by(f64::total_cmp);

@@ -76,19 +76,9 @@ pub fn cpu_seconds() -> f64 {
 /// Builds the Engabreen store (3 m lidar DEM + ortho from the shared data, default build
 /// options) into `dir`; returns the build's wall-clock seconds.
 pub fn build_engabreen_store(dir: &Path, fingerprint: &str) -> anyhow::Result<f64> {
+    use cliffmap::OrthoPlacement;
     use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-    use cliffmap::{DemLoadOptions, OrthoPlacement};
-    let dem_opts = DemLoadOptions {
-        width: Some(507),
-        height: Some(590),
-        spacing: Some(3.0),
-        origin: Some((445302.17, 7396769.45)),
-        ..Default::default()
-    };
-    let dem = cliffmap::load_dem(
-        &shared_data("engabreen/engabreen_dem_3m_507x590.f32"),
-        &dem_opts,
-    )?;
+    let dem = engabreen_dem()?;
     let ortho = cliffmap::load_ortho(
         &shared_data("engabreen/engabreen_ortho_3m_507x590.png"),
         OrthoPlacement::SameGridAsDem,
@@ -112,6 +102,21 @@ pub fn build_engabreen_store(dir: &Path, fingerprint: &str) -> anyhow::Result<f6
         dir,
     )?;
     Ok(t.elapsed().as_secs_f64())
+}
+
+/// Engabreen's 3-m DEM (507 × 590 samples, UTM 33N) as the stores of the benchmarks use it.
+pub fn engabreen_dem() -> anyhow::Result<cliffmap::Dem> {
+    let dem_opts = cliffmap::DemLoadOptions {
+        width: Some(507),
+        height: Some(590),
+        spacing: Some(3.0),
+        origin: Some((445302.17, 7396769.45)),
+        ..Default::default()
+    };
+    Ok(cliffmap::load_dem(
+        &shared_data("engabreen/engabreen_dem_3m_507x590.f32"),
+        &dem_opts,
+    )?)
 }
 
 /// Fractal DEM (diamond-square) of `(2^k + 1)^2` samples whose displacement depends only on
