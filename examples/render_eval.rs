@@ -13,7 +13,7 @@
 //!     [--photo-texture-budget-mb MB] [--texels-per-delivered N] [--feather F] [--resolution-ramp LO,HI] [--best]
 //!     [--render-supersample N] [--no-relief-mapping] [--project-onto-tin] [--perturb-yaw DEG] [--perturb-position DX,DY,DZ]
 //!     [--occlusion-margin PX] [--rough SEED [--rough-position M] [--known-focal]
-//!     [--register [--include-unregistered] [--textures active|best]]]
+//!     [--register [--include-unregistered] [--textures active|best] [--position-search-m M]]]
 //!     [--second-photos TURN_DEG,DISTANCE_RATIO]
 //! ```
 //! `--seed`, `--relief` (wall heights, m) and `--photo-distance` (factor on the cameras'
@@ -29,7 +29,8 @@
 //! `--known-focal`: the focal length exact and held by `register`, the angles the same);
 //! `--register` first refines those cameras with `cliffmap register` (prints the errors
 //! before and after) and projects the registered ones (photos it could not confirm are left
-//! out, as `cliffmap project` does, unless `--include-unregistered`).
+//! out, as `cliffmap project` does, unless `--include-unregistered`; `--position-search-m M`
+//! searches the position too, as `cliffmap register --position-search-m M`).
 //! ```text
 //! ```
 //! `--perturb-*` project the photos with every camera's yaw turned by DEG degrees or its
@@ -170,6 +171,7 @@ fn main() -> anyhow::Result<()> {
                         Some("best") => cliffmap::register::LabelTexture::Best,
                         Some(t) => anyhow::bail!("--textures active|best, not {t:?}"),
                     },
+                    position_search_m: flag("--position-search-m").map(str::parse).transpose()?,
                     ..cliffmap::register::TerrainOptions::default()
                 },
                 &ties,
