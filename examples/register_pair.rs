@@ -32,14 +32,7 @@ fn main() -> anyhow::Result<()> {
     let matches = match_photos(&a, &b, &MatchOptions::default())?;
     let t_match = t.elapsed().as_secs_f64();
     // stable ground: the ray from A hits the DEM off the glacier
-    let dem_opts = cliffmap::DemLoadOptions {
-        width: Some(507),
-        height: Some(590),
-        spacing: Some(3.0),
-        origin: Some((445302.17, 7396769.45)),
-        ..Default::default()
-    };
-    let dem = cliffmap::load_dem(&data.join("engabreen_dem_3m_507x590.f32"), &dem_opts)?;
+    let dem = bench_util::engabreen_dem()?;
     let mask = image::open(data.join("engabreen_glacier_mask_507x590.png"))?.to_luma8();
     let tracer = cliffmap::scene::DemTracer::new(&dem, cam.position)?;
     let off_glacier = |p: glam::DVec3| {

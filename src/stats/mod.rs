@@ -36,7 +36,7 @@ pub use area::{DemSurface, dem_surface, tin_surface_area, triangle_area_3d};
 pub use cell::cell_stats;
 pub use histogram::{RelTexelBins, rel_texel_bins, write_histogram_png};
 pub use stretch::{
-    STEEP_STRETCH, StretchSummary, cell_texel_stretch, stretch_bin_edges, summarize_stretch,
+    CellSurface, STEEP_STRETCH, StretchSummary, cell_texel_stretch, stretch_bin_edges, summarize_stretch,
     texel_stretch,
 };
 pub use summary::{

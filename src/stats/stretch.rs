@@ -157,22 +157,43 @@ pub fn cell_texel_stretch(
     mesh: &crate::store::CellMesh,
     texels: u32,
 ) -> Vec<f32> {
-    let n = (mesh.surface_vertices as usize).min(mesh.positions.len());
-    let positions: Vec<[f64; 3]> = mesh.positions[..n]
-        .iter()
-        .map(|p| p.map(f64::from))
-        .collect();
-    let uvs: Vec<[f64; 2]> = (0..n)
-        .map(|i| crate::store::texcoord(rec, mesh, i).map(f64::from))
-        .collect();
-    let tris: Vec<[u32; 3]> = mesh
-        .surface()
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&k| (k as usize) < n))
-        .collect();
+    let s = CellSurface::of(rec, mesh);
     let base_area = (rec.extent.width() * rec.extent.height()).abs();
-    texel_stretch(&positions, &tris, &uvs, texels.max(1), base_area)
+    texel_stretch(&s.positions, &s.triangles, &s.uvs, texels.max(1), base_area)
+}
+
+/// A stored cell's surface as [`texel_stretch`] takes it: the surface vertices (metres,
+/// cell-local, widened to f64), their texture coordinates from [`crate::store::texcoord`],
+/// and the surface triangles that use only those vertices.
+pub struct CellSurface {
+    /// Surface vertex positions.
+    pub positions: Vec<[f64; 3]>,
+    /// Texture coordinates (0..1) per surface vertex.
+    pub uvs: Vec<[f64; 2]>,
+    /// Surface triangles (indices into `positions`).
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl CellSurface {
+    /// The surface of cell `rec` drawn with `mesh`.
+    pub fn of(rec: &crate::store::CellRecord, mesh: &crate::store::CellMesh) -> CellSurface {
+        let n = (mesh.surface_vertices as usize).min(mesh.positions.len());
+        CellSurface {
+            positions: mesh.positions[..n]
+                .iter()
+                .map(|p| p.map(f64::from))
+                .collect(),
+            uvs: (0..n)
+                .map(|i| crate::store::texcoord(rec, mesh, i).map(f64::from))
+                .collect(),
+            triangles: mesh
+                .surface()
+                .iter()
+                .copied()
+                .filter(|t| t.iter().all(|&k| (k as usize) < n))
+                .collect(),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -171,24 +171,13 @@ impl CellOutcome {
 /// surface triangle in texture space (row-major).
 pub(super) fn covered_mask(store: &Store, rec: &CellRecord, texels: u32) -> Result<Vec<bool>> {
     let mesh = store.read_active_mesh(rec)?;
-    let ns = (mesh.surface_vertices as usize).min(mesh.positions.len());
-    let positions: Vec<[f64; 3]> = mesh.positions[..ns]
-        .iter()
-        .map(|p| p.map(f64::from))
-        .collect();
-    let uvs: Vec<[f64; 2]> = (0..ns)
-        .map(|i| texcoord(rec, &mesh, i).map(f64::from))
-        .collect();
-    let triangles: Vec<[u32; 3]> = mesh
-        .surface()
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&k| (k as usize) < ns))
-        .collect();
-    Ok(texel_stretch(&positions, &triangles, &uvs, texels, 1.0)
-        .iter()
-        .map(|s| !s.is_nan())
-        .collect())
+    let s = crate::stats::CellSurface::of(rec, &mesh);
+    Ok(
+        texel_stretch(&s.positions, &s.triangles, &s.uvs, texels, 1.0)
+            .iter()
+            .map(|s| !s.is_nan())
+            .collect(),
+    )
 }
 
 /// Encodes `img` as PNG and queues it for `dir/rel` on `writer`.

@@ -38,7 +38,7 @@ use crate::photo::{
 use crate::stats::texel_stretch;
 use crate::store::{
     BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
-    PhotoSettings, Store, active_texels, cell_stem, texcoord,
+    PhotoSettings, Store, active_texels, cell_stem,
 };
 
 /// Texels steeper than this (degrees from horizontal) count as steep.
