@@ -340,6 +340,13 @@ fn main() -> anyhow::Result<()> {
     for v in &images {
         write_view_images(&vdir, v)?;
     }
+    // The views' cameras, so that `cliffmap render STORE --camera VIEW.camera.json` redraws one.
+    for v in &views {
+        std::fs::write(
+            vdir.join(format!("{}.camera.json", v.name)),
+            cliffmap::camera::camera_to_json(&v.camera).to_string(),
+        )?;
+    }
     println!("{}", gains_table(&reports));
     std::fs::write(
         out.join("eval.json"),

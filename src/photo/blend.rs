@@ -12,12 +12,15 @@
 //! mixed in the working [`ColourSpace`], alpha `max(α, β)`; the confidence map stores `s`
 //! (0..255). A photo texture finer than the existing one (`scale` > 1) starts from the
 //! existing texture magnified bilinearly (texel centres, edges clamped); texels the photos
-//! do not reach keep that colour.
+//! do not reach keep that colour, except the gutter beside photo colour (off the chart, or
+//! of unknown colour: alpha below 255), which takes the photo colour out to `2 · scale`
+//! texels ([`super::gutter`]) so that filtering at a chart's edge stays photo colour.
 
 use image::{GrayImage, RgbaImage};
 
 use super::cell_accum::{CellAccum, CellContext};
 use super::confidence::ConfidenceParams;
+use super::gutter::{SlotBlocks, fill_gutter_from_photo};
 
 use crate::colour::ColourSpace;
 pub use crate::store::magnify;
@@ -38,8 +41,8 @@ pub struct Blended {
     pub confidence: GrayImage,
     /// Block side (texels) of `blocks`.
     pub block_side: u32,
-    /// The blocks where some texel got photo weight `β > 0` (those stored): elsewhere the
-    /// texture equals the existing one magnified.
+    /// The blocks where some texel got photo weight `β > 0` or photo colour in its gutter
+    /// (those stored): elsewhere the texture equals the existing one magnified.
     pub blocks: PhotoBlocks,
     /// Covered texels with `s > 0.5`.
     pub photo_texels: u64,
@@ -187,6 +190,20 @@ pub fn blend_cell(
             }
         }
     });
+    // photo colour into the gutter beside it (chart and cell edges), as far as a renderer's
+    // filtering reaches: the magnified existing texture's edge ramp plus a texel per scale
+    let blocks_held = SlotBlocks {
+        slot_of: &slot_of,
+        slots: &slots,
+        side: sd,
+        grid,
+        size: [w as usize, h as usize],
+    };
+    let filled =
+        fill_gutter_from_photo(&mut px, &mut cv, &blocks_held, space, 2 * acc.scale.max(1));
+    for (&i, _) in slots.iter().zip(&filled).filter(|(_, f)| **f > 0) {
+        stored[i] = true;
+    }
     let kept: Vec<usize> = slots.iter().copied().filter(|&i| stored[i]).collect();
     Blended {
         texture: atlas_of(&px, 4, &kept, &slot_of, [side, w, h]),

@@ -37,6 +37,7 @@ mod colour_transform;
 mod confidence;
 mod corners;
 mod footprint;
+mod gutter;
 mod input;
 mod level;
 mod occlusion;
