@@ -14,9 +14,10 @@
 //! Why: the existing (reparameterized) texture's gutter holds its own colours dilated, and
 //! a photo texture starts from it magnified, so without this step every chart edge whose
 //! surface took photo colour showed a thin line of the smeared existing colour in renders
-//! (measured: docs/projection.md, "Gutter").
+//! (measured: docs/projection.md, "Photo colour in the gutter").
 
 use crate::colour::ColourSpace;
+use crate::resample::fill::N8;
 
 /// Blocks of a texture held block-major in slots (as [`super::blend::blend_cell`] keeps the
 /// blocks footprints reached): block `i` (row-major over a `grid`-wide grid of `side`-texel
@@ -72,7 +73,7 @@ impl SlotBlocks<'_> {
         let (x, y) = self.texel(at);
         let mut out = [0usize; 8];
         let mut count = 0;
-        for (dx, dy) in NEIGHBOURS {
+        for (dx, dy) in N8 {
             if let Some(j) = self.index(x + dx, y + dy) {
                 out[count] = j;
                 count += 1;
@@ -113,17 +114,6 @@ impl SlotBlocks<'_> {
 /// source of the fill. Gutter texels below it (a footprint's edge reaching just off the
 /// chart gives them a sliver of photo weight) are filled like those with none.
 pub(crate) const PHOTO_SHARE: u8 = 128;
-
-const NEIGHBOURS: [(i64, i64); 8] = [
-    (-1, -1),
-    (0, -1),
-    (1, -1),
-    (-1, 0),
-    (1, 0),
-    (-1, 1),
-    (0, 1),
-    (1, 1),
-];
 
 /// Fills gutter texels next to photo texels as the [module docs](self) say, for `passes`
 /// passes, in `px` (RGBA8, slot order) and `confidence` (one byte per texel, slot order).
@@ -292,7 +282,7 @@ mod tests {
         for at in 0..slots.len() * 16 {
             let (x, y) = blocks.texel(at);
             assert_eq!(blocks.index(x, y), Some(at));
-            let mut want: Vec<usize> = NEIGHBOURS
+            let mut want: Vec<usize> = N8
                 .iter()
                 .filter_map(|&(dx, dy)| blocks.index(x + dx, y + dy))
                 .collect();

@@ -5,7 +5,8 @@
 use crate::fastmath::to_u8;
 use image::RgbaImage;
 
-const N8: [(i64, i64); 8] = [
+/// The 8-neighbour offsets `(dx, dy)` of a texel, row by row.
+pub(crate) const N8: [(i64, i64); 8] = [
     (-1, -1),
     (0, -1),
     (1, -1),
