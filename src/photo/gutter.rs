@@ -214,6 +214,15 @@ pub(crate) fn fill_gutter_from_photo(
 mod tests {
     use super::*;
 
+    /// The layout of [`block`]: one 8 x 8 block in slot 0.
+    const ONE_BLOCK: SlotBlocks<'static> = SlotBlocks {
+        slot_of: &[0],
+        slots: &[0],
+        side: 8,
+        grid: 1,
+        size: [8, 8],
+    };
+
     /// One 8 x 8 block: the left half photo (red, confidence 200), column 4 and 5 gutter
     /// (alpha 0 and 100; texel (4, 0) with a share of 3), columns 6 and 7 known existing
     /// texels (alpha 255, green).
@@ -240,15 +249,7 @@ mod tests {
     #[test]
     fn gutter_next_to_photo_takes_its_colour_known_texels_do_not() {
         let (mut px, mut cv) = block();
-        let slot_of = [0u32];
-        let slots = [0usize];
-        let blocks = SlotBlocks {
-            slot_of: &slot_of,
-            slots: &slots,
-            side: 8,
-            grid: 1,
-            size: [8, 8],
-        };
+        let blocks = ONE_BLOCK;
         let filled = fill_gutter_from_photo(&mut px, &mut cv, &blocks, ColourSpace::Linear, 4);
         assert_eq!(filled, vec![16]);
         for y in 0..8 {
@@ -300,15 +301,7 @@ mod tests {
 
     #[test]
     fn one_pass_fills_one_ring_and_no_pass_fills_nothing() {
-        let slot_of = [0u32];
-        let slots = [0usize];
-        let blocks = SlotBlocks {
-            slot_of: &slot_of,
-            slots: &slots,
-            side: 8,
-            grid: 1,
-            size: [8, 8],
-        };
+        let blocks = ONE_BLOCK;
         let (mut px, mut cv) = block();
         let (px0, cv0) = (px.clone(), cv.clone());
         assert_eq!(
