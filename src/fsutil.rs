@@ -55,7 +55,15 @@ fn test_disk_budget(len: usize) -> std::io::Result<()> {
 /// encoding time against file size (docs/performance.md, "PNG encoding"; measured on
 /// 2048² photo textures: `fast` ≈ 18× the speed of `balanced` at 1.3× its size).
 #[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum PngCompression {
@@ -130,12 +138,25 @@ mod tests {
     #[test]
     fn every_png_compression_keeps_the_pixels_and_fast_is_the_old_encoding() {
         let img = image::RgbaImage::from_fn(97, 61, |x, y| {
-            image::Rgba([(x * 7 % 256) as u8, (y * 13 % 256) as u8, ((x ^ y) % 256) as u8, 255])
+            image::Rgba([
+                (x * 7 % 256) as u8,
+                (y * 13 % 256) as u8,
+                ((x ^ y) % 256) as u8,
+                255,
+            ])
         });
         let p = Path::new("t.png");
-        for c in [PngCompression::Fast, PngCompression::Balanced, PngCompression::Best] {
+        for c in [
+            PngCompression::Fast,
+            PngCompression::Balanced,
+            PngCompression::Best,
+        ] {
             let bytes = encode_png(p, &img, c).unwrap();
-            assert_eq!(image::load_from_memory(&bytes).unwrap().to_rgba8(), img, "{c:?}");
+            assert_eq!(
+                image::load_from_memory(&bytes).unwrap().to_rgba8(),
+                img,
+                "{c:?}"
+            );
         }
         let mut old = std::io::Cursor::new(Vec::new());
         img.write_to(&mut old, image::ImageFormat::Png).unwrap();

@@ -248,7 +248,15 @@ fn a_geoid_grid_replaces_the_constant_offset() {
     let d = dir.to_str().unwrap();
     let export = |name: &str, extra: &[&str]| {
         let out = tmp.path().join(name);
-        let mut args = vec!["export-tiles", d, "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--quiet"];
+        let mut args = vec![
+            "export-tiles",
+            d,
+            "--out",
+            out.to_str().unwrap(),
+            "--crs",
+            "EPSG:32633",
+            "--quiet",
+        ];
         args.extend_from_slice(extra);
         ok(&args);
         out
@@ -266,23 +274,43 @@ fn a_geoid_grid_replaces_the_constant_offset() {
             continue; // (records the options, which differ)
         }
         if rel == Path::new("tileset.json") {
-            let ta: serde_json::Value = serde_json::from_slice(&std::fs::read(&f).unwrap()).unwrap();
-            let tb: serde_json::Value = serde_json::from_slice(&std::fs::read(b.join(rel)).unwrap()).unwrap();
+            let ta: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(&f).unwrap()).unwrap();
+            let tb: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(b.join(rel)).unwrap()).unwrap();
             assert_eq!(ta["root"], tb["root"]);
-            let h = tb["asset"]["extras"]["cliffmap"]["heights"].as_str().unwrap();
-            assert!(h.contains("egm_constant.tif") && h.contains("35.00..35.00"), "{h}");
+            let h = tb["asset"]["extras"]["cliffmap"]["heights"]
+                .as_str()
+                .unwrap();
+            assert!(
+                h.contains("egm_constant.tif") && h.contains("35.00..35.00"),
+                "{h}"
+            );
         } else {
-            assert!(std::fs::read(&f).unwrap() == std::fs::read(b.join(rel)).unwrap(), "{} differs", rel.display());
+            assert!(
+                std::fs::read(&f).unwrap() == std::fs::read(b.join(rel)).unwrap(),
+                "{} differs",
+                rel.display()
+            );
         }
     }
     // A sloped grid moves each tile by its own N: the root frame's origin rises by N there.
     let sloped = tmp.path().join("egm_sloped.tif");
-    write_geoid_grid(&sloped, |lon, lat| 10.0 + 0.5 * lon + 0.25 * lat, (90.0, -90.0));
+    write_geoid_grid(
+        &sloped,
+        |lon, lat| 10.0 + 0.5 * lon + 0.25 * lat,
+        (90.0, -90.0),
+    );
     let c = export("sloped", &["--geoid", sloped.to_str().unwrap()]);
     let root = |dir: &Path| -> DVec3 {
-        let ts: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("tileset.json")).unwrap()).unwrap();
+        let ts: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("tileset.json")).unwrap()).unwrap();
         let m = ts["root"]["transform"].as_array().unwrap();
-        DVec3::new(m[12].as_f64().unwrap(), m[13].as_f64().unwrap(), m[14].as_f64().unwrap())
+        DVec3::new(
+            m[12].as_f64().unwrap(),
+            m[13].as_f64().unwrap(),
+            m[14].as_f64().unwrap(),
+        )
     };
     let (qa, qc) = (root(&a), root(&c));
     let up = ecef_to_enu(qa).row(2);
@@ -292,19 +320,50 @@ fn a_geoid_grid_replaces_the_constant_offset() {
         lo = lo.min(DVec3::from_array(cell.bbox_min));
         hi = hi.max(DVec3::from_array(cell.bbox_max));
     }
-    let n = ToEcef::with_geoid("EPSG:32633", cliffmap::export::GeoidGrid::read(&sloped).unwrap())
-        .unwrap()
-        .geoid_height((lo + hi) * 0.5)
-        .unwrap();
-    assert!(((qc - qa).dot(up) - (n - 35.0)).abs() < 1e-3, "{} vs {}", (qc - qa).dot(up), n - 35.0);
+    let n = ToEcef::with_geoid(
+        "EPSG:32633",
+        cliffmap::export::GeoidGrid::read(&sloped).unwrap(),
+    )
+    .unwrap()
+    .geoid_height((lo + hi) * 0.5)
+    .unwrap();
+    assert!(
+        ((qc - qa).dot(up) - (n - 35.0)).abs() < 1e-3,
+        "{} vs {}",
+        (qc - qa).dot(up),
+        n - 35.0
+    );
     // A grid that does not reach the store, and both flags at once, are refused.
     let south = tmp.path().join("egm_south.tif");
     write_geoid_grid(&south, |_, _| 20.0, (-60.0, -90.0));
     let o = tmp.path().join("refused");
     let os = o.to_str().unwrap();
-    fails_naming(&["export-tiles", d, "--out", os, "--crs", "EPSG:32633", "--geoid", south.to_str().unwrap()], "egm_south.tif");
     fails_naming(
-        &["export-tiles", d, "--out", os, "--crs", "EPSG:32633", "--geoid", south.to_str().unwrap(), "--geoid-offset", "3"],
+        &[
+            "export-tiles",
+            d,
+            "--out",
+            os,
+            "--crs",
+            "EPSG:32633",
+            "--geoid",
+            south.to_str().unwrap(),
+        ],
+        "egm_south.tif",
+    );
+    fails_naming(
+        &[
+            "export-tiles",
+            d,
+            "--out",
+            os,
+            "--crs",
+            "EPSG:32633",
+            "--geoid",
+            south.to_str().unwrap(),
+            "--geoid-offset",
+            "3",
+        ],
         "--geoid",
     );
     assert!(!o.join("tileset.json").exists());
@@ -319,28 +378,69 @@ fn every_texture_mode_gets_its_own_tileset() {
     let dir = tmp.path().join("store");
     common::small_demo_store(&dir, true);
     let out = tmp.path().join("tiles");
-    ok(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--modes", "ortho,reparam", "--quiet"]);
+    ok(&[
+        "export-tiles",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--crs",
+        "EPSG:32633",
+        "--modes",
+        "ortho,reparam",
+        "--quiet",
+    ]);
     let store = Store::open(&dir).unwrap();
-    let rec = store.manifest.cells.iter().find(|c| c.reparam.is_some()).expect("a reparameterized cell");
+    let rec = store
+        .manifest
+        .cells
+        .iter()
+        .find(|c| c.reparam.is_some())
+        .expect("a reparameterized cell");
     for (mode, file) in [
-        (TextureSource::Photo, &rec.reparam.as_ref().unwrap().files.texture),
-        (TextureSource::Reparam, &rec.reparam.as_ref().unwrap().files.texture),
+        (
+            TextureSource::Photo,
+            &rec.reparam.as_ref().unwrap().files.texture,
+        ),
+        (
+            TextureSource::Reparam,
+            &rec.reparam.as_ref().unwrap().files.texture,
+        ),
         (TextureSource::Ortho, &rec.files.texture),
     ] {
         let ts: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join(tileset_name(mode))).unwrap()).unwrap();
-        let modes = ts["asset"]["extras"]["cliffmap"]["modes"].as_array().unwrap();
+        let modes = ts["asset"]["extras"]["cliffmap"]["modes"]
+            .as_array()
+            .unwrap();
         assert_eq!(modes.len(), 3);
-        assert_eq!(ts["asset"]["extras"]["cliffmap"]["texture_mode"], mode.name());
+        assert_eq!(
+            ts["asset"]["extras"]["cliffmap"]["texture_mode"],
+            mode.name()
+        );
         let glb = std::fs::read(out.join(tile_path_for(mode, rec.level, rec.x, rec.y))).unwrap();
         let g = gltf::Gltf::from_slice(&glb).unwrap();
         let blob = g.blob.as_deref().unwrap();
         let img = g.document.images().next().unwrap();
-        let gltf::image::Source::View { view, .. } = img.source() else { panic!("embedded image expected") };
+        let gltf::image::Source::View { view, .. } = img.source() else {
+            panic!("embedded image expected")
+        };
         let bytes = &blob[view.offset()..view.offset() + view.length()];
-        assert!(bytes == std::fs::read(dir.join(&file.path)).unwrap().as_slice(), "{mode:?}");
+        assert!(
+            bytes == std::fs::read(dir.join(&file.path)).unwrap().as_slice(),
+            "{mode:?}"
+        );
     }
-    cli_util::fails_naming(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--modes", "sepia"], "sepia");
+    cli_util::fails_naming(
+        &[
+            "export-tiles",
+            dir.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--modes",
+            "sepia",
+        ],
+        "sepia",
+    );
 }
 
 /// `--jpeg-quality Q`: every GLB embeds a JPEG (declared `image/jpeg`) of the same size as
@@ -351,25 +451,68 @@ fn jpeg_textures_replace_the_pngs_on_request() {
     let dir = tmp.path().join("store");
     common::small_demo_store(&dir, true);
     let out = tmp.path().join("tiles");
-    ok(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--crs", "EPSG:32633", "--jpeg-quality", "90", "--quiet"]);
+    ok(&[
+        "export-tiles",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--crs",
+        "EPSG:32633",
+        "--jpeg-quality",
+        "90",
+        "--quiet",
+    ]);
     let store = Store::open(&dir).unwrap();
-    let rec = store.manifest.cells.iter().find(|c| c.reparam.is_some()).expect("a reparameterized cell");
-    let glb = std::fs::read(out.join(cliffmap::export::tile_path_for(cliffmap::export::TextureSource::Photo, rec.level, rec.x, rec.y))).unwrap();
+    let rec = store
+        .manifest
+        .cells
+        .iter()
+        .find(|c| c.reparam.is_some())
+        .expect("a reparameterized cell");
+    let glb = std::fs::read(out.join(cliffmap::export::tile_path_for(
+        cliffmap::export::TextureSource::Photo,
+        rec.level,
+        rec.x,
+        rec.y,
+    )))
+    .unwrap();
     let g = gltf::Gltf::from_slice(&glb).unwrap();
     let blob = g.blob.as_deref().unwrap();
     let img = g.document.images().next().unwrap();
-    let gltf::image::Source::View { view, mime_type } = img.source() else { panic!("embedded image expected") };
+    let gltf::image::Source::View { view, mime_type } = img.source() else {
+        panic!("embedded image expected")
+    };
     assert_eq!(mime_type, "image/jpeg");
-    let jpeg = image::load_from_memory_with_format(&blob[view.offset()..view.offset() + view.length()], image::ImageFormat::Jpeg)
+    let jpeg = image::load_from_memory_with_format(
+        &blob[view.offset()..view.offset() + view.length()],
+        image::ImageFormat::Jpeg,
+    )
+    .unwrap()
+    .to_rgb8();
+    let png = image::open(dir.join(&rec.reparam.as_ref().unwrap().files.texture.path))
         .unwrap()
         .to_rgb8();
-    let png = image::open(dir.join(&rec.reparam.as_ref().unwrap().files.texture.path)).unwrap().to_rgb8();
     assert_eq!(jpeg.dimensions(), png.dimensions());
-    let mse = jpeg.as_raw().iter().zip(png.as_raw()).map(|(&a, &b)| (a as f64 - b as f64).powi(2)).sum::<f64>()
+    let mse = jpeg
+        .as_raw()
+        .iter()
+        .zip(png.as_raw())
+        .map(|(&a, &b)| (a as f64 - b as f64).powi(2))
+        .sum::<f64>()
         / png.as_raw().len() as f64;
     let psnr = 10.0 * (255.0f64 * 255.0 / mse.max(1e-9)).log10();
     assert!(psnr > 30.0, "JPEG q90 against the PNG: {psnr:.1} dB");
-    cli_util::fails_naming(&["export-tiles", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--jpeg-quality", "0"], "jpeg-quality");
+    cli_util::fails_naming(
+        &[
+            "export-tiles",
+            dir.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--jpeg-quality",
+            "0",
+        ],
+        "jpeg-quality",
+    );
 }
 
 /// `--subtree-levels N`: the subtree under every cell at a positive multiple of N levels is
@@ -392,7 +535,10 @@ fn external_child_tilesets_hold_the_deeper_levels() {
                     serde_json::from_slice(&std::fs::read(&target).unwrap()).unwrap();
                 assert_eq!(sub["asset"]["version"], "1.1");
                 assert_eq!(sub["root"]["refine"], "REPLACE");
-                assert!(sub["root"].get("transform").is_none(), "one transform, at the root");
+                assert!(
+                    sub["root"].get("transform").is_none(),
+                    "one transform, at the root"
+                );
                 assert_eq!(sub["root"]["boundingVolume"], t["boundingVolume"]);
                 assert_eq!(sub["root"]["geometricError"], t["geometricError"]);
                 assert!(t.get("children").is_none());
@@ -440,14 +586,31 @@ fn external_child_tilesets_hold_the_deeper_levels() {
     let mut seen = std::collections::HashSet::new();
     for (p, depth) in &glbs {
         assert!(seen.insert(p.clone()), "{p:?} listed twice");
-        let rel = p.strip_prefix(std::fs::canonicalize(&out).unwrap()).unwrap();
-        let level: usize = rel.iter().nth(1).unwrap().to_str().unwrap().parse().unwrap();
+        let rel = p
+            .strip_prefix(std::fs::canonicalize(&out).unwrap())
+            .unwrap();
+        let level: usize = rel
+            .iter()
+            .nth(1)
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .parse()
+            .unwrap();
         assert_eq!(*depth, level + 1, "{rel:?}");
     }
     // the default for a store this small is one file; 0 forces one file
     for extra in [&[][..], &["--subtree-levels", "0"][..]] {
         let out2 = tmp.path().join(format!("one{}", extra.len()));
-        let mut args = vec!["export-tiles", dir.to_str().unwrap(), "--out", out2.to_str().unwrap(), "--crs", "EPSG:32633", "--quiet"];
+        let mut args = vec![
+            "export-tiles",
+            dir.to_str().unwrap(),
+            "--out",
+            out2.to_str().unwrap(),
+            "--crs",
+            "EPSG:32633",
+            "--quiet",
+        ];
         args.extend_from_slice(extra);
         ok(&args);
         assert!(!out2.join("subtrees").exists());

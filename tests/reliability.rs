@@ -231,7 +231,11 @@ fn a_project_that_fills_the_disk_leaves_the_store_as_it_was() {
         .write_demo_photos(
             &dem,
             &tmp.path().join("photos"),
-            &cliffmap::scene::DemoPhotoOptions { width: 320, height: 240, supersample: 1 },
+            &cliffmap::scene::DemoPhotoOptions {
+                width: 320,
+                height: 240,
+                supersample: 1,
+            },
         )
         .unwrap();
     let size: u64 = files_under(&built)
@@ -242,7 +246,10 @@ fn a_project_that_fills_the_disk_leaves_the_store_as_it_was() {
     let store = fs.path().join("store");
     copy_dir(&built, &store);
     let manifest_before = std::fs::read(store.join("manifest.json")).unwrap();
-    let o = fs.cliffmap(&["project", s(&store), "--photos", s(&list), "--quiet"], size / 1024);
+    let o = fs.cliffmap(
+        &["project", s(&store), "--photos", s(&list), "--quiet"],
+        size / 1024,
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "project should run out of space");
     assert!(err.contains("No space left on device"), "{err}");

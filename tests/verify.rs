@@ -171,7 +171,10 @@ fn a_repair_keeps_the_recorded_png_compression() {
     let m = manifest(&store);
     assert_eq!(m["reparam"]["png_compression"], "best");
     let cells = m["cells"].as_array().unwrap();
-    let base_tex = cells[0]["files"]["texture"]["path"].as_str().unwrap().to_string();
+    let base_tex = cells[0]["files"]["texture"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
     let reparam_tex = cells
         .iter()
         .find_map(|c| c.get("reparam"))
@@ -190,6 +193,9 @@ fn a_repair_keeps_the_recorded_png_compression() {
     let mut other = cliff_build_args(&dem, &store);
     other.extend(["--png-compression", "fast"]);
     let o = cliffmap(&other);
-    assert!(!o.status.success(), "a resume with another compression must be refused");
+    assert!(
+        !o.status.success(),
+        "a resume with another compression must be refused"
+    );
     assert!(String::from_utf8_lossy(&o.stderr).contains("other inputs or options"));
 }

@@ -36,8 +36,8 @@ pub use area::{DemSurface, dem_surface, tin_surface_area, triangle_area_3d};
 pub use cell::cell_stats;
 pub use histogram::{RelTexelBins, rel_texel_bins, write_histogram_png};
 pub use stretch::{
-    CellSurface, STEEP_STRETCH, StretchSummary, cell_texel_stretch, stretch_bin_edges, summarize_stretch,
-    texel_stretch,
+    CellSurface, STEEP_STRETCH, StretchSummary, cell_texel_stretch, stretch_bin_edges,
+    summarize_stretch, texel_stretch,
 };
 pub use summary::{
     CellStatsEntry, HistogramBin, LevelSummary, StatsSummary, stats_json, summarize,
