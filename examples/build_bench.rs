@@ -19,7 +19,6 @@
 
 use std::time::Instant;
 
-use clap::ValueEnum;
 use cliffmap::fsutil::{PngCompression, encode_png};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::scene::DemoScene;
@@ -55,7 +54,10 @@ fn main() -> anyhow::Result<()> {
         None => vec![PngCompression::Fast],
         Some(list) => list
             .split(',')
-            .map(|c| PngCompression::from_str(c, true).map_err(|e| anyhow::anyhow!("{c}: {e}")))
+            .map(|c| {
+                c.parse::<PngCompression>()
+                    .map_err(|e| anyhow::anyhow!("{c}: {e}"))
+            })
             .collect::<anyhow::Result<_>>()?,
     };
     let fractal = std::env::args().nth(4).as_deref() == Some("fractal");
@@ -85,7 +87,6 @@ fn main() -> anyhow::Result<()> {
         let tmp = tempfile::tempdir()?;
         let dir = keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
         let opts = BuildOptions {
-            quiet: true,
             cell_texels: texels,
             png_compression: compression,
             ..BuildOptions::default()

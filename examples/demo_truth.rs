@@ -76,7 +76,6 @@ fn main() -> anyhow::Result<()> {
     build_store(
         &inputs,
         &BuildOptions {
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         },

@@ -188,7 +188,6 @@ fn main() -> anyhow::Result<()> {
         let dir = out.join("stores").join(spec.name);
         let opts = BuildOptions {
             max_error: spec.max_error,
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         };

@@ -36,7 +36,6 @@ fn main() -> anyhow::Result<()> {
         &work,
         &photos,
         &ProjectOptions {
-            quiet: true,
             ..ProjectOptions::default()
         },
     )?;

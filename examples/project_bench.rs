@@ -31,8 +31,8 @@ mod bench_util;
 use std::time::Instant;
 
 use bench_util::{cpu_seconds, median};
-use cliffmap::photo::RayAccel;
 use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
+use cliffmap::raycast::RayAccel;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -71,7 +71,6 @@ fn main() -> anyhow::Result<()> {
             let opts = ProjectOptions {
                 ray: *accel,
                 texture: *texture,
-                quiet: true,
                 onto_relief: !name.ends_with("@tin"),
                 ..ProjectOptions::default()
             };

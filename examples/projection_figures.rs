@@ -52,7 +52,6 @@ fn main() -> anyhow::Result<()> {
     copy_dir(&store, &without)?;
     let photos = read_photo_list(&list)?;
     let opts = ProjectOptions {
-        quiet: true,
         ..ProjectOptions::default()
     };
     let t0 = std::time::Instant::now();

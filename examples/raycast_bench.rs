@@ -19,9 +19,9 @@ use std::time::Instant;
 use bench_util::{cpu_seconds, median, shared_data};
 use cliffmap::camera::CameraModel;
 use cliffmap::camera::camera_from_json_file;
-use cliffmap::photo::{
-    BvhQuality, FootprintOptions, LevelScene, RayAccel, TriangleBvh, ViewGrid, nearest_brute_force,
-    photo_footprints,
+use cliffmap::photo::{FootprintOptions, photo_footprints};
+use cliffmap::raycast::{
+    BvhQuality, LevelScene, RayAccel, TriangleBvh, ViewGrid, nearest_brute_force,
 };
 use cliffmap::store::Store;
 use glam::Vec3;

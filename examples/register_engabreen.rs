@@ -60,7 +60,6 @@ fn main() -> anyhow::Result<()> {
         reparam_store(
             &dir,
             &ReparamOptions {
-                quiet: true,
                 ..ReparamOptions::default()
             },
         )?;

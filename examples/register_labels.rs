@@ -40,7 +40,6 @@ fn main() -> anyhow::Result<()> {
             &store_dir,
             &ps.anchors,
             &ProjectOptions {
-                quiet: true,
                 ..ProjectOptions::default()
             },
         )?;

@@ -99,7 +99,6 @@ fn main() -> anyhow::Result<()> {
         let opts = BuildOptions {
             max_error,
             cell_texels,
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         };
@@ -107,7 +106,6 @@ fn main() -> anyhow::Result<()> {
         reparam_store(
             &store,
             &ReparamOptions {
-                quiet: true,
                 mixed_resolution: has("--mixed-resolution"),
                 ..ReparamOptions::default()
             },
@@ -257,7 +255,6 @@ fn main() -> anyhow::Result<()> {
             .collect::<Result<Vec<_>, _>>()?;
         let t = Instant::now();
         let mut popts = ProjectOptions {
-            quiet: true,
             onto_relief: !has("--project-onto-tin"),
             ..ProjectOptions::default()
         };

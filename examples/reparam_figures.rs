@@ -66,7 +66,6 @@ fn main() -> anyhow::Result<()> {
             build_store(
                 &inputs,
                 &BuildOptions {
-                    quiet: true,
                     ..Default::default()
                 },
                 &d,
@@ -81,7 +80,6 @@ fn main() -> anyhow::Result<()> {
             &dir,
             &ReparamOptions {
                 mixed_resolution: mixed,
-                quiet: true,
                 ..Default::default()
             },
         )?;

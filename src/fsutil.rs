@@ -54,17 +54,7 @@ fn test_disk_budget(len: usize) -> std::io::Result<()> {
 /// PNG compression of store textures (`--png-compression`): the same pixels, a trade of
 /// encoding time against file size (docs/performance.md, "PNG encoding"; measured on
 /// 2048² photo textures: `fast` ≈ 18× the speed of `balanced` at 1.3× its size).
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    Default,
-    PartialEq,
-    Eq,
-    clap::ValueEnum,
-    serde::Serialize,
-    serde::Deserialize,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PngCompression {
     /// fdeflate with adaptive filtering: the fastest encoder, the `image` crate's default
@@ -75,6 +65,22 @@ pub enum PngCompression {
     Balanced,
     /// The strongest zlib level: the smallest files, slowest.
     Best,
+}
+
+impl std::str::FromStr for PngCompression {
+    type Err = String;
+
+    /// `fast`, `balanced` or `best`.
+    fn from_str(s: &str) -> std::result::Result<PngCompression, String> {
+        match s {
+            "fast" => Ok(PngCompression::Fast),
+            "balanced" => Ok(PngCompression::Balanced),
+            "best" => Ok(PngCompression::Best),
+            _ => Err(format!(
+                "unknown PNG compression {s:?} (fast, balanced or best)"
+            )),
+        }
+    }
 }
 
 impl PngCompression {

@@ -69,6 +69,8 @@ pub mod ortho;
 pub mod param;
 pub mod photo;
 pub mod pipeline;
+pub mod progress;
+pub mod raycast;
 pub mod register;
 pub mod render;
 pub mod resample;

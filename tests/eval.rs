@@ -143,7 +143,6 @@ fn small_store(scene: &DemoScene, dem: &cliffmap::Dem, ortho: &cliffmap::Ortho, 
         max_error: 0.25,
         cell_intervals: 32,
         cell_texels: 64,
-        quiet: true,
         force: true,
         ..BuildOptions::default()
     };
@@ -151,7 +150,6 @@ fn small_store(scene: &DemoScene, dem: &cliffmap::Dem, ortho: &cliffmap::Ortho, 
     reparam_store(
         dir,
         &ReparamOptions {
-            quiet: true,
             ..ReparamOptions::default()
         },
     )
@@ -213,7 +211,6 @@ fn the_photo_gain_does_not_fall_as_the_texture_budget_grows() {
             &store,
             &photos,
             &ProjectOptions {
-                quiet: true,
                 texture,
                 ..ProjectOptions::default()
             },

@@ -37,7 +37,6 @@ fn cesium_page_shows_what_cliffmap_renders() {
     build_store(
         &inputs,
         &BuildOptions {
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         },

@@ -631,7 +631,6 @@ fn an_interrupted_export_resumes_to_the_same_files() {
         crs: Some("EPSG:32633".into()),
         extra_modes: vec![TextureSource::Ortho],
         subtree_levels: Some(1),
-        quiet: true,
         ..TilesOptions::default()
     };
     let first = export_tiles(&dir, &out, &opts).unwrap();

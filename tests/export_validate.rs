@@ -307,7 +307,8 @@ fn metadata_round_trips(st: &cliffmap::store::Store, glb: &Path) {
         Some(r) => (st.read_mesh_file(&r.files.mesh).unwrap(), r.texels),
         None => (st.read_mesh(rec).unwrap(), rec.texels),
     };
-    let want = cliffmap::stats::cell_texel_stretch(rec, &mesh, texels);
+    let uvs = rec.surface_texcoords(&mesh);
+    let want = cliffmap::stats::cell_texel_stretch(&mesh, &uvs, rec.base_area(), texels);
     assert_eq!(got.dimensions(), (texels, texels));
     let mut on_surface = 0;
     for (i, p) in got.pixels().enumerate() {

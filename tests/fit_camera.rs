@@ -158,12 +158,12 @@ fn exif_focal_length_of_img_8902() {
     // Canon EOS Rebel T3, FocalLength 30 mm, no focal-plane resolution in the file: the
     // sensor width (22.0 mm) gives 5850 px, 2.7 % below the GCP fit's 6014 px
     let img = common::real_data("engabreen/IMG_8902.jpg");
-    let f = cliffmap::register::exif_focal_px(&img, 4290, 2856, Some(22.0))
+    let f = cliffmap::camera::exif_focal_px(&img, 4290, 2856, Some(22.0))
         .unwrap()
         .unwrap();
     assert!((f.focal_px - 5850.0).abs() < 0.5, "{f:?}");
     assert_eq!(
-        cliffmap::register::exif_focal_px(&img, 4290, 2856, None).unwrap(),
+        cliffmap::camera::exif_focal_px(&img, 4290, 2856, None).unwrap(),
         None
     );
     // the command starts from it
@@ -304,7 +304,7 @@ fn img_8937_registers_to_img_8902_on_stable_ground() {
 
 #[test]
 fn gps_position_altitude_and_heading_are_read_with_their_references() {
-    use cliffmap::register::exif_gps;
+    use cliffmap::camera::exif_gps;
     use exif::Tag;
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("gps.jpg");

@@ -6,10 +6,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use cliffmap::camera::{CameraModel, camera_from_json_file, camera_to_json, rotation_look_at};
-use cliffmap::photo::{
-    apply_rotation_delta, read_colmap, read_colmap_specs, read_photo_list, read_photo_specs,
-    validate_camera,
-};
+use cliffmap::camera::{apply_rotation_delta, validate_camera};
+use cliffmap::photo::{read_colmap, read_colmap_specs, read_photo_list, read_photo_specs};
 use glam::{DMat3, DQuat, DVec3};
 
 fn write(path: &Path, text: &str) {

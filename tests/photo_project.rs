@@ -45,7 +45,6 @@ fn build(dir: &Path) {
         max_error: 0.05,
         cell_intervals: 32,
         cell_texels: 64,
-        quiet: true,
         force: false,
         ..BuildOptions::default()
     };
@@ -100,7 +99,6 @@ fn photo_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 
 fn opts() -> ProjectOptions {
     ProjectOptions {
-        quiet: true,
         level_colours: false,
         ..ProjectOptions::default()
     }
@@ -274,7 +272,6 @@ fn e2e_reparam_drops_photo_textures() {
     reparam_store(
         &dir,
         &ReparamOptions {
-            quiet: true,
             ..ReparamOptions::default()
         },
     )

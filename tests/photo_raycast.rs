@@ -3,10 +3,8 @@
 //! cell borders, silhouette rejection, UTM-sized coordinates and thread-count independence.
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
-use cliffmap::photo::{
-    BvhQuality, FootprintOptions, FootprintSet, LevelScene, PixelFootprint, RayAccel, SceneCell,
-    photo_footprints,
-};
+use cliffmap::photo::{FootprintOptions, FootprintSet, PixelFootprint, photo_footprints};
+use cliffmap::raycast::{BvhQuality, LevelScene, RayAccel, SceneCell};
 use glam::DVec3;
 
 const TEXELS: u32 = 64;
@@ -485,7 +483,7 @@ impl Lcg {
 
 #[test]
 fn view_grid_finds_the_nearest_hit_of_every_corner_ray() {
-    use cliffmap::photo::{ViewGrid, ViewGridParams, nearest_brute_force};
+    use cliffmap::raycast::{ViewGrid, ViewGridParams, nearest_brute_force};
     // A random triangle soup around a distorted camera: big and tiny triangles, triangles
     // behind the camera and crossing its image plane, at UTM-sized coordinates.
     let mut rng = Lcg(11);

@@ -269,7 +269,6 @@ fn ortho_store_is_smeared_on_walls_and_truth_textures_score_high() {
         fingerprint: "photo_truth".into(),
     };
     let opts = BuildOptions {
-        quiet: true,
         force: true,
         ..BuildOptions::default()
     };

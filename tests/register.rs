@@ -51,7 +51,6 @@ fn scene_with_photos(dir: &Path) -> std::path::PathBuf {
         &inputs,
         &BuildOptions {
             max_error: 0.25,
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         },

@@ -4,9 +4,10 @@
 
 mod common;
 
+use cliffmap::camera::RoughPose;
+use cliffmap::camera::rough_camera;
 use cliffmap::camera::yaw_pitch_roll_from_rotation;
-use cliffmap::photo::{PhotoEntry, RoughPose, read_photo_entries, read_photo_specs};
-use cliffmap::register::rough_camera;
+use cliffmap::photo::{PhotoEntry, read_photo_entries, read_photo_specs};
 use common::exif::{ascii, exif_field, jpeg_with_exif, rationals};
 use exif::Tag;
 

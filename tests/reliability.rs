@@ -220,7 +220,6 @@ fn a_project_that_fills_the_disk_leaves_the_store_as_it_was() {
         &BuildOptions {
             cell_intervals: 32,
             cell_texels: 64,
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         },

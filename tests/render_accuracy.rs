@@ -39,7 +39,6 @@ fn engabreen_store(out: &Path) {
     let opts = BuildOptions {
         max_error: 1.0,
         cell_texels: 64,
-        quiet: true,
         force: true,
         ..Default::default()
     };
@@ -62,7 +61,6 @@ fn demo_store(out: &Path) {
     let opts = BuildOptions {
         max_error: 0.5,
         cell_texels: 256,
-        quiet: true,
         force: true,
         ..Default::default()
     };

@@ -325,7 +325,6 @@ fn engabreen_render_with_distortion_overlays_the_photo() {
     };
     let opts = BuildOptions {
         max_error: 1.0,
-        quiet: true,
         force: true,
         ..Default::default()
     };

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
+use cliffmap::cells::CellMesh;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::render::accuracy::{image_difference, surface_displacement};
 use cliffmap::render::geomorph::morph_targets;
@@ -12,7 +13,7 @@ use cliffmap::render::{
     CellIndex, FrameOptions, GeomorphOptions, SceneOptions, TerrainScene, select_cells,
 };
 use cliffmap::scene::DemoScene;
-use cliffmap::store::{CellMesh, Store, texcoord};
+use cliffmap::store::{Store, texcoord};
 use glam::DVec3;
 
 const W: u32 = 320;
@@ -36,7 +37,6 @@ fn small_store(out: &Path) {
         max_error: 0.25,
         cell_intervals: 16,
         cell_texels: 64,
-        quiet: true,
         force: true,
         ..BuildOptions::default()
     };

@@ -43,7 +43,6 @@ fn small_store(out: &Path) {
         max_error: 0.5,
         cell_intervals: 32,
         cell_texels: 64,
-        quiet: true,
         force: true,
         ..BuildOptions::default()
     };

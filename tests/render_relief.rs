@@ -145,7 +145,7 @@ fn a_constant_relief_looks_like_the_raised_surface() {
 /// A flat mesh of `n × n` squares over the cell's nominal square (at the height of
 /// `flat_mesh`, without a skirt) with orthographic texture coordinates: interior vertices
 /// lie away from the chart's seams, so relief mapping may move lookups there.
-fn grid_mesh(rec: &cliffmap::store::CellRecord, n: u32) -> cliffmap::store::CellMesh {
+fn grid_mesh(rec: &cliffmap::store::CellRecord, n: u32) -> cliffmap::cells::CellMesh {
     let flat = render_support::flat_mesh(rec, true);
     let (o, e) = (rec.origin, rec.extent);
     let z = flat.positions[0][2];
@@ -168,7 +168,7 @@ fn grid_mesh(rec: &cliffmap::store::CellRecord, n: u32) -> cliffmap::store::Cell
             triangles.push([k(i, j), k(i + 1, j + 1), k(i + 1, j)]);
         }
     }
-    cliffmap::store::CellMesh {
+    cliffmap::cells::CellMesh {
         surface_vertices: positions.len() as u32,
         surface_triangles: triangles.len() as u32,
         positions,

@@ -96,7 +96,6 @@ pub fn build_engabreen_store(dir: &Path, fingerprint: &str) -> anyhow::Result<f6
     build_store(
         &inputs,
         &BuildOptions {
-            quiet: true,
             ..BuildOptions::default()
         },
         dir,
@@ -201,7 +200,6 @@ pub fn build_engabreen_reparam_store(dir: &Path, fingerprint: &str) -> anyhow::R
     cliffmap::pipeline::reparam_store(
         dir,
         &cliffmap::pipeline::ReparamOptions {
-            quiet: true,
             ..Default::default()
         },
     )?;

@@ -223,7 +223,6 @@ pub fn reparam_quietly(dir: &Path) -> anyhow::Result<()> {
     cliffmap::pipeline::reparam_store(
         dir,
         &cliffmap::pipeline::ReparamOptions {
-            quiet: true,
             ..cliffmap::pipeline::ReparamOptions::default()
         },
     )?;
@@ -272,7 +271,6 @@ pub fn build_scene_store(
         &inputs,
         &BuildOptions {
             max_error,
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         },

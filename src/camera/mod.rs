@@ -8,14 +8,20 @@
 //! cliffmap camera or an ImGRAFT-style description (e.g. the Engabreen camera file).
 //! [`CameraModel::pixel_ray`] inverts the projection (undistorting first) for ray casting.
 
+mod checks;
+mod exif;
 mod geometry;
 mod json;
+mod rough;
 mod undistort;
 
+pub use checks::{apply_rotation_delta, fit_camera_to_image, validate_camera};
+pub use exif::{ExifFocal, ExifGps, exif_camera_body, exif_focal_px, exif_gps};
 pub use geometry::yaw_pitch_roll_from_rotation;
 pub use json::{
     camera_from_json_file, camera_from_json_str, camera_to_imgraft_json, camera_to_json,
 };
+pub use rough::{DEFAULT_HEIGHT_ABOVE_GROUND_M, RoughCamera, RoughPose, rough_camera};
 pub(crate) use undistort::{PlaneRay, RayCaster};
 
 use glam::{DMat3, DVec3};

@@ -3,7 +3,9 @@
 //! Data types: [`Quadtree`] and [`CellKey`] address cells; [`SampleRect`] is a cell's
 //! clipped rectangle of DEM samples; [`Tin`] is one cell's simplified triangulation on DEM
 //! sample positions, with its measured maximum vertical error against every full-resolution
-//! sample of the cell. [`LevelBorders`] holds the simplified cell sides of one level, shared
+//! sample of the cell; [`CellMesh`] is its renderable mesh in the cell-local f32 frame
+//! ([`local_mesh`] converts a TIN, [`CellMesh::texcoord`] gives texture coordinates).
+//! [`LevelBorders`] holds the simplified cell sides of one level, shared
 //! by neighbouring cells so their TINs are crack-free. Per-cell images: [`ortho_texture`]
 //! (RGBA colour + coverage) and [`normal_map`] (world-frame normals from the
 //! full-resolution DEM) and [`relief_map`] (the DEM's height above the cell's TIN), all
@@ -17,6 +19,7 @@ mod border;
 mod extent;
 mod face_heap;
 mod halfedge;
+mod mesh;
 pub mod normals;
 mod quadtree;
 mod raster;
@@ -31,6 +34,7 @@ mod tin;
 
 pub use border::{LevelBorders, simplify_rect_border};
 pub use extent::{clipped_extent, nominal_extent};
+pub use mesh::{CellMesh, LocalMesh, local_mesh};
 pub use normals::normal_map;
 pub use quadtree::{CellKey, Quadtree, SampleRect};
 pub use relief::{ReliefMap, relief_map};

@@ -227,6 +227,54 @@ impl Iterator for Spans {
     }
 }
 
+/// Plane through three grid points with heights: `z(col,row) = h0 + a*(col-c0) + b*(row-r0)`.
+#[derive(Clone, Copy)]
+pub(super) struct Plane {
+    c0: f64,
+    r0: f64,
+    h0: f64,
+    a: f64,
+    b: f64,
+}
+
+impl Plane {
+    pub(super) fn new(p: [[i64; 2]; 3], h: [f64; 3]) -> Plane {
+        let (dx1, dy1) = ((p[1][0] - p[0][0]) as f64, (p[1][1] - p[0][1]) as f64);
+        let (dx2, dy2) = ((p[2][0] - p[0][0]) as f64, (p[2][1] - p[0][1]) as f64);
+        let (dh1, dh2) = (h[1] - h[0], h[2] - h[0]);
+        let det = dx1 * dy2 - dx2 * dy1;
+        let (a, b) = if det != 0.0 {
+            ((dh1 * dy2 - dh2 * dy1) / det, (dx1 * dh2 - dx2 * dh1) / det)
+        } else {
+            (0.0, 0.0)
+        };
+        Plane {
+            c0: p[0][0] as f64,
+            r0: p[0][1] as f64,
+            h0: h[0],
+            a,
+            b,
+        }
+    }
+
+    /// `(base, a)` such that z(col, row) = base + a * col on this row.
+    #[inline]
+    pub(super) fn row(&self, row: i64) -> (f64, f64) {
+        (
+            self.h0 + self.b * (row as f64 - self.r0) - self.a * self.c0,
+            self.a,
+        )
+    }
+
+    /// The plane along `row` by lattice column index: `(base, step)` with
+    /// z(oc + i·s, row) = base + step · i.
+    #[inline(always)]
+    pub(super) fn lattice_row(&self, row: i64, oc: i64, s: i64) -> (f64, f64) {
+        let (base, a) = self.row(row);
+        (base + a * oc as f64, a * s as f64)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,9 +20,9 @@
 
 use image::GrayImage;
 
+use crate::cells::CellMesh;
 use crate::dem::Dem;
 use crate::georef::WorldRect;
-use crate::store::CellMesh;
 
 /// Ranges below this (metres) are stored as 0: the f32 rounding of cell-local positions.
 pub const MIN_RANGE_M: f64 = 1e-3;

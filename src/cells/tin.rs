@@ -13,7 +13,7 @@
 use super::border::{LevelBorders, border_error, check_epsilon, check_tree};
 use super::face_heap::FaceHeap;
 use super::halfedge::{MAX_COORD, Mesh};
-use super::raster::{Lattice, for_each_span};
+use super::raster::{Lattice, Plane, for_each_span};
 use super::tiles::LatticeTiles;
 use super::{CellKey, Quadtree, SampleRect, Tin};
 use crate::dem::Dem;
@@ -23,54 +23,6 @@ use rayon::prelude::*;
 /// The error bound of `level`: `max_error_finest * 2^(finest - level)` (height units).
 pub fn level_epsilon(tree: &Quadtree, level: u8, max_error_finest: f64) -> f64 {
     max_error_finest * (1u64 << tree.finest_level().saturating_sub(level)) as f64
-}
-
-/// Plane through three grid points with heights: `z(col,row) = h0 + a*(col-c0) + b*(row-r0)`.
-#[derive(Clone, Copy)]
-pub(super) struct Plane {
-    c0: f64,
-    r0: f64,
-    h0: f64,
-    a: f64,
-    b: f64,
-}
-
-impl Plane {
-    pub(super) fn new(p: [[i64; 2]; 3], h: [f64; 3]) -> Plane {
-        let (dx1, dy1) = ((p[1][0] - p[0][0]) as f64, (p[1][1] - p[0][1]) as f64);
-        let (dx2, dy2) = ((p[2][0] - p[0][0]) as f64, (p[2][1] - p[0][1]) as f64);
-        let (dh1, dh2) = (h[1] - h[0], h[2] - h[0]);
-        let det = dx1 * dy2 - dx2 * dy1;
-        let (a, b) = if det != 0.0 {
-            ((dh1 * dy2 - dh2 * dy1) / det, (dx1 * dh2 - dx2 * dh1) / det)
-        } else {
-            (0.0, 0.0)
-        };
-        Plane {
-            c0: p[0][0] as f64,
-            r0: p[0][1] as f64,
-            h0: h[0],
-            a,
-            b,
-        }
-    }
-
-    /// `(base, a)` such that z(col, row) = base + a * col on this row.
-    #[inline]
-    fn row(&self, row: i64) -> (f64, f64) {
-        (
-            self.h0 + self.b * (row as f64 - self.r0) - self.a * self.c0,
-            self.a,
-        )
-    }
-
-    /// The plane along `row` by lattice column index: `(base, step)` with
-    /// z(oc + i·s, row) = base + step · i.
-    #[inline(always)]
-    pub(super) fn lattice_row(&self, row: i64, oc: i64, s: i64) -> (f64, f64) {
-        let (base, a) = self.row(row);
-        (base + a * oc as f64, a * s as f64)
-    }
 }
 
 /// The vertical distance of height `h` at lattice column index `i` from the plane

@@ -1,11 +1,10 @@
 //! `cliffmap build`: DEM (+ ortho) to a cell store.
 
-use cliffmap::fsutil::PngCompression;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::{DemFormat, DemLoadOptions, OrthoPlacement, WorldRect, load_dem, load_ortho};
+use cliffmap::{DemLoadOptions, OrthoPlacement, WorldRect, load_dem, load_ortho};
 
 use super::stats::print_summary;
 
@@ -17,7 +16,7 @@ pub struct Args {
     pub(super) dem: PathBuf,
     /// DEM format; inferred from the extension (and PNG colour type) when omitted.
     #[arg(long, value_enum)]
-    dem_format: Option<DemFormat>,
+    dem_format: Option<super::values::DemFormatArg>,
     /// Width in samples (raw f32).
     #[arg(long)]
     width: Option<usize>,
@@ -52,7 +51,7 @@ pub struct Args {
     /// best. Same pixels; balanced files are ~0.77× the size of fast ones at ~1/18 the
     /// encoding speed (docs/performance.md, "PNG encoding").
     #[arg(long, value_enum, default_value = "fast")]
-    png_compression: PngCompression,
+    png_compression: super::values::PngCompressionArg,
     /// Ortho image (PNG, JPEG or GeoTIFF); without it textures are derived from the DEM.
     #[arg(long)]
     pub(super) ortho: Option<PathBuf>,
@@ -119,13 +118,13 @@ pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
         max_error: a.max_error,
         cell_intervals: a.cell_intervals,
         cell_texels: a.cell_texels,
-        png_compression: a.png_compression,
-        quiet: a.quiet,
+        png_compression: a.png_compression.into(),
+        progress: super::progress::progress_sink(a.quiet),
         force: a.force,
     };
     opts.validate()?;
     let dem_opts = DemLoadOptions {
-        format: a.dem_format,
+        format: a.dem_format.map(Into::into),
         width: a.width,
         height: a.height,
         z_scale: a.z_scale,
@@ -180,7 +179,7 @@ pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
     };
     let manifest = build_store(&inputs, &opts, &a.out)?;
     if record_recipe {
-        super::verify::write_recipe(&a.out)?;
+        super::recipe::write_recipe(&a.out)?;
     }
     if !a.quiet {
         println!(

@@ -126,7 +126,7 @@ fn photo_stage(
         store,
         &photos,
         &ProjectOptions {
-            quiet: a.quiet,
+            progress: super::progress::progress_sink(a.quiet),
             ..ProjectOptions::default()
         },
     )?;
@@ -218,7 +218,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let store = a.out.join("store");
     let opts = BuildOptions {
         max_error: a.max_error,
-        quiet: a.quiet,
+        progress: super::progress::progress_sink(a.quiet),
         force: true,
         ..BuildOptions::default()
     };
@@ -239,7 +239,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     let reparam = ReparamOptions {
-        quiet: a.quiet,
+        progress: super::progress::progress_sink(a.quiet),
         ..ReparamOptions::default()
     };
     let st = reparam_store(&store, &reparam)?;

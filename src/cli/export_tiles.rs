@@ -62,7 +62,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut views = Vec::new();
     for v in &a.view {
         let cam = cliffmap::camera::camera_from_json_file(v, (0, 0))?;
-        cliffmap::photo::validate_camera(&cam, v)?;
+        cliffmap::camera::validate_camera(&cam, v)?;
         let name = v
             .file_stem()
             .map_or_else(|| "view".to_string(), |s| s.to_string_lossy().into_owned());
@@ -80,7 +80,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             lit: a.lit,
             metadata: a.metadata,
             subtree_levels: a.subtree_levels,
-            quiet: a.quiet,
+            progress: super::progress::progress_sink(a.quiet),
             views,
         },
     )?;

@@ -160,7 +160,7 @@ fn start_camera(
     let (w, h) = image_size(a)?;
     let mut focal = a.focal_px;
     if let (None, Some(img)) = (focal, &a.image)
-        && let Some(e) = cliffmap::register::exif_focal_px(img, w, h, a.sensor_width_mm)?
+        && let Some(e) = cliffmap::camera::exif_focal_px(img, w, h, a.sensor_width_mm)?
     {
         eprintln!(
             "start focal length {:.1} px from EXIF ({})",
@@ -210,7 +210,7 @@ fn gps_position(
     gcps: &[cliffmap::register::Gcp],
     focal: Option<f64>,
 ) -> anyhow::Result<Option<DVec3>> {
-    let Some(gps) = cliffmap::register::exif_gps(img)? else {
+    let Some(gps) = cliffmap::camera::exif_gps(img)? else {
         eprintln!(
             "{}: no EXIF GPS fix; the start comes from the GCPs",
             img.display()

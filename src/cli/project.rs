@@ -1,11 +1,11 @@
 //! `cliffmap project`: merge ground photos into a store's cell textures.
 
-use cliffmap::fsutil::PngCompression;
 use std::path::PathBuf;
 
 use cliffmap::colour::ColourSpace;
-use cliffmap::photo::{BlendMode, BvhQuality, FootprintOptions, PhotoInput, RayAccel};
+use cliffmap::photo::{BlendMode, FootprintOptions, PhotoInput};
 use cliffmap::pipeline::{PhotoTextureOptions, ProjectOptions, project_store};
+use cliffmap::raycast::{BvhQuality, RayAccel};
 
 use super::stats::print_summary;
 
@@ -91,7 +91,7 @@ pub struct Args {
     /// best. Same pixels; balanced files are ~0.77× the size of fast ones at ~1/18 the
     /// encoding speed (docs/performance.md, "PNG encoding").
     #[arg(long, value_enum, default_value = "fast")]
-    pub png_compression: PngCompression,
+    pub png_compression: super::values::PngCompressionArg,
     /// No progress bars or summary.
     #[arg(long)]
     pub quiet: bool,
@@ -133,8 +133,8 @@ pub fn options(a: &Args) -> ProjectOptions {
             feather: a.feather,
             ..Default::default()
         },
-        png_compression: a.png_compression,
-        quiet: a.quiet,
+        png_compression: a.png_compression.into(),
+        progress: super::progress::progress_sink(a.quiet),
         ..ProjectOptions::default()
     }
 }

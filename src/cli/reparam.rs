@@ -1,6 +1,5 @@
 //! `cliffmap reparam`: reparameterize the stretched cells of a store.
 
-use cliffmap::fsutil::PngCompression;
 use std::path::PathBuf;
 
 use cliffmap::param::{Objective, ParamOptions};
@@ -53,7 +52,7 @@ pub struct Args {
     /// best. Same pixels; balanced files are ~0.77× the size of fast ones at ~1/18 the
     /// encoding speed (docs/performance.md, "PNG encoding").
     #[arg(long, value_enum, default_value = "fast")]
-    pub png_compression: PngCompression,
+    pub png_compression: super::values::PngCompressionArg,
     /// No progress bars or summary.
     #[arg(long)]
     pub quiet: bool,
@@ -102,8 +101,8 @@ pub fn options(a: &Args) -> ReparamOptions {
             },
             ..ResampleOptions::default()
         },
-        png_compression: a.png_compression,
-        quiet: a.quiet,
+        png_compression: a.png_compression.into(),
+        progress: super::progress::progress_sink(a.quiet),
     }
 }
 

@@ -10,6 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::recipe::Recipe;
 use anyhow::{Context, bail};
 use clap::Parser;
 use cliffmap::pipeline::{recorded_reparam_options, redo_reparam_cells, write_stats};
@@ -27,27 +28,6 @@ pub struct Args {
     /// Print the report as JSON instead of text.
     #[arg(long)]
     pub json: bool,
-}
-
-/// The recorded build command: working directory and argument vector.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct Recipe {
-    cwd: PathBuf,
-    argv: Vec<String>,
-}
-
-/// Records this process's command line as `STORE/recipe.json` (called by `build`).
-pub(super) fn write_recipe(store: &Path) -> anyhow::Result<()> {
-    let cwd = std::env::current_dir().context("cannot read the current directory")?;
-    let recipe = Recipe {
-        cwd,
-        argv: std::env::args().collect(),
-    };
-    cliffmap::fsutil::write_atomic(
-        &store.join("recipe.json"),
-        &serde_json::to_vec_pretty(&recipe)?,
-    )?;
-    Ok(())
 }
 
 /// Runs `verify`.

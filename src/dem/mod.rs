@@ -34,9 +34,7 @@ use crate::error::{Error, Result};
 use crate::georef::{GridGeoref, WorldRect};
 
 /// On-disk DEM formats cliffmap reads.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
-)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DemFormat {
     /// GeoTIFF (or plain TIFF with explicit spacing/origin).

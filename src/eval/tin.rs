@@ -11,7 +11,8 @@ use super::reference::{PhotoMips, oracle_colour, ortho_colour};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 use crate::ortho::Ortho;
-use crate::photo::{BvhQuality, PhotoInput, TriangleBvh};
+use crate::photo::PhotoInput;
+use crate::raycast::{BvhQuality, TriangleBvh};
 use crate::scene::{DemHit, SKY_COLOUR};
 use crate::store::Store;
 

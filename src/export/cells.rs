@@ -3,8 +3,9 @@
 
 use glam::DVec3;
 
+use crate::cells::CellMesh;
 use crate::error::{Error, Result};
-use crate::store::{CellMesh, CellRecord, FileRef, ReparamRecord, Store, texcoord};
+use crate::store::{CellRecord, FileRef, ReparamRecord, Store, texcoord};
 
 /// Which texture a cell exports: the best it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -196,7 +197,8 @@ impl ExportCell {
     ) -> Result<()> {
         let mesh = export_mesh(store, rec, mode)?;
         let texels = layout_reparam(rec, mode).map_or(rec.texels, |r| r.texels);
-        let stretch = crate::stats::cell_texel_stretch(rec, &mesh, texels);
+        let uvs = rec.surface_texcoords(&mesh);
+        let stretch = crate::stats::cell_texel_stretch(&mesh, &uvs, rec.base_area(), texels);
         let path = store.dir.join(&self.normal_file.path);
         let png = crate::fsutil::PngCompression::default();
         let stretch_png = crate::fsutil::encode_png(

@@ -47,8 +47,8 @@ pub struct TilesOptions {
     /// than `n` levels. `None`: every 4 levels when the store has more than
     /// [`SUBTREE_AUTO_CELLS`] cells, else one file; `Some(0)`: one file.
     pub subtree_levels: Option<u8>,
-    /// No progress bar.
-    pub quiet: bool,
+    /// Where progress is reported (default: nowhere).
+    pub progress: crate::progress::ProgressSink,
     /// Cameras (name, camera in the store's CRS) written as `views/NAME.json` for the page's
     /// `?camera=` (ECEF position, direction and up, the field of view of the larger side).
     pub views: Vec<(String, crate::camera::CameraModel)>,
@@ -192,10 +192,9 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
             .map_err(|e| Error::BadOption(format!("{EXPORT_KEY_FILE}: {e}")))?;
         write_atomic(&key_path, text.as_bytes())?;
     }
-    let progress = crate::pipeline::progress_bar(
+    let progress = opts.progress.task(
         (store.manifest.cells.len() * modes.len()) as u64,
         "export-tiles",
-        opts.quiet,
     );
     let ctx = TilesetContext {
         store: &store,
@@ -211,7 +210,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         metadata: opts.metadata,
         subtree_levels,
         resume,
-        progress: &progress,
+        progress: progress.as_ref(),
     };
     let mut report = None;
     let (mut bytes, mut resumed) = (0, 0);
@@ -221,7 +220,7 @@ pub fn export_tiles(dir: &Path, out: &Path, opts: &TilesOptions) -> Result<Tiles
         resumed += r.resumed;
         report.get_or_insert(r);
     }
-    progress.finish_and_clear();
+    progress.finish();
     for (name, cam) in &opts.views {
         let v = view_json(&to_ecef, cam)?;
         write_atomic(
@@ -257,7 +256,7 @@ struct TilesetContext<'a> {
     subtree_levels: u8,
     /// Keep GLBs an earlier run of the same export wrote.
     resume: bool,
-    progress: &'a indicatif::ProgressBar,
+    progress: &'a dyn crate::progress::ProgressTask,
 }
 
 /// Removes what an earlier export wrote into `out` (tileset files, `tiles*/`, `subtrees/`,

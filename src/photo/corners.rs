@@ -7,11 +7,11 @@
 
 use glam::Vec3;
 
-use super::TriHit;
-use super::accel::Caster;
-use super::scene::{LevelScene, NO_TRI};
-use super::viewgrid::ViewGrid;
 use crate::camera::{PlaneRay, RayCaster};
+use crate::raycast::Caster;
+use crate::raycast::TriHit;
+use crate::raycast::ViewGrid;
+use crate::raycast::{LevelScene, NO_TRI};
 
 /// The compact result of one corner ray (24 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -188,7 +188,7 @@ fn finish_hit(scene: &LevelScene, dir: Vec3, hit: Option<TriHit>) -> CornerHit {
 mod tests {
     use super::*;
     use crate::camera::{CameraModel, rotation_look_at};
-    use crate::photo::{RayAccel, SceneCell, ViewGridParams};
+    use crate::raycast::{RayAccel, SceneCell, ViewGridParams};
     use glam::DVec3;
 
     /// A bumpy heightfield with a steep ridge: many small triangles, occlusion, grazing rays.

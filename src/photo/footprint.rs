@@ -13,7 +13,7 @@
 //!    a silhouette pixel.
 //! 3. **Silhouette** (unless all corners hit one triangle): for each edge of the polygon of
 //!    the present corners whose ends lie in different triangles, walk the cell's mesh in
-//!    texture space ([`super::silhouette`]); crossing an edge between a front- and a
+//!    texture space ([`crate::raycast`]); crossing an edge between a front- and a
 //!    back-facing triangle rejects the pixel.
 //! 4. **Reconstruction** ([`super::reconstruct`], switchable): missing corners from the
 //!    parallelogram rule or from the adjacent footprints' corners in the same cell. A
@@ -38,15 +38,15 @@ use std::sync::Mutex;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::RayAccel;
-use super::accel::Caster;
 use super::corners::{CornerHit, cast_corner_alone, cast_corner_row};
 use super::reconstruct::reconstruct;
-use super::scene::LevelScene;
-use super::silhouette::crosses_silhouette;
-use super::viewgrid::ViewGrid;
 use super::{CellFootprints, FootprintSet, PixelFootprint};
 use crate::camera::{CameraModel, RayCaster};
+use crate::raycast::Caster;
+use crate::raycast::LevelScene;
+use crate::raycast::RayAccel;
+use crate::raycast::ViewGrid;
+use crate::raycast::crosses_silhouette;
 
 /// Pixel rows per parallel band.
 const BAND_ROWS: u32 = 64;
@@ -603,7 +603,7 @@ impl Ctx<'_> {
                         self.origin,
                         q[from].tri,
                         q[from].tex,
-                        super::scene::NO_TRI,
+                        crate::raycast::NO_TRI,
                         target,
                     ) {
                         return Outcome::Silhouette;

@@ -6,7 +6,7 @@
 //! droll]}, {"image": "c.jpg", "rough": {"heading_deg": 250}}]}`; relative paths resolve
 //! against the list's folder. A `"rough"` entry has no fitted camera, only what the photo's
 //! EXIF data and the photographer give ([`RoughPose`]): `cliffmap register` makes its camera
-//! ([`crate::register::rough_camera`]); [`read_photo_specs`] refuses it.
+//! ([`crate::camera::rough_camera`]); [`read_photo_specs`] refuses it.
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,8 @@ use serde::Deserialize;
 
 use super::PhotoInput;
 use crate::camera::{
-    CameraModel, camera_from_json_file, rotation_from_yaw_pitch_roll, yaw_pitch_roll_from_rotation,
+    CameraModel, RoughPose, apply_rotation_delta, camera_from_json_file, fit_camera_to_image,
+    validate_camera,
 };
 use crate::error::{Error, Result};
 
@@ -60,34 +61,6 @@ impl PhotoSpec {
     }
 }
 
-/// Checks that `cam` can be used for projection: finite everywhere, positive size and focal
-/// lengths, orthonormal rotation (determinant +1), radial distortion invertible inside the
-/// image ([`CameraModel::problem`]). The error names `source`.
-pub fn validate_camera(cam: &CameraModel, source: &Path) -> Result<()> {
-    match cam.problem() {
-        Some(msg) => Err(Error::bad_input(source, msg)),
-        None => Ok(()),
-    }
-}
-
-/// The camera rotated by a small change of its ImGRAFT view angles (degrees, added to yaw,
-/// pitch and roll as ImGRAFT's `camB.viewdir = camA.viewdir + delta`): yaw turns the optical
-/// axis counter-clockwise seen from above (the scene moves right in the image), pitch
-/// positive looks further down (the scene moves up), roll tilts the horizon. Position and
-/// intrinsics are unchanged.
-pub fn apply_rotation_delta(cam: &CameraModel, delta_deg: [f64; 3]) -> CameraModel {
-    let (yaw, pitch, roll) = yaw_pitch_roll_from_rotation(&cam.world_to_camera);
-    let r = rotation_from_yaw_pitch_roll(
-        yaw + delta_deg[0].to_radians(),
-        pitch + delta_deg[1].to_radians(),
-        roll + delta_deg[2].to_radians(),
-    );
-    CameraModel {
-        world_to_camera: r,
-        ..*cam
-    }
-}
-
 /// The real pixel size of an image file (header only). Errors name the file.
 pub fn image_size(path: &Path) -> Result<(u32, u32)> {
     if let Err(e) = std::fs::metadata(path) {
@@ -97,36 +70,6 @@ pub fn image_size(path: &Path) -> Result<(u32, u32)> {
         image::ImageError::IoError(io) => Error::io(path, io),
         other => Error::bad_input(path, format!("cannot read image: {other}")),
     })
-}
-
-/// `cam` (read from `source`) for an image of `size`: unchanged if the sizes agree, else
-/// [`CameraModel::resized`] when the aspect ratios agree within 1 %, else an error naming
-/// both files.
-pub fn fit_camera_to_image(
-    cam: CameraModel,
-    size: (u32, u32),
-    source: &Path,
-    image: &Path,
-) -> Result<CameraModel> {
-    if (cam.width, cam.height) == size {
-        return Ok(cam);
-    }
-    let a_cam = cam.width as f64 / cam.height as f64;
-    let a_img = size.0 as f64 / size.1 as f64;
-    if (a_cam / a_img - 1.0).abs() > 0.01 {
-        return Err(Error::bad_input(
-            source,
-            format!(
-                "camera is for a {} x {} image but {} is {} x {} (aspect ratios differ by more than 1 %)",
-                cam.width,
-                cam.height,
-                image.display(),
-                size.0,
-                size.1
-            ),
-        ));
-    }
-    Ok(cam.resized(size.0, size.1))
 }
 
 /// A validated [`PhotoSpec`] from an image file and the camera read for it.
@@ -178,88 +121,6 @@ struct Entry {
     /// Why not, with `"registered": false`.
     #[serde(default)]
     reason: Option<String>,
-}
-
-/// A photo's rough pose as a photographer knows it (a `"rough"` entry of `photos.json`):
-/// every field is optional, and what is missing comes from the photo's EXIF data. World
-/// coordinates are the store's (its CRS, metres); angles in degrees.
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RoughPose {
-    /// CRS of the store's coordinates (`EPSG:CODE` or a PROJ string) for an EXIF GPS fix;
-    /// default: the store's own CRS.
-    pub crs: Option<String>,
-    /// Camera position `[x, y]` or `[x, y, z]` in the store's frame, instead of EXIF GPS.
-    pub position: Option<Vec<f64>>,
-    /// Height of the camera above the terrain under it (metres) when `position` has no z:
-    /// default 1.6 (a photographer standing on the ground).
-    pub height_above_ground_m: Option<f64>,
-    /// Take z from the EXIF GPS altitude rather than from the terrain (GPS heights are often
-    /// tens of metres off; default false).
-    #[serde(default)]
-    pub use_gps_altitude: bool,
-    /// Compass heading of the view, clockwise from true north; default EXIF
-    /// `GPSImgDirection`.
-    pub heading_deg: Option<f64>,
-    /// Magnetic declination (east positive) added to a magnetic EXIF heading.
-    pub declination_deg: Option<f64>,
-    /// Pitch (ImGRAFT: positive looking down), default 0.
-    #[serde(default)]
-    pub pitch_deg: f64,
-    /// Roll (ImGRAFT), default 0.
-    #[serde(default)]
-    pub roll_deg: f64,
-    /// Focal length in pixels of the image; default from EXIF.
-    pub focal_px: Option<f64>,
-    /// Sensor width (mm) for EXIF data that gives the focal length in mm alone.
-    pub sensor_width_mm: Option<f64>,
-}
-
-impl RoughPose {
-    /// The first problem of the given values (non-finite numbers, a position of neither 2
-    /// nor 3 values, a negative focal length or sensor width, angles beyond ±360°).
-    pub fn problem(&self) -> Option<String> {
-        let finite = |v: f64| v.is_finite();
-        if let Some(p) = &self.position
-            && (!(p.len() == 2 || p.len() == 3) || !p.iter().all(|v| finite(*v)))
-        {
-            return Some(format!(
-                "\"position\" must be [x, y] or [x, y, z], finite, got {p:?}"
-            ));
-        }
-        for (name, v) in [
-            ("heading_deg", self.heading_deg),
-            ("declination_deg", self.declination_deg),
-            ("pitch_deg", Some(self.pitch_deg)),
-            ("roll_deg", Some(self.roll_deg)),
-        ] {
-            if let Some(v) = v
-                && !(finite(v) && v.abs() <= 360.0)
-            {
-                return Some(format!(
-                    "\"{name}\" must be a finite angle within ±360, got {v}"
-                ));
-            }
-        }
-        for (name, v) in [
-            ("focal_px", self.focal_px),
-            ("sensor_width_mm", self.sensor_width_mm),
-        ] {
-            if let Some(v) = v
-                && !(finite(v) && v > 0.0)
-            {
-                return Some(format!("\"{name}\" must be positive, got {v}"));
-            }
-        }
-        if let Some(h) = self.height_above_ground_m
-            && !(finite(h) && h.abs() <= 10_000.0)
-        {
-            return Some(format!(
-                "\"height_above_ground_m\" must be finite (within ±10 km), got {h}"
-            ));
-        }
-        None
-    }
 }
 
 /// One entry of a photo list: a photo with its camera, or with a rough pose only.

@@ -27,10 +27,8 @@
 //! one if the cell has it, else the orthographic one): x right, y down, texel `(i, j)`
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
-mod accel;
 mod accumulate;
 mod blend;
-mod bvh;
 mod cell_accum;
 mod colmap;
 mod colour_transform;
@@ -43,21 +41,14 @@ mod level;
 mod occlusion;
 mod pyramid;
 mod reconstruct;
-mod relief;
 mod samples;
-mod scene;
-mod silhouette;
 mod sizing;
 mod splat;
 mod strip;
 mod texel_tiles;
-mod triangle;
-mod viewgrid;
 
-pub use accel::RayAccel;
 pub use accumulate::{PhotoAccum, TexelSums};
 pub use blend::{Blended, blend_cell, magnify};
-pub use bvh::{BvhQuality, TriHit, TriangleBvh, nearest_brute_force};
 pub use cell_accum::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE};
 pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
@@ -66,8 +57,8 @@ pub use footprint::{
     for_each_footprint_batch_rows_in, photo_footprints, photo_footprints_in,
 };
 pub use input::{
-    PhotoEntry, PhotoSpec, RoughPose, apply_rotation_delta, fit_camera_to_image, image_size,
-    photo_spec, read_photo_entries, read_photo_list, read_photo_specs, validate_camera,
+    PhotoEntry, PhotoSpec, image_size, photo_spec, read_photo_entries, read_photo_list,
+    read_photo_specs,
 };
 pub use level::{
     ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
@@ -76,12 +67,10 @@ pub use level::{
 pub use occlusion::{OcclusionMap, occlusion_weight};
 pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
 pub use samples::PhotoSamples;
-pub use scene::{LevelScene, SceneCell};
 pub use sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
 pub use splat::{
     MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint,
 };
-pub use viewgrid::{ViewGrid, ViewGridParams, ViewGridStats, Z_NEAR};
 
 use std::path::PathBuf;
 

@@ -5,12 +5,14 @@ use std::path::Path;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{derived_ortho, local_mesh, progress_bar};
+use super::derived_ortho;
+use crate::cells::local_mesh;
 use crate::cells::{self, CellKey, LevelBorders, Quadtree};
 use crate::dem::Dem;
 use crate::error::{Error, Result};
 use crate::fsutil::{PngCompression, encode_png, write_atomic};
 use crate::ortho::Ortho;
+use crate::progress::ProgressSink;
 use crate::stats;
 use crate::store::{
     self, CellFiles, CellRecord, DemInfo, Manifest, Parameterization, STORE_FORMAT, STORE_VERSION,
@@ -30,9 +32,9 @@ pub struct BuildOptions {
     /// identity unless `fast`, what earlier stores used, so they keep their key).
     #[serde(default, skip_serializing_if = "is_default_png")]
     pub png_compression: PngCompression,
-    /// Hide progress bars.
+    /// Where progress is reported (default: nowhere).
     #[serde(skip)]
-    pub quiet: bool,
+    pub progress: ProgressSink,
     /// Rebuild over an existing store built from other inputs or options.
     #[serde(skip)]
     pub force: bool,
@@ -45,7 +47,7 @@ impl Default for BuildOptions {
             cell_intervals: 64,
             cell_texels: 256,
             png_compression: PngCompression::default(),
-            quiet: false,
+            progress: ProgressSink::none(),
             force: false,
         }
     }
@@ -147,7 +149,7 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
         }
     };
     let total: usize = (0..tree.levels).map(|l| tree.cells(l).len()).sum();
-    let pb = progress_bar(total as u64, "cells", opts.quiet);
+    let pb = opts.progress.task(total as u64, "cells");
     let mut records = Vec::with_capacity(total);
     for level in 0..tree.levels {
         let eps = cells::level_epsilon(&tree, level, opts.max_error);
@@ -168,7 +170,7 @@ pub fn build_store(inp: &BuildInputs, opts: &BuildOptions, out: &Path) -> Result
             records.push(r?);
         }
     }
-    pb.finish_and_clear();
+    pb.finish();
 
     let (lo, hi) = dem.height_range();
     let mut manifest = Manifest {

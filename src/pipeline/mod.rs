@@ -11,17 +11,13 @@
 mod build;
 mod decoded_photos;
 mod derived_ortho;
-mod mesh;
 mod photo_stats;
-mod progress;
 mod project;
 mod register;
 mod reparam;
 
 pub use build::{BuildInputs, BuildOptions, build_store, write_stats};
 pub use derived_ortho::derived_ortho;
-pub use mesh::{LocalMesh, local_mesh};
-pub use progress::progress_bar;
 pub use project::{
     PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, coarse_scale_cap,
     project_store,

@@ -21,13 +21,14 @@ use std::path::{Path, PathBuf};
 use serde_json::{Value, json};
 
 use super::decoded_photos::{DEFAULT_BUDGET_BYTES, DecodedPhotos};
+use crate::camera::rough_camera;
 use crate::camera::{CameraModel, camera_to_json};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{PhotoEntry, PhotoSpec};
 use crate::register::{
     CameraParams, LabelTexture, Param, ResectFit, ResectOptions, TerrainFit, TerrainOptions,
-    TerrainScene, TieFit, TieOptions, register_to_terrain, resect_photo, rough_camera, tie_photo,
+    TerrainScene, TieFit, TieOptions, register_to_terrain, resect_photo, tie_photo,
 };
 use crate::store::Store;
 
@@ -280,7 +281,7 @@ pub fn register_photos_with(
         // the same camera body (EXIF make, model, serial, lens, focal length) and image
         // size: the anchor's intrinsics, the focal length not fitted (it would trade
         // against the distance along the view)
-        let body = |k: usize| crate::register::exif_camera_body(&specs[k].image_path);
+        let body = |k: usize| crate::camera::exif_camera_body(&specs[k].image_path);
         let same_body = (anchor.width, anchor.height)
             == (specs[i].camera.width, specs[i].camera.height)
             && matches!((body(i)?, body(j)?), (Some(a), Some(b)) if a == b);

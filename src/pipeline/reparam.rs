@@ -8,16 +8,18 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::build::write_png;
-use super::{progress_bar, write_stats};
+use super::write_stats;
+use crate::cells::CellMesh;
 use crate::error::{Error, Result};
 use crate::fsutil::PngCompression;
 use crate::georef::GridGeoref;
 use crate::param::{ParamMesh, ParamOptions, chart_metrics, parameterize};
+use crate::progress::ProgressSink;
 use crate::resample::{ChartMesh, Mode, PixelMap, ResampleOptions, Source, resample};
 use crate::stats::{self, texel_stretch};
 use crate::store::{
-    CellFiles, CellMesh, CellRecord, Parameterization, ReparamRecord, ReparamSettings, Store,
-    cell_stem, write_file,
+    CellFiles, CellRecord, Parameterization, ReparamRecord, ReparamSettings, Store, cell_stem,
+    write_file,
 };
 
 /// Options of `reparam`.
@@ -33,8 +35,8 @@ pub struct ReparamOptions {
     pub resample: ResampleOptions,
     /// PNG compression of the reparameterized textures (default fast).
     pub png_compression: PngCompression,
-    /// Hide progress bars.
-    pub quiet: bool,
+    /// Where progress is reported (default: nowhere).
+    pub progress: ProgressSink,
 }
 
 impl Default for ReparamOptions {
@@ -45,7 +47,7 @@ impl Default for ReparamOptions {
             mixed_resolution: false,
             resample: ResampleOptions::default(),
             png_compression: PngCompression::default(),
-            quiet: false,
+            progress: ProgressSink::none(),
         }
     }
 }
@@ -111,7 +113,7 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
     let chosen: Vec<usize> = (0..store.manifest.cells.len())
         .filter(|&i| store.manifest.cells[i].stats.rel_texel > opts.threshold)
         .collect();
-    let pb = progress_bar(chosen.len() as u64, "reparam", opts.quiet);
+    let pb = opts.progress.task(chosen.len() as u64, "reparam");
     let results: Vec<(usize, Result<ReparamRecord>)> = chosen
         .par_iter()
         .map(|&i| {
@@ -120,7 +122,7 @@ pub fn reparam_store(dir: &Path, opts: &ReparamOptions) -> Result<Store> {
             (i, r)
         })
         .collect();
-    pb.finish_and_clear();
+    pb.finish();
     let mut failed = Vec::new();
     for c in &mut store.manifest.cells {
         c.reparam = None;
@@ -202,7 +204,7 @@ pub fn recorded_reparam_options(settings: &ReparamSettings) -> Option<ReparamOpt
             ..ResampleOptions::default()
         },
         png_compression: settings.png_compression,
-        quiet: true,
+        progress: ProgressSink::none(),
     })
 }
 

@@ -16,8 +16,8 @@
 
 use glam::DVec3;
 
+use super::bearings::{rotation_from_bearings, sample_picker};
 use super::pair::PatchMatch;
-use super::start::{rotation_from_bearings, sample_picker};
 use crate::camera::CameraModel;
 
 /// Most rotation hypotheses tried.

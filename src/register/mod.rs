@@ -7,8 +7,8 @@
 //! from [`parse_free`]; [`fit_camera`] takes a start [`CameraModel`](crate::camera::CameraModel),
 //! the GCPs and [`FitOptions`] and returns a [`CameraFit`] (the camera, per-GCP residuals and
 //! status, RMSE, AIC, parameter standard deviations). [`start_from_position`] gives a start
-//! without a view direction when the camera position is known; [`exif_focal_px`] reads a
-//! photo's focal length in pixels from its EXIF data; [`match_photos`] and
+//! without a view direction when the camera position is known ([`crate::camera::rough_camera`]
+//! makes a start from a photo's EXIF data and a rough pose); [`match_photos`] and
 //! [`fit_rotation`] register a photo to another taken from the same place.
 //!
 //! ```
@@ -33,9 +33,9 @@
 //! # Ok::<(), cliffmap::Error>(())
 //! ```
 
+mod bearings;
 mod bundle;
 mod consensus;
-mod exif;
 mod fit;
 mod gcp;
 mod grey;
@@ -44,24 +44,20 @@ mod p3p;
 mod pair;
 mod params;
 mod resection;
-mod rough;
 mod start;
 pub mod terrain;
 mod ties;
 
+pub use bearings::rotation_from_bearings;
 pub use bundle::{BundleFit, BundleOptions, BundlePair, PairTie, adjust_bundle};
 pub use consensus::{RotationConsensus, rotation_consensus};
-pub use exif::{ExifFocal, ExifGps, exif_camera_body, exif_focal_px, exif_gps};
 pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
 pub use gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};
 pub use p3p::{p3p, start_from_gcps_p3p};
 pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
 pub use params::{CameraParams, Param, parse_free};
 pub use resection::{ResectFit, ResectOptions, resect_photo};
-pub use rough::{DEFAULT_HEIGHT_ABOVE_GROUND_M, RoughCamera, rough_camera};
-pub use start::{
-    rotation_from_bearings, start_from_gcps, start_from_position, start_without_position,
-};
+pub use start::{start_from_gcps, start_from_position, start_without_position};
 pub use terrain::{
     EdgeFit, EdgeOptions, LabelTexture, TerrainFit, TerrainOptions, TerrainScene,
     parallax_px_per_m, refine_edges, register_to_terrain,

@@ -13,8 +13,8 @@
 use glam::{DMat3, DVec3};
 use nalgebra::Matrix4;
 
+use super::bearings::{rotation_from_bearings, sample_picker, search_focal};
 use super::gcp::Gcp;
-use super::start::{rotation_from_bearings, sample_picker, search_focal};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 

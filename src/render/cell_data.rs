@@ -1,7 +1,8 @@
 //! What a cell needs on the GPU, prepared off the render thread: mesh, UV stream, colour
 //! and normal mip chains (colour averaged in linear light), geomorphing targets.
 
-use crate::store::{CellMesh, CellRecord, texcoord};
+use crate::cells::CellMesh;
+use crate::store::{CellRecord, texcoord};
 
 /// A cell's data ready for upload, produced off the render thread.
 #[derive(Clone, Debug)]

@@ -16,7 +16,7 @@
 
 use glam::DVec3;
 
-use crate::store::CellMesh;
+use crate::cells::CellMesh;
 
 /// Geomorphing settings of a scene.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,7 +1,8 @@
 //! Overlay textures: the per-texel stretch of a cell's parameterization as a heat map.
 
+use crate::cells::CellMesh;
 use crate::stats::cell_texel_stretch;
-use crate::store::{CellMesh, CellRecord};
+use crate::store::CellRecord;
 
 /// What is drawn over the terrain.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -86,7 +87,7 @@ pub fn heat_colour(stretch: f32) -> [u8; 4] {
 /// cell's nominal square (stretch as in [`crate::stats::texel_stretch`]).
 pub fn stretch_heatmap(rec: &CellRecord, mesh: &CellMesh, texels: u32) -> image::RgbaImage {
     let t = texels.max(1);
-    let s = cell_texel_stretch(rec, mesh, t);
+    let s = cell_texel_stretch(mesh, &rec.surface_texcoords(mesh), rec.base_area(), t);
     image::RgbaImage::from_fn(t, t, |x, y| {
         image::Rgba(heat_colour(s[(y * t + x) as usize]))
     })

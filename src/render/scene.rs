@@ -20,8 +20,9 @@ use super::lod::{
 use super::overlay::{NO_PHOTO_COLOUR, Overlay, share_map, stretch_heatmap};
 use super::stream::{Streamer, resolve_draw_list};
 use crate::camera::CameraModel;
+use crate::cells::CellMesh;
 use crate::error::{Error, Result};
-use crate::store::{CellMesh, CellRecord, Store, texcoord};
+use crate::store::{CellRecord, Store, texcoord};
 
 /// How a scene renders.
 #[derive(Clone, Copy, Debug, PartialEq)]

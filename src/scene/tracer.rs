@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use crate::dem::Dem;
 use crate::error::{Error, Result};
-use crate::photo::{BvhQuality, TriangleBvh};
+use crate::raycast::{BvhQuality, TriangleBvh};
 
 /// A ray's nearest hit on the DEM surface.
 #[derive(Clone, Copy, Debug, PartialEq)]

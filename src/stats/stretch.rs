@@ -1,5 +1,6 @@
 //! Per-texel stretch of a texture parameterization, by scan conversion in texture space.
 
+use crate::cells::CellMesh;
 use crate::stats::Percentiles;
 
 /// Stretch above which a texel counts as steep: 2 = `1 / cos 60°` for the ortho map.
@@ -149,22 +150,22 @@ pub(crate) fn bin_index(edges: &[f64], v: f64) -> usize {
     edges.partition_point(|&e| e <= v).saturating_sub(1)
 }
 
-/// [`texel_stretch`] of a stored cell drawn with `mesh` (its surface triangles, texture
-/// coordinates from [`crate::store::texcoord`]) on a `texels × texels` texture budgeted for
-/// the cell's nominal square.
+/// [`texel_stretch`] of a cell drawn with `mesh` (its surface triangles) and the texture
+/// coordinates `uvs` of its surface vertices ([`CellMesh::surface_texcoords`]) on a
+/// `texels × texels` texture budgeted for the cell's nominal square of `base_area` m².
 pub fn cell_texel_stretch(
-    rec: &crate::store::CellRecord,
-    mesh: &crate::store::CellMesh,
+    mesh: &CellMesh,
+    uvs: &[[f32; 2]],
+    base_area: f64,
     texels: u32,
 ) -> Vec<f32> {
-    let s = CellSurface::of(rec, mesh);
-    let base_area = (rec.extent.width() * rec.extent.height()).abs();
+    let s = CellSurface::of(mesh, uvs);
     texel_stretch(&s.positions, &s.triangles, &s.uvs, texels.max(1), base_area)
 }
 
-/// A stored cell's surface as [`texel_stretch`] takes it: the surface vertices (metres,
-/// cell-local, widened to f64), their texture coordinates from [`crate::store::texcoord`],
-/// and the surface triangles that use only those vertices.
+/// A cell's surface as [`texel_stretch`] takes it: the surface vertices (metres,
+/// cell-local, widened to f64), their texture coordinates, and the surface triangles that
+/// use only those vertices.
 pub struct CellSurface {
     /// Surface vertex positions.
     pub positions: Vec<[f64; 3]>,
@@ -175,17 +176,18 @@ pub struct CellSurface {
 }
 
 impl CellSurface {
-    /// The surface of cell `rec` drawn with `mesh`.
-    pub fn of(rec: &crate::store::CellRecord, mesh: &crate::store::CellMesh) -> CellSurface {
-        let n = (mesh.surface_vertices as usize).min(mesh.positions.len());
+    /// The surface of `mesh` with the texture coordinates `uvs` of its surface vertices
+    /// ([`CellMesh::surface_texcoords`]).
+    pub fn of(mesh: &CellMesh, uvs: &[[f32; 2]]) -> CellSurface {
+        let n = (mesh.surface_vertices as usize)
+            .min(mesh.positions.len())
+            .min(uvs.len());
         CellSurface {
             positions: mesh.positions[..n]
                 .iter()
                 .map(|p| p.map(f64::from))
                 .collect(),
-            uvs: (0..n)
-                .map(|i| crate::store::texcoord(rec, mesh, i).map(f64::from))
-                .collect(),
+            uvs: uvs[..n].iter().map(|uv| uv.map(f64::from)).collect(),
             triangles: mesh
                 .surface()
                 .iter()

@@ -182,6 +182,17 @@ pub struct ReparamSettings {
 }
 
 impl CellRecord {
+    /// Texture coordinates of the surface vertices of this cell drawn with `mesh`
+    /// ([`crate::cells::CellMesh::surface_texcoords`] over the cell's origin and nominal square).
+    pub fn surface_texcoords(&self, mesh: &crate::cells::CellMesh) -> Vec<[f32; 2]> {
+        mesh.surface_texcoords(self.origin, &self.extent)
+    }
+
+    /// Area in m² of the cell's nominal square (the base a texture budget is spread over).
+    pub fn base_area(&self) -> f64 {
+        (self.extent.width() * self.extent.height()).abs()
+    }
+
     /// The error the cell makes, in world metres (≥ 0), the one a renderer's screen-space
     /// error is measured with: the larger of its geometric error
     /// ([`CellRecord::geometric_error`]) and half a texel of its texture (the texture's own
@@ -286,7 +297,7 @@ pub struct PhotoSettings {
     pub reconstruct: bool,
     /// Whether per-photo colour leveling towards the ortho was applied.
     pub level_colours: bool,
-    /// Ray-casting acceleration used ([`crate::photo::RayAccel::name`]: `grid:BIN_PX` or
+    /// Ray-casting acceleration used ([`crate::raycast::RayAccel::name`]: `grid:BIN_PX` or
     /// `bvh:PRESET`; stores written before the grid existed hold the BVH preset alone).
     #[serde(alias = "bvh_quality")]
     pub ray_accel: String,

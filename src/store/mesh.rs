@@ -1,5 +1,6 @@
 //! The binary cell mesh (`.mesh` files): cell-local f32 positions, optional f32 texture
-//! coordinates, u32 triangles, surface first and skirt after it.
+//! coordinates, u32 triangles, surface first and skirt after it: the file format of
+//! [`CellMesh`] (the type itself is the cells stage's).
 //!
 //! Layout (little endian), version 1:
 //! ```text
@@ -15,34 +16,14 @@
 
 use std::path::Path;
 
+use crate::cells::CellMesh;
 use crate::error::{Error, Result};
 
 const MAGIC: &[u8; 8] = b"CLIFMESH";
 const VERSION: u32 = 1;
 const HEADER: usize = 8 + 4 * 6;
 
-/// One cell's renderable mesh in its cell-local f32 frame. The first
-/// `surface_vertices` / `surface_triangles` are the terrain surface; the rest is skirt.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct CellMesh {
-    /// Cell-local positions in metres (world minus the cell origin).
-    pub positions: Vec<[f32; 3]>,
-    /// Texture coordinates in [0,1]² (u east, v south); `None` = orthographic (derived from x, y).
-    pub uvs: Option<Vec<[f32; 2]>>,
-    /// Triangles, CCW seen from above (skirts: from outside the cell).
-    pub triangles: Vec<[u32; 3]>,
-    /// Number of leading vertices that belong to the surface.
-    pub surface_vertices: u32,
-    /// Number of leading triangles that belong to the surface.
-    pub surface_triangles: u32,
-}
-
 impl CellMesh {
-    /// The surface triangles (skirt excluded).
-    pub fn surface(&self) -> &[[u32; 3]] {
-        &self.triangles[..self.surface_triangles as usize]
-    }
-
     /// Serializes to the version-1 binary layout.
     pub fn to_bytes(&self) -> Vec<u8> {
         let nv = self.positions.len();

@@ -37,11 +37,11 @@ pub use manifest::{
     PhotoLevelReport, PhotoReport, PhotoSettings, ReliefRecord, ReparamRecord, ReparamSettings,
     STORE_FORMAT, STORE_VERSION,
 };
-pub use mesh::CellMesh;
 pub use obj::obj_text;
 pub use photo_texture::{PHOTO_BLOCK, PhotoBlocks, magnify};
 pub use writer::BackgroundWriter;
 
+use crate::cells::CellMesh;
 use crate::error::{Error, Result};
 
 /// An opened store: its directory and manifest. Reading a cell verifies its checksums.
@@ -258,18 +258,8 @@ pub fn cell_stem(level: u8, x: u32, y: u32) -> String {
     format!("cells/{level}/{x}-{y}")
 }
 
-/// Texture coordinate of vertex `i`: the stored UV, or for orthographic cells the position
-/// mapped over the cell's nominal square (u east, v south, both in [0,1] inside the cell).
+/// Texture coordinate of vertex `i` of cell `rec` drawn with `mesh`
+/// ([`CellMesh::texcoord`] over the cell's origin and nominal square).
 pub fn texcoord(rec: &CellRecord, mesh: &CellMesh, i: usize) -> [f32; 2] {
-    if let Some(uvs) = &mesh.uvs {
-        return uvs[i];
-    }
-    let p = mesh.positions[i];
-    let e = &rec.extent;
-    let x = p[0] as f64 + rec.origin[0];
-    let y = p[1] as f64 + rec.origin[1];
-    [
-        ((x - e.min_x) / e.width()) as f32,
-        ((e.max_y - y) / e.height()) as f32,
-    ]
+    mesh.texcoord(i, rec.origin, &rec.extent)
 }

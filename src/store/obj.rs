@@ -3,7 +3,7 @@
 use std::fmt::Write;
 
 use super::manifest::CellRecord;
-use super::mesh::CellMesh;
+use crate::cells::CellMesh;
 
 /// Renders the cell's surface (skirt excluded) as OBJ text: `v` positions (cell-local, or
 /// world if `world`, printed with enough digits for UTM coordinates), `vt` texture

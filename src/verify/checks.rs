@@ -4,8 +4,9 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use super::{Finding, Layer, VerifyReport};
+use crate::cells::CellMesh;
 use crate::store::photo_texture::atlas_blocks;
-use crate::store::{CellMesh, CellRecord, FileRef, Manifest, crc32_hex};
+use crate::store::{CellRecord, FileRef, Manifest, crc32_hex};
 
 /// Checks the store in `dir` (see the module documentation). Never modifies anything.
 /// A manifest that cannot be read gives a report with one [`Layer::Manifest`] finding.

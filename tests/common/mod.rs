@@ -80,7 +80,6 @@ pub fn project_demo_photos(
         store,
         &photos,
         &ProjectOptions {
-            quiet: true,
             ..ProjectOptions::default()
         },
     )
@@ -110,7 +109,6 @@ pub fn small_demo_store(dir: &std::path::Path, reparam: bool) {
         max_error: 0.5,
         cell_intervals: 32,
         cell_texels: 64,
-        quiet: true,
         force: true,
         ..BuildOptions::default()
     };
@@ -119,7 +117,6 @@ pub fn small_demo_store(dir: &std::path::Path, reparam: bool) {
         reparam_store(
             dir,
             &ReparamOptions {
-                quiet: true,
                 ..ReparamOptions::default()
             },
         )

@@ -10,8 +10,9 @@
 use std::path::{Path, PathBuf};
 
 use cliffmap::camera::{camera_from_json_str, camera_to_json};
+use cliffmap::cells::CellMesh;
 use cliffmap::register::{PixelOrigin, parse_gcps};
-use cliffmap::store::{CellMesh, Manifest};
+use cliffmap::store::Manifest;
 use cliffmap::{DemFormat, DemLoadOptions, load_dem};
 
 /// One parser under test.
@@ -258,7 +259,6 @@ fn store_seeds(dir: &Path) -> (Vec<u8>, Vec<u8>) {
             max_error: 0.5,
             cell_intervals: 16,
             cell_texels: 16,
-            quiet: true,
             force: true,
             ..BuildOptions::default()
         },

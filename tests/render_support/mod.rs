@@ -5,10 +5,11 @@
 
 use std::path::Path;
 
+use cliffmap::cells::CellMesh;
 use cliffmap::cells::{CellKey, Quadtree, SampleRect};
 use cliffmap::georef::{GridGeoref, WorldRect};
 use cliffmap::store::{
-    CellFiles, CellMesh, CellRecord, DemInfo, FileRef, Manifest, Parameterization, STORE_FORMAT,
+    CellFiles, CellRecord, DemInfo, FileRef, Manifest, Parameterization, STORE_FORMAT,
     STORE_VERSION, cell_stem, write_file,
 };
 

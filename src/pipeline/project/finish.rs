@@ -171,7 +171,7 @@ impl CellOutcome {
 /// surface triangle in texture space (row-major).
 pub(super) fn covered_mask(store: &Store, rec: &CellRecord, texels: u32) -> Result<Vec<bool>> {
     let mesh = store.read_active_mesh(rec)?;
-    let s = crate::stats::CellSurface::of(rec, &mesh);
+    let s = crate::stats::CellSurface::of(&mesh, &rec.surface_texcoords(&mesh));
     Ok(
         texel_stretch(&s.positions, &s.triangles, &s.uvs, texels, 1.0)
             .iter()

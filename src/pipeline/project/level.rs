@@ -103,7 +103,7 @@ pub(super) struct LevelRun<'a> {
     pub(super) transforms: &'a [ColourTransform],
     pub(super) opts: &'a ProjectOptions,
     pub(super) buffers: &'a FootprintBuffers,
-    pub(super) bars: &'a [ProgressBar],
+    pub(super) bars: &'a [Box<dyn ProgressTask>],
     pub(super) finest: usize,
     /// TIN error (metres) per manifest cell, for the occlusion margin.
     pub(super) cell_errors: Vec<f32>,

@@ -20,21 +20,22 @@
 use std::cmp::Reverse;
 use std::path::Path;
 
-use indicatif::{MultiProgress, ProgressBar};
 use rayon::prelude::*;
 
-use super::{progress_bar, write_stats};
+use super::write_stats;
 use crate::cells::CellKey;
 use crate::colour::ColourSpace;
 use crate::error::{Error, Result};
 use crate::fsutil::{PngCompression, encode_png};
 use crate::photo::{
     BlendMode, CellAccum, CellContext, CellFootprints, ColourPairs, ColourTransform,
-    ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelScene, LevelingParams,
-    OcclusionMap, PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, RayAccel, SIZING_BINS,
-    SizeRequest, SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
+    ConfidenceParams, FootprintBuffers, FootprintOptions, FootprintSet, LevelingParams,
+    OcclusionMap, PhotoAccum, PhotoInput, PhotoPyramid, PhotoSamples, SIZING_BINS, SizeRequest,
+    SizingBins, blend_cell, choose_scales, collect_pairs, fit_colour_transform,
     for_each_footprint_batch_rows_in, normal_cos_slope, photo_footprints_in, texture_bytes,
 };
+use crate::progress::{ProgressSink, ProgressTask};
+use crate::raycast::{LevelScene, RayAccel};
 use crate::stats::texel_stretch;
 use crate::store::{
     BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
@@ -67,8 +68,8 @@ pub struct ProjectOptions {
     pub texture: PhotoTextureOptions,
     /// PNG compression of the photo textures and confidence maps (default fast).
     pub png_compression: PngCompression,
-    /// Hide progress bars.
-    pub quiet: bool,
+    /// Where progress is reported (default: nowhere): a task per photo.
+    pub progress: ProgressSink,
     /// Project onto the relief surface (the TIN plus each orthographic cell's relief map,
     /// `photo::CellRelief`, slopes up to 75.5°), as the renderer draws it; `false`: onto the
     /// TIN. Reparameterized cells are projected onto the TIN either way. Default on.
@@ -88,7 +89,7 @@ impl Default for ProjectOptions {
             colour_space: ColourSpace::Linear,
             texture: PhotoTextureOptions::default(),
             png_compression: PngCompression::default(),
-            quiet: false,
+            progress: ProgressSink::none(),
             onto_relief: true,
         }
     }
@@ -283,14 +284,10 @@ pub fn project_store(
         .collect();
     timer.lap("photo pyramids");
 
-    let multi = MultiProgress::new();
     let steps = levels as u64 + opts.level_colours as u64;
-    let bars: Vec<ProgressBar> = photos
+    let bars: Vec<Box<dyn ProgressTask>> = photos
         .iter()
-        .map(|p| {
-            let pb = progress_bar(steps, &p.name, opts.quiet);
-            if opts.quiet { pb } else { multi.add(pb) }
-        })
+        .map(|p| opts.progress.task(steps, &p.name))
         .collect();
 
     let mut reports: Vec<PhotoReport> = photos
@@ -439,7 +436,7 @@ pub fn project_store(
     timer.lap("photo textures on disk");
     level_reports.sort_by_key(|r| r.level);
     for pb in &bars {
-        pb.finish_and_clear();
+        pb.finish();
     }
     for r in &reports {
         if r.texels_written == 0 {

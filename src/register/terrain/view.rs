@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::camera::CameraModel;
 use crate::error::Result;
-use crate::photo::LevelScene;
+use crate::raycast::LevelScene;
 use crate::store::Store;
 
 /// Grid stride of the samples [`TerrainScene::sample`] keeps away from the silhouettes when
@@ -136,7 +136,7 @@ impl<'a> TerrainScene<'a> {
             store,
             level,
             near,
-            crate::photo::RayAccel::Bvh(crate::photo::BvhQuality::default()),
+            crate::raycast::RayAccel::Bvh(crate::raycast::BvhQuality::default()),
         )?;
         let (mut lo, mut hi, mut top_z) = (
             [f64::INFINITY; 2],
@@ -193,7 +193,7 @@ impl<'a> TerrainScene<'a> {
 
     /// Grey (0..1) of the label photo that shows `point` finest, unoccluded (its ray meets
     /// the terrain within 0.1 m + 0.2 % of the distance of `point`), if any.
-    fn photo_grey(&self, bvh: &crate::photo::TriangleBvh, point: DVec3) -> Option<f32> {
+    fn photo_grey(&self, bvh: &crate::raycast::TriangleBvh, point: DVec3) -> Option<f32> {
         let mut best: Option<(f64, f32)> = None;
         for lp in &self.label_photos {
             let d = point - lp.camera.position;
@@ -249,7 +249,7 @@ impl<'a> TerrainScene<'a> {
             return Ok(Vec::new());
         };
         // (direction, hit: (triangle, t, bary))
-        let raw: Vec<Option<(DVec3, Option<crate::photo::TriHit>)>> = (0..nu * nv)
+        let raw: Vec<Option<(DVec3, Option<crate::raycast::TriHit>)>> = (0..nu * nv)
             .into_par_iter()
             .map(|i| {
                 // Jittered inside the grid cell (a fixed hash of the index): samples on the

@@ -22,10 +22,93 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use serde::Deserialize;
+
 use super::exif::{exif_focal_px, exif_gps};
-use crate::camera::{CameraModel, rotation_from_yaw_pitch_roll};
+use super::{CameraModel, rotation_from_yaw_pitch_roll, validate_camera};
 use crate::error::{Error, Result};
-use crate::photo::{RoughPose, validate_camera};
+
+/// A photo's rough pose as a photographer knows it (a `"rough"` entry of `photos.json`):
+/// every field is optional, and what is missing comes from the photo's EXIF data. World
+/// coordinates are the store's (its CRS, metres); angles in degrees.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoughPose {
+    /// CRS of the store's coordinates (`EPSG:CODE` or a PROJ string) for an EXIF GPS fix;
+    /// default: the store's own CRS.
+    pub crs: Option<String>,
+    /// Camera position `[x, y]` or `[x, y, z]` in the store's frame, instead of EXIF GPS.
+    pub position: Option<Vec<f64>>,
+    /// Height of the camera above the terrain under it (metres) when `position` has no z:
+    /// default 1.6 (a photographer standing on the ground).
+    pub height_above_ground_m: Option<f64>,
+    /// Take z from the EXIF GPS altitude rather than from the terrain (GPS heights are often
+    /// tens of metres off; default false).
+    #[serde(default)]
+    pub use_gps_altitude: bool,
+    /// Compass heading of the view, clockwise from true north; default EXIF
+    /// `GPSImgDirection`.
+    pub heading_deg: Option<f64>,
+    /// Magnetic declination (east positive) added to a magnetic EXIF heading.
+    pub declination_deg: Option<f64>,
+    /// Pitch (ImGRAFT: positive looking down), default 0.
+    #[serde(default)]
+    pub pitch_deg: f64,
+    /// Roll (ImGRAFT), default 0.
+    #[serde(default)]
+    pub roll_deg: f64,
+    /// Focal length in pixels of the image; default from EXIF.
+    pub focal_px: Option<f64>,
+    /// Sensor width (mm) for EXIF data that gives the focal length in mm alone.
+    pub sensor_width_mm: Option<f64>,
+}
+
+impl RoughPose {
+    /// The first problem of the given values (non-finite numbers, a position of neither 2
+    /// nor 3 values, a negative focal length or sensor width, angles beyond ±360°).
+    pub fn problem(&self) -> Option<String> {
+        let finite = |v: f64| v.is_finite();
+        if let Some(p) = &self.position
+            && (!(p.len() == 2 || p.len() == 3) || !p.iter().all(|v| finite(*v)))
+        {
+            return Some(format!(
+                "\"position\" must be [x, y] or [x, y, z], finite, got {p:?}"
+            ));
+        }
+        for (name, v) in [
+            ("heading_deg", self.heading_deg),
+            ("declination_deg", self.declination_deg),
+            ("pitch_deg", Some(self.pitch_deg)),
+            ("roll_deg", Some(self.roll_deg)),
+        ] {
+            if let Some(v) = v
+                && !(finite(v) && v.abs() <= 360.0)
+            {
+                return Some(format!(
+                    "\"{name}\" must be a finite angle within ±360, got {v}"
+                ));
+            }
+        }
+        for (name, v) in [
+            ("focal_px", self.focal_px),
+            ("sensor_width_mm", self.sensor_width_mm),
+        ] {
+            if let Some(v) = v
+                && !(finite(v) && v > 0.0)
+            {
+                return Some(format!("\"{name}\" must be positive, got {v}"));
+            }
+        }
+        if let Some(h) = self.height_above_ground_m
+            && !(finite(h) && h.abs() <= 10_000.0)
+        {
+            return Some(format!(
+                "\"height_above_ground_m\" must be finite (within ±10 km), got {h}"
+            ));
+        }
+        None
+    }
+}
 
 /// Camera height above the terrain when nothing else gives it, metres.
 pub const DEFAULT_HEIGHT_ABOVE_GROUND_M: f64 = 1.6;

@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use super::scene::{LevelScene, NO_TRI};
+use super::level_scene::{LevelScene, NO_TRI};
 
 /// Most triangles one walk visits (a pixel footprint spans a handful).
 const MAX_STEPS: usize = 4096;

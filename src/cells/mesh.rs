@@ -1,9 +1,56 @@
-//! From a [`Tin`] on DEM samples to a renderable [`CellMesh`] in the cell-local f32 frame,
-//! with skirts along the cell border.
+//! A cell's renderable mesh ([`CellMesh`]) in the cell-local f32 frame, its texture
+//! coordinates, and the conversion from a [`Tin`] on DEM samples ([`local_mesh`]), with
+//! skirts along the cell border. The store writes it as a `.mesh` file
+//! (`crate::store`'s format).
 
 use crate::cells::{SampleRect, Tin};
 use crate::dem::Dem;
-use crate::store::CellMesh;
+use crate::georef::WorldRect;
+
+/// One cell's renderable mesh in its cell-local f32 frame. The first
+/// `surface_vertices` / `surface_triangles` are the terrain surface; the rest is skirt.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CellMesh {
+    /// Cell-local positions in metres (world minus the cell origin).
+    pub positions: Vec<[f32; 3]>,
+    /// Texture coordinates in [0,1]² (u east, v south); `None` = orthographic (derived from x, y).
+    pub uvs: Option<Vec<[f32; 2]>>,
+    /// Triangles, CCW seen from above (skirts: from outside the cell).
+    pub triangles: Vec<[u32; 3]>,
+    /// Number of leading vertices that belong to the surface.
+    pub surface_vertices: u32,
+    /// Number of leading triangles that belong to the surface.
+    pub surface_triangles: u32,
+}
+
+impl CellMesh {
+    /// The surface triangles (skirt excluded).
+    pub fn surface(&self) -> &[[u32; 3]] {
+        &self.triangles[..self.surface_triangles as usize]
+    }
+
+    /// Texture coordinate of vertex `i`: the stored UV, or for orthographic meshes (no
+    /// UVs) the position mapped over the cell's nominal square `extent` (u east, v south,
+    /// both in [0,1] inside the cell); `origin` is the world origin of the cell-local frame.
+    pub fn texcoord(&self, i: usize, origin: [f64; 3], extent: &WorldRect) -> [f32; 2] {
+        if let Some(uvs) = &self.uvs {
+            return uvs[i];
+        }
+        let p = self.positions[i];
+        let x = p[0] as f64 + origin[0];
+        let y = p[1] as f64 + origin[1];
+        [
+            ((x - extent.min_x) / extent.width()) as f32,
+            ((extent.max_y - y) / extent.height()) as f32,
+        ]
+    }
+
+    /// [`CellMesh::texcoord`] of every surface vertex.
+    pub fn surface_texcoords(&self, origin: [f64; 3], extent: &WorldRect) -> Vec<[f32; 2]> {
+        let n = (self.surface_vertices as usize).min(self.positions.len());
+        (0..n).map(|i| self.texcoord(i, origin, extent)).collect()
+    }
+}
 
 /// A cell's mesh together with the f64 facts the manifest records.
 pub struct LocalMesh {
