@@ -19,9 +19,9 @@
 
 use std::time::Instant;
 
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::fsutil::{PngCompression, encode_png};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::DemoScene;
 
 #[path = "bench_util/mod.rs"]
 mod bench_util;

@@ -9,8 +9,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use cliffmap::demo_scene::{DemoScene, TextureChoice, texel_truth};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::{DemoScene, TextureChoice, texel_truth};
 use cliffmap::store::Store;
 
 fn main() -> anyhow::Result<()> {

@@ -15,8 +15,8 @@
 //! ```
 
 use cliffmap::camera::CameraModel;
+use cliffmap::demo_scene::{DemTracer, DemoScene};
 use cliffmap::register::{CameraParams, FitOptions, Gcp, fit_camera, parse_free};
-use cliffmap::scene::{DemTracer, DemoScene};
 use glam::DVec3;
 
 struct Rng(u64);

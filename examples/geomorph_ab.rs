@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 
-use cliffmap::render::{FlightPath, GeomorphOptions, SceneOptions, TerrainScene, percentile};
+use cliffmap::render::{FlightPath, GeomorphOptions, SceneOptions, StoreRenderer, percentile};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -38,7 +38,7 @@ fn main() -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    let mut scene = TerrainScene::open(&store, w, h, opts)?;
+    let mut scene = StoreRenderer::open(&store, w, h, opts)?;
     let path = match &path_file {
         Some(p) => FlightPath::from_json_file(p)?,
         None => FlightPath::default_for(&scene.store().manifest)?,

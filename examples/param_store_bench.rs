@@ -15,9 +15,9 @@
 //! Real data: env CLIFFMAP_SHARED_DATA, else $CARGO_MANIFEST_DIR/../shared/data/real, else
 //! /work/shared/data/real.
 
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::param::Objective;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::DemoScene;
 use cliffmap::store::Store;
 use cliffmap::{
     Dem, DemLoadOptions, ParamMesh, ParamOptions, chart_metrics, load_dem, parameterize,

@@ -31,7 +31,7 @@ use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::register::{
-    BundleOptions, BundlePair, CameraParams, Param, ResectOptions, TerrainScene, adjust_bundle,
+    BundleOptions, BundlePair, CameraParams, LabelledTerrain, Param, ResectOptions, adjust_bundle,
     resect_photo,
 };
 
@@ -92,7 +92,7 @@ fn main() -> anyhow::Result<()> {
     println!("|---|---|---|---|---|---|---|---|---|");
     let mut summary = Vec::new();
     for anchor in &ps.anchors {
-        let terrain = TerrainScene::new(store, anchor.camera.position)?;
+        let terrain = LabelledTerrain::new(store, anchor.camera.position)?;
         let surface = |o, d| terrain.hit(o, d);
         let Some(second) = ps.second_of(anchor) else {
             eprintln!("{}: no second place with a clear view", anchor.name);

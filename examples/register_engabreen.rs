@@ -11,7 +11,7 @@
 //! `--textures best`: the terrain samples labelled by the store's photo textures where it
 //! has them (`LabelTexture::Best`; docs/registration.md, "Registering against projected
 //! photos"). `--label-8937`: IMG_8937's own pixels label the terrain it shows
-//! (`TerrainScene::set_label_photos`).
+//! (`LabelledTerrain::set_label_photos`).
 //! `--resect-render [--max-slope DEG]` (an experiment, docs/registration.md "Position"): after
 //! the terrain search the photo is resected (`register::resect_photo`, position free) against
 //! the store rendered from the camera found, the glacier masked out.
@@ -35,7 +35,7 @@ use std::path::PathBuf;
 
 use cliffmap::pipeline::{ReparamOptions, reparam_store};
 use cliffmap::register::{
-    CameraParams, LabelTexture, ResectOptions, TerrainOptions, TerrainScene, parse_free,
+    CameraParams, LabelTexture, LabelledTerrain, ResectOptions, TerrainOptions, parse_free,
     register_to_terrain, resect_photo,
 };
 use glam::DVec3;
@@ -88,7 +88,7 @@ fn main() -> anyhow::Result<()> {
     } else {
         LabelTexture::Active
     };
-    let mut terrain = TerrainScene::with_labels(&store, fitted.position, labels)?;
+    let mut terrain = LabelledTerrain::with_labels(&store, fitted.position, labels)?;
     // --label-8937: IMG_8937's pixels label the terrain it shows (its camera as in
     // fixtures/engabreen_photos.json: IMG_8902's ImGRAFT camera turned by ImGRAFT's tie)
     let label_photos = if args.iter().any(|a| a == "--label-8937") {

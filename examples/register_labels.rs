@@ -1,5 +1,5 @@
 //! Registering a photo against the store's photo textures instead of its ortho
-//! (`TerrainScene::with_labels`, `LabelTexture::Best`; docs/registration.md, "Registering
+//! (`LabelledTerrain::with_labels`, `LabelTexture::Best`; docs/registration.md, "Registering
 //! against projected photos"), on a generated scene with exact cameras.
 //!
 //! The demo photos (the anchors, exact cameras) are projected into the scene's store; per
@@ -8,7 +8,7 @@
 //! inside the issue's ranges (yaw ±3°, pitch and roll ±1.5°, focal ±3 %; position exact)
 //! and registered against the terrain three times from each start: labels from the active
 //! (ortho / reparameterized) textures, from the photo textures, and from the anchor photo's
-//! own pixels (`TerrainScene::set_label_photos`). Prints per start the
+//! own pixels (`LabelledTerrain::set_label_photos`). Prints per start the
 //! angle errors and the pixel error of the found camera on the terrain the photo shows.
 //!
 //! ```text
@@ -27,7 +27,7 @@ use bench_util::scene_args::{
 use cliffmap::camera::CameraModel;
 use cliffmap::pipeline::{ProjectOptions, project_store};
 use cliffmap::register::{
-    CameraParams, LabelTexture, TerrainOptions, TerrainScene, register_to_terrain,
+    CameraParams, LabelTexture, LabelledTerrain, TerrainOptions, register_to_terrain,
 };
 
 fn main() -> anyhow::Result<()> {
@@ -60,11 +60,11 @@ fn main() -> anyhow::Result<()> {
         let truth = second.camera.resized(width, photo_height(width));
         let img = scene.render_truth_photo(dem, &truth, 2)?;
         let tp = CameraParams::from_camera(&truth);
-        let active = TerrainScene::new(&store, truth.position)?;
-        let best = TerrainScene::with_labels(&store, truth.position, LabelTexture::Best)?;
+        let active = LabelledTerrain::new(&store, truth.position)?;
+        let best = LabelledTerrain::with_labels(&store, truth.position, LabelTexture::Best)?;
         // the anchor's own pixels as labels (what `register --textures best --known ANCHOR`
         // does within one run, no projection needed)
-        let mut photos = TerrainScene::new(&store, truth.position)?;
+        let mut photos = LabelledTerrain::new(&store, truth.position)?;
         photos.set_label_photos(&[(anchor.camera, &anchor.image)]);
         // terrain points the photo shows, to score a camera by where it puts them
         let shown = shown_points(&truth, |o, d| active.hit(o, d));

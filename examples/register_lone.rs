@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::register::{
-    CameraParams, ResectOptions, TerrainOptions, TerrainScene, register_to_terrain, resect_photo,
+    CameraParams, LabelledTerrain, ResectOptions, TerrainOptions, register_to_terrain, resect_photo,
 };
 use cliffmap::render::UvMode;
 
@@ -61,7 +61,7 @@ fn main() -> anyhow::Result<()> {
     for p in &photos {
         let truth = p.camera;
         let tp = CameraParams::from_camera(&truth);
-        let terrain = TerrainScene::new(&store, truth.position)?;
+        let terrain = LabelledTerrain::new(&store, truth.position)?;
         let errs = |cam: &CameraModel| {
             let q = CameraParams::from_camera(cam);
             let each = [0, 1, 2].map(|k| angle_diff(q.angles[k], tp.angles[k]).to_degrees());

@@ -1,5 +1,5 @@
 //! Two rough photos of one target registered against the terrain, then each again against
-//! the other's pixels (`TerrainScene::set_label_photos` with the other's camera found):
+//! the other's pixels (`LabelledTerrain::set_label_photos` with the other's camera found):
 //! does a second, mutual pass make them agree, and does it move them towards the truth?
 //! (docs/registration.md, "Registering against projected photos": a trial.)
 //!
@@ -40,7 +40,7 @@ use bench_util::scene_args::{
 
 use cliffmap::camera::CameraModel;
 use cliffmap::register::{
-    CameraParams, TerrainFit, TerrainOptions, TerrainScene, register_to_terrain,
+    CameraParams, LabelledTerrain, TerrainFit, TerrainOptions, register_to_terrain,
 };
 
 fn main() -> anyhow::Result<()> {
@@ -74,7 +74,7 @@ fn main() -> anyhow::Result<()> {
             second.camera.resized(width, photo_height(width)),
         );
         let (img_a, img_b) = (&anchor.image, scene.render_truth_photo(dem, &tb, 2)?);
-        let terrain = TerrainScene::new(&store, ta.position)?;
+        let terrain = LabelledTerrain::new(&store, ta.position)?;
         let hit = |o, d| terrain.hit(o, d);
         let (shown_a, shown_b) = (shown_points(&ta, hit), shown_points(&tb, hit));
         let ghost =
@@ -143,7 +143,7 @@ fn again(
     if labels.is_empty() {
         return Ok(first.clone());
     }
-    let mut t = TerrainScene::new(store, first.camera.position)?;
+    let mut t = LabelledTerrain::new(store, first.camera.position)?;
     t.set_label_photos(&labels);
     let f = register_to_terrain(&t, img, &first.camera, opts)?;
     Ok(if f.converged { f } else { first.clone() })
@@ -194,7 +194,7 @@ fn run_triples(
         let img_a = &anchor.image;
         let img_b = scene.render_truth_photo(dem, &tb, 2)?;
         let img_c = scene.render_truth_photo(dem, &tc, 2)?;
-        let terrain = TerrainScene::new(store, ta.position)?;
+        let terrain = LabelledTerrain::new(store, ta.position)?;
         let hit = |o, d| terrain.hit(o, d);
         let (sa, sb, sc) = (
             shown_points(&ta, hit),
@@ -279,7 +279,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// between what A and B paint there, where a photo paints a point with the true point its
 /// found camera's pixel shows.
 fn ghost_px(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     shown_a: &[(glam::DVec3, [f64; 2])],
     (ta, tb): (&CameraModel, &CameraModel),
     (fa, fb): (&CameraModel, &CameraModel),

@@ -34,7 +34,7 @@ fn main() -> anyhow::Result<()> {
     // stable ground: the ray from A hits the DEM off the glacier
     let dem = bench_util::engabreen_dem()?;
     let mask = image::open(data.join("engabreen_glacier_mask_507x590.png"))?.to_luma8();
-    let tracer = cliffmap::scene::DemTracer::new(&dem, cam.position)?;
+    let tracer = cliffmap::demo_scene::DemTracer::new(&dem, cam.position)?;
     let off_glacier = |p: glam::DVec3| {
         let (r, c) = dem.georef.grid(p.x, p.y);
         let (r, c) = (r.round(), c.round());

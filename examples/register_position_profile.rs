@@ -10,7 +10,7 @@
 //! STORE: an Engabreen store (e.g. the one `register_engabreen` builds); F default 4.
 #[path = "bench_util/mod.rs"]
 mod bench_util;
-use cliffmap::register::{CameraParams, TerrainOptions, TerrainScene, register_to_terrain};
+use cliffmap::register::{CameraParams, LabelledTerrain, TerrainOptions, register_to_terrain};
 use glam::DVec3;
 
 fn main() -> anyhow::Result<()> {
@@ -21,7 +21,7 @@ fn main() -> anyhow::Result<()> {
     let factor: u32 = a.get(1).map_or(Ok(4), |s| s.parse())?;
     let (photo, fitted, gcps) = bench_util::engabreen_8902()?;
     let store = cliffmap::store::Store::open(std::path::Path::new(store_dir))?;
-    let terrain = TerrainScene::new(&store, fitted.position)?;
+    let terrain = LabelledTerrain::new(&store, fitted.position)?;
     let opts = TerrainOptions {
         search_deg: [0.6, 0.6, 0.6],
         finest_factor: factor,

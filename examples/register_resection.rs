@@ -29,7 +29,7 @@ use bench_util::scene_args::{
 use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
-use cliffmap::register::{CameraParams, Param, ResectOptions, TerrainScene, resect_photo};
+use cliffmap::register::{CameraParams, LabelledTerrain, Param, ResectOptions, resect_photo};
 
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
@@ -65,7 +65,7 @@ fn main() -> anyhow::Result<()> {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut summary = Vec::new();
     for a in anchors {
-        let terrain = TerrainScene::new(store, a.camera.position)?;
+        let terrain = LabelledTerrain::new(store, a.camera.position)?;
         let Some(second) = ps.second_of(a) else {
             eprintln!("{}: no second place with a clear view", a.name);
             continue;

@@ -28,7 +28,7 @@ mod scene_args;
 
 use cliffmap::register::CameraParams;
 use cliffmap::register::terrain::{
-    GREY_CLASSES, GreyImage, SKY, Sample, SampleAt, TerrainScene, nmi, nmi_by, sample_pixel,
+    GREY_CLASSES, GreyImage, LabelledTerrain, SKY, Sample, SampleAt, nmi, nmi_by, sample_pixel,
 };
 use glam::DVec3;
 use rayon::prelude::*;
@@ -48,7 +48,7 @@ fn main() -> anyhow::Result<()> {
         .iter()
         .find(|p| &p.name == name)
         .ok_or_else(|| anyhow::anyhow!("no photo {name} in {list}"))?;
-    let terrain = TerrainScene::new(&store, p.camera.position)?;
+    let terrain = LabelledTerrain::new(&store, p.camera.position)?;
     let grey = GreyImage::from_photo(&p.image, 1);
     let cam = p.camera.resized(grey.width, grey.height);
     let mut band = terrain.sample(&cam, 1.0, 0.04, Some(24))?;
@@ -69,8 +69,8 @@ fn main() -> anyhow::Result<()> {
             let which = flag("--truth").or(flag("--lift"));
             let scene = scene_args::scene_overrides(
                 match which {
-                    Some("tall") => cliffmap::scene::DemoScene::tall_walls(),
-                    Some("demo") => cliffmap::scene::DemoScene::default(),
+                    Some("tall") => cliffmap::demo_scene::DemoScene::tall_walls(),
+                    Some("demo") => cliffmap::demo_scene::DemoScene::default(),
                     _ => anyhow::bail!("--match needs --lift demo|tall or --truth"),
                 },
                 flag,
@@ -138,8 +138,8 @@ fn main() -> anyhow::Result<()> {
     if let Some(i) = a.iter().position(|x| x == "--truth") {
         let scene = scene_args::scene_overrides(
             match a.get(i + 1).map(String::as_str) {
-                Some("tall") => cliffmap::scene::DemoScene::tall_walls(),
-                _ => cliffmap::scene::DemoScene::default(),
+                Some("tall") => cliffmap::demo_scene::DemoScene::tall_walls(),
+                _ => cliffmap::demo_scene::DemoScene::default(),
             },
             flag,
         )?;

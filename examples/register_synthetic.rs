@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use cliffmap::camera::CameraModel;
 use cliffmap::register::{
-    CameraParams, TerrainOptions, TerrainScene, parse_free, register_to_terrain,
+    CameraParams, LabelledTerrain, TerrainOptions, parse_free, register_to_terrain,
 };
 
 fn main() -> anyhow::Result<()> {
@@ -74,7 +74,7 @@ fn main() -> anyhow::Result<()> {
     let mut rows: Vec<(String, bool, bool, f64)> = Vec::new(); // photo, converged, within goal, seconds
     for p in &photos {
         let truth = CameraParams::from_camera(&p.camera);
-        let terrain = TerrainScene::new(&store, p.camera.position)?;
+        let terrain = LabelledTerrain::new(&store, p.camera.position)?;
         for s in 0..starts {
             let mut c = rough_start(truth, &mut rng, pos_err, true);
             keep_above_ground(&mut c, &terrain);

@@ -48,6 +48,7 @@ use bench_util::scene_args::SceneArgs;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use cliffmap::demo_scene::{DemTracer, DemoPhotoOptions};
 use cliffmap::eval::{
     EvalOptions, ReferenceSources, evaluate_views, gains_table, write_view_images,
 };
@@ -55,7 +56,6 @@ use cliffmap::pipeline::{
     BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store,
     reparam_store,
 };
-use cliffmap::scene::{DemTracer, DemoPhotoOptions};
 
 fn main() -> anyhow::Result<()> {
     let a = SceneArgs::from_env("render_eval OUT [options]")?;

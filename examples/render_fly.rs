@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use cliffmap::render::{
-    FlightPath, FlyReport, SceneOptions, TerrainScene, UvMode, fly, percentile,
+    FlightPath, FlyReport, SceneOptions, StoreRenderer, UvMode, fly, percentile,
 };
 
 fn main() -> anyhow::Result<()> {
@@ -39,7 +39,7 @@ fn main() -> anyhow::Result<()> {
                 uv_mode: *mode,
                 ..Default::default()
             };
-            let mut scene = TerrainScene::open(&store, w, h, opts)?;
+            let mut scene = StoreRenderer::open(&store, w, h, opts)?;
             let path = FlightPath::default_for(&scene.store().manifest)?;
             let cams = path.cameras(frames.max(2), w, h);
             results[k].push(fly(

@@ -13,8 +13,8 @@
 
 use std::path::PathBuf;
 
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store};
-use cliffmap::scene::DemoScene;
 use cliffmap::store::{CellRecord, Store};
 
 /// (steep surface m², ortho texels on it, reparam texels on it) of one cell.

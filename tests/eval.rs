@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use cliffmap::demo_scene::{DemTracer, DemoScene};
 use cliffmap::eval::{
     BASELINE, Class, EvalOptions, ORACLE, ReferenceSources, evaluate_views, reference_images,
     score_view,
@@ -13,7 +14,6 @@ use cliffmap::pipeline::{
     BuildInputs, BuildOptions, PhotoTextureOptions, ProjectOptions, ReparamOptions, build_store,
     project_store, reparam_store,
 };
-use cliffmap::scene::{DemTracer, DemoScene};
 
 fn tracer_origin(dem: &cliffmap::Dem) -> glam::DVec3 {
     let (x, y) = dem
@@ -172,7 +172,7 @@ fn the_photo_gain_does_not_fall_as_the_texture_budget_grows() {
         .write_demo_photos(
             &dem,
             &photo_dir,
-            &cliffmap::scene::DemoPhotoOptions {
+            &cliffmap::demo_scene::DemoPhotoOptions {
                 width: 480,
                 height: 360,
                 supersample: 1,

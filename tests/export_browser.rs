@@ -12,8 +12,8 @@ mod common;
 
 use cli_util::ok;
 use cliffmap::camera::camera_to_json;
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::DemoScene;
 
 #[test]
 fn cesium_page_shows_what_cliffmap_renders() {

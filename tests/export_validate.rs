@@ -269,10 +269,10 @@ fn demo_store_with_photos(tmp: &Path) -> PathBuf {
     let store = tmp.join("store");
     common::small_demo_store(&store, true);
     // the scene of small_demo_store; its photos from the usual aims at 320 × 240
-    let scene = cliffmap::scene::DemoScene {
+    let scene = cliffmap::demo_scene::DemoScene {
         samples: 129,
         spacing: 4.0,
-        ..cliffmap::scene::DemoScene::default()
+        ..cliffmap::demo_scene::DemoScene::default()
     };
     let (dem, _) = scene.generate().unwrap();
     common::project_demo_photos(&store, &scene, &dem, &tmp.join("photos"), (320, 240));

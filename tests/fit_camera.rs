@@ -266,7 +266,7 @@ fn img_8937_registers_to_img_8902_on_stable_ground() {
     ))
     .unwrap()
     .to_luma8();
-    let tracer = cliffmap::scene::DemTracer::new(&dem, cam.position).unwrap();
+    let tracer = cliffmap::demo_scene::DemTracer::new(&dem, cam.position).unwrap();
     let rock = |p: glam::DVec3| {
         let (r, c) = dem.georef.grid(p.x, p.y);
         r >= -0.5

@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 /// The module → layer map of the "Layers" table of docs/architecture.md: rows
 /// `| N | `a`, `b` | … |` after the heading `## Layers`.
 fn documented_layers() -> BTreeMap<String, u32> {
-    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/architecture.md"))
-        .expect("docs/architecture.md");
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/architecture.md"))
+            .expect("docs/architecture.md");
     let section = doc
         .split("\n## Layers")
         .nth(1)
@@ -30,12 +31,22 @@ fn documented_layers() -> BTreeMap<String, u32> {
         };
         for name in cols[2].split(',') {
             let name = name.trim().trim_matches('`');
-            assert!(!name.is_empty(), "empty module name in layer {layer}: {line}");
+            assert!(
+                !name.is_empty(),
+                "empty module name in layer {layer}: {line}"
+            );
             let before = layers.insert(name.to_string(), layer);
-            assert!(before.is_none(), "module `{name}` listed twice in the Layers table");
+            assert!(
+                before.is_none(),
+                "module `{name}` listed twice in the Layers table"
+            );
         }
     }
-    assert!(layers.len() > 10, "the Layers table lists only {} modules", layers.len());
+    assert!(
+        layers.len() > 10,
+        "the Layers table lists only {} modules",
+        layers.len()
+    );
     layers
 }
 
@@ -132,11 +143,15 @@ fn modules_import_only_lower_layers() {
         .filter_map(|l| {
             let l = l.trim();
             let l = l.strip_prefix("pub ").unwrap_or(l);
-            l.strip_prefix("mod ").map(|m| m.trim_end_matches(';').to_string())
+            l.strip_prefix("mod ")
+                .map(|m| m.trim_end_matches(';').to_string())
         })
         .filter(|m| m != "tiffgen")
         .collect();
-    let missing: Vec<_> = declared.iter().filter(|m| !layers.contains_key(*m)).collect();
+    let missing: Vec<_> = declared
+        .iter()
+        .filter(|m| !layers.contains_key(*m))
+        .collect();
     assert!(
         missing.is_empty(),
         "modules of lib.rs missing from the Layers table of docs/architecture.md: {missing:?}"
@@ -174,7 +189,11 @@ fn no_file_imports_a_sibling_that_imports_it_back() {
     // folder -> (file stem -> sibling stems it imports)
     let mut graph: BTreeMap<PathBuf, BTreeMap<String, BTreeSet<String>>> = BTreeMap::new();
     for file in rust_files(&src) {
-        let stem = file.file_stem().unwrap_or_default().to_string_lossy().to_string();
+        let stem = file
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .to_string();
         if stem == "mod" || stem == "lib" || stem == "main" {
             continue;
         }
@@ -230,7 +249,11 @@ fn no_file_imports_a_sibling_that_imports_it_back() {
             }
         }
     }
-    assert!(cycles.is_empty(), "import cycles between files:\n{}", cycles.join("\n"));
+    assert!(
+        cycles.is_empty(),
+        "import cycles between files:\n{}",
+        cycles.join("\n")
+    );
 }
 
 #[test]

@@ -2,11 +2,11 @@
 //! photos.json set, and texel-level PSNR of a store against the solid texture.
 
 use cliffmap::camera::CameraModel;
-use cliffmap::photo::read_photo_list;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::{
+use cliffmap::demo_scene::{
     DemoPhotoOptions, DemoScene, SKY_COLOUR, TextureChoice, texel_truth, texel_truth_with,
 };
+use cliffmap::photo::read_photo_list;
+use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::store::Store;
 use glam::DVec3;
 

@@ -8,9 +8,9 @@ use std::path::Path;
 
 use cli_util::{fails_naming, ok};
 use cliffmap::camera::{camera_from_json_file, camera_to_json, yaw_pitch_roll_from_rotation};
+use cliffmap::demo_scene::{DemoPhotoOptions, DemoScene};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::register::CameraParams;
-use cliffmap::scene::{DemoPhotoOptions, DemoScene};
 
 /// Writes `cam` as an ImGRAFT-style camera JSON file.
 fn write_camera(path: impl AsRef<Path>, cam: &cliffmap::camera::CameraModel) {
@@ -634,7 +634,7 @@ fn register_refuses_bad_input_naming_it() {
 /// truth; the command refuses a free position.
 #[test]
 fn silhouette_edges_move_a_camera_towards_its_position_and_the_command_refuses_it() {
-    use cliffmap::register::{EdgeOptions, TerrainScene, refine_edges};
+    use cliffmap::register::{EdgeOptions, LabelledTerrain, refine_edges};
     let tmp = tempfile::tempdir().unwrap();
     let MovedPhoto {
         list,
@@ -643,7 +643,7 @@ fn silhouette_edges_move_a_camera_towards_its_position_and_the_command_refuses_i
         truth,
         rough,
     } = moved_photo(tmp.path(), 0, glam::DVec3::new(1.2, -0.8, 0.3), 0.1);
-    let terrain = TerrainScene::new(&store, p.camera.position).unwrap();
+    let terrain = LabelledTerrain::new(&store, p.camera.position).unwrap();
     let fit = refine_edges(
         &terrain,
         &p.image,
@@ -865,7 +865,7 @@ fn the_position_search_moves_a_camera_back_towards_its_position() {
     // must bring it nearer the truth (measured 2026-12-06: 2.48 -> 1.47 m) and its angles
     // with it (worst 1.19° with the position kept, 0.13° searched; docs/registration.md,
     // "Position by the score at full resolution")
-    use cliffmap::register::{TerrainOptions, TerrainScene, register_to_terrain};
+    use cliffmap::register::{LabelledTerrain, TerrainOptions, register_to_terrain};
     let tmp = tempfile::tempdir().unwrap();
     let MovedPhoto {
         store,
@@ -874,7 +874,7 @@ fn the_position_search_moves_a_camera_back_towards_its_position() {
         rough,
         ..
     } = moved_photo(tmp.path(), 2, glam::DVec3::new(1.5, -1.8, 0.8), 0.3);
-    let terrain = TerrainScene::new(&store, p.camera.position).unwrap();
+    let terrain = LabelledTerrain::new(&store, p.camera.position).unwrap();
     let search = |h: Option<f64>| {
         let opts = TerrainOptions {
             position_search_m: h,

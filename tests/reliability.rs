@@ -202,10 +202,10 @@ fn a_reparam_that_fills_the_disk_leaves_the_store_as_it_was() {
 fn a_project_that_fills_the_disk_leaves_the_store_as_it_was() {
     use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
     let tmp = tempfile::tempdir().unwrap();
-    let scene = cliffmap::scene::DemoScene {
+    let scene = cliffmap::demo_scene::DemoScene {
         samples: 129,
         spacing: 4.0,
-        ..cliffmap::scene::DemoScene::default()
+        ..cliffmap::demo_scene::DemoScene::default()
     };
     let (dem, ortho) = scene.generate().unwrap();
     let built = tmp.path().join("store");
@@ -230,7 +230,7 @@ fn a_project_that_fills_the_disk_leaves_the_store_as_it_was() {
         .write_demo_photos(
             &dem,
             &tmp.path().join("photos"),
-            &cliffmap::scene::DemoPhotoOptions {
+            &cliffmap::demo_scene::DemoPhotoOptions {
                 width: 320,
                 height: 240,
                 supersample: 1,

@@ -7,13 +7,13 @@ mod common;
 use std::path::Path;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::render::accuracy::{image_difference, surface_displacement};
 use cliffmap::render::{
-    CellIndex, FlightPath, FrameOptions, SceneOptions, TerrainScene, screen_space_error,
+    CellIndex, FlightPath, FrameOptions, SceneOptions, StoreRenderer, screen_space_error,
     select_cells,
 };
-use cliffmap::scene::DemoScene;
 use glam::DVec3;
 
 const W: u32 = 480;
@@ -68,7 +68,7 @@ fn demo_store(out: &Path) {
 }
 
 /// Views: three cameras of the default (low, steep) flight and an oblique overview.
-fn views(scene: &TerrainScene) -> Vec<CameraModel> {
+fn views(scene: &StoreRenderer) -> Vec<CameraModel> {
     let m = &scene.store().manifest;
     let cams = FlightPath::default_for(m).unwrap().cameras(7, W, H);
     let mut out = vec![cams[1], cams[3], cams[5]];
@@ -102,7 +102,7 @@ struct Frame {
     cells: Vec<usize>,
 }
 
-fn render(scene: &mut TerrainScene, cam: &CameraModel, sse: f64) -> Frame {
+fn render(scene: &mut StoreRenderer, cam: &CameraModel, sse: f64) -> Frame {
     scene.set_sse(sse).unwrap();
     let r = scene.frame(cam, true).unwrap();
     assert_eq!(
@@ -130,7 +130,7 @@ fn check_store(name: &str, dir: &Path) {
         },
         ..Default::default()
     };
-    let mut scene = TerrainScene::open(dir, W, H, opts).unwrap_or_else(|e| {
+    let mut scene = StoreRenderer::open(dir, W, H, opts).unwrap_or_else(|e| {
         panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers)")
     });
     eprintln!("{name}: adapter {}", scene.gpu().describe());

@@ -310,7 +310,7 @@ fn tile_shifts(
 #[test]
 fn engabreen_render_with_distortion_overlays_the_photo() {
     use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-    use cliffmap::render::{DistortionMode, FrameOptions, SceneOptions, TerrainScene};
+    use cliffmap::render::{DistortionMode, FrameOptions, SceneOptions, StoreRenderer};
     // An Engabreen store (ortho textures) rendered from IMG_8902's camera at a quarter of the
     // photo's size, with and without the lens distortion, against the photo's edges.
     let t = tempfile::tempdir().unwrap();
@@ -352,7 +352,7 @@ fn engabreen_render_with_distortion_overlays_the_photo() {
             distortion: mode,
             ..Default::default()
         };
-        let mut scene = TerrainScene::open(t.path(), w, h, opts).unwrap();
+        let mut scene = StoreRenderer::open(t.path(), w, h, opts).unwrap();
         assert_eq!(
             scene.frame(&cam, true).unwrap().distorted,
             mode == DistortionMode::Auto

@@ -6,7 +6,7 @@ mod render_support;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
 use cliffmap::render::accuracy::image_difference;
-use cliffmap::render::{DistortionMode, FrameOptions, SceneOptions, TerrainScene};
+use cliffmap::render::{DistortionMode, FrameOptions, SceneOptions, StoreRenderer};
 use glam::DVec3;
 use render_support::{Synth, X0, Y0, write_store_textured};
 
@@ -59,7 +59,7 @@ fn marker_texture() -> image::RgbaImage {
     })
 }
 
-fn scene(dir: &std::path::Path, mode: DistortionMode) -> TerrainScene {
+fn scene(dir: &std::path::Path, mode: DistortionMode) -> StoreRenderer {
     let opts = SceneOptions {
         frame: FrameOptions {
             lit: false,
@@ -69,7 +69,7 @@ fn scene(dir: &std::path::Path, mode: DistortionMode) -> TerrainScene {
         distortion: mode,
         ..Default::default()
     };
-    TerrainScene::open(dir, W, H, opts).unwrap_or_else(|e| {
+    StoreRenderer::open(dir, W, H, opts).unwrap_or_else(|e| {
         panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers)")
     })
 }

@@ -6,13 +6,13 @@ use std::path::Path;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
 use cliffmap::cells::CellMesh;
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::render::accuracy::{image_difference, surface_displacement};
 use cliffmap::render::geomorph::morph_targets;
 use cliffmap::render::{
-    CellIndex, FrameOptions, GeomorphOptions, SceneOptions, TerrainScene, select_cells,
+    CellIndex, FrameOptions, GeomorphOptions, SceneOptions, StoreRenderer, select_cells,
 };
-use cliffmap::scene::DemoScene;
 use cliffmap::store::{Store, texcoord};
 use glam::DVec3;
 
@@ -116,7 +116,7 @@ fn morph_targets_of_a_built_store_lie_on_the_parent_surfaces() {
 }
 
 /// Camera on a line from far to near, looking at the scene centre.
-fn camera_at(scene: &TerrainScene, s: f64) -> CameraModel {
+fn camera_at(scene: &StoreRenderer, s: f64) -> CameraModel {
     let m = &scene.store().manifest;
     let root = m.cells.iter().find(|c| c.level == 0).unwrap();
     let (lo, hi) = (DVec3::from(root.bbox_min), DVec3::from(root.bbox_max));
@@ -133,7 +133,7 @@ fn camera_at(scene: &TerrainScene, s: f64) -> CameraModel {
     )
 }
 
-fn selection(scene: &TerrainScene, s: f64) -> Vec<usize> {
+fn selection(scene: &StoreRenderer, s: f64) -> Vec<usize> {
     let cam = scene.render_camera(&camera_at(scene, s));
     let cells = &scene.store().manifest.cells;
     select_cells(cells, &CellIndex::new(cells), &cam, SSE).cells
@@ -142,7 +142,7 @@ fn selection(scene: &TerrainScene, s: f64) -> Vec<usize> {
 /// Path parameters bracketing each LOD refinement: pairs (a, b), b − a < 1e-7, where a cell
 /// selected at `a` is replaced by its children at `b` (changes by frustum culling alone are
 /// skipped).
-fn switches(scene: &TerrainScene) -> Vec<(f64, f64)> {
+fn switches(scene: &StoreRenderer) -> Vec<(f64, f64)> {
     let cells = &scene.store().manifest.cells;
     let index = CellIndex::new(cells);
     let refines = |far: &[usize], near: &[usize]| {
@@ -186,7 +186,7 @@ struct Frame {
     morphed: usize,
 }
 
-fn render(scene: &mut TerrainScene, s: f64) -> Frame {
+fn render(scene: &mut StoreRenderer, s: f64) -> Frame {
     let cam = camera_at(scene, s);
     let r = scene.frame(&cam, true).unwrap();
     assert_eq!(r.holes + r.substituted, 0);
@@ -214,7 +214,7 @@ fn geomorphing_hides_popping_at_lod_switches() {
             },
             ..Default::default()
         };
-        TerrainScene::open(t.path(), W, H, opts).unwrap_or_else(|e| {
+        StoreRenderer::open(t.path(), W, H, opts).unwrap_or_else(|e| {
             panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers)")
         })
     };

@@ -9,10 +9,10 @@
 use std::path::{Path, PathBuf};
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
+use cliffmap::demo_scene::DemoScene;
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
 use cliffmap::render::accuracy::image_difference;
-use cliffmap::render::{FrameOptions, SceneOptions, TerrainScene};
-use cliffmap::scene::DemoScene;
+use cliffmap::render::{FrameOptions, SceneOptions, StoreRenderer};
 use glam::DVec3;
 
 const W: u32 = 320;
@@ -51,7 +51,7 @@ fn small_store(out: &Path) {
 
 /// Fixed views in the scene's own coordinates: an oblique overview and a low view into the
 /// terrain (positions relative to the root bounding box, so they follow the generator's extent).
-fn views(scene: &TerrainScene) -> Vec<(&'static str, CameraModel)> {
+fn views(scene: &StoreRenderer) -> Vec<(&'static str, CameraModel)> {
     let m = &scene.store().manifest;
     let root = m.cells.iter().find(|c| c.level == 0).unwrap();
     let (lo, hi) = (DVec3::from(root.bbox_min), DVec3::from(root.bbox_max));
@@ -91,7 +91,7 @@ fn fixed_views_match_the_golden_images() {
             },
             ..Default::default()
         };
-        let mut scene = TerrainScene::open(t.path(), W, H, opts).unwrap_or_else(|e| {
+        let mut scene = StoreRenderer::open(t.path(), W, H, opts).unwrap_or_else(|e| {
             panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers)")
         });
         for (name, cam) in views(&scene) {

@@ -4,13 +4,13 @@
 mod render_support;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
-use cliffmap::render::{FrameOptions, SceneOptions, TerrainScene, UvMode};
+use cliffmap::render::{FrameOptions, SceneOptions, StoreRenderer, UvMode};
 use glam::DVec3;
 use render_support::{Synth, X0, Y0, write_store};
 
 const SKY: [u8; 3] = [170, 200, 235];
 
-fn open(dir: &std::path::Path, size: u32, lit: bool, mode: UvMode) -> TerrainScene {
+fn open(dir: &std::path::Path, size: u32, lit: bool, mode: UvMode) -> StoreRenderer {
     let opts = SceneOptions {
         uv_mode: mode,
         frame: FrameOptions {
@@ -20,7 +20,7 @@ fn open(dir: &std::path::Path, size: u32, lit: bool, mode: UvMode) -> TerrainSce
         },
         ..Default::default()
     };
-    TerrainScene::open(dir, size, size, opts).unwrap_or_else(|e| {
+    StoreRenderer::open(dir, size, size, opts).unwrap_or_else(|e| {
         panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers libegl1 libegl-mesa0 libgl1-mesa-dri)")
     })
 }
@@ -177,7 +177,7 @@ fn lighting_darkens_surfaces_facing_away_from_the_sun() {
         },
         ..Default::default()
     };
-    let mut low_sun = TerrainScene::open(dir.path(), 64, 64, opts).unwrap();
+    let mut low_sun = StoreRenderer::open(dir.path(), 64, 64, opts).unwrap();
     let low = low_sun
         .frame(&cam, true)
         .and_then(|_| low_sun.read_rgba())

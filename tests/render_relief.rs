@@ -10,7 +10,7 @@ use std::path::Path;
 
 use cliffmap::camera::{CameraModel, rotation_look_at};
 use cliffmap::render::{
-    FrameOptions, NO_PHOTO_COLOUR, Overlay, SceneOptions, TerrainScene, UvMode, share_colour,
+    FrameOptions, NO_PHOTO_COLOUR, Overlay, SceneOptions, StoreRenderer, UvMode, share_colour,
 };
 use cliffmap::store::{ReliefRecord, cell_stem, write_file};
 use glam::DVec3;
@@ -82,7 +82,7 @@ fn render_overlay(
         relief,
         ..Default::default()
     };
-    let mut scene = TerrainScene::open(dir, SIZE, SIZE, opts).unwrap_or_else(|e| {
+    let mut scene = StoreRenderer::open(dir, SIZE, SIZE, opts).unwrap_or_else(|e| {
         panic!("cannot open a headless GPU scene: {e}\n(install Mesa: apt-get install mesa-vulkan-drivers libegl1 libegl-mesa0 libgl1-mesa-dri)")
     });
     scene.frame(cam, true).unwrap();

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use cliffmap::demo_scene::{DemoPhotoOptions, DemoScene};
 use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::scene::{DemoPhotoOptions, DemoScene};
 
 /// The arguments after the program name: the output folder first, then flags.
 pub struct SceneArgs {
@@ -78,7 +78,7 @@ pub fn scene_overrides<'a>(
             h.len() == 3 && h.iter().all(|v| v.is_finite() && *v >= 0.0),
             "--relief wants PLATEAU,CANYON,ESCARPMENT metres (>= 0), not {r:?}"
         );
-        scene.relief = cliffmap::scene::Relief {
+        scene.relief = cliffmap::demo_scene::Relief {
             plateau: h[0],
             canyon: h[1],
             escarpment: h[2],
@@ -105,7 +105,7 @@ pub struct PairScene {
     /// The demo photos with their exact cameras.
     pub anchors: Vec<cliffmap::photo::PhotoInput>,
     /// The second places (`--turn-deg`, default 12; `--distance-ratio`, default 1.15).
-    pub seconds: Vec<cliffmap::scene::PhotoShot>,
+    pub seconds: Vec<cliffmap::demo_scene::PhotoShot>,
     pub turn_deg: f64,
     pub distance_ratio: f64,
     /// `--starts` (default 5).
@@ -168,7 +168,7 @@ impl PairScene {
     pub fn second_of(
         &self,
         anchor: &cliffmap::photo::PhotoInput,
-    ) -> Option<&cliffmap::scene::PhotoShot> {
+    ) -> Option<&cliffmap::demo_scene::PhotoShot> {
         let stem = anchor.name.trim_end_matches(".jpg");
         self.seconds
             .iter()
@@ -333,7 +333,7 @@ pub fn rough_start(
 /// end underground).
 pub fn keep_above_ground(
     c: &mut cliffmap::register::CameraParams,
-    terrain: &cliffmap::register::TerrainScene,
+    terrain: &cliffmap::register::LabelledTerrain,
 ) {
     let ground = terrain
         .hit(c.position + glam::DVec3::Z * 1000.0, -glam::DVec3::Z)

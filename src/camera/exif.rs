@@ -51,7 +51,7 @@ fn read_exif(path: &Path) -> Result<Option<exif::Exif>> {
 }
 
 /// The focal length in pixels of the `width × height` image at `path` (see the
-/// [module docs](self)); `sensor_width_mm` is used when EXIF gives the focal length alone.
+/// module docs (`src/camera/exif.rs`)); `sensor_width_mm` is used when EXIF gives the focal length alone.
 pub fn exif_focal_px(
     path: &Path,
     width: u32,
@@ -131,7 +131,7 @@ pub fn exif_camera_body(path: &Path) -> Result<Option<String>> {
     )))
 }
 
-/// A photo's GPS fix and heading from EXIF (see the [module docs](self)).
+/// A photo's GPS fix and heading from EXIF (see the module docs (`src/camera/exif.rs`)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExifGps {
     /// WGS 84 latitude, degrees north.

@@ -4,7 +4,7 @@
 //! rotation (rows = camera right, down, forward; x east, y north, z up in the world),
 //! intrinsics in pixels of an image of `width × height` (pixel-centre convention: the
 //! centre of the top-left pixel is (0, 0)) and ImGRAFT radial distortion `k1`, `k2`.
-//! [`CameraModel::from_json_file`] reads the "Camera JSON" of docs/formats.md: either a
+//! [`camera_from_json_file`] reads the "Camera JSON" of docs/formats.md: either a
 //! cliffmap camera or an ImGRAFT-style description (e.g. the Engabreen camera file).
 //! [`CameraModel::pixel_ray`] inverts the projection (undistorting first) for ray casting.
 

@@ -13,7 +13,7 @@ use crate::georef::WorldRect;
 pub struct CellMesh {
     /// Cell-local positions in metres (world minus the cell origin).
     pub positions: Vec<[f32; 3]>,
-    /// Texture coordinates in [0,1]² (u east, v south); `None` = orthographic (derived from x, y).
+    /// Texture coordinates in \[0,1\]² (u east, v south); `None` = orthographic (derived from x, y).
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Triangles, CCW seen from above (skirts: from outside the cell).
     pub triangles: Vec<[u32; 3]>,
@@ -31,7 +31,7 @@ impl CellMesh {
 
     /// Texture coordinate of vertex `i`: the stored UV, or for orthographic meshes (no
     /// UVs) the position mapped over the cell's nominal square `extent` (u east, v south,
-    /// both in [0,1] inside the cell); `origin` is the world origin of the cell-local frame.
+    /// both in \[0,1\] inside the cell); `origin` is the world origin of the cell-local frame.
     pub fn texcoord(&self, i: usize, origin: [f64; 3], extent: &WorldRect) -> [f32; 2] {
         if let Some(uvs) = &self.uvs {
             return uvs[i];

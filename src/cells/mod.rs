@@ -19,6 +19,7 @@ mod border;
 mod extent;
 mod face_heap;
 mod halfedge;
+mod lattice_tiles;
 mod mesh;
 pub mod normals;
 mod quadtree;
@@ -29,7 +30,6 @@ pub mod relief_reach;
 mod scan_x4;
 mod taps;
 pub mod texture;
-mod tiles;
 mod tin;
 
 pub use border::{LevelBorders, simplify_rect_border};

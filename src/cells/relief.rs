@@ -4,7 +4,7 @@
 //! cell's nominal square, row 0 north, each texel's value taken at its centre. The value is
 //! `h_dem(x, y) − h_tin(x, y)` in world units, where `h_dem` is the DEM's full-resolution
 //! grid surface (two triangles per quad of samples, split north-west to south-east, as
-//! [`crate::scene::DemTracer`] casts it) and `h_tin` the cell's TIN surface (its mesh's surface
+//! [`crate::demo_scene::DemTracer`] casts it) and `h_tin` the cell's TIN surface (its mesh's surface
 //! triangles; skirts excluded). Texels the TIN does not cover (beyond a clipped cell's data)
 //! get 0. The renderer uses the map to find where a view ray meets the DEM surface near
 //! where it meets the TIN (relief mapping), so textures of flat ground are looked up at the
@@ -43,7 +43,7 @@ pub const CHART_MIN_NORMAL_Z: f32 = std::f32::consts::FRAC_1_SQRT_2;
 pub const MAX_SEARCH_TEXELS: f32 = 48.0;
 
 /// The longest (x, y) move a relief search can give on a map of `side` texels over a nominal
-/// square `width` metres wide, metres (the cap of [`crate::cells::relief_reach`]).
+/// square `width` metres wide, metres (the cap of [`crate::cells::relief_reach()`]).
 pub fn max_shift_m(width: f64, side: u32) -> f32 {
     (MAX_SEARCH_TEXELS as f64 * width / side.max(1) as f64) as f32
 }
@@ -72,7 +72,7 @@ pub fn decode(v: u8, range_m: f64) -> f64 {
 
 /// Height of the DEM's full-resolution grid surface at fractional grid position
 /// `(row, col)`, clamped to the grid: the two triangles per quad of samples that
-/// [`crate::scene::DemTracer`] casts against (the quad split from (r, c) to (r+1, c+1)).
+/// [`crate::demo_scene::DemTracer`] casts against (the quad split from (r, c) to (r+1, c+1)).
 pub fn grid_surface_height(dem: &Dem, row: f64, col: f64) -> f64 {
     let ([h00, h01, h10, h11], fr, fc) = dem.quad_at(row, col);
     if fr >= fc {

@@ -13,9 +13,9 @@
 use pulp::x86::V3;
 use pulp::{f32x4, f64x4};
 
+use super::lattice_tiles::LatticeTiles;
 use super::raster::Plane;
 use super::raster::Spans;
-use super::tiles::LatticeTiles;
 
 /// Scan order key of lattice sample `(i, j)`: row-major, exact in an `f64` (`i < 2^32`,
 /// `j < 2^20`).

@@ -13,8 +13,8 @@
 use super::border::{LevelBorders, border_error, check_epsilon, check_tree};
 use super::face_heap::FaceHeap;
 use super::halfedge::{MAX_COORD, Mesh};
+use super::lattice_tiles::LatticeTiles;
 use super::raster::{Lattice, Plane, for_each_span};
-use super::tiles::LatticeTiles;
 use super::{CellKey, Quadtree, SampleRect, Tin};
 use crate::dem::Dem;
 use crate::error::{Error, Result};

@@ -2,12 +2,12 @@
 
 use std::path::PathBuf;
 
+use cliffmap::demo_scene::{DemoScene, TextureChoice, texel_truth, texel_truth_covered};
 use cliffmap::fsutil::write_png_atomic;
 use cliffmap::pipeline::{
     BuildInputs, BuildOptions, ProjectOptions, ReparamOptions, build_store, project_store,
     reparam_store,
 };
-use cliffmap::scene::{DemoScene, TextureChoice, texel_truth, texel_truth_covered};
 
 use super::stats::print_summary;
 
@@ -20,13 +20,13 @@ fn render_view(
     out: &std::path::Path,
     share_out: &std::path::Path,
 ) -> anyhow::Result<String> {
-    use cliffmap::render::{FlightPath, FrameOptions, Overlay, SceneOptions, TerrainScene};
+    use cliffmap::render::{FlightPath, FrameOptions, Overlay, SceneOptions, StoreRenderer};
     let (w, h) = (960, 540);
     let cams = FlightPath::default_for(m)?.cameras(9, w, h);
     let cam = cams
         .get(4)
         .ok_or_else(|| anyhow::anyhow!("empty default flight"))?;
-    let mut scene = TerrainScene::open(store, w, h, SceneOptions::default())?;
+    let mut scene = StoreRenderer::open(store, w, h, SceneOptions::default())?;
     let r = scene.frame(cam, true)?;
     write_png_atomic(out, &scene.read_rgba()?)?;
     let mut msg = format!(
@@ -45,7 +45,7 @@ fn render_view(
             },
             ..SceneOptions::default()
         };
-        let mut scene = TerrainScene::open(store, w, h, opts)?;
+        let mut scene = StoreRenderer::open(store, w, h, opts)?;
         scene.frame(cam, true)?;
         write_png_atomic(share_out, &scene.read_rgba()?)?;
         msg += &format!(
@@ -76,8 +76,10 @@ fn view_stage(
             .world(dem.height as f64 / 2.0, dem.width as f64 / 2.0),
         dem.height_range(),
     );
-    let tracer =
-        cliffmap::scene::DemTracer::new(dem, glam::DVec3::new(c.0, c.1, 0.5 * (lo + hi) as f64))?;
+    let tracer = cliffmap::demo_scene::DemTracer::new(
+        dem,
+        glam::DVec3::new(c.0, c.1, 0.5 * (lo + hi) as f64),
+    )?;
     let src = ReferenceSources {
         scene,
         tracer: &tracer,
@@ -115,7 +117,7 @@ fn photo_stage(
             a.photo_supersample
         );
     }
-    let opts = cliffmap::scene::DemoPhotoOptions {
+    let opts = cliffmap::demo_scene::DemoPhotoOptions {
         width: a.photo_width,
         height: a.photo_width / 4 * 3,
         supersample: a.photo_supersample,

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use cliffmap::fsutil::write_atomic;
 use cliffmap::render::{
-    FlightPath, FrameOptions, GeomorphOptions, SceneOptions, TerrainScene, UvMode, fly,
+    FlightPath, FrameOptions, GeomorphOptions, SceneOptions, StoreRenderer, UvMode, fly,
 };
 
 use super::render::parse_size;
@@ -75,7 +75,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
+    let mut scene = StoreRenderer::open(&a.store, w, h, opts)?;
     let path = match &a.path {
         Some(p) => FlightPath::from_json_file(p)?,
         None => FlightPath::default_for(&scene.store().manifest)?,

@@ -6,7 +6,7 @@ use anyhow::Context;
 use cliffmap::camera::camera_from_json_file;
 use cliffmap::fsutil::write_png_atomic;
 use cliffmap::render::{
-    DistortionMode, FrameOptions, GeomorphOptions, Overlay, SceneOptions, TerrainScene, UvMode,
+    DistortionMode, FrameOptions, GeomorphOptions, Overlay, SceneOptions, StoreRenderer, UvMode,
 };
 
 /// Flags of `cliffmap render`.
@@ -162,7 +162,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         relief: !a.no_relief,
         ..Default::default()
     };
-    let mut scene = TerrainScene::open(&a.store, w, h, opts)?;
+    let mut scene = StoreRenderer::open(&a.store, w, h, opts)?;
     eprintln!("adapter: {}", scene.gpu().describe());
     if matches!(a.mode, TextureMode::Photo) && !scene.has_photo() {
         eprintln!(

@@ -1,6 +1,6 @@
 //! `cliffmap view`: an interactive window (winit) over a store with a fly camera.
 //!
-//! Each frame is rendered offscreen by [`TerrainScene`] on a device opened for the window's
+//! Each frame is rendered offscreen by [`StoreRenderer`] on a device opened for the window's
 //! surface, read back and written into the surface texture (a copy, so the renderer stays
 //! headless); the surface and the render target follow window resizes. Keys: WASD move, Q/E
 //! down/up, Shift faster, mouse drag look, Tab or right button capture the mouse for mouse
@@ -15,7 +15,7 @@ use std::time::Instant;
 use anyhow::{Context, anyhow, bail};
 use cliffmap::render::{
     FlightPath, FlyCamera, FlyInput, FrameReport, GeomorphOptions, GpuContext, Overlay,
-    SceneOptions, TerrainScene, UvMode, adjust_sse,
+    SceneOptions, StoreRenderer, UvMode, adjust_sse,
 };
 use cliffmap::store::Store;
 use glam::DVec3;
@@ -144,7 +144,7 @@ struct App {
 struct ViewState {
     window: Arc<Window>,
     presenter: Presenter,
-    scene: TerrainScene,
+    scene: StoreRenderer,
     cam: FlyCamera,
     fov_y: f64,
     keys: HashSet<KeyCode>,
@@ -206,7 +206,7 @@ impl App {
             },
             ..Default::default()
         };
-        let scene = TerrainScene::open_with_context(&self.args.store, ctx, w, h, opts)?;
+        let scene = StoreRenderer::open_with_context(&self.args.store, ctx, w, h, opts)?;
         let k = &self.path.keys[0];
         let (p, t) = (DVec3::from(k.position), DVec3::from(k.look_at));
         let r = &scene.store().manifest.cells;

@@ -23,7 +23,7 @@ mod reference;
 mod render;
 mod run;
 mod score;
-mod tiles;
+mod side_by_side;
 mod tin;
 
 pub use metrics::{ClassScore, Plane, low_pass, plane, psnr_masked};
@@ -37,5 +37,5 @@ pub use run::{
     EvalOptions, MODES, TIN_BASELINE, TIN_ORACLE, ViewImages, evaluate_views, write_view_images,
 };
 pub use score::{BASELINE, Class, MethodScore, ORACLE, ViewReport, gains_table, score_view};
-pub use tiles::side_by_side;
+pub use side_by_side::side_by_side;
 pub use tin::{TinTracer, tin_references};

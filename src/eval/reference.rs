@@ -7,10 +7,10 @@ use rayon::prelude::*;
 
 use crate::camera::CameraModel;
 use crate::colour::{linear_to_srgb, srgb_to_linear};
+use crate::demo_scene::{DemHit, DemTracer, DemoScene, FLAT_DEG, SKY_COLOUR, STEEP_DEG};
 use crate::error::{Error, Result};
 use crate::ortho::Ortho;
 use crate::photo::PhotoInput;
-use crate::scene::{DemHit, DemTracer, DemoScene, FLAT_DEG, SKY_COLOUR, STEEP_DEG};
 
 /// Pixel class bit: the centre ray hits the terrain.
 pub const TERRAIN: u8 = 1;

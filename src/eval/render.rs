@@ -6,7 +6,7 @@ use image::RgbImage;
 
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
-use crate::render::{FrameOptions, SceneOptions, TerrainScene, UvMode};
+use crate::render::{FrameOptions, SceneOptions, StoreRenderer, UvMode};
 
 /// Renders `cameras` (all of one size) of the store in `dir` in each of `modes`, unlit (the
 /// texture colour alone, as `cliffmap render --unlit`), with screen-space error `sse_px`,
@@ -55,7 +55,7 @@ pub fn render_views_relief(
             relief,
             ..SceneOptions::default()
         };
-        let mut scene = TerrainScene::open(dir, w * s, h * s, opts)?;
+        let mut scene = StoreRenderer::open(dir, w * s, h * s, opts)?;
         let mut imgs = Vec::with_capacity(cameras.len());
         for cam in cameras {
             scene.frame(&cam.resized(w * s, h * s), true)?;

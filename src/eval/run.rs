@@ -9,9 +9,9 @@ use super::reference::{Reference, ReferenceSources, reference_images};
 use super::render::render_views_relief;
 use super::score::{ViewReport, score_view};
 use super::tin::{TinTracer, tin_references};
+use crate::demo_scene::PhotoShot;
 use crate::error::Result;
 use crate::render::UvMode;
-use crate::scene::PhotoShot;
 use crate::store::Store;
 
 /// The texture modes rendered, with their method names: the ortho alone, the reparameterized

@@ -9,11 +9,11 @@ use rayon::prelude::*;
 
 use super::reference::{PhotoMips, oracle_colour, ortho_colour};
 use crate::camera::CameraModel;
+use crate::demo_scene::{DemHit, SKY_COLOUR};
 use crate::error::{Error, Result};
 use crate::ortho::Ortho;
 use crate::photo::PhotoInput;
 use crate::raycast::{BvhQuality, TriangleBvh};
-use crate::scene::{DemHit, SKY_COLOUR};
 use crate::store::Store;
 
 /// The surface triangles of every cell of one level of a store, in a BVH (f32 frame centred
@@ -73,9 +73,9 @@ impl TinTracer {
         Some(DemHit::on_triangle(hit.t as f64, *t, hit.bary))
     }
 
-    /// Whether `point` is seen from `eye` (as [`crate::scene::DemTracer::sees`]).
+    /// Whether `point` is seen from `eye` (as [`crate::demo_scene::DemTracer::sees`]).
     pub fn sees(&self, eye: DVec3, point: DVec3, tolerance: f64) -> bool {
-        crate::scene::sees_with(eye, point, tolerance, |o, d, t| self.nearest(o, d, t))
+        crate::demo_scene::sees_with(eye, point, tolerance, |o, d, t| self.nearest(o, d, t))
     }
 }
 

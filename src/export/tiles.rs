@@ -43,9 +43,9 @@ pub struct TilesOptions {
     pub metadata: bool,
     /// External child tilesets: the subtree under every cell whose level is a positive
     /// multiple of `n` is written as its own tileset (`subtrees/LEVEL/X-Y.json`,
-    /// [`subtree_path_for`]) and referenced from its parent, so no tileset file lists more
+    /// `subtree_path_for`) and referenced from its parent, so no tileset file lists more
     /// than `n` levels. `None`: every 4 levels when the store has more than
-    /// [`SUBTREE_AUTO_CELLS`] cells, else one file; `Some(0)`: one file.
+    /// `SUBTREE_AUTO_CELLS` cells, else one file; `Some(0)`: one file.
     pub subtree_levels: Option<u8>,
     /// Where progress is reported (default: nowhere).
     pub progress: crate::progress::ProgressSink,

@@ -30,7 +30,7 @@ pub struct ChartMetrics {
     pub stretch_l2: f64,
     /// Sander et al. (2001) L∞ stretch: the largest 1/s2 (texels stretched most on the surface).
     pub stretch_linf: f64,
-    /// Total UV area of the chart as given (for a chart packed into [0,1]²: the fraction
+    /// Total UV area of the chart as given (for a chart packed into \[0,1\]²: the fraction
     /// of the texture covered).
     pub used_fraction: f64,
     /// Total 3D surface area, in the units of the positions squared.

@@ -5,7 +5,7 @@
 //!   a consistently oriented manifold disc, triangles counter-clockwise seen from +z.
 //! - [`ParamOptions`]: the energy's area/angle balance θ, the relaxation budget, the
 //!   global finish's budget and the texture size/gutter used for packing.
-//! - [`Chart`]: one UV per input vertex, inside [0,1]², plus the similarity that placed
+//! - [`Chart`]: one UV per input vertex, inside \[0,1\]², plus the similarity that placed
 //!   the chart in the square and its [`ChartMetrics`].
 //!
 //! Method: the mesh is simplified by rounds of independent half-edge collapses down to one
@@ -165,7 +165,7 @@ impl ParamOptions {
 /// A parameterized cell.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chart {
-    /// One texture coordinate per input vertex, inside [0,1]² (u right, v up), with no
+    /// One texture coordinate per input vertex, inside \[0,1\]² (u right, v up), with no
     /// flipped triangle unless `metrics.flipped` says otherwise.
     pub uvs: Vec<[f64; 2]>,
     /// Distortion of the final chart (see [`ChartMetrics`]; base area = xy bounding

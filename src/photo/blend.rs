@@ -82,7 +82,7 @@ impl Blended {
 }
 
 /// Blends `acc` into `existing` (the cell's existing texture, `acc.scale` times smaller than
-/// `acc`) as described in the [module docs](self), mixing in `space` (the space `acc`'s
+/// `acc`) as described in the module docs (`src/photo/blend.rs`), mixing in `space` (the space `acc`'s
 /// colours are in), in the blocks of [`PHOTO_BLOCK`] texels (at most the texture's side)
 /// that footprints reached. `covered[b]` marks existing texels on the cell's surface and
 /// `steep[b]` those steeper than the steep threshold (both row-major, of the existing

@@ -46,7 +46,7 @@ pub struct ConfidenceParams {
     /// [0, 16]. Default 4 (a photo 2× sharper weighs 16×).
     pub sharpness_power: f64,
     /// Pose uncertainty (full-resolution photo pixels, in [0, 1000]) of the occlusion
-    /// margin ([`super::occlusion`]): photo pixels closer than this plus the TIN error's
+    /// margin (`super::occlusion`): photo pixels closer than this plus the TIN error's
     /// displacement (pixels) to an occlusion edge of the photo count less. 0 = no margin.
     /// Default 2.
     pub occlusion_margin_px: f64,

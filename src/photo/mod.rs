@@ -2,14 +2,12 @@
 //! textures, so that walls get real detail instead of a smeared ortho image.
 //!
 //! Data types (the stage's plain data, shared by its files):
-//! - [`TriangleBvh`] / [`TriHit`]: nearest-hit ray casting (`obvhs` CWBVH) over f32
-//!   triangles in a local frame; [`BvhQuality`] is the build preset.
 //! - [`PhotoInput`]: a decoded photo and its [`crate::camera::CameraModel`] (world frame),
 //!   read from `photos.json` ([`read_photo_list`]) or a COLMAP text model ([`read_colmap`]);
 //!   [`PhotoSpec`] is the same without decoded pixels (load one photo at a time).
-//! - [`LevelScene`]: all cells of one quadtree level ([`SceneCell`]: surface triangles,
-//!   texture positions) in one f32 frame near the camera, with a BVH;
-//!   [`photo_footprints`] casts a photo's pixel-corner rays against it.
+//! - Ray casting is the stage below ([`crate::raycast`]): [`photo_footprints`] casts a
+//!   photo's pixel-corner rays against a [`crate::raycast::LevelScene`] (all cells of one
+//!   quadtree level in one f32 frame near the camera).
 //! - [`PixelFootprint`]: one photo pixel's footprint in one cell's texture: the four pixel
 //!   corners' texture positions (texel units of the cell's active texture), with the view
 //!   cosine and distance at the pixel centre. [`FootprintSet`] holds every footprint of one
@@ -31,13 +29,13 @@ mod accumulate;
 mod blend;
 mod cell_accum;
 mod colmap;
+mod colour_leveling;
 mod colour_transform;
 mod confidence;
 mod corners;
 mod footprint;
 mod gutter;
 mod input;
-mod level;
 mod occlusion;
 mod pyramid;
 mod reconstruct;
@@ -51,6 +49,10 @@ pub use accumulate::{PhotoAccum, TexelSums};
 pub use blend::{Blended, blend_cell, magnify};
 pub use cell_accum::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE};
 pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
+pub use colour_leveling::{
+    ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
+    normal_cos_slope,
+};
 pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
 pub use footprint::{
     FootprintBuffers, FootprintOptions, for_each_footprint_batch, for_each_footprint_batch_in,
@@ -59,10 +61,6 @@ pub use footprint::{
 pub use input::{
     PhotoEntry, PhotoSpec, image_size, photo_spec, read_photo_entries, read_photo_list,
     read_photo_specs,
-};
-pub use level::{
-    ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
-    normal_cos_slope,
 };
 pub use occlusion::{OcclusionMap, occlusion_weight};
 pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};

@@ -75,7 +75,7 @@ impl<'a> PhotoSamples<'a> {
 }
 
 impl<'a> PhotoSamples<'a> {
-    /// Adds the occlusion margin of `params` ([`super::occlusion`]): `map` of this photo,
+    /// Adds the occlusion margin of `params` (`super::occlusion`): `map` of this photo,
     /// the image these samples are of being `step_scale` times smaller per side than the
     /// full-resolution photo of focal length `focal_full` pixels; `cell_error[c]` the TIN
     /// error (metres) of manifest cell `c`. No change when the margin is 0.

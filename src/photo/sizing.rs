@@ -89,7 +89,7 @@ impl SizingBins {
     }
 
     /// The scale (a power of two, at least 1, at most `max_scale`) the bins want for
-    /// `texels_per_pixel` texels per photo pixel side (1 in the [module docs](self)), and no
+    /// `texels_per_pixel` texels per photo pixel side (1 in the module docs (`src/photo/sizing.rs`)), and no
     /// more than `texels_per_delivered` texels (at the existing texture's side `base_texels`
     /// times the scale) per photo pixel the cell receives; 1 without covered bins.
     pub fn wanted_scale(
@@ -137,7 +137,7 @@ pub struct SizeRequest {
 /// The scales granted to `requests` (same order) so that the photo textures of the cells
 /// that want more than scale 1 fit into `budget_bytes` ([`texture_bytes`]; the cells at
 /// scale 1 are not counted: their photo texture replaces one of the existing size), as in
-/// the [module docs](self).
+/// the module docs (`src/photo/sizing.rs`).
 pub fn choose_scales(requests: &[SizeRequest], budget_bytes: u64) -> Vec<u32> {
     let mut scales: Vec<u32> = requests.iter().map(|r| r.scale.max(1)).collect();
     let bytes = |i: usize, s: u32| {

@@ -127,7 +127,7 @@ pub fn footprint_area(corners: &[[f32; 2]; 4]) -> f64 {
 /// Deposits the footprint with corners `corners` (texel units, in order around the pixel)
 /// into a `texels × texels` texture: calls `deposit(texel_index, weight)` (row-major index
 /// `j * texels + i`, weight in texels², > 0) for every texel it covers, as described in the
-/// [module docs](self). The weights sum to the footprint's area minus what falls outside
+/// module docs (`src/photo/splat.rs`). The weights sum to the footprint's area minus what falls outside
 /// the texture.
 pub fn splat_footprint(
     corners: &[[f32; 2]; 4],

@@ -27,8 +27,8 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{PhotoEntry, PhotoSpec};
 use crate::register::{
-    CameraParams, LabelTexture, Param, ResectFit, ResectOptions, TerrainFit, TerrainOptions,
-    TerrainScene, TieFit, TieOptions, register_to_terrain, resect_photo, tie_photo,
+    CameraParams, LabelTexture, LabelledTerrain, Param, ResectFit, ResectOptions, TerrainFit,
+    TerrainOptions, TieFit, TieOptions, register_to_terrain, resect_photo, tie_photo,
 };
 use crate::store::Store;
 
@@ -109,7 +109,7 @@ pub fn resolve_photo_entries(
         (m.dem.width as f64 - 1.0) / 2.0,
     );
     let near = glam::DVec3::new(cx, cy, (m.dem.height_min + m.dem.height_max) / 2.0);
-    let terrain = TerrainScene::new(&store, near)?;
+    let terrain = LabelledTerrain::new(&store, near)?;
     let top = terrain.top_z().max(m.dem.height_max) + 100.0;
     let ground = |x: f64, y: f64| {
         terrain
@@ -241,7 +241,7 @@ pub fn register_photos_with(
             return Ok(None);
         };
         let (a_img, p_img) = (images.get(j)?, images.get(i)?);
-        let terrain = TerrainScene::new(&store, anchor.position)?;
+        let terrain = LabelledTerrain::new(&store, anchor.position)?;
         let tie = tie_photo(
             &anchor,
             &a_img,
@@ -277,7 +277,7 @@ pub fn register_photos_with(
             return Ok(None);
         };
         let (a_img, p_img) = (images.get(j)?, images.get(i)?);
-        let terrain = TerrainScene::new(&store, anchor.position)?;
+        let terrain = LabelledTerrain::new(&store, anchor.position)?;
         // the same camera body (EXIF make, model, serial, lens, focal length) and image
         // size: the anchor's intrinsics, the focal length not fitted (it would trade
         // against the distance along the view)
@@ -357,7 +357,7 @@ pub fn register_photos_with(
         }
         let spec = &specs[i];
         let photo = images.get(i)?;
-        let mut terrain = TerrainScene::for_options(&store, spec.camera.position, opts)?;
+        let mut terrain = LabelledTerrain::for_options(&store, spec.camera.position, opts)?;
         if opts.labels == LabelTexture::Best {
             // the photos placed so far with trusted cameras (known, or tied or resected to
             // such a photo) label the terrain they show
@@ -668,7 +668,7 @@ fn second_pass_against_photos(
             continue;
         }
         let spec = &specs[i];
-        let mut terrain = TerrainScene::for_options(store, spec.camera.position, opts)?;
+        let mut terrain = LabelledTerrain::for_options(store, spec.camera.position, opts)?;
         set_label_photos(&mut terrain, images, fits, source)?;
         let small = first.camera.resized(
             (first.camera.width / 8).max(16),
@@ -700,7 +700,7 @@ fn second_pass_against_photos(
 /// Gives `terrain` the photos `pick` chooses among those with a fit as label photos (their
 /// fitted cameras; images from `images`).
 fn set_label_photos(
-    terrain: &mut TerrainScene,
+    terrain: &mut LabelledTerrain,
     images: &DecodedPhotos,
     fits: &[Option<(TerrainFit, &'static str)>],
     pick: impl Fn(usize) -> bool,

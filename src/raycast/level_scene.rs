@@ -40,7 +40,7 @@ pub struct SceneCell {
 
 /// All cells of one level, as triangles in an f32 frame centred on `frame_origin`, with the
 /// ray-casting acceleration chosen at construction (a BVH, or nothing until a photo's
-/// camera-space grid is built by [`super::photo_footprints`]).
+/// camera-space grid is built by `crate::photo::photo_footprints`).
 ///
 /// Triangles are one-sided for the photo stage: the front face is the one the vertices
 /// run counter-clockwise around (seen from above for terrain). Triangles with an index
@@ -119,7 +119,7 @@ impl LevelScene {
     }
 
     /// Loads the relief maps of the cells whose active texture is orthographic from `store`,
-    /// so that hits are moved onto the relief surface ([`super::relief::CellRelief::shift`],
+    /// so that hits are moved onto the relief surface (`super::relief::CellRelief::shift`,
     /// slopes up to 75.5°, as the renderer). Reparameterized cells keep their TIN hits: the
     /// renderer leaves the photo's colour of their photo textures where it was projected and
     /// relief-maps only the chart texture's share (docs/rendering.md, "Photo charts by

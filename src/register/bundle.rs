@@ -297,7 +297,7 @@ fn ray_scale(
 
 /// Adjusts the cameras `start` (not those marked in `fixed`) to the ties `pairs` through
 /// the terrain `surface(origin, unit dir) -> hit`, with priors centred on `prior` (see the
-/// [module docs](self)). `start`, `prior` and `fixed` have one entry per camera.
+/// module docs (`src/register/bundle.rs`)). `start`, `prior` and `fixed` have one entry per camera.
 ///
 /// Errors (never panics): lengths that differ, a pair naming a camera out of range or the
 /// same camera twice, no free camera, no tie that meets the terrain, or a solver failure.

@@ -36,7 +36,7 @@ pub struct RotationConsensus {
 }
 
 /// The matches one rotation of camera `a` explains within `tol_px` pixels, and the support
-/// of the best second rotation among the others (see the [module docs](self)). Matches
+/// of the best second rotation among the others (see the module docs (`src/register/consensus.rs`)). Matches
 /// whose pixels give no ray (outside the model's domain) are never inliers.
 pub fn rotation_consensus(
     a: &CameraModel,

@@ -170,7 +170,7 @@ impl Residuals for Problem<'_> {
     }
 }
 
-/// Fits the free parameters of `start` to `gcps` (see the [module docs](self)).
+/// Fits the free parameters of `start` to `gcps` (see the module docs (`src/register/fit.rs`)).
 ///
 /// Errors (never panics): no free parameters, fewer usable GCP coordinates than free
 /// parameters, GCPs that do not determine the free parameters (the Jacobian with unit

@@ -60,7 +60,7 @@ pub fn gcp_rmse_px(cam: &crate::camera::CameraModel, gcps: &[Gcp]) -> (f64, usiz
     }
 }
 
-/// Reads a GCP file (either format, see the [module docs](self)).
+/// Reads a GCP file (either format, see the module docs (`src/register/gcp.rs`)).
 pub fn read_gcps(path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     parse_gcps(&text, path, origin)

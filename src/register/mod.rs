@@ -59,7 +59,7 @@ pub use params::{CameraParams, Param, parse_free};
 pub use resection::{ResectFit, ResectOptions, resect_photo};
 pub use start::{start_from_gcps, start_from_position, start_without_position};
 pub use terrain::{
-    EdgeFit, EdgeOptions, LabelTexture, TerrainFit, TerrainOptions, TerrainScene,
+    EdgeFit, EdgeOptions, LabelTexture, LabelledTerrain, TerrainFit, TerrainOptions,
     parallax_px_per_m, refine_edges, register_to_terrain,
 };
 pub use ties::{TieFit, TieOptions, tie_photo};

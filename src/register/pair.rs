@@ -65,7 +65,7 @@ pub struct PatchMatch {
     pub ncc: f64,
 }
 
-/// Matches patches of photo `a` in photo `b` (same size; see the [module docs](self)), in
+/// Matches patches of photo `a` in photo `b` (same size; see the module docs (`src/register/pair.rs`)), in
 /// grid order.
 pub fn match_photos(a: &RgbImage, b: &RgbImage, opts: &MatchOptions) -> Result<Vec<PatchMatch>> {
     if a.dimensions() != b.dimensions() {
@@ -141,7 +141,7 @@ pub fn stable_matches(
 }
 
 /// Fits photo B's rotation from `matches` with A's camera `a` (B at A's position, A's
-/// intrinsics; see the [module docs](self)). The result's RMSE is the match residual.
+/// intrinsics; see the module docs (`src/register/pair.rs`)). The result's RMSE is the match residual.
 pub fn fit_rotation(a: &CameraModel, matches: &[PatchMatch]) -> Result<CameraFit> {
     let gcps: Vec<Gcp> = matches
         .iter()

@@ -20,7 +20,7 @@ use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 
 /// A start camera at `position` for a `width × height` photo from `gcps` (see the
-/// [module docs](self)); `focal_px` fixes the focal length. Errors with fewer than 2 GCPs
+/// module docs (`src/register/start.rs`)); `focal_px` fixes the focal length. Errors with fewer than 2 GCPs
 /// inside the image (3 without a focal length) or when no rotation fits.
 pub fn start_from_position(
     position: DVec3,

@@ -26,7 +26,7 @@ pub struct CellData {
     /// ([`crate::cells::relief::ORTHO_MIN_NORMAL_Z`] or `CHART_MIN_NORMAL_Z`).
     pub relief_min_normal_z: f32,
     /// Per vertex, how far relief mapping may move a lookup, metres
-    /// ([`crate::cells::relief_reach`]); `None`: unbounded (orthographic layouts).
+    /// ([`crate::cells::relief_reach()`]); `None`: unbounded (orthographic layouts).
     pub relief_reach: Option<Vec<f32>>,
     /// For a chart drawn with its photo texture: the chart's own (reparameterized) texture's
     /// mip chain, whose share of each photo texel (the photo texture's alpha, `1 − s`) is
@@ -107,7 +107,7 @@ impl CellData {
     /// Sets the cell's relief map for relief mapping of triangles whose unit normal's up
     /// component is at least `min_normal_z` (the limit of the drawn texture's layout). On a
     /// chart (`chart`: the texture coordinates are a reparameterization) lookups move at most
-    /// each vertex's reach ([`crate::cells::relief_reach`]) over the nominal square `width`
+    /// each vertex's reach ([`crate::cells::relief_reach()`]) over the nominal square `width`
     /// metres wide. A map of range 0 or without texels is ignored.
     pub fn set_relief(
         &mut self,

@@ -6,7 +6,7 @@ use std::path::Path;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::scene::TerrainScene;
+use super::store_renderer::StoreRenderer;
 use crate::camera::{CameraModel, rotation_look_at};
 use crate::error::{Error, Result};
 use crate::store::Manifest;
@@ -252,7 +252,7 @@ pub fn percentile(v: &[f64], q: f64) -> f64 {
 /// Flies `cams`: the first camera is a warm-up frame that waits for its cells; the others
 /// never wait for loads. `mode` and `budget` are copied into the report.
 pub fn fly(
-    scene: &mut TerrainScene,
+    scene: &mut StoreRenderer,
     cams: &[CameraModel],
     mode: &str,
     sse_px: f64,

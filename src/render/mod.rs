@@ -5,7 +5,7 @@
 //! byte budget ([`LruCache`]) and background loading with ancestor fallback ([`Streamer`],
 //! [`resolve_draw_list`]), geomorphing towards parent cells ([`geomorph`]) and the pinhole view
 //! of distorted cameras ([`distortion`]). GPU side: [`gpu`] (headless wgpu: cell uploads,
-//! pipelines, offscreen frames, the distortion pass, PNG readback) and [`TerrainScene`] (a store
+//! pipelines, offscreen frames, the distortion pass, PNG readback) and [`StoreRenderer`] (a store
 //! with cache, loaders and frames); [`downsample_rgba`] reduces supersampled frames.
 
 mod cache;
@@ -39,12 +39,12 @@ pub mod accuracy;
 mod cell_data;
 mod context;
 pub mod gpu;
-mod scene;
+mod store_renderer;
 
 pub use gpu::{
     CellData, CellDraw, FrameOptions, GpuCell, GpuContext, MorphData, TerrainRenderer, UvMode,
 };
-pub use scene::{FrameReport, SceneOptions, TerrainScene};
+pub use store_renderer::{FrameReport, SceneOptions, StoreRenderer};
 mod flight;
 mod fly_camera;
 

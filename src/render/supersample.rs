@@ -7,7 +7,7 @@ use image::RgbaImage;
 
 use crate::colour::{decode_u8, encode_u8};
 
-/// `img` reduced by `factor` (≥ 1) per axis as described in the [module docs](self); sides
+/// `img` reduced by `factor` (≥ 1) per axis as described in the module docs (`src/render/supersample.rs`); sides
 /// not divisible by `factor` lose their last partial block. `factor` 1 returns a copy.
 pub fn downsample_rgba(img: &RgbaImage, factor: u32) -> RgbaImage {
     let f = factor.max(1);

@@ -63,13 +63,13 @@ pub fn engabreen_ortho(dem: &Dem) -> Ortho {
 /// options.
 pub fn project_demo_photos(
     store: &std::path::Path,
-    scene: &cliffmap::scene::DemoScene,
+    scene: &cliffmap::demo_scene::DemoScene,
     dem: &Dem,
     dir: &std::path::Path,
     (w, h): (u32, u32),
 ) {
     use cliffmap::pipeline::{ProjectOptions, project_store};
-    let opts = cliffmap::scene::DemoPhotoOptions {
+    let opts = cliffmap::demo_scene::DemoPhotoOptions {
         width: w,
         height: h,
         supersample: 1,
@@ -92,10 +92,10 @@ pub fn small_demo_store(dir: &std::path::Path, reparam: bool) {
     use cliffmap::pipeline::{
         BuildInputs, BuildOptions, ReparamOptions, build_store, reparam_store,
     };
-    let scene = cliffmap::scene::DemoScene {
+    let scene = cliffmap::demo_scene::DemoScene {
         samples: 129,
         spacing: 4.0,
-        ..cliffmap::scene::DemoScene::default()
+        ..cliffmap::demo_scene::DemoScene::default()
     };
     let (dem, ortho) = scene.generate().unwrap();
     let inputs = BuildInputs {

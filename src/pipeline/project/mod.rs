@@ -240,7 +240,7 @@ impl StageTimer {
     }
 }
 
-/// Runs `project` on the store in `dir` with `photos` (see the [module docs](self)).
+/// Runs `project` on the store in `dir` with `photos` (see the module docs (`src/pipeline/project/mod.rs`)).
 /// Errors on an unreadable store, a photo whose image size differs from its camera's, or a
 /// failed write; a photo that sees no terrain only logs a warning.
 pub fn project_store(

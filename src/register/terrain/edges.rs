@@ -21,7 +21,7 @@ use levenberg_marquardt::LevenbergMarquardt;
 use nalgebra::DVector;
 use rayon::prelude::*;
 
-use super::view::{RayEnd, TerrainScene};
+use super::view::{LabelledTerrain, RayEnd};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
 use crate::register::grey::Grey;
@@ -54,7 +54,7 @@ type Crossing = (DVec3, [f64; 2], [f64; 2]);
 /// the near side gives the point). Normals from the crossings within 2.5 steps (principal
 /// direction of their positions), else the grid direction. Deterministic.
 pub fn contour(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     cam: &CameraModel,
     step: f64,
     margin: f64,
@@ -372,10 +372,10 @@ pub struct EdgeFit {
 /// working camera), unit normal, weight.
 type Match = (DVec3, [f64; 2], [f64; 2], f64);
 
-/// Refines `start` (sized like `photo`) by silhouette edges (see the [module docs](self)),
+/// Refines `start` (sized like `photo`) by silhouette edges (see the module docs (`src/register/terrain/edges.rs`)),
 /// with `prior` the camera whose position and focal length the priors hold to.
 pub fn refine_edges(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     photo: &RgbImage,
     start: &CameraModel,
     prior: &CameraModel,

@@ -1,7 +1,7 @@
 //! Registration of a photo against the terrain, without GCPs (docs/registration.md,
 //! "`cliffmap register`").
 //!
-//! Input: a [`TerrainScene`] (the store's finest level, ray-cast on the CPU with the cells'
+//! Input: a [`LabelledTerrain`] (the store's finest level, ray-cast on the CPU with the cells'
 //! active textures), a decoded photo and its rough camera (world frame), and
 //! [`TerrainOptions`] (free parameters, search ranges). Output: a [`TerrainFit`] — the
 //! refined camera, the score before and after, a repeatability figure and a verdict.
@@ -39,7 +39,9 @@ use image::RgbImage;
 
 pub use edges::{ContourPoint, EdgeFit, EdgeImage, EdgeOptions, contour, refine_edges};
 pub use mi::{GreyImage, nmi, nmi_by, sample_pixel};
-pub use view::{GREY_CLASSES, LABELS, LabelTexture, RayEnd, SKY, Sample, SampleAt, TerrainScene};
+pub use view::{
+    GREY_CLASSES, LABELS, LabelTexture, LabelledTerrain, RayEnd, SKY, Sample, SampleAt,
+};
 
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
@@ -74,7 +76,7 @@ pub struct TerrainOptions {
     /// experiment, off by default (`cliffmap register --position-search-m`).
     pub position_search_m: Option<f64>,
     /// Which textures give the terrain samples their grey when a caller builds the scene
-    /// from these options ([`TerrainScene::for_options`]; `pipeline::register_photos_with`
+    /// from these options ([`LabelledTerrain::for_options`]; `pipeline::register_photos_with`
     /// does). [`register_to_terrain`] itself uses the scene it is given.
     pub labels: LabelTexture,
 }
@@ -192,7 +194,7 @@ pub struct TerrainFit {
     /// With the position kept (not free, not searched): [`parallax_px_per_m`] of the camera
     /// found, what each metre of error in the given position costs (else `None`).
     pub position_kept_parallax_px_per_m: Option<f64>,
-    /// With label photos ([`TerrainScene::set_label_photos`]): the share (0..1) of the
+    /// With label photos ([`LabelledTerrain::set_label_photos`]): the share (0..1) of the
     /// terrain samples of the final view whose labels came from their pixels (0: none of
     /// them shows what this photo sees); else `None`.
     pub photo_label_share: Option<f64>,
@@ -260,7 +262,7 @@ const POSITION_REPEAT_M: f64 = 0.5;
 // indexed loops: each index serves more than one array or lookup
 #[allow(clippy::needless_range_loop)]
 pub fn register_to_terrain(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     photo: &RgbImage,
     rough: &CameraModel,
     opts: &TerrainOptions,
@@ -496,7 +498,7 @@ pub fn register_to_terrain(
 /// percentiles of the distances on a 15 × 15 grid of its rays): what each metre of error
 /// in a position the search keeps costs between them. `None` when fewer than 10 rays meet
 /// the terrain.
-pub fn parallax_px_per_m(terrain: &TerrainScene, cam: &CameraModel) -> Option<f64> {
+pub fn parallax_px_per_m(terrain: &LabelledTerrain, cam: &CameraModel) -> Option<f64> {
     let d = view_depths(terrain, cam);
     if d.len() < 10 {
         return None;
@@ -512,7 +514,7 @@ pub fn parallax_px_per_m(terrain: &TerrainScene, cam: &CameraModel) -> Option<f6
 /// the matches fit within [`EDGE_MEDIAN_PX`] and no parameter reached its bound.
 #[allow(clippy::too_many_arguments)]
 fn finish_with_edges(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     photo: &RgbImage,
     rough: &CameraModel,
     mi: &CameraModel,
@@ -656,7 +658,7 @@ impl Space {
 /// Nelder-Mead at one scale from `from`, with samples cast from `from`: the best camera, its
 /// score and the evaluations spent.
 fn refine(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     space: &Space,
     from: &CameraParams,
     grey: &GreyImage,
@@ -669,7 +671,7 @@ fn refine(
 /// The samples [`refine`] scores `from` with: cast from it at `grey`'s scale, those in the
 /// band around silhouettes and one in [`INNER_STRIDE`]² of the others.
 fn cast_samples(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     from: &CameraParams,
     grey: &GreyImage,
 ) -> Result<Vec<Sample>> {
@@ -712,14 +714,14 @@ pub(super) fn scaled(cam: &CameraModel, grey: &GreyImage) -> CameraModel {
 }
 
 /// Median distance of the terrain seen by `cam` (a coarse grid of rays), 100 m if none.
-fn median_depth(terrain: &TerrainScene, cam: &CameraModel) -> f64 {
+fn median_depth(terrain: &LabelledTerrain, cam: &CameraModel) -> f64 {
     let d = view_depths(terrain, cam);
     d.get(d.len() / 2).copied().unwrap_or(100.0)
 }
 
 /// Sorted distances (metres) from `cam` to where its rays through a 15 × 15 grid inside
 /// the image meet the terrain.
-fn view_depths(terrain: &TerrainScene, cam: &CameraModel) -> Vec<f64> {
+fn view_depths(terrain: &LabelledTerrain, cam: &CameraModel) -> Vec<f64> {
     let mut d: Vec<f64> = Vec::new();
     for j in 1..16 {
         for i in 1..16 {

@@ -22,8 +22,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::mi::GreyImage;
+use super::view::LabelledTerrain;
 use super::view::Sample;
-use super::view::TerrainScene;
 use super::{Space, refine_on};
 use crate::camera::{rotation_look_at, yaw_pitch_roll_from_rotation};
 use crate::error::Result;
@@ -76,7 +76,7 @@ fn axes(forward: DVec3) -> [DVec3; 3] {
 /// settled on a peak along every axis; infinite when a trial of that round could not be
 /// scored; see [`SETTLED`]).
 pub(super) fn search_position(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     space: &Space,
     cam: CameraParams,
     photo: &image::RgbImage,
@@ -169,7 +169,7 @@ fn dense_factor(w: u32, h: u32) -> u32 {
 /// Every grid sample of the view of `c` at `grey`'s scale (no band: each trial's score is
 /// over the same photo pixels).
 fn dense_samples(
-    terrain: &TerrainScene,
+    terrain: &LabelledTerrain,
     c: &CameraParams,
     grey: &GreyImage,
 ) -> Result<Vec<Sample>> {

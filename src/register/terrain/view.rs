@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::raycast::LevelScene;
 use crate::store::Store;
 
-/// Grid stride of the samples [`TerrainScene::sample`] keeps away from the silhouettes when
+/// Grid stride of the samples [`LabelledTerrain::sample`] keeps away from the silhouettes when
 /// it keeps a band around them. The band gives the score its sharp peak; these sparse
 /// samples of the regions' insides tie the score to the view as a whole, so that a band
 /// made mostly of where the store ends (a photo that sees far beyond the store, as at
@@ -24,7 +24,7 @@ pub const GREY_CLASSES: u8 = 10;
 /// Label of a sky sample (terrain labels are `1..LABELS`).
 pub const SKY: u8 = 0;
 /// Number of labels: sky, then grey × steep (2) × distance (2) × source (2: the store's
-/// texture, or a label photo's pixels, [`TerrainScene::set_label_photos`]).
+/// texture, or a label photo's pixels, [`LabelledTerrain::set_label_photos`]).
 pub const LABELS: usize = 1 + GREY_CLASSES as usize * 8;
 
 /// What one sample is: a terrain point (world metres) or a sky direction (unit, world).
@@ -47,7 +47,7 @@ pub struct Sample {
 }
 
 impl Sample {
-    /// Whether the sample's grey came from a label photo ([`TerrainScene::set_label_photos`]).
+    /// Whether the sample's grey came from a label photo ([`LabelledTerrain::set_label_photos`]).
     pub fn photo_labelled(&self) -> bool {
         self.label != SKY && (self.label - 1) / GREY_CLASSES >= 4
     }
@@ -61,7 +61,7 @@ pub fn photo_label_share(samples: &[Sample]) -> f64 {
     photo as f64 / terrain.max(1) as f64
 }
 
-/// Where a ray ends ([`TerrainScene::classify`]).
+/// Where a ray ends ([`LabelledTerrain::classify`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RayEnd {
     /// On the terrain: the point (world metres) and its distance from the ray's origin.
@@ -70,7 +70,7 @@ pub enum RayEnd {
     Sky,
 }
 
-/// Which texture of a cell gives a terrain sample its grey ([`TerrainScene::with_labels`]).
+/// Which texture of a cell gives a terrain sample its grey ([`LabelledTerrain::with_labels`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LabelTexture {
     /// The active parameterization's texture (reparameterized, else ortho); photo textures
@@ -98,7 +98,7 @@ type LabelImage = std::sync::Arc<(RgbaImage, f32)>;
 
 /// The store's finest level as a ray-castable scene with the label textures the rays hit
 /// (loaded on demand) and the terrain's highest point.
-pub struct TerrainScene<'a> {
+pub struct LabelledTerrain<'a> {
     store: &'a Store,
     scene: LevelScene,
     labels: LabelTexture,
@@ -109,28 +109,28 @@ pub struct TerrainScene<'a> {
     hi: [f64; 2],
 }
 
-impl<'a> TerrainScene<'a> {
+impl<'a> LabelledTerrain<'a> {
     /// The finest level of `store`, in an f32 frame centred on `near` (a camera position),
     /// labelled by the active textures ([`LabelTexture::Active`]).
-    pub fn new(store: &'a Store, near: DVec3) -> Result<TerrainScene<'a>> {
+    pub fn new(store: &'a Store, near: DVec3) -> Result<LabelledTerrain<'a>> {
         Self::with_labels(store, near, LabelTexture::Active)
     }
 
-    /// [`TerrainScene::with_labels`] with the labels `opts` asks for.
+    /// [`LabelledTerrain::with_labels`] with the labels `opts` asks for.
     pub fn for_options(
         store: &'a Store,
         near: DVec3,
         opts: &super::TerrainOptions,
-    ) -> Result<TerrainScene<'a>> {
+    ) -> Result<LabelledTerrain<'a>> {
         Self::with_labels(store, near, opts.labels)
     }
 
-    /// [`TerrainScene::new`] with the samples' greys taken from `labels`.
+    /// [`LabelledTerrain::new`] with the samples' greys taken from `labels`.
     pub fn with_labels(
         store: &'a Store,
         near: DVec3,
         labels: LabelTexture,
-    ) -> Result<TerrainScene<'a>> {
+    ) -> Result<LabelledTerrain<'a>> {
         let level = store.manifest.quadtree.levels.saturating_sub(1);
         let scene = LevelScene::from_store(
             store,
@@ -152,7 +152,7 @@ impl<'a> TerrainScene<'a> {
             }
         }
         let n = scene.cells.len();
-        Ok(TerrainScene {
+        Ok(LabelledTerrain {
             store,
             scene,
             labels,
@@ -186,7 +186,7 @@ impl<'a> TerrainScene<'a> {
         Ok(photo_label_share(&self.sample(cam, 1.0, 0.0, None)?))
     }
 
-    /// Whether label photos are set ([`TerrainScene::set_label_photos`]).
+    /// Whether label photos are set ([`LabelledTerrain::set_label_photos`]).
     pub fn has_label_photos(&self) -> bool {
         !self.label_photos.is_empty()
     }
@@ -228,7 +228,7 @@ impl<'a> TerrainScene<'a> {
     /// (rays that leave the store's extent below its top, where the land goes on unseen)
     /// are dropped. With `band = Some(w)` the samples within `w` grid steps of a layer
     /// boundary (sky against terrain, dropped against kept, or a distance jump of more than
-    /// 25 %: the silhouettes) are kept, and of the others one in [`INNER_STRIDE`]² (every
+    /// 25 %: the silhouettes) are kept, and of the others one in `INNER_STRIDE`² (every
     /// `INNER_STRIDE`-th grid row and column). Deterministic.
     pub fn sample(
         &self,
@@ -484,7 +484,7 @@ impl<'a> TerrainScene<'a> {
     }
 
     /// What the ray from `from` along the unit `dir` (world) meets: the terrain (point and
-    /// distance), the sky ([`TerrainScene::rises_above`]), or nothing known (`None`: it
+    /// distance), the sky (`LabelledTerrain::rises_above`), or nothing known (`None`: it
     /// leaves the store's extent below its top).
     pub fn classify(&self, from: DVec3, dir: DVec3) -> Option<RayEnd> {
         match self.hit(from, dir) {

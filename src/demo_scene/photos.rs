@@ -171,7 +171,7 @@ impl DemoScene {
         aims
     }
 
-    /// The demo's ground photos: 3–4 cameras standing [`EYE_HEIGHT`] (1.7 m) above the
+    /// The demo's ground photos: 3–4 cameras standing `EYE_HEIGHT` (1.7 m) above the
     /// ground, a few hundred metres from the plateau's walls (south and east, the east one
     /// with radial distortion k1 = −0.06), the escarpment and inside the canyon, each at the
     /// first candidate distance with a clear line of sight to its target. 1600 x 1200
@@ -223,7 +223,7 @@ impl DemoScene {
     /// placed one (docs/registration.md, "Ties between different places"): per photo of
     /// [`DemoScene::photo_shots`], a camera turned `turn_deg` around its target (either
     /// side, the first with a clear line of sight) at `distance_ratio` × the photo's
-    /// horizontal distance, standing [`EYE_HEIGHT`] above the ground; inside the canyon
+    /// horizontal distance, standing `EYE_HEIGHT` above the ground; inside the canyon
     /// `distance_ratio` × the distance up-canyon on its floor instead (a move along the
     /// view). Aimed at a point 5 m off the target, the photo's size and field of view, no
     /// distortion; named `"<photo>_second"`. Deterministic.

@@ -23,7 +23,7 @@ pub struct DemHit {
     pub slope_deg: f64,
 }
 
-/// The DEM grid as triangles in a BVH (see the [module docs](self)).
+/// The DEM grid as triangles in a BVH (see the module docs (`src/scene/tracer.rs`)).
 pub struct DemTracer<'a> {
     dem: &'a Dem,
     origin: DVec3,

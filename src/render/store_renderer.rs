@@ -100,7 +100,7 @@ pub struct FrameReport {
 }
 
 /// A store with a GPU renderer, a cell cache and background loaders.
-pub struct TerrainScene {
+pub struct StoreRenderer {
     store: Arc<Store>,
     index: CellIndex,
     renderer: TerrainRenderer,
@@ -111,18 +111,18 @@ pub struct TerrainScene {
     morph_loaded: bool,
 }
 
-impl TerrainScene {
+impl StoreRenderer {
     /// Opens `store_dir` and a headless GPU target of `width × height`.
     pub fn open(
         store_dir: &Path,
         width: u32,
         height: u32,
         opts: SceneOptions,
-    ) -> Result<TerrainScene> {
+    ) -> Result<StoreRenderer> {
         Self::open_with_context(store_dir, GpuContext::new()?, width, height, opts)
     }
 
-    /// Like [`TerrainScene::open`] on an already opened GPU context (e.g. one whose adapter
+    /// Like [`StoreRenderer::open`] on an already opened GPU context (e.g. one whose adapter
     /// can present to a window surface).
     pub fn open_with_context(
         store_dir: &Path,
@@ -130,7 +130,7 @@ impl TerrainScene {
         width: u32,
         height: u32,
         opts: SceneOptions,
-    ) -> Result<TerrainScene> {
+    ) -> Result<StoreRenderer> {
         if !(opts.sse_px.is_finite() && opts.sse_px > 0.0) {
             return Err(Error::BadOption(format!(
                 "screen-space error threshold must be > 0 px, got {}",
@@ -158,7 +158,7 @@ impl TerrainScene {
             opts.frame.level_overlay = true;
             opts.frame.bounding_boxes = true;
         }
-        Ok(TerrainScene {
+        Ok(StoreRenderer {
             store,
             index,
             renderer,
