@@ -7,7 +7,14 @@ use std::path::{Path, PathBuf};
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// Everything that can go wrong in cliffmap. Input errors carry the offending path.
+///
+/// Callers tell apart the cases they must act on by variant: a bad input file
+/// ([`Error::BadInput`], [`Error::Io`], [`Error::TooLarge`]), a bad option
+/// ([`Error::BadOption`]), a store another process is writing ([`Error::StoreLocked`]), a
+/// store of another version ([`Error::StoreVersion`]), a damaged store ([`Error::Store`]) and
+/// the GPU ([`Error::Gpu`]). New variants may be added.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// An I/O error while reading or writing `path`.
     #[error("{path}: {error}")]
@@ -47,6 +54,30 @@ pub enum Error {
         path: PathBuf,
         /// What is wrong.
         msg: String,
+    },
+    /// Another process holds the store's writer lock (`STORE/.lock`).
+    #[error(
+        "store {path}: another cliffmap process is writing this store ({holder}); wait for it to finish, then run `{command}` again"
+    )]
+    StoreLocked {
+        /// The store directory.
+        path: PathBuf,
+        /// What the lock file says of its holder (process id and command), or "holder unknown".
+        holder: String,
+        /// The command that was refused.
+        command: String,
+    },
+    /// The store's manifest has a version this cliffmap does not read.
+    #[error(
+        "store {path}: store version {found} is not supported (this cliffmap reads version {supported})"
+    )]
+    StoreVersion {
+        /// The manifest file.
+        path: PathBuf,
+        /// The version the manifest records.
+        found: u32,
+        /// The version this cliffmap reads.
+        supported: u32,
     },
     /// The GPU (wgpu adapter, device or a GPU operation) failed or is unavailable.
     #[error("GPU: {0}")]

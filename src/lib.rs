@@ -158,6 +158,7 @@ pub use pipeline::{
     register_photos, reparam_store,
 };
 pub use progress::{Progress, ProgressSink, ProgressTask};
+#[cfg(feature = "render")]
 pub use render::{SceneOptions, StoreRenderer};
 pub use stats::{CellStats, CellStatsEntry, StatsSummary, cell_stats};
 pub use store::Store;

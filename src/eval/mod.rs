@@ -20,7 +20,9 @@
 
 mod metrics;
 mod reference;
+#[cfg(feature = "render")]
 mod render;
+#[cfg(feature = "render")]
 mod run;
 mod score;
 mod side_by_side;
@@ -32,7 +34,9 @@ pub use reference::{
     VISIBILITY_TOLERANCE_REL, finest_photo, finest_photo_with, oracle_colour, ortho_colour,
     reference_images,
 };
+#[cfg(feature = "render")]
 pub use render::{render_views, render_views_relief};
+#[cfg(feature = "render")]
 pub use run::{
     EvalOptions, MODES, TIN_BASELINE, TIN_ORACLE, ViewImages, evaluate_views, write_view_images,
 };

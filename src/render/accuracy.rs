@@ -285,7 +285,7 @@ pub fn surface_displacement(
     out.mean_px = v.iter().sum::<f64>() / v.len() as f64;
     v.sort_by(f64::total_cmp);
     out.max_px = v[v.len() - 1];
-    out.p99_px = super::flight::percentile(&v, 0.99);
+    out.p99_px = percentile(&v, 0.99);
     out
 }
 
@@ -319,6 +319,17 @@ pub fn image_difference(a: &image::RgbaImage, b: &image::RgbaImage, tol: u8) -> 
         max_abs: max,
         frac_over: over as f64 / n,
     })
+}
+
+/// Nearest-rank percentile (`q` in [0, 1]) of `v`; NaN if empty.
+pub fn percentile(v: &[f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let rank = ((q.clamp(0.0, 1.0) * s.len() as f64).ceil() as usize).clamp(1, s.len());
+    s[rank - 1]
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use std::path::Path;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use super::accuracy::percentile;
 use super::store_renderer::StoreRenderer;
 use crate::camera::{CameraModel, rotation_look_at};
 use crate::error::{Error, Result};
@@ -236,17 +237,6 @@ pub struct FlyReport {
     /// Median over frames of the cells drawn with a morph factor > 0.
     #[serde(default)]
     pub morphed_cells_per_frame_median: f64,
-}
-
-/// Nearest-rank percentile (`q` in [0, 1]) of `v`; NaN if empty.
-pub fn percentile(v: &[f64], q: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let rank = ((q.clamp(0.0, 1.0) * s.len() as f64).ceil() as usize).clamp(1, s.len());
-    s[rank - 1]
 }
 
 /// Flies `cams`: the first camera is a warm-up frame that waits for its cells; the others

@@ -6,10 +6,12 @@
 //! [`resolve_draw_list`]), geomorphing towards parent cells ([`geomorph`]) and the pinhole view
 //! of distorted cameras ([`distortion`]). GPU side: [`gpu`] (headless wgpu: cell uploads,
 //! pipelines, offscreen frames, the distortion pass, PNG readback) and [`StoreRenderer`] (a store
-//! with cache, loaders and frames); [`downsample_rgba`] reduces supersampled frames.
+//! with cache, loaders and frames); [`downsample_rgba`] reduces supersampled frames. The GPU
+//! side needs the crate feature `render` (on by default); the policy compiles without it.
 
 mod cache;
 mod camera;
+#[cfg(feature = "render")]
 mod distort_pass;
 pub mod distortion;
 mod frustum;
@@ -18,6 +20,7 @@ mod lod;
 mod overlay;
 mod stream;
 mod supersample;
+#[cfg(feature = "render")]
 mod target;
 
 pub use cache::LruCache;
@@ -36,18 +39,27 @@ pub use stream::{DrawList, Streamer, resolve_draw_list};
 pub use supersample::downsample_rgba;
 
 pub mod accuracy;
+pub use accuracy::percentile;
+#[cfg(feature = "render")]
 mod cell_data;
+#[cfg(feature = "render")]
 mod context;
+#[cfg(feature = "render")]
 pub mod gpu;
+#[cfg(feature = "render")]
 mod store_renderer;
 
+#[cfg(feature = "render")]
 pub use gpu::{
     CellData, CellDraw, FrameOptions, GpuCell, GpuContext, MorphData, TerrainRenderer, UvMode,
 };
+#[cfg(feature = "render")]
 pub use store_renderer::{FrameReport, SceneOptions, StoreRenderer};
+#[cfg(feature = "render")]
 mod flight;
 mod fly_camera;
 
 pub use fly_camera::{FAST_FACTOR, FlyCamera, FlyInput, MAX_PITCH, adjust_sse};
 
-pub use flight::{FlightKey, FlightPath, FlyReport, fly, percentile};
+#[cfg(feature = "render")]
+pub use flight::{FlightKey, FlightPath, FlyReport, fly};

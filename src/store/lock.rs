@@ -57,17 +57,15 @@ impl StoreLock {
             Err(std::fs::TryLockError::WouldBlock) => {
                 let holder = std::fs::read_to_string(&path).unwrap_or_default();
                 let holder = holder.trim();
-                return Err(Error::store(
-                    dir,
-                    format!(
-                        "another cliffmap process is writing this store ({}); wait for it to finish, then run `{command}` again",
-                        if holder.is_empty() {
-                            "holder unknown".to_string()
-                        } else {
-                            holder.to_string()
-                        }
-                    ),
-                ));
+                return Err(Error::StoreLocked {
+                    path: dir.to_path_buf(),
+                    holder: if holder.is_empty() {
+                        "holder unknown".to_string()
+                    } else {
+                        holder.to_string()
+                    },
+                    command: command.to_string(),
+                });
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(&path, e)),
         }
@@ -118,5 +116,21 @@ mod tests {
         assert!(f.try_lock().is_ok());
         let text = std::fs::read_to_string(tmp.path().join(".lock")).unwrap();
         assert!(text.contains("cliffmap build"), "{text}");
+        // Held through another file description, the store is refused with a typed error.
+        let e = StoreLock::acquire(tmp.path(), "cliffmap project").unwrap_err();
+        match &e {
+            Error::StoreLocked {
+                holder, command, ..
+            } => {
+                assert!(holder.contains("cliffmap build"), "{holder}");
+                assert_eq!(command, "cliffmap project");
+            }
+            other => panic!("expected StoreLocked, got {other:?}"),
+        }
+        assert!(
+            e.to_string()
+                .contains("another cliffmap process is writing this store"),
+            "{e}"
+        );
     }
 }

@@ -401,13 +401,11 @@ impl Manifest {
             ));
         }
         if m.version != STORE_VERSION {
-            return Err(Error::store(
-                &path,
-                format!(
-                    "store version {} is not supported (this cliffmap reads version {STORE_VERSION})",
-                    m.version
-                ),
-            ));
+            return Err(Error::StoreVersion {
+                path,
+                found: m.version,
+                supported: STORE_VERSION,
+            });
         }
         if let Some(want) = &m.content_crc32 {
             let got = raw_checksum(text.as_bytes());
@@ -474,6 +472,20 @@ mod tests {
             "ortho": null, "quadtree": {"dem_width": 2, "dem_height": 2, "finest_intervals": 2, "levels": 1},
             "max_error": 0.5, "cell_texels": 8, "build_key": "0", "cells": []}"#;
         serde_json::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn another_version_is_a_typed_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = tiny();
+        m.version = STORE_VERSION + 1;
+        m.write(dir.path()).unwrap();
+        match Manifest::read(dir.path()).unwrap_err() {
+            Error::StoreVersion {
+                found, supported, ..
+            } => assert_eq!((found, supported), (STORE_VERSION + 1, STORE_VERSION)),
+            other => panic!("expected StoreVersion, got {other:?}"),
+        }
     }
 
     #[test]
