@@ -142,6 +142,51 @@ fn a_repair_without_the_inputs_says_which_are_missing() {
 }
 
 #[test]
+fn the_recipe_is_versioned_data_and_an_older_command_line_recipe_still_repairs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (dem, store) = build(tmp.path());
+    let recipe: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(store.join("recipe.json")).unwrap()).unwrap();
+    assert_eq!(recipe["recipe_version"], 1, "{recipe}");
+    let recorded_dem = PathBuf::from(recipe["dem"].as_str().unwrap());
+    assert!(recorded_dem.is_absolute(), "{recipe}");
+    assert_eq!(
+        recorded_dem.canonicalize().unwrap(),
+        dem.canonicalize().unwrap()
+    );
+    let before = snapshot(&store);
+    // The form stores built before the recipe was data have: the command line.
+    let mut argv = vec!["cliffmap".to_string()];
+    argv.extend(cliff_build_args(&dem, &store).iter().map(|a| a.to_string()));
+    let old = serde_json::json!({"cwd": tmp.path(), "argv": argv});
+    std::fs::write(store.join("recipe.json"), old.to_string()).unwrap();
+    let mesh = manifest(&store)["cells"][0]["files"]["mesh"]["path"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    flip_byte(&store.join(&mesh), 40);
+    ok(&["verify", "--repair", s(&store)]);
+    ok(&["verify", s(&store)]);
+    let after = snapshot(&store);
+    assert_eq!(
+        before[&mesh], after[&mesh],
+        "the mesh is rebuilt byte for byte"
+    );
+    // A key the recipe format does not know is refused, naming the file and the key.
+    let mut bad = recipe.clone();
+    bad["cell_intervls"] = serde_json::json!(32);
+    std::fs::write(store.join("recipe.json"), bad.to_string()).unwrap();
+    flip_byte(&store.join(&mesh), 40);
+    let o = cliffmap(&["verify", "--repair", s(&store)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("recipe.json") && err.contains("cell_intervls"),
+        "{err}"
+    );
+}
+
+#[test]
 fn not_a_store_is_a_clear_error() {
     let tmp = tempfile::tempdir().unwrap();
     let o = cliffmap(&["verify", s(&tmp.path().join("nothing"))]);

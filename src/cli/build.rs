@@ -1,10 +1,9 @@
 //! `cliffmap build`: DEM (+ ortho) to a cell store.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::Context;
-use cliffmap::pipeline::{BuildInputs, BuildOptions, build_store};
-use cliffmap::{DemLoadOptions, OrthoPlacement, WorldRect, load_dem, load_ortho};
+use cliffmap::pipeline::{BuildRecipe, RECIPE_VERSION, build_from_recipe};
+use cliffmap::{DemLoadOptions, WorldRect};
 
 use super::stats::print_summary;
 
@@ -107,80 +106,15 @@ fn parse_extent(s: &str) -> Result<WorldRect, String> {
 }
 
 /// Runs `build`: loads and checks every input before creating the store directory, and
-/// records the command line as the store's recipe (for `cliffmap verify --repair`).
+/// records the build's recipe in the store (for `cliffmap verify --repair`).
 pub fn run(a: Args) -> anyhow::Result<()> {
-    execute(a, true)
-}
-
-/// `build` itself; `record_recipe` false when the repair re-runs a recorded build.
-pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
-    let opts = BuildOptions {
-        max_error: a.max_error,
-        cell_intervals: a.cell_intervals,
-        cell_texels: a.cell_texels,
-        png_compression: a.png_compression.into(),
-        progress: super::progress::progress_sink(a.quiet),
-        force: a.force,
-    };
-    opts.validate()?;
-    let dem_opts = DemLoadOptions {
-        format: a.dem_format.map(Into::into),
-        width: a.width,
-        height: a.height,
-        z_scale: a.z_scale,
-        z_offset: a.z_offset,
-        spacing: a.spacing,
-        origin: a.origin,
-        nodata: a.nodata,
-        max_memory: a.max_memory,
-    };
-    let dem = load_dem(&a.dem, &dem_opts)?;
-    let ortho = match &a.ortho {
-        Some(p) => {
-            let placement = if a.ortho_same_grid {
-                OrthoPlacement::SameGridAsDem
-            } else if let Some(e) = a.ortho_extent {
-                OrthoPlacement::Extent(e)
-            } else {
-                OrthoPlacement::FromFile
-            };
-            let mut o = load_ortho(p, placement, &dem, a.max_memory)?;
-            if let Some(c) = a.ortho_nodata_colour {
-                let n = o.mask_colour(c);
-                tracing::info!(
-                    "{}: {n} pixels of colour {c:?} marked as no data",
-                    p.display()
-                );
-            }
-            Some(o)
-        }
-        None => None,
-    };
-    // Everything that shapes the inputs: file contents and how they were read and placed.
-    let fingerprint = format!(
-        "{}|{}|{:?}|{:?}|{:?}|{}",
-        file_crc(&a.dem)?,
-        a.ortho
-            .as_deref()
-            .map(file_crc)
-            .transpose()?
-            .unwrap_or_default(),
-        dem_opts,
-        a.ortho_extent,
-        a.ortho_nodata_colour,
-        a.ortho_same_grid
-    );
-    let inputs = BuildInputs {
-        dem: &dem,
-        ortho: ortho.as_ref(),
-        dem_source: a.dem.display().to_string(),
-        ortho_source: a.ortho.as_ref().map(|p| p.display().to_string()),
-        fingerprint,
-    };
-    let manifest = build_store(&inputs, &opts, &a.out)?;
-    if record_recipe {
-        super::recipe::write_recipe(&a.out)?;
-    }
+    let recipe = recipe_of(&a);
+    let manifest = build_from_recipe(
+        &recipe,
+        &a.out,
+        super::progress::progress_sink(a.quiet),
+        a.force,
+    )?;
     if !a.quiet {
         println!(
             "built {} cells in {} levels into {}",
@@ -193,7 +127,29 @@ pub(super) fn execute(a: Args, record_recipe: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn file_crc(p: &Path) -> anyhow::Result<String> {
-    let bytes = std::fs::read(p).with_context(|| format!("{}: cannot read", p.display()))?;
-    Ok(cliffmap::store::crc32_hex(&bytes))
+/// The build recipe the flags describe (paths as given).
+pub(super) fn recipe_of(a: &Args) -> BuildRecipe {
+    BuildRecipe {
+        recipe_version: RECIPE_VERSION,
+        dem: a.dem.clone(),
+        dem_load: DemLoadOptions {
+            format: a.dem_format.map(Into::into),
+            width: a.width,
+            height: a.height,
+            z_scale: a.z_scale,
+            z_offset: a.z_offset,
+            spacing: a.spacing,
+            origin: a.origin,
+            nodata: a.nodata,
+            max_memory: a.max_memory,
+        },
+        ortho: a.ortho.clone(),
+        ortho_same_grid: a.ortho_same_grid,
+        ortho_extent: a.ortho_extent,
+        ortho_nodata_colour: a.ortho_nodata_colour,
+        max_error: a.max_error,
+        cell_intervals: a.cell_intervals,
+        cell_texels: a.cell_texels,
+        png_compression: a.png_compression.into(),
+    }
 }

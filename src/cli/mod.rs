@@ -10,7 +10,6 @@ mod fit_camera;
 mod fly;
 mod progress;
 mod project;
-mod recipe;
 mod register;
 mod render;
 mod reparam;

@@ -48,7 +48,8 @@ pub enum DemFormat {
 }
 
 /// How to read a DEM file. Unset fields fall back to the file's own metadata or defaults.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DemLoadOptions {
     /// Format; inferred from the extension (and for PNG from the colour type) when `None`.
     pub format: Option<DemFormat>,

@@ -13,6 +13,7 @@ mod decoded_photos;
 mod derived_ortho;
 mod photo_stats;
 mod project;
+mod recipe;
 mod register;
 mod reparam;
 
@@ -21,6 +22,11 @@ pub use derived_ortho::derived_ortho;
 pub use project::{
     PhotoTextureOptions, ProjectOptions, ProjectReport, STEEP_SLOPE_DEG, coarse_scale_cap,
     project_store,
+};
+pub(crate) use recipe::build_without_recording;
+pub use recipe::{
+    BuildRecipe, LoadedInputs, RECIPE_FILE, RECIPE_VERSION, RecordedRecipe, build_from_recipe,
+    read_recipe,
 };
 pub use register::{
     PhotoRegistration, TieSettings, register_photos, register_photos_with, resolve_photo_entries,

@@ -5,8 +5,8 @@
 //!   inconsistency), each naming the file, the cell and which [`Layer`] it belongs to
 //!   (the base build, the reparameterized variant or the photo texture).
 //! - [`verify_store`] (read-only) and [`repair_plan`] (which cells must be redone per
-//!   layer); the repair itself re-runs the recorded stages (see `cli/verify.rs` and
-//!   docs/reliability.md).
+//!   layer); [`repair_store`] redoes them from the store's build recipe
+//!   ([`crate::pipeline::read_recipe`]) and recorded options (docs/reliability.md).
 //!
 //! Checks, per store: `manifest.json` parses, has the right format/version and (for stores
 //! written since 2026-12-04) matches its content checksum; cell ids are unique and match
@@ -19,9 +19,11 @@
 
 mod checks;
 mod plan;
+mod repair;
 
 pub use checks::verify_store;
 pub use plan::{RepairPlan, merge_rebuilt, repair_plan};
+pub use repair::repair_store;
 
 use serde::Serialize;
 
