@@ -1,10 +1,10 @@
 //! The layering of `src/` stays as docs/architecture.md documents it: a library module may
-//! import only modules of a lower layer (the "Layers" table), and no file of a folder
-//! imports a sibling that imports it back (directly or through other siblings).
+//! import only modules of a lower layer (the "Layers" table), and no file or subfolder of a
+//! folder imports a sibling that imports it back (directly or through other siblings).
 //!
 //! Imports are read from the source text: every `crate::NAME` path outside comments and
-//! outside the trailing `#[cfg(test)] mod tests` (tests may use anything), and for files
-//! of one folder every `super::NAME` / `crate::FOLDER::NAME` naming a sibling file.
+//! outside the trailing `#[cfg(test)] mod tests` (tests may use anything), and within a
+//! folder every `super::NAME` / `crate::FOLDER::NAME` naming a sibling file or subfolder.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -183,55 +183,87 @@ fn modules_import_only_lower_layers() {
     );
 }
 
+/// The children of folder `dir` (file stems and subfolder names; `mod.rs` excluded).
+fn children(dir: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(dir)
+        .expect("read folder")
+        .filter_map(|e| {
+            let p = e.ok()?.path();
+            let s = p.file_stem()?.to_string_lossy().to_string();
+            (s != "mod" && (p.is_dir() || p.extension().is_some_and(|x| x == "rs"))).then_some(s)
+        })
+        .collect()
+}
+
+/// `src/a/b` as the module path `a::b`.
+fn module_path(src: &Path, dir: &Path) -> String {
+    dir.strip_prefix(src)
+        .expect("under src")
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().to_string())
+        .collect::<Vec<_>>()
+        .join("::")
+}
+
 #[test]
-fn no_file_imports_a_sibling_that_imports_it_back() {
+fn no_file_or_folder_imports_a_sibling_that_imports_it_back() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    // folder -> (file stem -> sibling stems it imports)
+    // folder -> (child -> siblings it imports): a child is a file or a subfolder (all the
+    // files under it), an import `super::NAME` from a file directly in the folder or
+    // `crate::FOLDER::NAME` from any file under it.
     let mut graph: BTreeMap<PathBuf, BTreeMap<String, BTreeSet<String>>> = BTreeMap::new();
     for file in rust_files(&src) {
-        let stem = file
+        let code = code_of(&file);
+        let mut dir = file.parent().expect("a folder").to_path_buf();
+        let mut child = file
             .file_stem()
             .unwrap_or_default()
             .to_string_lossy()
             .to_string();
-        if stem == "mod" || stem == "lib" || stem == "main" {
-            continue;
+        let direct = child != "mod";
+        loop {
+            let siblings = children(&dir);
+            let path = module_path(&src, &dir);
+            let mut used = if path.is_empty() {
+                names_after(&code, "crate::")
+            } else {
+                names_after(&code, &format!("crate::{path}::"))
+            };
+            if direct && dir == file.parent().expect("a folder") {
+                used.extend(names_after(&code, "super::"));
+            }
+            if child != "mod" && child != "lib" && child != "main" {
+                let deps: BTreeSet<String> = used
+                    .into_iter()
+                    .filter(|u| *u != child && siblings.contains(u))
+                    .collect();
+                graph
+                    .entry(dir.clone())
+                    .or_default()
+                    .entry(child.clone())
+                    .or_default()
+                    .extend(deps);
+            }
+            if dir == src {
+                break;
+            }
+            child = dir
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .to_string();
+            dir = dir.parent().expect("under src").to_path_buf();
         }
-        let dir = file.parent().expect("a folder").to_path_buf();
-        let siblings: BTreeSet<String> = std::fs::read_dir(&dir)
-            .expect("read folder")
-            .filter_map(|e| {
-                let p = e.ok()?.path();
-                let s = p.file_stem()?.to_string_lossy().to_string();
-                (s != "mod" && s != stem).then_some(s)
-            })
-            .collect();
-        let code = code_of(&file);
-        let folder_path = dir
-            .strip_prefix(&src)
-            .expect("under src")
-            .components()
-            .map(|c| c.as_os_str().to_string_lossy().to_string())
-            .collect::<Vec<_>>()
-            .join("::");
-        let mut used = names_after(&code, "super::");
-        if !folder_path.is_empty() {
-            used.extend(names_after(&code, &format!("crate::{folder_path}::")));
-        } else {
-            used.extend(names_after(&code, "crate::"));
-        }
-        let deps = used.into_iter().filter(|u| siblings.contains(u)).collect();
-        graph.entry(dir).or_default().insert(stem, deps);
     }
     let mut cycles = Vec::new();
-    for (dir, files) in &graph {
-        for start in files.keys() {
+    for (dir, nodes) in &graph {
+        for start in nodes.keys() {
             // depth-first search for a path back to `start`
             let mut stack: Vec<Vec<String>> = vec![vec![start.clone()]];
             let mut seen = BTreeSet::new();
             while let Some(path) = stack.pop() {
                 let last = path.last().expect("non-empty");
-                for next in files.get(last).into_iter().flatten() {
+                for next in nodes.get(last).into_iter().flatten() {
                     if next == start {
                         let mut c = path.clone();
                         c.push(start.clone());
@@ -251,7 +283,7 @@ fn no_file_imports_a_sibling_that_imports_it_back() {
     }
     assert!(
         cycles.is_empty(),
-        "import cycles between files:\n{}",
+        "import cycles between files or folders:\n{}",
         cycles.join("\n")
     );
 }

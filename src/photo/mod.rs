@@ -1,6 +1,12 @@
 //! Ground-photo projection: photos taken from known camera poses are merged into the cells'
 //! textures, so that walls get real detail instead of a smeared ortho image.
 //!
+//! Sub-stages, one folder each, in the order a projection runs them (each uses only those
+//! before it): `inputs` (photo lists, COLMAP, pyramids), `footprints` (pixel-corner casts,
+//! silhouettes, reconstruction), `splatting` (texture sizes, exact-area deposits, pixel
+//! weights and colour transforms), `blending` (photos per texel, then against the existing
+//! texture, and the gutter), `leveling` (fitting each photo's colour transform).
+//!
 //! Data types (the stage's plain data, shared by its files):
 //! - [`PhotoInput`]: a decoded photo and its [`crate::camera::CameraModel`] (world frame),
 //!   read from `photos.json` ([`read_photo_list`]) or a COLMAP text model ([`read_colmap`]);
@@ -25,48 +31,34 @@
 //! one if the cell has it, else the orthographic one): x right, y down, texel `(i, j)`
 //! covers `[i, i+1] × [j, j+1]`, so uv = position / texels.
 
-mod accumulate;
-mod blend;
-mod cell_accum;
-mod colmap;
-mod colour_leveling;
-mod colour_transform;
-mod confidence;
-mod corners;
-mod footprint;
-mod gutter;
-mod input;
-mod occlusion;
-mod pyramid;
-mod reconstruct;
-mod samples;
-mod sizing;
-mod splat;
-mod strip;
-mod texel_tiles;
+mod blending;
+mod footprints;
+mod inputs;
+mod leveling;
+mod splatting;
 
-pub use accumulate::{PhotoAccum, TexelSums};
-pub use blend::{Blended, blend_cell, magnify};
-pub use cell_accum::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE};
-pub use colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
-pub use colour_leveling::{
-    ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
-    normal_cos_slope,
-};
-pub use confidence::{BorderFeather, ConfidenceParams, smoothstep};
-pub use footprint::{
+pub use blending::blend::{Blended, blend_cell, magnify};
+pub use blending::cell_accum::{BlendMode, CellAccum, CellContext, MIN_COS_SLOPE};
+pub use footprints::footprint::{
     FootprintBuffers, FootprintOptions, for_each_footprint_batch, for_each_footprint_batch_in,
     for_each_footprint_batch_rows_in, photo_footprints, photo_footprints_in,
 };
-pub use input::{
+pub use inputs::colmap::{Similarity, read_colmap, read_colmap_specs, read_similarity};
+pub use inputs::input::{
     PhotoEntry, PhotoSpec, image_size, photo_spec, read_photo_entries, read_photo_list,
     read_photo_specs,
 };
-pub use occlusion::{OcclusionMap, occlusion_weight};
-pub use pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
-pub use samples::PhotoSamples;
-pub use sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
-pub use splat::{
+pub use inputs::pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
+pub use leveling::colour_leveling::{
+    ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
+    normal_cos_slope,
+};
+pub use splatting::accumulate::{PhotoAccum, TexelSums};
+pub use splatting::confidence::{BorderFeather, ConfidenceParams, smoothstep};
+pub use splatting::occlusion::{OcclusionMap, occlusion_weight};
+pub use splatting::samples::PhotoSamples;
+pub use splatting::sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
+pub use splatting::splat::{
     MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint,
 };
 

@@ -12,12 +12,12 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::PhotoInput;
 use crate::camera::{
     CameraModel, RoughPose, apply_rotation_delta, camera_from_json_file, fit_camera_to_image,
     validate_camera,
 };
 use crate::error::{Error, Result};
+use crate::photo::PhotoInput;
 
 /// A photo's image file and its camera, fitted to the image's real size (pixels not decoded
 /// yet; [`PhotoSpec::load`] decodes them).

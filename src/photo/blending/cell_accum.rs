@@ -3,9 +3,9 @@
 //! ([`CellContext`]). A cell's first photo hands over its [`PhotoAccum`]'s memory; later
 //! photos are merged texel by texel, in photo order (docs/projection.md, "Several photos").
 
-use super::accumulate::PhotoAccum;
-use super::confidence::ConfidenceParams;
-use super::texel_tiles::{TexelSums, TexelTiles};
+use crate::photo::splatting::accumulate::PhotoAccum;
+use crate::photo::splatting::confidence::ConfidenceParams;
+use crate::photo::splatting::texel_tiles::{TexelSums, TexelTiles};
 
 /// The photo index of a record's label (1 + the index, 0 for none; see [`CellAccum`]).
 #[inline]

@@ -1,15 +1,15 @@
 //! A photo image prepared for splatting ([`PhotoSamples`]): its colours through the
 //! leveling transform into the working colour space, the border feather of every pixel,
 //! the angle a pixel subtends and, if on, the occlusion margin's inputs. Made once per photo
-//! and level; [`super::PhotoAccum::add_samples`] reads it per footprint.
+//! and level; [`crate::photo::PhotoAccum::add_samples`] reads it per footprint.
 
 use image::RgbImage;
 
-use super::PixelFootprint;
-use super::colour_transform::ColourTransform;
-use super::confidence::{BorderFeather, ConfidenceParams};
-use super::occlusion::{OcclusionMap, occlusion_weight};
 use crate::colour::ColourSpace;
+use crate::photo::PixelFootprint;
+use crate::photo::splatting::colour_transform::ColourTransform;
+use crate::photo::splatting::confidence::{BorderFeather, ConfidenceParams};
+use crate::photo::splatting::occlusion::{OcclusionMap, occlusion_weight};
 
 /// A photo image prepared for splatting: its 8-bit values mapped by a colour transform and
 /// decoded into the working colour space (per channel, the same numbers as transforming and
@@ -17,17 +17,17 @@ use crate::colour::ColourSpace;
 /// ([`ConfidenceParams::border_feather`]) and the angle a pixel subtends.
 #[derive(Clone, Debug)]
 pub struct PhotoSamples<'a> {
-    pub(super) image: &'a RgbImage,
+    pub(in crate::photo) image: &'a RgbImage,
     /// Per channel and 8-bit value, the working-space value (leveling applied).
-    pub(super) lut: [[f32; 256]; 3],
-    pub(super) feather: BorderFeather,
+    pub(in crate::photo) lut: [[f32; 256]; 3],
+    pub(in crate::photo) feather: BorderFeather,
     /// Radians per pixel: `1 / √(fx·fy)` of the camera the footprints were cast with.
-    pub(super) pixel_angle: f32,
+    pub(in crate::photo) pixel_angle: f32,
     /// The occlusion margin's inputs, if on.
     occlusion: Option<OcclusionTerm<'a>>,
 }
 
-/// What [`PhotoSamples`] needs for the occlusion margin ([`super::occlusion`]).
+/// What [`PhotoSamples`] needs for the occlusion margin ([`crate::photo::splatting::occlusion`]).
 #[derive(Clone, Debug)]
 struct OcclusionTerm<'a> {
     map: &'a OcclusionMap,
@@ -75,7 +75,7 @@ impl<'a> PhotoSamples<'a> {
 }
 
 impl<'a> PhotoSamples<'a> {
-    /// Adds the occlusion margin of `params` (`super::occlusion`): `map` of this photo,
+    /// Adds the occlusion margin of `params` (`crate::photo::splatting::occlusion`): `map` of this photo,
     /// the image these samples are of being `step_scale` times smaller per side than the
     /// full-resolution photo of focal length `focal_full` pixels; `cell_error[c]` the TIN
     /// error (metres) of manifest cell `c`. No change when the margin is 0.
@@ -101,7 +101,7 @@ impl<'a> PhotoSamples<'a> {
 
     /// The occlusion weight of footprint `fp` (1 without the margin).
     #[inline]
-    pub(super) fn occlusion_weight(&self, fp: &PixelFootprint) -> f32 {
+    pub(in crate::photo) fn occlusion_weight(&self, fp: &PixelFootprint) -> f32 {
         let Some(o) = &self.occlusion else {
             return 1.0;
         };

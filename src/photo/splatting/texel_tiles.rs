@@ -15,7 +15,7 @@
 //! projection's CPU time (docs/projection.md, "Splatting cost"). A tile is zeroed when it is
 //! allocated, so what a grid holds never depends on a chunk's past.
 
-/// The per-texel accumulator record (see `super::accumulate`); all zero is the empty texel.
+/// The per-texel accumulator record (see `crate::photo::splatting::accumulate`); all zero is the empty texel.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TexelSums {
     /// `A`: deposited footprint area (texels²).
@@ -28,7 +28,7 @@ pub struct TexelSums {
     pub footprint: f32,
     /// `G`: feathered area over the view cosine.
     pub grazing: f32,
-    /// `O`: feathered area times the occlusion weight (`super::occlusion`), so that
+    /// `O`: feathered area times the occlusion weight (`crate::photo::splatting::occlusion`), so that
     /// `O / W` is the mean occlusion weight of the deposits.
     pub clear: f32,
 }

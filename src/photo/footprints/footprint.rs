@@ -1,6 +1,6 @@
 //! Pixel footprints of a photo in the cells' textures.
 //!
-//! One ray per pixel corner (`(W+1)·(H+1)` rays, [`super::corners`]), nearest front-face hit
+//! One ray per pixel corner (`(W+1)·(H+1)` rays, [`crate::photo::footprints::corners`]), nearest front-face hit
 //! → texture position `Σ b_i·t_i` in the hit triangle's cell. Per pixel:
 //! 1. **Cell**: the cell hit by most of the pixel's four corners; ties go to the lowest
 //!    manifest index. Corners that hit another cell or nothing are *missing*.
@@ -15,7 +15,7 @@
 //!    the present corners whose ends lie in different triangles, walk the cell's mesh in
 //!    texture space ([`crate::raycast`]); crossing an edge between a front- and a
 //!    back-facing triangle rejects the pixel.
-//! 4. **Reconstruction** ([`super::reconstruct`], switchable): missing corners from the
+//! 4. **Reconstruction** ([`crate::photo::footprints::reconstruct`], switchable): missing corners from the
 //!    parallelogram rule or from the adjacent footprints' corners in the same cell. A
 //!    reconstructed corner is also walked to from a present one, so a completion reaching
 //!    over a silhouette (e.g. a ridge against the sky) rejects the pixel instead.
@@ -38,10 +38,10 @@ use std::sync::Mutex;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::corners::{CornerHit, cast_corner_alone, cast_corner_row};
-use super::reconstruct::reconstruct;
-use super::{CellFootprints, FootprintSet, PixelFootprint};
 use crate::camera::{CameraModel, RayCaster};
+use crate::photo::footprints::corners::{CornerHit, cast_corner_alone, cast_corner_row};
+use crate::photo::footprints::reconstruct::reconstruct;
+use crate::photo::{CellFootprints, FootprintSet, PixelFootprint};
 use crate::raycast::Caster;
 use crate::raycast::LevelScene;
 use crate::raycast::RayAccel;

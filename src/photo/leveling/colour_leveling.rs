@@ -18,9 +18,9 @@
 
 use image::RgbaImage;
 
-use super::accumulate::PhotoAccum;
-use super::cell_accum::CellContext;
-pub use super::colour_transform::ColourTransform;
+use crate::photo::blending::cell_accum::CellContext;
+use crate::photo::splatting::accumulate::PhotoAccum;
+pub use crate::photo::splatting::colour_transform::ColourTransform;
 
 /// Which texels serve as leveling samples and how the fit is guarded.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -14,13 +14,13 @@
 //! existing texture magnified bilinearly (texel centres, edges clamped); texels the photos
 //! do not reach keep that colour, except the gutter beside photo colour (off the chart, or
 //! of unknown colour: alpha below 255), which takes the photo colour out to `2 · scale`
-//! texels ([`super::gutter`]) so that filtering at a chart's edge stays photo colour.
+//! texels ([`crate::photo::blending::gutter`]) so that filtering at a chart's edge stays photo colour.
 
 use image::{GrayImage, RgbaImage};
 
-use super::cell_accum::{CellAccum, CellContext};
-use super::confidence::ConfidenceParams;
-use super::gutter::{SlotBlocks, fill_gutter_from_photo};
+use crate::photo::blending::cell_accum::{CellAccum, CellContext};
+use crate::photo::blending::gutter::{SlotBlocks, fill_gutter_from_photo};
+use crate::photo::splatting::confidence::ConfidenceParams;
 
 use crate::colour::ColourSpace;
 pub use crate::store::magnify;

@@ -19,7 +19,7 @@
 use crate::colour::ColourSpace;
 use crate::resample::fill::N8;
 
-/// Blocks of a texture held block-major in slots (as [`super::blend::blend_cell`] keeps the
+/// Blocks of a texture held block-major in slots (as [`crate::photo::blend_cell`] keeps the
 /// blocks footprints reached): block `i` (row-major over a `grid`-wide grid of `side`-texel
 /// blocks) is in slot `slot_of[i]` (`u32::MAX`: not held), texels row-major in the block.
 pub(crate) struct SlotBlocks<'a> {

@@ -20,8 +20,8 @@
 //! cover the smallest fraction of it (then the larger texture, then the lower index), so the
 //! memory goes where the photos cover most of the cell. Deterministic.
 
-use super::PixelFootprint;
-use super::splat::footprint_area;
+use crate::photo::PixelFootprint;
+use crate::photo::splatting::splat::footprint_area;
 
 /// Bins per side of [`SizingBins`].
 pub const SIZING_BINS: usize = 16;

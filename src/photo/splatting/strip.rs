@@ -4,7 +4,7 @@
 //! The pixels of a photo tile the surface, so neighbouring footprints share edges. Every
 //! footprint deposits `area(footprint ∩ texel) · v` into each texel, with `v` its 8 values
 //! per texel² (the [`TexelSums`] fields: 1, feather, feather × colour, …). By signed-area
-//! accumulation along texel rows (as font rasterizers, and [`super::splat`]'s row
+//! accumulation along texel rows (as font rasterizers, and [`crate::photo::splatting::splat`]'s row
 //! rasterizer, do for one polygon) an edge adds, per texel row it crosses, its signed height
 //! split between the columns it passes; a running sum along the row then gives each texel
 //! its covered area. The sum is linear in the values, so a block of footprints is
@@ -20,16 +20,16 @@
 //! column block at a time. Per footprint that is about two edges drawn (four alone, three
 //! in runs along one row) and each texel resolved and deposited about once per block.
 //!
-//! The result equals the footprint-by-footprint exact splat ([`super::splat`]) up to f32
+//! The result equals the footprint-by-footprint exact splat ([`crate::photo::splatting::splat`]) up to f32
 //! rounding of the sums (a test compares them); texels whose resolved coverage is below
 //! [`MIN_RESOLVED`] texels² (rounding noise of the running sums) get nothing. Only simple
-//! quads (not self-intersecting) whose area is at least [`super::MIN_SPLAT_AREA`] and whose
+//! quads (not self-intersecting) whose area is at least [`crate::photo::MIN_SPLAT_AREA`] and whose
 //! box spans at most [`FOOTPRINT_BOX_MAX`] texels each way join a strip; the rest take the
 //! footprint-by-footprint path. The order of the deposits depends only on the footprints
 //! offered (not on threads).
 
-use super::texel_tiles::{TexelSums, TexelTiles};
 use crate::fastmath::{ceil_f, floor_f};
+use crate::photo::splatting::texel_tiles::{TexelSums, TexelTiles};
 
 /// A footprint's values per texel² of its area, in [`TexelSums`] field order: coverage,
 /// weight, colour (3), footprint, grazing, clear.
@@ -38,7 +38,7 @@ pub(crate) type Values = [f32; 8];
 /// Footprints whose box spans more texels than this either way are splatted alone.
 pub(crate) const FOOTPRINT_BOX_MAX: f64 = 16.0;
 /// Footprints that lie within this many texel columns and rows (the texel lines around
-/// their box) are splatted alone: [`super::splat`]'s constant-size cases for one to four
+/// their box) are splatted alone: [`crate::photo::splatting::splat`]'s constant-size cases for one to four
 /// texels cost less than a block, which pays by sharing edges and depositing each texel
 /// once and so saves little when a footprint touches at most four texels (Engabreen
 /// IMG_8902 with texture sizes fixed, whose footprints are mostly under a texel: 1.1 CPU-s of
@@ -142,7 +142,7 @@ impl StripSplatter {
             }
         }
         let box_ok = hi[0] - lo[0] <= FOOTPRINT_BOX_MAX && hi[1] - lo[1] <= FOOTPRINT_BOX_MAX;
-        if !(simple && area >= super::MIN_SPLAT_AREA && box_ok && area.is_finite()) {
+        if !(simple && area >= crate::photo::MIN_SPLAT_AREA && box_ok && area.is_finite()) {
             return false;
         }
         // (the rasterizer's running sum gives −area for a quad of positive shoelace area)
@@ -508,8 +508,8 @@ fn add_record(r: &mut TexelSums, v: &Values) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::splat::splat_footprint;
     use super::*;
+    use crate::photo::splatting::splat::splat_footprint;
 
     /// Corners of pixel `(c, r)` of a warped pixel mesh (shared between neighbours): pixels
     /// `scale` texels wide, sheared and bent, shifted by `origin`; `mirror` flips x.

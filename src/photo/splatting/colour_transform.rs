@@ -1,5 +1,5 @@
 //! The per-channel affine colour map that levels a photo's colours to the existing textures
-//! (fitted in [`super::colour_leveling`], applied before splatting in [`super::accumulate`]).
+//! (fitted in [`crate::photo::leveling::colour_leveling`], applied before splatting in [`crate::photo::splatting::accumulate`]).
 
 /// A per-channel affine colour map on sRGB values in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq)]

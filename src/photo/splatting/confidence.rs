@@ -6,11 +6,11 @@
 //!   can fade out towards the image border instead of ending in a seam. Off by default
 //!   (`feather` 0): every band measured handed photo detail to a coarser source.
 //! - **Coverage confidence** (per texel and photo): the feathered fraction of the texel the
-//!   photo's footprints cover, `Σ a·φ / max(1, Σ a)` ([`super::accumulate`]). The weight of
+//!   photo's footprints cover, `Σ a·φ / max(1, Σ a)` ([`crate::photo::splatting::accumulate`]). The weight of
 //!   photo colour rises with it along [`ConfidenceParams::blend_weight`], a smoothstep ramp
 //!   from `ramp[0]` (no photo) to `ramp[1]`.
 //! - **Resolution** (per texel): what each source resolves there, in metres on the surface
-//!   ([`super::CellContext`]): the photo's pixel footprint `distance / (f · cos_view)` plus the
+//!   ([`crate::photo::CellContext`]): the photo's pixel footprint `distance / (f · cos_view)` plus the
 //!   displacement the TIN's error causes along its rays, against the existing texture's
 //!   ground sample distance stretched along the fall line. The photo's weight rises with
 //!   `log2(existing / photo)` along [`ConfidenceParams::resolution_weight`] (default: none
@@ -19,7 +19,7 @@
 //!   photo's share (tested).
 //! - Between photos, each texel weights a photo by its coverage confidence times its
 //!   resolution to the power `−sharpness_power`, so the sharpest photo wins, times its
-//!   occlusion term ([`super::occlusion`]), so that a photo seeing the texel clear of its own
+//!   occlusion term ([`crate::photo::splatting::occlusion`]), so that a photo seeing the texel clear of its own
 //!   occlusion edges wins over one seeing it next to them.
 
 use crate::error::{Error, Result};
@@ -46,7 +46,7 @@ pub struct ConfidenceParams {
     /// [0, 16]. Default 4 (a photo 2× sharper weighs 16×).
     pub sharpness_power: f64,
     /// Pose uncertainty (full-resolution photo pixels, in [0, 1000]) of the occlusion
-    /// margin (`super::occlusion`): photo pixels closer than this plus the TIN error's
+    /// margin (`crate::photo::splatting::occlusion`): photo pixels closer than this plus the TIN error's
     /// displacement (pixels) to an occlusion edge of the photo count less. 0 = no margin.
     /// Default 2.
     pub occlusion_margin_px: f64,

@@ -1,6 +1,6 @@
 //! Per-texel accumulation of photo colour: one photo's deposits in one cell
 //! ([`PhotoAccum`]); all photos of a run in one cell are merged by
-//! [`super::cell_accum::CellAccum`] (the sharpest photos win, weighted or best view).
+//! [`crate::photo::blending::cell_accum::CellAccum`] (the sharpest photos win, weighted or best view).
 //!
 //! Colours are accumulated in the working space of a [`ColourSpace`] (linear light by
 //! default: photo bytes decoded after the colour leveling, averaged, encoded when the cell
@@ -18,16 +18,16 @@
 
 use image::RgbImage;
 
-use super::PixelFootprint;
-use super::colour_transform::ColourTransform;
-use super::confidence::ConfidenceParams;
-pub use super::samples::PhotoSamples;
-use super::splat::{
+use crate::colour::ColourSpace;
+use crate::photo::PixelFootprint;
+use crate::photo::splatting::colour_transform::ColourTransform;
+use crate::photo::splatting::confidence::ConfidenceParams;
+pub use crate::photo::splatting::samples::PhotoSamples;
+use crate::photo::splatting::splat::{
     Deposit, MAX_SPLAT_BBOX, Splat, SplatKind, footprint_shape, splat_polygon_limited,
 };
-use super::strip::StripSplatter;
-pub use super::texel_tiles::{TexelSums, TexelTiles};
-use crate::colour::ColourSpace;
+use crate::photo::splatting::strip::StripSplatter;
+pub use crate::photo::splatting::texel_tiles::{TexelSums, TexelTiles};
 
 /// One photo's deposits in one `texels × texels` cell texture (row-major per texel).
 #[derive(Clone, Debug, PartialEq)]
@@ -145,9 +145,9 @@ impl PhotoAccum {
         STRIPS.with_borrow_mut(|strips| self.add_samples_with(footprints, photo, strips));
     }
 
-    /// [`PhotoAccum::add_samples`] with the given run splatter (module [`super::strip`]):
+    /// [`PhotoAccum::add_samples`] with the given run splatter (module [`crate::photo::splatting::strip`]):
     /// strips of footprints that share edges are splatted together, the others (and those
-    /// within 2 × 2 texels, [`super::strip::ALONE_TEXELS`]) one by one.
+    /// within 2 × 2 texels, [`crate::photo::splatting::strip::ALONE_TEXELS`]) one by one.
     fn add_samples_with<'f>(
         &mut self,
         footprints: impl IntoIterator<Item = &'f PixelFootprint>,
@@ -306,9 +306,9 @@ const MIN_COS_VIEW: f32 = 1e-3;
 
 #[cfg(test)]
 mod tests {
-    use super::super::cell_accum::{BlendMode, CellAccum, CellContext};
-    use super::super::occlusion::OcclusionMap;
     use super::*;
+    use crate::photo::blending::cell_accum::{BlendMode, CellAccum, CellContext};
+    use crate::photo::splatting::occlusion::OcclusionMap;
 
     pub(crate) fn fp(pixel: [u32; 2], corners: [[f32; 2]; 4], cos_view: f32) -> PixelFootprint {
         PixelFootprint {

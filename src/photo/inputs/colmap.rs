@@ -13,10 +13,10 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DQuat, DVec3};
 use serde::Deserialize;
 
-use super::PhotoInput;
-use super::input::{PhotoSpec, photo_spec};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
+use crate::photo::PhotoInput;
+use crate::photo::inputs::input::{PhotoSpec, photo_spec};
 
 /// Similarity from COLMAP's model frame to the world frame: `world = scale·R·colmap + t`.
 #[derive(Clone, Copy, Debug, PartialEq)]

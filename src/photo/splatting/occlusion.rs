@@ -16,13 +16,13 @@
 //! uncertainty in pixels ([`ConfidenceParams::occlusion_margin_px`]) plus how far the cell
 //! TIN's error `ε` (metres) can move an edge seen at that distance with the full-resolution
 //! focal length `f`. It enters the choice between photos (each texel keeps the mean weight of
-//! a photo's deposits, [`super::TexelSums::clear`], and the photo's selection weight is
+//! a photo's deposits, [`crate::photo::TexelSums::clear`], and the photo's selection weight is
 //! scaled by it, with a floor so that a photo alone on a texel still gives it colour), not
 //! the blend against the existing texture (docs/projection.md, "Occlusion margin", has the
 //! measurement that decided this). `m = 0` switches the margin off.
 
-use super::FootprintSet;
-use super::confidence::smoothstep;
+use crate::photo::FootprintSet;
+use crate::photo::splatting::confidence::smoothstep;
 
 /// Distances are capped at this many map pixels (far beyond any margin).
 const CAP: f32 = 256.0;
