@@ -1,5 +1,11 @@
-//! Camera registration: fitting a photo's camera to ground control points
-//! (docs/registration.md).
+//! Camera registration: fitting a photo's camera to ground control points, to the terrain,
+//! and to other photos (docs/registration.md).
+//!
+//! Sub-stages: `gcps` (GCP files, start cameras, the robust fit), `pairs` (patch matches
+//! between photos, the rotation consensus, ties to a photo from the same place),
+//! [`terrain`] (a photo against the store's terrain), then `resection` (a photo from
+//! elsewhere placed from a known one) and `bundle` (photos adjusted together); `params`
+//! (the camera as parameters), `lsq` and `grey` are the pieces they share.
 //!
 //! Data types: [`Gcp`] (a world point and the 0-based pixel where the photo shows it), read
 //! by [`read_gcps`] from ImGRAFT text or CSV; [`Param`] / [`CameraParams`] (the camera as
@@ -33,33 +39,27 @@
 //! # Ok::<(), cliffmap::Error>(())
 //! ```
 
-mod bearings;
 mod bundle;
-mod consensus;
-mod fit;
-mod gcp;
+mod gcps;
 mod grey;
 mod lsq;
-mod p3p;
-mod pair;
+mod pairs;
 mod params;
 mod resection;
-mod start;
 pub mod terrain;
-mod ties;
 
-pub use bearings::rotation_from_bearings;
 pub use bundle::{BundleFit, BundleOptions, BundlePair, PairTie, adjust_bundle};
-pub use consensus::{RotationConsensus, rotation_consensus};
-pub use fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
-pub use gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};
-pub use p3p::{p3p, start_from_gcps_p3p};
-pub use pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
+pub use gcps::bearings::rotation_from_bearings;
+pub use gcps::fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
+pub use gcps::gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};
+pub use gcps::p3p::{p3p, start_from_gcps_p3p};
+pub use gcps::start::{start_from_gcps, start_from_position, start_without_position};
+pub use pairs::consensus::{RotationConsensus, rotation_consensus};
+pub use pairs::pair::{MatchOptions, PatchMatch, fit_rotation, match_photos, stable_matches};
+pub use pairs::ties::{TieFit, TieOptions, tie_photo};
 pub use params::{CameraParams, Param, parse_free};
 pub use resection::{ResectFit, ResectOptions, resect_photo};
-pub use start::{start_from_gcps, start_from_position, start_without_position};
 pub use terrain::{
     EdgeFit, EdgeOptions, LabelTexture, LabelledTerrain, TerrainFit, TerrainOptions,
     parallax_px_per_m, refine_edges, register_to_terrain,
 };
-pub use ties::{TieFit, TieOptions, tie_photo};

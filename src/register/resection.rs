@@ -45,10 +45,10 @@ use image::RgbImage;
 use rayon::prelude::*;
 
 use super::bundle::PairTie;
-use super::fit::{CameraFit, FitOptions, GcpStatus, fit_camera_local};
-use super::gcp::Gcp;
+use super::gcps::fit::{CameraFit, FitOptions, GcpStatus, fit_camera_local};
+use super::gcps::gcp::Gcp;
+use super::gcps::p3p::start_from_gcps_p3p;
 use super::grey::{Grey, grid_centres};
-use super::p3p::start_from_gcps_p3p;
 use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
 use crate::error::Result;

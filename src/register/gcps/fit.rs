@@ -15,7 +15,7 @@
 //! The solver works on offsets from the start camera's values (its trust region scales with
 //! the parameters' norm, so absolute UTM coordinates would let a first step move the camera
 //! by kilometres). With the position free, the fit is also run from the GCPs' own pose
-//! (DLT + RANSAC, [`super::start_from_gcps`]) and the better result kept. GCPs whose
+//! (DLT + RANSAC, [`crate::register::start_from_gcps`]) and the better result kept. GCPs whose
 //! observed pixel lies outside the image, or that lie behind the start camera,
 //! are left out and reported. Reported: per GCP the residual and its status; the RMSE of
 //! the fitted GCPs (unweighted, pixels) and of the inliers; `AIC = n ln(RSS / n) + 2k` (n =
@@ -26,11 +26,11 @@
 use levenberg_marquardt::LevenbergMarquardt;
 use nalgebra::DVector;
 
-use super::gcp::Gcp;
-use super::lsq::{Lsq, Residuals, jacobian, params_at};
-use super::params::{CameraParams, Param};
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
+use crate::register::gcps::gcp::Gcp;
+use crate::register::lsq::{Lsq, Residuals, jacobian, params_at};
+use crate::register::params::{CameraParams, Param};
 
 /// How [`fit_camera`] fits.
 #[derive(Clone, Debug, PartialEq)]
@@ -189,7 +189,7 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
     if !position_free || gcps.len() < 6 {
         return Ok(fit);
     }
-    let Ok(dlt) = super::start::start_from_gcps(start.width, start.height, gcps) else {
+    let Ok(dlt) = crate::register::gcps::start::start_from_gcps(start.width, start.height, gcps) else {
         return Ok(fit);
     };
     let other_start = CameraModel {

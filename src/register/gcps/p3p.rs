@@ -8,15 +8,15 @@
 //! formed here by polynomial arithmetic (no hand-expanded coefficients) and solved through
 //! the eigenvalues of its companion matrix, each real root polished by Newton steps. Every
 //! root with positive distances gives the camera-frame points, and the pose is the rigid
-//! motion between them and the world points (Procrustes, [`super::rotation_from_bearings`]).
+//! motion between them and the world points (Procrustes, [`crate::register::rotation_from_bearings`]).
 
 use glam::{DMat3, DVec3};
 use nalgebra::Matrix4;
 
-use super::bearings::{rotation_from_bearings, sample_picker, search_focal};
-use super::gcp::Gcp;
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
+use crate::register::gcps::bearings::{rotation_from_bearings, sample_picker, search_focal};
+use crate::register::gcps::gcp::Gcp;
 
 /// The poses (world-to-camera rotation, camera position) under which unit bearings
 /// `bearing[i]` (camera frame: x right, y down, z forward) point at world points `world[i]`;

@@ -9,15 +9,15 @@
 //! `Σ b_cam b_worldᵀ`. Without `f`, the horizontal field of view is searched over 3°–140°
 //! on a log grid of 96 steps, then by golden section around the best step, minimising the
 //! median reprojection error (robust to a minority of bad GCPs); the result starts
-//! [`super::fit_camera`].
+//! [`crate::register::fit_camera`].
 
 use glam::{DMat3, DVec3};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-use super::bearings::{rotation_from_bearings, sample_picker, search_focal};
-use super::gcp::Gcp;
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
+use crate::register::gcps::bearings::{rotation_from_bearings, sample_picker, search_focal};
+use crate::register::gcps::gcp::Gcp;
 
 /// A start camera at `position` for a `width × height` photo from `gcps` (see the
 /// module docs (`src/register/start.rs`)); `focal_px` fixes the focal length. Errors with fewer than 2 GCPs
@@ -156,7 +156,7 @@ pub fn start_from_gcps(width: u32, height: u32, gcps: &[Gcp]) -> Result<CameraMo
 }
 
 /// A start camera with the position unknown, and how it was found: P3P + RANSAC
-/// ([`super::start_from_gcps_p3p`], ≥ 4 GCPs, `focal_px` fixed or searched) and, with ≥ 6
+/// ([`crate::register::start_from_gcps_p3p`], ≥ 4 GCPs, `focal_px` fixed or searched) and, with ≥ 6
 /// GCPs, the DLT ([`start_from_gcps`]); the one that reprojects more GCPs within 2 % of the
 /// image diagonal (then the smaller capped error sum) wins, P3P on ties. Errors when neither
 /// gives a camera.
@@ -167,13 +167,13 @@ pub fn start_without_position(
     focal_px: Option<f64>,
 ) -> Result<(CameraModel, &'static str)> {
     let tol = 0.02 * (width as f64).hypot(height as f64);
-    let p3p = super::start_from_gcps_p3p(width, height, gcps, focal_px);
+    let p3p = crate::register::start_from_gcps_p3p(width, height, gcps, focal_px);
     let dlt = (gcps.len() >= 6).then(|| start_from_gcps(width, height, gcps));
     match (p3p, dlt) {
         (Ok(a), Some(Ok(b))) => {
             let (sa, sb) = (
-                super::p3p::score(&a, gcps, tol),
-                super::p3p::score(&b, gcps, tol),
+                crate::register::gcps::p3p::score(&a, gcps, tol),
+                crate::register::gcps::p3p::score(&b, gcps, tol),
             );
             if sb.0 > sa.0 || (sb.0 == sa.0 && sb.1 < sa.1) {
                 Ok((b, "DLT + RANSAC"))

@@ -1,5 +1,5 @@
 //! Which patch matches one rotation explains: a RANSAC over pairs of matches for photos taken
-//! from the same place ([`super::ties`]), so that a surface that moved between the shots (a
+//! from the same place ([`crate::register::pairs::ties`]), so that a surface that moved between the shots (a
 //! glacier, clouds, water) cannot pull the rotation fit, and so that a scene with two
 //! motions of similar support is recognised as ambiguous instead of being fitted to one of
 //! them silently.
@@ -7,7 +7,7 @@
 //! Model: photo B is photo A's camera turned (same position and intrinsics). A match's
 //! world bearing is A's ray through its pixel in A; its bearing in B's camera frame is the
 //! camera-frame ray of A's intrinsics through its pixel in B. Two matches with bearings at
-//! least 0.1° apart give a rotation ([`super::rotation_from_bearings`]); a match agrees with
+//! least 0.1° apart give a rotation ([`crate::register::rotation_from_bearings`]); a match agrees with
 //! it when the angle between the rotated world bearing and its B bearing, times the focal
 //! length, is at most the tolerance (pixels). Hypotheses: every pair when there are at most
 //! 2 000, else 2 000 pairs from a fixed pseudo-random sequence. The largest set wins (ties:
@@ -16,9 +16,9 @@
 
 use glam::DVec3;
 
-use super::bearings::{rotation_from_bearings, sample_picker};
-use super::pair::PatchMatch;
 use crate::camera::CameraModel;
+use crate::register::gcps::bearings::{rotation_from_bearings, sample_picker};
+use crate::register::pairs::pair::PatchMatch;
 
 /// Most rotation hypotheses tried.
 const MAX_HYPOTHESES: usize = 2000;

@@ -1,12 +1,12 @@
 //! Photo-to-photo ties: a photo taken from the same place as an already placed one (a
 //! camera on a tripod or a time-lapse station that turned between shots) gets its rotation
-//! from patch matches between the two ([`super::match_photos`], [`super::fit_rotation`]),
+//! from patch matches between the two ([`crate::register::match_photos`], [`crate::register::fit_rotation`]),
 //! where the terrain alone cannot place it (little skyline, few silhouettes).
 //!
 //! The tied photo takes the anchor's position and intrinsics (the same camera body); only
 //! matches whose ray from the anchor meets a surface the caller calls stable are used (the
 //! terrain, not sky or clouds; optionally not a moving glacier). Of those, the matches one
-//! rotation explains within [`TieOptions::consensus_px`] ([`super::rotation_consensus`])
+//! rotation explains within [`TieOptions::consensus_px`] ([`crate::register::rotation_consensus`])
 //! go to the robust fit; when a second rotation explains at least half as many of the
 //! others (and at least [`TieOptions::min_inliers`]), part of the scene moved and the tie is
 //! refused as ambiguous. The tie is accepted when at
@@ -19,11 +19,11 @@ use std::time::Instant;
 use glam::DVec3;
 use image::RgbImage;
 
-use super::consensus::rotation_consensus;
-use super::fit::GcpStatus;
-use super::pair::{MatchOptions, fit_rotation, match_photos, stable_matches};
 use crate::camera::CameraModel;
 use crate::error::Result;
+use crate::register::gcps::fit::GcpStatus;
+use crate::register::pairs::consensus::rotation_consensus;
+use crate::register::pairs::pair::{MatchOptions, fit_rotation, match_photos, stable_matches};
 
 /// When a tie is tried and accepted.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,7 +37,7 @@ pub struct TieOptions {
     /// Most rotation (degrees) between the given camera and the tied one.
     pub max_turn_deg: f64,
     /// Tolerance (pixels) of the consensus that picks the matches one rotation explains
-    /// ([`super::rotation_consensus`]) before the robust fit.
+    /// ([`crate::register::rotation_consensus`]) before the robust fit.
     pub consensus_px: f64,
 }
 

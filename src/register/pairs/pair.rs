@@ -15,7 +15,7 @@
 //!
 //! Fit: each match becomes a ground control point for B: the world point 10 km along A's
 //! ray through the matched pixel (A's distortion removed), observed at B's pixel. With B's
-//! position fixed at A's, only B's angles are fitted ([`super::fit_camera`], robust): the
+//! position fixed at A's, only B's angles are fitted ([`crate::register::fit_camera`], robust): the
 //! points are effectively at infinity, so the fit is the rotation alone and its RMSE is the
 //! match residual in pixels.
 
@@ -23,12 +23,12 @@ use glam::DVec3;
 use image::RgbImage;
 use rayon::prelude::*;
 
-use super::fit::{CameraFit, FitOptions, fit_camera};
-use super::gcp::Gcp;
-use super::grey::{Grey, grid_centres};
-use super::params::Param;
 use crate::camera::CameraModel;
 use crate::error::{Error, Result};
+use crate::register::gcps::fit::{CameraFit, FitOptions, fit_camera};
+use crate::register::gcps::gcp::Gcp;
+use crate::register::grey::{Grey, grid_centres};
+use crate::register::params::Param;
 
 /// How [`match_photos`] matches.
 #[derive(Clone, Copy, Debug, PartialEq)]
