@@ -169,6 +169,44 @@ pub fn register_photos_with(
     warn: &mut dyn FnMut(&str),
 ) -> Result<Vec<PhotoRegistration>> {
     let store = Store::open(store_dir)?;
+    check_tie_settings(&store, specs, ties)?;
+    if opts.labels == LabelTexture::Best {
+        check_photo_labels(&store, specs, &ties.known, warn)?;
+    }
+    // each photo decoded once while memory allows (anchors and label sources are reused)
+    let images = DecodedPhotos::new(specs, DEFAULT_BUDGET_BYTES);
+    let (dir, stem) = output_dir_and_stem(out);
+    // known photos first, then each other photo: tied to a placed photo from the same place
+    // if one is, else resected, else registered against the terrain; last, ties and
+    // resections for the photos the terrain did not place, to photos placed after them
+    let mut run = Registration::new(&store, specs, &images, opts, ties);
+    for i in 0..specs.len() {
+        if run.fits[i].is_none() {
+            run.place(i, warn)?;
+        }
+    }
+    for i in 0..specs.len() {
+        run.retry_if_unplaced(i)?;
+    }
+    if opts.labels == LabelTexture::Best {
+        second_pass_against_photos(
+            &store,
+            specs,
+            &images,
+            &mut run.fits,
+            &run.trusted,
+            opts,
+            warn,
+        )?;
+    }
+    let results = run.into_results(&dir, &stem, warn)?;
+    write_report(&dir, &stem, opts, &results)?;
+    write_photo_list(out, &dir, specs, &results)?;
+    Ok(results)
+}
+
+/// Refuses a known photo not in the list and a moving mask not of the store's DEM size.
+fn check_tie_settings(store: &Store, specs: &[PhotoSpec], ties: &TieSettings) -> Result<()> {
     if let Some(k) = ties
         .known
         .iter()
@@ -190,11 +228,11 @@ pub fn register_photos_with(
             )));
         }
     }
-    if opts.labels == LabelTexture::Best {
-        check_photo_labels(&store, specs, &ties.known, warn)?;
-    }
-    // each photo decoded once while memory allows (anchors and label sources are reused)
-    let images = DecodedPhotos::new(specs, DEFAULT_BUDGET_BYTES);
+    Ok(())
+}
+
+/// The folder of `out` and the stem its side files are named after.
+fn output_dir_and_stem(out: &Path) -> (PathBuf, String) {
     let dir = out
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -204,166 +242,225 @@ pub fn register_photos_with(
         || "registered".to_string(),
         |s| s.to_string_lossy().into_owned(),
     );
-    // known photos first, then each other photo: tied to a placed photo from the same place
-    // if one is, else registered against the terrain; last, ties for the photos the terrain
-    // did not place, to photos placed after them
-    let mut fits: Vec<Option<(TerrainFit, &'static str)>> = specs
-        .iter()
-        .map(|s| {
-            ties.known
-                .contains(&s.name)
-                .then(|| (given(&s.camera), "known"))
-        })
-        .collect();
-    let mut tied: Vec<Option<(String, TieFit)>> = vec![None; specs.len()];
-    let georef = store.manifest.georef;
-    let stable = |p: glam::DVec3| {
-        ties.moving_mask
-            .as_ref()
-            .is_none_or(|m| !georef.mask_covers(m, p.x, p.y))
-    };
-    // the tie of photo i to the nearest placed photo within reach not tried yet, if any
-    let try_tie = |i: usize,
-                   fits: &[Option<(TerrainFit, &'static str)>],
-                   tried: Option<&str>|
-     -> Result<Option<(String, TieFit)>> {
-        let here = specs[i].camera.position;
-        let anchor = (0..specs.len())
-            .filter(|&j| j != i && Some(specs[j].name.as_str()) != tried)
-            .filter_map(|j| {
-                let (f, _) = fits[j].as_ref()?;
-                f.converged
-                    .then(|| (f.camera.position.distance(here), j, f.camera))
+    (dir, stem)
+}
+
+/// A photo's camera so far and how it was found.
+type Placed = Option<(TerrainFit, &'static str)>;
+
+/// One `register` run: every photo's fit, tie and resection so far, and whose position
+/// may anchor a resection.
+struct Registration<'a> {
+    store: &'a Store,
+    specs: &'a [PhotoSpec],
+    images: &'a DecodedPhotos<'a>,
+    opts: &'a TerrainOptions,
+    ties: &'a TieSettings,
+    fits: Vec<Placed>,
+    tied: Vec<Option<(String, TieFit)>>,
+    resected: Vec<Option<(String, ResectFit)>>,
+    /// Known, resected, or tied to such a photo.
+    trusted: Vec<bool>,
+}
+
+impl<'a> Registration<'a> {
+    /// The run before any photo is placed: known photos keep their cameras.
+    fn new(
+        store: &'a Store,
+        specs: &'a [PhotoSpec],
+        images: &'a DecodedPhotos<'a>,
+        opts: &'a TerrainOptions,
+        ties: &'a TieSettings,
+    ) -> Registration<'a> {
+        let fits: Vec<Placed> = specs
+            .iter()
+            .map(|s| {
+                ties.known
+                    .contains(&s.name)
+                    .then(|| (given(&s.camera), "known"))
             })
-            .filter(|(d, ..)| *d <= ties.options.max_distance_m)
-            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let Some((_, j, anchor)) = anchor else {
+            .collect();
+        let trusted = fits.iter().map(|f| f.is_some()).collect();
+        Registration {
+            store,
+            specs,
+            images,
+            opts,
+            ties,
+            fits,
+            tied: vec![None; specs.len()],
+            resected: vec![None; specs.len()],
+            trusted,
+        }
+    }
+
+    /// Whether a world point lies on terrain that does not move (outside the moving mask).
+    fn stable(&self) -> impl Fn(glam::DVec3) -> bool + Sync + 'a {
+        let georef = self.store.manifest.georef;
+        let mask = self.ties.moving_mask.as_ref();
+        move |p| mask.is_none_or(|m| !georef.mask_covers(m, p.x, p.y))
+    }
+
+    /// Whether the photo named `anchor` has a trusted position.
+    fn trusted_anchor(&self, anchor: &str) -> bool {
+        self.specs
+            .iter()
+            .position(|s| s.name == anchor)
+            .is_some_and(|j| self.trusted[j])
+    }
+
+    /// The nearest photo to photo `i` within `reach` metres that `eligible` allows, not
+    /// `tried` already: its index and camera.
+    fn nearest_anchor(
+        &self,
+        i: usize,
+        reach: f64,
+        tried: Option<&str>,
+        eligible: impl Fn(usize, &TerrainFit) -> bool,
+    ) -> Option<(usize, CameraModel)> {
+        let here = self.specs[i].camera.position;
+        (0..self.specs.len())
+            .filter(|&j| j != i && Some(self.specs[j].name.as_str()) != tried)
+            .filter_map(|j| {
+                let (f, _) = self.fits[j].as_ref()?;
+                eligible(j, f).then(|| (f.camera.position.distance(here), j, f.camera))
+            })
+            .filter(|(d, ..)| *d <= reach)
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+            .map(|(_, j, camera)| (j, camera))
+    }
+
+    /// The tie of photo `i` to the nearest placed photo within reach not tried yet, if any.
+    fn try_tie(&self, i: usize, tried: Option<&str>) -> Result<Option<(String, TieFit)>> {
+        let reach = self.ties.options.max_distance_m;
+        let Some((j, anchor)) = self.nearest_anchor(i, reach, tried, |_, f| f.converged) else {
             return Ok(None);
         };
-        let (a_img, p_img) = (images.get(j)?, images.get(i)?);
-        let terrain = LabelledTerrain::new(&store, anchor.position)?;
+        let (a_img, p_img) = (self.images.get(j)?, self.images.get(i)?);
+        let terrain = LabelledTerrain::new(self.store, anchor.position)?;
         let tie = tie_photo(
             &anchor,
             &a_img,
             &p_img,
-            &specs[i].camera,
+            &self.specs[i].camera,
             |o, d| terrain.hit(o, d),
-            stable,
-            &ties.options,
+            self.stable(),
+            &self.ties.options,
         )
-        .map_err(|e| Error::BadOption(format!("{}: {e}", specs[i].image_path.display())))?;
-        Ok(Some((specs[j].name.clone(), tie)))
-    };
-    // photo i resected against the nearest photo with a trusted position within reach, not
-    // `tried` already
-    let try_resect = |i: usize,
-                      fits: &[Option<(TerrainFit, &'static str)>],
-                      trusted: &[bool],
-                      tried: Option<&str>|
-     -> Result<Option<(String, ResectFit)>> {
-        if !(ties.resect_distance_m > 0.0) {
+        .map_err(|e| Error::BadOption(format!("{}: {e}", self.specs[i].image_path.display())))?;
+        Ok(Some((self.specs[j].name.clone(), tie)))
+    }
+
+    /// Photo `i` resected against the nearest photo with a trusted position within reach,
+    /// not `tried` already.
+    fn try_resect(&self, i: usize, tried: Option<&str>) -> Result<Option<(String, ResectFit)>> {
+        if !(self.ties.resect_distance_m > 0.0) {
             return Ok(None);
         }
-        let here = specs[i].camera.position;
-        let anchor = (0..specs.len())
-            .filter(|&j| j != i && trusted[j] && Some(specs[j].name.as_str()) != tried)
-            .filter_map(|j| {
-                let (f, _) = fits[j].as_ref()?;
-                Some((f.camera.position.distance(here), j, f.camera))
-            })
-            .filter(|(d, ..)| *d <= ties.resect_distance_m)
-            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let Some((_, j, anchor)) = anchor else {
+        let reach = self.ties.resect_distance_m;
+        let Some((j, anchor)) = self.nearest_anchor(i, reach, tried, |j, _| self.trusted[j]) else {
             return Ok(None);
         };
-        let (a_img, p_img) = (images.get(j)?, images.get(i)?);
-        let terrain = LabelledTerrain::new(&store, anchor.position)?;
-        // the same camera body (EXIF make, model, serial, lens, focal length) and image
-        // size: the anchor's intrinsics, the focal length not fitted (it would trade
-        // against the distance along the view)
-        let body = |k: usize| crate::camera::exif_camera_body(&specs[k].image_path);
-        let same_body = (anchor.width, anchor.height)
-            == (specs[i].camera.width, specs[i].camera.height)
-            && matches!((body(i)?, body(j)?), (Some(a), Some(b)) if a == b);
-        let (rough, mut resect_opts) = (specs[i].camera, ties.resection.clone());
-        // the terrain the points are put on: the finest level, within its error bound
-        resect_opts.surface_error_m = store.manifest.max_error;
-        let rough = if same_body {
-            resect_opts
-                .free
-                .retain(|p| !matches!(p, Param::F | Param::Fx | Param::Fy));
-            CameraModel {
-                fx: anchor.fx,
-                fy: anchor.fy,
-                cx: anchor.cx,
-                cy: anchor.cy,
-                k1: anchor.k1,
-                k2: anchor.k2,
-                ..rough
-            }
-        } else {
-            rough
-        };
+        let (a_img, p_img) = (self.images.get(j)?, self.images.get(i)?);
+        let terrain = LabelledTerrain::new(self.store, anchor.position)?;
+        let (rough, resect_opts) = self.resection_start(i, j, &anchor)?;
         let fit = resect_photo(
             &anchor,
             &a_img,
             &p_img,
             &rough,
             |o, d| terrain.hit(o, d),
-            stable,
+            self.stable(),
             &resect_opts,
         )
-        .map_err(|e| Error::BadOption(format!("{}: {e}", specs[i].image_path.display())))?;
-        Ok(Some((specs[j].name.clone(), fit)))
-    };
-    let mut resected: Vec<Option<(String, ResectFit)>> = vec![None; specs.len()];
-    // whose position may anchor a resection: known, resected, or tied to such a photo
-    let mut trusted: Vec<bool> = fits.iter().map(|f| f.is_some()).collect();
-    let trusted_anchor = |anchor: &str, trusted: &[bool]| {
-        specs
-            .iter()
-            .position(|s| s.name == anchor)
-            .is_some_and(|j| trusted[j])
-    };
-    for i in 0..specs.len() {
-        if fits[i].is_some() {
-            continue;
+        .map_err(|e| Error::BadOption(format!("{}: {e}", self.specs[i].image_path.display())))?;
+        Ok(Some((self.specs[j].name.clone(), fit)))
+    }
+
+    /// The start camera and options of photo `i`'s resection against photo `j`: with the
+    /// same camera body (EXIF make, model, serial, lens, focal length) and image size, the
+    /// anchor's intrinsics and the focal length not fitted (it would trade against the
+    /// distance along the view).
+    fn resection_start(
+        &self,
+        i: usize,
+        j: usize,
+        anchor: &CameraModel,
+    ) -> Result<(CameraModel, ResectOptions)> {
+        let specs = self.specs;
+        let body = |k: usize| crate::camera::exif_camera_body(&specs[k].image_path);
+        let same_body = (anchor.width, anchor.height)
+            == (specs[i].camera.width, specs[i].camera.height)
+            && matches!((body(i)?, body(j)?), (Some(a), Some(b)) if a == b);
+        let (rough, mut resect_opts) = (specs[i].camera, self.ties.resection.clone());
+        // the terrain the points are put on: the finest level, within its error bound
+        resect_opts.surface_error_m = self.store.manifest.max_error;
+        if !same_body {
+            return Ok((rough, resect_opts));
         }
-        if let Some((anchor, tie)) = try_tie(i, &fits, None)? {
+        resect_opts
+            .free
+            .retain(|p| !matches!(p, Param::F | Param::Fx | Param::Fy));
+        let rough = CameraModel {
+            fx: anchor.fx,
+            fy: anchor.fy,
+            cx: anchor.cx,
+            cy: anchor.cy,
+            k1: anchor.k1,
+            k2: anchor.k2,
+            ..rough
+        };
+        Ok((rough, resect_opts))
+    }
+
+    /// Places photo `i`: tied to a placed photo from the same place, else resected against
+    /// a trusted one, else registered against the terrain.
+    fn place(&mut self, i: usize, warn: &mut dyn FnMut(&str)) -> Result<()> {
+        if let Some((anchor, tie)) = self.try_tie(i, None)? {
             let accepted = tie.accepted.then(|| {
                 let mut f = given(&tie.camera);
                 f.seconds = tie.seconds;
                 f
             });
-            trusted[i] = accepted.is_some() && trusted_anchor(&anchor, &trusted);
-            tied[i] = Some((anchor, tie));
+            self.trusted[i] = accepted.is_some() && self.trusted_anchor(&anchor);
+            self.tied[i] = Some((anchor, tie));
             if let Some(f) = accepted {
-                fits[i] = Some((f, "tie"));
-                continue;
+                self.fits[i] = Some((f, "tie"));
+                return Ok(());
             }
         }
-        if let Some((anchor, r)) = try_resect(i, &fits, &trusted, None)? {
+        if let Some((anchor, r)) = self.try_resect(i, None)? {
             let accepted = r.accepted.then(|| {
                 let mut f = given(&r.camera);
                 f.seconds = r.seconds;
                 f
             });
-            resected[i] = Some((anchor, r));
+            self.resected[i] = Some((anchor, r));
             if let Some(f) = accepted {
-                fits[i] = Some((f, "resection"));
-                trusted[i] = true;
-                continue;
+                self.fits[i] = Some((f, "resection"));
+                self.trusted[i] = true;
+                return Ok(());
             }
         }
-        let spec = &specs[i];
-        let photo = images.get(i)?;
-        let mut terrain = LabelledTerrain::for_options(&store, spec.camera.position, opts)?;
-        if opts.labels == LabelTexture::Best {
+        self.register_against_terrain(i, warn)
+    }
+
+    /// Photo `i` registered against the terrain (labelled by the trusted photos placed so
+    /// far with `--textures best`).
+    fn register_against_terrain(&mut self, i: usize, warn: &mut dyn FnMut(&str)) -> Result<()> {
+        let spec = &self.specs[i];
+        let photo = self.images.get(i)?;
+        let mut terrain =
+            LabelledTerrain::for_options(self.store, spec.camera.position, self.opts)?;
+        if self.opts.labels == LabelTexture::Best {
             // the photos placed so far with trusted cameras (known, or tied or resected to
             // such a photo) label the terrain they show
-            set_label_photos(&mut terrain, &images, &fits, |j| j != i && trusted[j])?;
+            let trusted = &self.trusted;
+            set_label_photos(&mut terrain, self.images, &self.fits, |j| {
+                j != i && trusted[j]
+            })?;
         }
-        let fit = register_to_terrain(&terrain, &photo, &spec.camera, opts)
+        let fit = register_to_terrain(&terrain, &photo, &spec.camera, self.opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         if fit.photo_label_share.is_some_and(|s| s < 0.01) {
             warn(&format!(
@@ -372,94 +469,130 @@ pub fn register_photos_with(
                 spec.name
             ));
         }
-        fits[i] = Some((fit, "terrain"));
+        self.fits[i] = Some((fit, "terrain"));
+        Ok(())
     }
-    for i in 0..specs.len() {
-        let unplaced = fits[i]
+
+    /// A photo the terrain did not place tries a resection, then a tie, against photos
+    /// placed after it (anchors not tried before).
+    fn retry_if_unplaced(&mut self, i: usize) -> Result<()> {
+        let unplaced = self.fits[i]
             .as_ref()
             .is_some_and(|(f, m)| !f.converged && *m == "terrain");
         if !unplaced {
-            continue;
+            return Ok(());
         }
-        let earlier = fits[i].as_ref().map_or(0.0, |(f, _)| f.seconds);
-        let tried = resected[i].as_ref().map(|(a, _)| a.clone());
-        if let Some((anchor, r)) = try_resect(i, &fits, &trusted, tried.as_deref())? {
+        let earlier = self.fits[i].as_ref().map_or(0.0, |(f, _)| f.seconds);
+        let tried = self.resected[i].as_ref().map(|(a, _)| a.clone());
+        if let Some((anchor, r)) = self.try_resect(i, tried.as_deref())? {
             if r.accepted {
                 let mut f = given(&r.camera);
                 f.seconds = r.seconds + earlier;
-                fits[i] = Some((f, "resection"));
-                trusted[i] = true;
-                resected[i] = Some((anchor, r));
-                continue;
+                self.fits[i] = Some((f, "resection"));
+                self.trusted[i] = true;
+                self.resected[i] = Some((anchor, r));
+                return Ok(());
             }
-            resected[i] = Some((anchor, r));
+            self.resected[i] = Some((anchor, r));
         }
-        let tried = tied[i].as_ref().map(|(a, _)| a.clone());
-        if let Some((anchor, tie)) = try_tie(i, &fits, tried.as_deref())? {
+        let tried = self.tied[i].as_ref().map(|(a, _)| a.clone());
+        if let Some((anchor, tie)) = self.try_tie(i, tried.as_deref())? {
             if tie.accepted {
                 let mut f = given(&tie.camera);
                 f.seconds = tie.seconds + earlier;
-                fits[i] = Some((f, "tie"));
-                trusted[i] = trusted_anchor(&anchor, &trusted);
+                self.fits[i] = Some((f, "tie"));
+                self.trusted[i] = self.trusted_anchor(&anchor);
             }
-            tied[i] = Some((anchor, tie));
+            self.tied[i] = Some((anchor, tie));
         }
+        Ok(())
     }
-    if opts.labels == LabelTexture::Best {
-        second_pass_against_photos(&store, specs, &images, &mut fits, &trusted, opts, warn)?;
-    }
-    let fits: Vec<(TerrainFit, &'static str)> = fits
-        .into_iter()
-        .zip(specs)
-        .map(|(f, s)| f.unwrap_or_else(|| (given(&s.camera), "known")))
-        .collect();
-    let mut results = Vec::with_capacity(specs.len());
-    for (((spec, (fit, method)), tie), resection) in specs.iter().zip(fits).zip(tied).zip(resected)
-    {
-        if let Some(why) = &fit.reason {
-            let mut tie_note = match &tie {
-                Some((anchor, t)) => format!(
-                    "; tie to {anchor}: {}",
-                    t.reason.as_deref().unwrap_or("accepted")
-                ),
-                None => String::new(),
-            };
-            if let Some((anchor, r)) = &resection {
-                tie_note += &format!(
-                    "; resection against {anchor}: {}",
-                    r.reason.as_deref().unwrap_or("accepted")
-                );
-            }
-            warn(&format!(
-                "{}: not registered, keeping its given camera: {why}{tie_note}",
-                spec.name
-            ));
-        }
-        let safe: String = spec
-            .name
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                    c
-                } else {
-                    '_'
-                }
-            })
+
+    /// Each photo's registration, its camera file written as `DIR/STEM.NAME.camera.json`
+    /// (a photo nothing placed keeps its given camera, with a warning).
+    fn into_results(
+        self,
+        dir: &Path,
+        stem: &str,
+        warn: &mut dyn FnMut(&str),
+    ) -> Result<Vec<PhotoRegistration>> {
+        let specs = self.specs;
+        let fits: Vec<(TerrainFit, &'static str)> = self
+            .fits
+            .into_iter()
+            .zip(specs)
+            .map(|(f, s)| f.unwrap_or_else(|| (given(&s.camera), "known")))
             .collect();
-        let camera_file = dir.join(format!("{stem}.{safe}.camera.json"));
-        let text = serde_json::to_string_pretty(&camera_to_json(&fit.camera))
-            .map_err(|e| Error::BadOption(e.to_string()))?;
-        write_atomic(&camera_file, text.as_bytes())?;
-        results.push(PhotoRegistration {
-            name: spec.name.clone(),
-            rough: spec.camera,
-            fit,
-            method,
-            tie,
-            resection,
-            camera_file,
-        });
+        let mut results = Vec::with_capacity(specs.len());
+        for (((spec, (fit, method)), tie), resection) in
+            specs.iter().zip(fits).zip(self.tied).zip(self.resected)
+        {
+            if let Some(why) = &fit.reason {
+                warn(&format!(
+                    "{}: not registered, keeping its given camera: {why}{}",
+                    spec.name,
+                    attempts_note(&tie, &resection)
+                ));
+            }
+            let camera_file = dir.join(format!("{stem}.{}.camera.json", safe_name(&spec.name)));
+            let text = serde_json::to_string_pretty(&camera_to_json(&fit.camera))
+                .map_err(|e| Error::BadOption(e.to_string()))?;
+            write_atomic(&camera_file, text.as_bytes())?;
+            results.push(PhotoRegistration {
+                name: spec.name.clone(),
+                rough: spec.camera,
+                fit,
+                method,
+                tie,
+                resection,
+                camera_file,
+            });
+        }
+        Ok(results)
     }
+}
+
+/// What the tie and the resection of an unregistered photo said (`; tie to A: why`).
+fn attempts_note(
+    tie: &Option<(String, TieFit)>,
+    resection: &Option<(String, ResectFit)>,
+) -> String {
+    let mut note = match tie {
+        Some((anchor, t)) => format!(
+            "; tie to {anchor}: {}",
+            t.reason.as_deref().unwrap_or("accepted")
+        ),
+        None => String::new(),
+    };
+    if let Some((anchor, r)) = resection {
+        note += &format!(
+            "; resection against {anchor}: {}",
+            r.reason.as_deref().unwrap_or("accepted")
+        );
+    }
+    note
+}
+
+/// A photo name as a file name part: ASCII letters, digits, `-` and `_`, the rest `_`.
+fn safe_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Writes `DIR/STEM.report.json`: the textures registered against and each photo's entry.
+fn write_report(
+    dir: &Path,
+    stem: &str,
+    opts: &TerrainOptions,
+    results: &[PhotoRegistration],
+) -> Result<()> {
     let report = json!({
         "textures": opts.labels.name(),
         "photos": results.iter().map(report_entry).collect::<Vec<Value>>(),
@@ -470,12 +603,22 @@ pub fn register_photos_with(
         serde_json::to_string_pretty(&report)
             .map_err(|e| Error::BadOption(e.to_string()))?
             .as_bytes(),
-    )?;
+    )
+}
+
+/// Writes the refined photo list `out` (image paths relative to `dir`; a photo not
+/// registered is marked so, and `project` leaves it out unless asked).
+fn write_photo_list(
+    out: &Path,
+    dir: &Path,
+    specs: &[PhotoSpec],
+    results: &[PhotoRegistration],
+) -> Result<()> {
     let entries: Vec<Value> = specs
         .iter()
-        .zip(&results)
+        .zip(results)
         .map(|(s, r)| {
-            let mut e = json!({ "image": relative_or_absolute(&s.image_path, &dir), "camera": file_name(&r.camera_file) });
+            let mut e = json!({ "image": relative_or_absolute(&s.image_path, dir), "camera": file_name(&r.camera_file) });
             if !r.fit.converged {
                 // the given camera is kept; `project` leaves the photo out unless asked
                 e["registered"] = json!(false);
@@ -492,8 +635,7 @@ pub fn register_photos_with(
         serde_json::to_string_pretty(&json!({ "photos": entries }))
             .map_err(|e| Error::BadOption(e.to_string()))?
             .as_bytes(),
-    )?;
-    Ok(results)
+    )
 }
 
 /// The fit recorded for a camera taken as it is (known, or from a tie): trusted, no search.

@@ -189,7 +189,8 @@ pub fn fit_camera(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Resul
     if !position_free || gcps.len() < 6 {
         return Ok(fit);
     }
-    let Ok(dlt) = crate::register::gcps::start::start_from_gcps(start.width, start.height, gcps) else {
+    let Ok(dlt) = crate::register::gcps::start::start_from_gcps(start.width, start.height, gcps)
+    else {
         return Ok(fit);
     };
     let other_start = CameraModel {
