@@ -248,33 +248,11 @@ pub fn project_store(
     photos: &[PhotoInput],
     opts: &ProjectOptions,
 ) -> Result<ProjectReport> {
-    opts.confidence.validate()?;
-    opts.texture.validate()?;
-    if photos.len() >= u16::MAX as usize {
-        return Err(Error::BadOption(format!(
-            "at most {} photos per run, got {}",
-            u16::MAX - 1,
-            photos.len()
-        )));
-    }
+    check_project_options(photos, opts)?;
     let mut timer = StageTimer::new();
     let _lock = crate::store::StoreLock::acquire(dir, "cliffmap project")?;
     let mut store = Store::open(dir)?;
-    for p in photos {
-        if p.image.dimensions() != (p.camera.width, p.camera.height) {
-            return Err(Error::bad_input(
-                &p.image_path,
-                format!(
-                    "image is {}x{} pixels but its camera is for {}x{}",
-                    p.image.width(),
-                    p.image.height(),
-                    p.camera.width,
-                    p.camera.height
-                ),
-            ));
-        }
-    }
-    let ncells = store.manifest.cells.len();
+    check_photo_sizes(photos)?;
     let levels = store.manifest.quadtree.levels as usize;
     let finest = levels.saturating_sub(1);
     timer.lap("open store");
@@ -289,78 +267,28 @@ pub fn project_store(
         .iter()
         .map(|p| opts.progress.task(steps, &p.name))
         .collect();
-
-    let mut reports: Vec<PhotoReport> = photos
-        .iter()
-        .map(|p| PhotoReport {
-            name: p.name.clone(),
-            image: crate::fsutil::relative_path(&p.image_path, dir),
-            texels_written: 0,
-            texels_supplied: 0,
-            pixels_hit: 0,
-            rejected_silhouette: 0,
-            reconstructed_footprints: 0,
-            colour_gain: [1.0; 3],
-            colour_offset: [0.0; 3],
-            colour_samples: 0,
-        })
-        .collect();
-
-    let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    let mut reports: Vec<PhotoReport> = photos.iter().map(|p| empty_report(p, dir)).collect();
     // Scratch memory of all casts of this run.
     let buffers = FootprintBuffers::default();
-    // Footprints cast for the leveling are kept for the main loop while they are few.
-    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
-    let mut cached_len = 0usize;
-    // The first photo's finest scene is built alongside the leveling (which leaves cores
-    // idle in its smaller steps); it is the first scene the level loop needs, unless the
-    // leveling casts the finest level itself (a photo of at most `leveling_max_pixels`).
-    let prebuild = !opts.level_colours
-        || pyramids
-            .first()
-            .is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
-    let (leveled, first_scene) = rayon::join(
-        || -> Result<Vec<leveling::Leveled>> {
-            if !opts.level_colours {
-                return Ok(Vec::new());
-            }
-            pyramids
-                .iter()
-                .map(|pyr| estimate_leveling(&store, pyr, finest, opts, &buffers))
-                .collect()
-        },
-        || {
-            let first = photos.first().filter(|_| prebuild);
-            first
-                .map(|p| level_scene(&store, finest as u8, p.camera.position, opts))
-                .transpose()
-        },
-    );
-    for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
-        if let Some((level, fs)) = fs
-            && cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS
-        {
-            cached_len += fs.len();
-            cached[i] = Some((level, fs));
-        }
-        transforms[i] = t;
-        reports[i].colour_gain = t.gain;
-        reports[i].colour_offset = t.offset;
-        reports[i].colour_samples = n as u64;
-        bars[i].inc(1);
-    }
-    let mut first_scene = first_scene?;
+    let LevelStart {
+        transforms,
+        mut cached,
+        mut first_scene,
+    } = level_colours(
+        &store,
+        &pyramids,
+        photos,
+        opts,
+        &buffers,
+        &mut reports,
+        &bars,
+    )?;
     timer.lap(if opts.level_colours {
         "colour leveling (alongside the first finest scene)"
     } else {
         "first finest scene"
     });
 
-    let mut records: Vec<Option<PhotoCellRecord>> = vec![None; ncells];
-    let mut level_reports = Vec::with_capacity(levels);
-    // Finest level first; the cells of each level are blended and written while the next
-    // coarser level is cast and splatted (levels are independent, so the output is the same
-    // as level by level).
     // The photo textures are written on a thread of their own (the fsyncs do not hold up
     // the workers); all are on disk before the manifest refers to them.
     let writer = BackgroundWriter::new(dir);
@@ -380,10 +308,177 @@ pub fn project_store(
             .collect(),
         writer: &writer,
     };
+    let (records, level_reports) = project_levels(
+        &run,
+        &mut cached,
+        &mut first_scene,
+        &mut reports,
+        &mut timer,
+        &writer,
+    )?;
+    writer.finish()?;
+    timer.lap("photo textures on disk");
+    for pb in &bars {
+        pb.finish();
+    }
+    warn_photos_without_terrain(&reports);
+
+    let cells_written = records.iter().filter(|r| r.is_some()).count();
+    for (c, r) in store.manifest.cells.iter_mut().zip(records) {
+        c.photo = r;
+    }
+    let settings = photo_settings(opts, reports, level_reports);
+    store.manifest.photos = Some(settings.clone());
+    let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);
+    write_stats(dir, &store.manifest, threshold)?;
+    store.manifest.write(dir)?;
+    remove_stale_photo_files(dir, &store.manifest.cells);
+    timer.lap("manifest and stats");
+    Ok(ProjectReport {
+        settings,
+        cells_written,
+        stage_seconds: timer.laps,
+    })
+}
+
+/// Refuses invalid confidence or texture options and more photos than a run can number.
+fn check_project_options(photos: &[PhotoInput], opts: &ProjectOptions) -> Result<()> {
+    opts.confidence.validate()?;
+    opts.texture.validate()?;
+    if photos.len() >= u16::MAX as usize {
+        return Err(Error::BadOption(format!(
+            "at most {} photos per run, got {}",
+            u16::MAX - 1,
+            photos.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses a photo whose image size differs from its camera's, naming the image.
+fn check_photo_sizes(photos: &[PhotoInput]) -> Result<()> {
+    for p in photos {
+        if p.image.dimensions() != (p.camera.width, p.camera.height) {
+            return Err(Error::bad_input(
+                &p.image_path,
+                format!(
+                    "image is {}x{} pixels but its camera is for {}x{}",
+                    p.image.width(),
+                    p.image.height(),
+                    p.camera.width,
+                    p.camera.height
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A photo's report before anything is projected.
+fn empty_report(p: &PhotoInput, dir: &Path) -> PhotoReport {
+    PhotoReport {
+        name: p.name.clone(),
+        image: crate::fsutil::relative_path(&p.image_path, dir),
+        texels_written: 0,
+        texels_supplied: 0,
+        pixels_hit: 0,
+        rejected_silhouette: 0,
+        reconstructed_footprints: 0,
+        colour_gain: [1.0; 3],
+        colour_offset: [0.0; 3],
+        colour_samples: 0,
+    }
+}
+
+/// What the level loop starts from: each photo's colour transform, the footprints the
+/// leveling cast (kept while they are few), and the first photo's finest scene if it was
+/// built alongside.
+struct LevelStart {
+    transforms: Vec<ColourTransform>,
+    cached: Vec<Option<(usize, FootprintSet)>>,
+    first_scene: Option<LevelScene>,
+}
+
+/// Fits each photo's colour leveling (when `opts.level_colours`) while the first photo's
+/// finest scene is built (the leveling leaves cores idle in its smaller steps; the scene is
+/// the first the level loop needs, unless the leveling casts the finest level itself: a
+/// photo of at most `leveling_max_pixels`). Records the transforms in `reports`.
+fn level_colours(
+    store: &Store,
+    pyramids: &[PhotoPyramid],
+    photos: &[PhotoInput],
+    opts: &ProjectOptions,
+    buffers: &FootprintBuffers,
+    reports: &mut [PhotoReport],
+    bars: &[Box<dyn ProgressTask>],
+) -> Result<LevelStart> {
+    let finest = (store.manifest.quadtree.levels as usize).saturating_sub(1);
+    let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    // Footprints cast for the leveling are kept for the main loop while they are few.
+    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
+    let mut cached_len = 0usize;
+    let prebuild = !opts.level_colours
+        || pyramids
+            .first()
+            .is_some_and(|pyr| leveling_step(pyr, finest, opts) > 0);
+    let (leveled, first_scene) = rayon::join(
+        || -> Result<Vec<leveling::Leveled>> {
+            if !opts.level_colours {
+                return Ok(Vec::new());
+            }
+            pyramids
+                .iter()
+                .map(|pyr| estimate_leveling(store, pyr, finest, opts, buffers))
+                .collect()
+        },
+        || {
+            let first = photos.first().filter(|_| prebuild);
+            first
+                .map(|p| level_scene(store, finest as u8, p.camera.position, opts))
+                .transpose()
+        },
+    );
+    for (i, (t, n, fs)) in leveled?.into_iter().enumerate() {
+        if let Some((level, fs)) = fs
+            && cached_len + fs.len() <= MAX_CACHED_FOOTPRINTS
+        {
+            cached_len += fs.len();
+            cached[i] = Some((level, fs));
+        }
+        transforms[i] = t;
+        reports[i].colour_gain = t.gain;
+        reports[i].colour_offset = t.offset;
+        reports[i].colour_samples = n as u64;
+        bars[i].inc(1);
+    }
+    Ok(LevelStart {
+        transforms,
+        cached,
+        first_scene: first_scene?,
+    })
+}
+
+/// Projects every level, finest first; the cells of each level are blended and written
+/// while the next coarser level is cast and splatted (levels are independent, so the output
+/// is the same as level by level). Returns each manifest cell's new photo record and the
+/// levels' reports (coarsest first).
+fn project_levels(
+    run: &LevelRun,
+    cached: &mut [Option<(usize, FootprintSet)>],
+    first_scene: &mut Option<LevelScene>,
+    reports: &mut [PhotoReport],
+    timer: &mut StageTimer,
+    writer: &BackgroundWriter,
+) -> Result<(Vec<Option<PhotoCellRecord>>, Vec<PhotoLevelReport>)> {
+    let store = run.store;
+    let opts = run.opts;
+    let levels = store.manifest.quadtree.levels as usize;
+    let mut records: Vec<Option<PhotoCellRecord>> = vec![None; store.manifest.cells.len()];
+    let mut level_reports = Vec::with_capacity(levels);
     let mut pending: Option<(usize, LevelProjection)> = None;
     // per photo, its occlusion map (made at the finest level when there are several
     // photos, used by every level)
-    let mut occlusion: Vec<Option<OcclusionMap>> = photos.iter().map(|_| None).collect();
+    let mut occlusion: Vec<Option<OcclusionMap>> = run.pyramids.iter().map(|_| None).collect();
     for level in (0..levels).rev().map(Some).chain([None]) {
         let (finished, projected) = rayon::join(
             || {
@@ -391,7 +486,7 @@ pub fn project_store(
                     let t = std::time::Instant::now();
                     (
                         l,
-                        finish_level(&store, l, p, opts, &writer),
+                        finish_level(store, l, p, opts, writer),
                         t.elapsed().as_secs_f64(),
                     )
                 })
@@ -400,14 +495,7 @@ pub fn project_store(
                 let Some(level) = level else { return Ok(None) };
                 Ok(Some((
                     level,
-                    run.project_level(
-                        level,
-                        &mut occlusion,
-                        &mut cached,
-                        &mut first_scene,
-                        &mut reports,
-                        &mut timer,
-                    )?,
+                    run.project_level(level, &mut occlusion, cached, first_scene, reports, timer)?,
                 )))
             },
         );
@@ -432,13 +520,13 @@ pub fn project_store(
         }
         pending = projected?;
     }
-    writer.finish()?;
-    timer.lap("photo textures on disk");
     level_reports.sort_by_key(|r| r.level);
-    for pb in &bars {
-        pb.finish();
-    }
-    for r in &reports {
+    Ok((records, level_reports))
+}
+
+/// Logs a warning for each photo that wrote no texel.
+fn warn_photos_without_terrain(reports: &[PhotoReport]) {
+    for r in reports {
         if r.texels_written == 0 {
             tracing::warn!(
                 "photo {}: it sees no terrain of the store (no texels written)",
@@ -446,12 +534,15 @@ pub fn project_store(
             );
         }
     }
+}
 
-    let cells_written = records.iter().filter(|r| r.is_some()).count();
-    for (c, r) in store.manifest.cells.iter_mut().zip(records) {
-        c.photo = r;
-    }
-    let settings = PhotoSettings {
+/// The run's settings and reports as the manifest records them.
+fn photo_settings(
+    opts: &ProjectOptions,
+    reports: Vec<PhotoReport>,
+    levels: Vec<PhotoLevelReport>,
+) -> PhotoSettings {
+    PhotoSettings {
         blend: opts.blend.name().to_string(),
         reconstruct: opts.footprint.reconstruct,
         level_colours: opts.level_colours,
@@ -462,19 +553,8 @@ pub fn project_store(
         photo_texture_budget: opts.texture.budget_bytes,
         occlusion_margin_px: opts.confidence.occlusion_margin_px,
         photos: reports,
-        levels: level_reports,
-    };
-    store.manifest.photos = Some(settings.clone());
-    let threshold = store.manifest.reparam.as_ref().map_or(1.1, |r| r.threshold);
-    write_stats(dir, &store.manifest, threshold)?;
-    store.manifest.write(dir)?;
-    remove_stale_photo_files(dir, &store.manifest.cells);
-    timer.lap("manifest and stats");
-    Ok(ProjectReport {
-        settings,
-        cells_written,
-        stage_seconds: timer.laps,
-    })
+        levels,
+    }
 }
 
 /// Removes the photo textures of cells without a photo record (left by an earlier run).
