@@ -234,20 +234,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     if opts.free.is_empty() {
         return Err(Error::BadOption("fit-camera: no free parameters".into()));
     }
-    let (w, h) = (start.width as f64, start.height as f64);
-    let mut status: Vec<Option<GcpStatus>> = gcps
-        .iter()
-        .map(|g| {
-            let [u, v] = g.pixel;
-            if !(u >= -0.5 && v >= -0.5 && u <= w - 0.5 && v <= h - 0.5) {
-                Some(GcpStatus::OutsideImage)
-            } else if start.to_camera(g.world).z <= 0.0 {
-                Some(GcpStatus::BehindCamera)
-            } else {
-                None
-            }
-        })
-        .collect();
+    let mut status = screen_gcps(start, gcps);
     let used: Vec<usize> = (0..gcps.len()).filter(|&i| status[i].is_none()).collect();
     let k = opts.free.len();
     if 2 * used.len() < k {
@@ -263,81 +250,15 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     // the solver works on offsets from the start (its trust region scales with the norm of
     // the parameters: absolute UTM coordinates would allow steps of kilometres)
     let x0 = DVector::from_iterator(k, opts.free.iter().map(|&p| base.get(p)));
-    let mut rho = vec![1.0f64; used.len()];
-    let mut x = DVector::zeros(k);
-    let mut rounds = 0;
-    let mut sigma_px;
-    let solver = LevenbergMarquardt::new().with_patience(200);
-    // per fitted GCP: world point, observed pixel, √(w ρ)
-    let points_of = |rho: &[f64]| -> Vec<(glam::DVec3, [f64; 2], f64)> {
-        used.iter()
-            .zip(rho)
-            .map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt()))
-            .collect()
-    };
-    let norms_at = |x: &DVector<f64>, pr: &Problem| -> Vec<f64> {
-        let cam = pr.params_at(x).camera();
-        used.iter()
-            .map(|&i| {
-                cam.project(gcps[i].world).map_or(BEHIND_PX, |p| {
-                    (p[0] - gcps[i].pixel[0]).hypot(p[1] - gcps[i].pixel[1])
-                })
-            })
-            .collect()
-    };
-    loop {
-        rounds += 1;
-        let problem = Problem {
-            base,
-            free: &opts.free,
-            points: points_of(&rho),
-        };
-        let (
-            Lsq {
-                problem: solved,
-                x: sx,
-            },
-            report,
-        ) = solver.minimize(Lsq {
-            problem,
-            x: x.clone(),
-        });
-        if report.termination.was_usage_issue() || !sx.iter().all(|v| v.is_finite()) {
-            return Err(Error::BadOption(format!(
-                "fit-camera: the solver failed ({:?})",
-                report.termination
-            )));
-        }
-        x = sx;
-        let e = norms_at(&x, &solved);
-        sigma_px = median(&e) / 1.1774;
-        if !opts.robust || rounds >= opts.max_rounds.max(1) {
-            break;
-        }
-        let delta = opts.huber_px.unwrap_or_else(|| (2.45 * sigma_px).max(0.5));
-        let new: Vec<f64> = e
-            .iter()
-            .map(|&ei| if ei <= delta { 1.0 } else { delta / ei })
-            .collect();
-        let change = new
-            .iter()
-            .zip(&rho)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        rho = new;
-        if change < 1e-4 {
-            break;
-        }
-    }
+    let (x, rho, sigma_px, rounds) = robust_rounds(base, gcps, &used, opts)?;
     // final statistics at x
     let problem = Problem {
         base,
         free: &opts.free,
-        points: points_of(&rho),
+        points: fitted_points(gcps, &used, &rho),
     };
-    let fitted = problem.params_at(&x);
-    let camera = fitted.camera();
-    let e = norms_at(&x, &problem);
+    let camera = problem.params_at(&x).camera();
+    let e = residual_norms(gcps, &used, &x, &problem);
     let n = 2 * used.len();
     let rss: f64 = e.iter().map(|v| v * v).sum();
     let wr = problem.residuals_at(&x);
@@ -348,26 +269,7 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     };
     let jac = jacobian(&problem, &x);
     if let Some(j) = &jac {
-        // the free parameters must be determined: columns scaled to unit norm, the smallest
-        // singular value against the largest (repeated GCPs, points on one ray, or a free
-        // set the GCPs cannot tell apart leave it near 0)
-        let mut jn = j.clone();
-        for mut c in jn.column_iter_mut() {
-            let n = c.norm();
-            if n > 0.0 {
-                c /= n;
-            }
-        }
-        let sv = jn.singular_values();
-        let (lo, hi) = (sv.min(), sv.max());
-        if !(lo > 1e-7 * hi) {
-            let names: Vec<&str> = opts.free.iter().map(|p| p.name()).collect();
-            return Err(Error::BadOption(format!(
-                "fit-camera: the {} usable GCPs do not determine the free parameters {} (repeated points, points on one ray, or too many free parameters)",
-                used.len(),
-                names.join(",")
-            )));
-        }
+        check_determined(j, used.len(), &opts.free)?;
     }
     let cov = jac.and_then(|j| (j.transpose() * &j).try_inverse());
     let params = opts
@@ -391,12 +293,160 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
             GcpStatus::Inlier
         });
     }
+    let report = gcp_residuals(gcps, &camera, &status, &used, &rho);
+    let inl: Vec<f64> = used
+        .iter()
+        .zip(&e)
+        .filter(|(i, _)| status[**i] == Some(GcpStatus::Inlier))
+        .map(|(_, v)| *v)
+        .collect();
+    Ok(CameraFit {
+        camera,
+        gcps: report,
+        params,
+        rmse_px: rmse(&e),
+        rmse_inliers_px: rmse(&inl),
+        aic: n as f64 * (rss.max(1e-300) / n as f64).ln() + 2.0 * k as f64,
+        sigma_px,
+        rounds,
+    })
+}
+
+/// Per GCP, why the fit leaves it out (outside the image, behind the start camera) or
+/// `None` if it is used.
+fn screen_gcps(start: &CameraModel, gcps: &[Gcp]) -> Vec<Option<GcpStatus>> {
+    let (w, h) = (start.width as f64, start.height as f64);
+    gcps.iter()
+        .map(|g| {
+            let [u, v] = g.pixel;
+            if !(u >= -0.5 && v >= -0.5 && u <= w - 0.5 && v <= h - 0.5) {
+                Some(GcpStatus::OutsideImage)
+            } else if start.to_camera(g.world).z <= 0.0 {
+                Some(GcpStatus::BehindCamera)
+            } else {
+                None
+            }
+        })
+        .collect()
+}
+
+/// Per fitted GCP (`used`, with robust weights `rho`): world point, observed pixel, √(w ρ).
+fn fitted_points(gcps: &[Gcp], used: &[usize], rho: &[f64]) -> Vec<(glam::DVec3, [f64; 2], f64)> {
+    used.iter()
+        .zip(rho)
+        .map(|(&i, r)| (gcps[i].world, gcps[i].pixel, (gcps[i].weight * r).sqrt()))
+        .collect()
+}
+
+/// The reprojection error (pixels) of each fitted GCP at offsets `x`.
+fn residual_norms(gcps: &[Gcp], used: &[usize], x: &DVector<f64>, pr: &Problem) -> Vec<f64> {
+    let cam = pr.params_at(x).camera();
+    used.iter()
+        .map(|&i| {
+            cam.project(gcps[i].world).map_or(BEHIND_PX, |p| {
+                (p[0] - gcps[i].pixel[0]).hypot(p[1] - gcps[i].pixel[1])
+            })
+        })
+        .collect()
+}
+
+/// Levenberg-Marquardt rounds, each reweighting the GCPs (Huber) from the last one's
+/// residuals when `opts.robust`, until the weights settle: the offsets from the start, the
+/// weights, the robust scale (px) and the rounds run.
+fn robust_rounds(
+    base: CameraParams,
+    gcps: &[Gcp],
+    used: &[usize],
+    opts: &FitOptions,
+) -> Result<(DVector<f64>, Vec<f64>, f64, usize)> {
+    let mut rho = vec![1.0f64; used.len()];
+    let mut x = DVector::zeros(opts.free.len());
+    let mut rounds = 0;
+    let mut sigma_px;
+    let solver = LevenbergMarquardt::new().with_patience(200);
+    loop {
+        rounds += 1;
+        let problem = Problem {
+            base,
+            free: &opts.free,
+            points: fitted_points(gcps, used, &rho),
+        };
+        let (
+            Lsq {
+                problem: solved,
+                x: sx,
+            },
+            report,
+        ) = solver.minimize(Lsq {
+            problem,
+            x: x.clone(),
+        });
+        if report.termination.was_usage_issue() || !sx.iter().all(|v| v.is_finite()) {
+            return Err(Error::BadOption(format!(
+                "fit-camera: the solver failed ({:?})",
+                report.termination
+            )));
+        }
+        x = sx;
+        let e = residual_norms(gcps, used, &x, &solved);
+        sigma_px = median(&e) / 1.1774;
+        if !opts.robust || rounds >= opts.max_rounds.max(1) {
+            break;
+        }
+        let delta = opts.huber_px.unwrap_or_else(|| (2.45 * sigma_px).max(0.5));
+        let new: Vec<f64> = e
+            .iter()
+            .map(|&ei| if ei <= delta { 1.0 } else { delta / ei })
+            .collect();
+        let change = new
+            .iter()
+            .zip(&rho)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        rho = new;
+        if change < 1e-4 {
+            break;
+        }
+    }
+    Ok((x, rho, sigma_px, rounds))
+}
+
+/// Refuses free parameters the GCPs do not determine: the Jacobian `j`'s columns scaled to
+/// unit norm, the smallest singular value against the largest (repeated GCPs, points on
+/// one ray, or a free set the GCPs cannot tell apart leave it near 0).
+fn check_determined(j: &nalgebra::DMatrix<f64>, used: usize, free: &[Param]) -> Result<()> {
+    let mut jn = j.clone();
+    for mut c in jn.column_iter_mut() {
+        let n = c.norm();
+        if n > 0.0 {
+            c /= n;
+        }
+    }
+    let sv = jn.singular_values();
+    let (lo, hi) = (sv.min(), sv.max());
+    if !(lo > 1e-7 * hi) {
+        let names: Vec<&str> = free.iter().map(|p| p.name()).collect();
+        return Err(Error::BadOption(format!(
+            "fit-camera: the {used} usable GCPs do not determine the free parameters {} (repeated points, points on one ray, or too many free parameters)",
+            names.join(",")
+        )));
+    }
+    Ok(())
+}
+
+/// Each GCP's residual at `camera`, its robust weight (0 if not fitted) and status.
+fn gcp_residuals(
+    gcps: &[Gcp],
+    camera: &CameraModel,
+    status: &[Option<GcpStatus>],
+    used: &[usize],
+    rho: &[f64],
+) -> Vec<GcpResidual> {
     let mut rho_of = vec![0.0; gcps.len()];
     for (j, &i) in used.iter().enumerate() {
         rho_of[i] = rho[j];
     }
-    let report: Vec<GcpResidual> = gcps
-        .iter()
+    gcps.iter()
         .enumerate()
         .map(|(i, g)| {
             let projected = camera.project(g.world);
@@ -409,30 +459,16 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
                 status: status[i].unwrap_or(GcpStatus::Inlier),
             }
         })
-        .collect();
-    let inl: Vec<f64> = used
-        .iter()
-        .zip(&e)
-        .filter(|(i, _)| status[**i] == Some(GcpStatus::Inlier))
-        .map(|(_, v)| *v)
-        .collect();
-    let rmse = |v: &[f64]| {
-        if v.is_empty() {
-            f64::NAN
-        } else {
-            (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
-        }
-    };
-    Ok(CameraFit {
-        camera,
-        gcps: report,
-        params,
-        rmse_px: rmse(&e),
-        rmse_inliers_px: rmse(&inl),
-        aic: n as f64 * (rss.max(1e-300) / n as f64).ln() + 2.0 * k as f64,
-        sigma_px,
-        rounds,
-    })
+        .collect()
+}
+
+/// Root mean square of `v` (NaN if empty).
+fn rmse(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+    }
 }
 
 fn median(v: &[f64]) -> f64 {

@@ -63,42 +63,90 @@ impl TerrainRenderer {
 
     /// Uploads a cell. Fails on an empty mesh or texture, or a texture over the device limit.
     pub fn upload(&self, rec: &CellRecord, data: &CellData) -> Result<GpuCell> {
-        let max = self.ctx.device.limits().max_texture_dimension_2d;
-        let first = |m: &[image::RgbaImage]| m.first().map_or((0, 0), |i| i.dimensions());
-        // the chart texture under a photo texture (relief mapping by share), the chart's
-        // orthographic texture and the relief map are optional
-        for (what, size) in [
-            ("texture", Some(first(&data.colour_mips))),
-            ("normal map", Some(first(&data.normal_mips))),
-            ("chart texture", data.base_mips.as_deref().map(first)),
-            (
-                "orthographic texture",
-                data.ortho_mips.as_deref().map(first),
-            ),
-            ("relief map", data.relief.as_ref().map(|r| r.dimensions())),
-        ] {
-            if let Some((w, h)) = size
-                && (w == 0 || h == 0 || w > max || h > max)
-            {
-                return Err(Error::Gpu(format!(
-                    "cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})",
-                    rec.id
-                )));
-            }
-        }
-        if data.mesh.triangles.is_empty() {
-            return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
-        }
-        if let Some(m) = &data.morph
-            && m.targets.len() != data.mesh.positions.len()
-        {
-            return Err(Error::Gpu(format!(
-                "cell {}: {} morph targets for {} vertices",
-                rec.id,
-                m.targets.len(),
-                data.mesh.positions.len()
-            )));
-        }
+        check_uploadable(rec, data, self.ctx.device.limits().max_texture_dimension_2d)?;
+        let mesh = self.mesh_buffers(data);
+        let (colour, cb) = self.texture(
+            "colour",
+            &data.colour_mips,
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        );
+        let (normal, nb) =
+            self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
+        let cv = colour.create_view(&Default::default());
+        let nv = normal.create_view(&Default::default());
+        // the relief map, the base texture whose share relief mapping moves and the chart's
+        // orthographic texture, each else the shared placeholder
+        let relief = data.relief.as_ref().map(|img| self.relief_view(img));
+        let colour_extra = |label: &str, mips: &Option<Vec<image::RgbaImage>>| {
+            mips.as_ref().map(|m| {
+                let (tex, bytes) = self.texture(label, m, wgpu::TextureFormat::Rgba8UnormSrgb);
+                (tex.create_view(&Default::default()), bytes)
+            })
+        };
+        let base = colour_extra("base colour", &data.base_mips);
+        let ortho = colour_extra("chart's orthographic colour", &data.ortho_mips);
+        let extra_bytes: u64 = [&relief, &base, &ortho]
+            .iter()
+            .filter_map(|t| t.as_ref().map(|(_, b)| *b))
+            .sum();
+        let textures = self.cell_bind_group(
+            &rec.id,
+            [
+                &cv,
+                &nv,
+                relief.as_ref().map_or(&self.no_relief, |(v, _)| v),
+                base.as_ref().map_or(&self.no_colour, |(v, _)| v),
+                ortho.as_ref().map_or(&self.no_colour, |(v, _)| v),
+            ],
+        );
+        let origin = DVec3::from(rec.origin);
+        let box_lines = self
+            .ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("bbox lines"),
+                contents: &f32_bytes(&bbox_lines(rec)),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        let e = rec.extent;
+        Ok(GpuCell {
+            positions: mesh.positions,
+            uvs: mesh.uvs,
+            morph: mesh.morph,
+            mip_shift: data
+                .morph
+                .as_ref()
+                .map_or([0.0; 2], |m| [m.colour_shift, m.normal_shift]),
+            indices: mesh.indices,
+            index_count: data.mesh.triangles.len() as u32 * 3,
+            box_lines,
+            textures,
+            colour_view: cv,
+            normal_view: nv,
+            origin,
+            extent_rel: [
+                (e.min_x - origin.x) as f32,
+                (e.max_y - origin.y) as f32,
+                e.width() as f32,
+                e.height() as f32,
+            ],
+            level: rec.level,
+            relief_m: if data.relief.is_some() {
+                data.relief_m
+            } else {
+                0.0
+            },
+            relief_min_normal_z: data.relief_min_normal_z,
+            share_relief: data.base_mips.is_some() && data.relief.is_some(),
+            ortho_beside: data.ortho_mips.is_some() && data.relief.is_some(),
+            triangles: data.mesh.triangles.len() as u32,
+            bytes: mesh.bytes + cb + nb + extra_bytes,
+        })
+    }
+
+    /// The vertex buffers (positions; UVs with each vertex's relief reach; morph targets)
+    /// and the index buffer of a cell's mesh, and their bytes.
+    fn mesh_buffers(&self, data: &CellData) -> MeshBuffers {
         let device = &self.ctx.device;
         let pos: Vec<f32> = data.mesh.positions.iter().flatten().copied().collect();
         let idx: Vec<u8> = data
@@ -139,157 +187,161 @@ impl TerrainRenderer {
             contents: &idx,
             usage: wgpu::BufferUsages::INDEX,
         });
-        let (colour, cb) = self.texture(
-            "colour",
-            &data.colour_mips,
-            wgpu::TextureFormat::Rgba8UnormSrgb,
-        );
-        let (normal, nb) =
-            self.texture("normal", &data.normal_mips, wgpu::TextureFormat::Rgba8Unorm);
-        let cv = colour.create_view(&Default::default());
-        let nv = normal.create_view(&Default::default());
-        // the relief map (R8, one level, read texel by texel), else the shared placeholder
-        let relief = data.relief.as_ref().map(|img| {
-            let tex = self.ctx.device.create_texture_with_data(
-                &self.ctx.queue,
-                &wgpu::TextureDescriptor {
-                    label: Some("relief"),
-                    size: wgpu::Extent3d {
-                        width: img.width(),
-                        height: img.height(),
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: wgpu::TextureFormat::R8Unorm,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                },
-                wgpu::util::TextureDataOrder::LayerMajor,
-                img.as_raw(),
-            );
-            (
-                tex.create_view(&Default::default()),
-                img.as_raw().len() as u64,
-            )
-        });
-        // the base texture whose share relief mapping moves and the chart's orthographic
-        // texture, else the shared placeholder
-        let colour_extra = |label: &str, mips: &Option<Vec<image::RgbaImage>>| {
-            mips.as_ref().map(|m| {
-                let (tex, bytes) = self.texture(label, m, wgpu::TextureFormat::Rgba8UnormSrgb);
-                (tex.create_view(&Default::default()), bytes)
-            })
-        };
-        let base = colour_extra("base colour", &data.base_mips);
-        let ortho = colour_extra("chart's orthographic colour", &data.ortho_mips);
-        let rv = relief.as_ref().map_or(&self.no_relief, |(v, _)| v);
-        let bv = base.as_ref().map_or(&self.no_colour, |(v, _)| v);
-        let ov = ortho.as_ref().map_or(&self.no_colour, |(v, _)| v);
-        let extra_bytes: u64 = [&relief, &base, &ortho]
-            .iter()
-            .filter_map(|t| t.as_ref().map(|(_, b)| *b))
-            .sum();
-        let textures = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(&rec.id),
-            layout: &self.cell_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&cv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&nv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(rv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(bv),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(ov),
-                },
-            ],
-        });
-        let origin = DVec3::from(rec.origin);
-        let (lo, hi) = (
-            (DVec3::from(rec.bbox_min) - origin).as_vec3(),
-            (DVec3::from(rec.bbox_max) - origin).as_vec3(),
-        );
-        let corner = |k: usize| {
-            [
-                if k & 1 == 0 { lo.x } else { hi.x },
-                if k & 2 == 0 { lo.y } else { hi.y },
-                if k & 4 == 0 { lo.z } else { hi.z },
-            ]
-        };
-        let mut lines = Vec::with_capacity(72);
-        for a in 0..8usize {
-            for bit in [1, 2, 4] {
-                if a & bit == 0 {
-                    lines.extend(corner(a));
-                    lines.extend(corner(a | bit));
-                }
-            }
-        }
-        let box_lines = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("bbox lines"),
-            contents: &f32_bytes(&lines),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let e = rec.extent;
         let bytes = pos.len() as u64 * 4
             + idx.len() as u64
             + data.uvs.as_ref().map_or(0, |u| u.len() as u64 * 12)
             + data
                 .morph
                 .as_ref()
-                .map_or(0, |m| m.targets.len() as u64 * 12)
-            + cb
-            + nb
-            + extra_bytes;
-        Ok(GpuCell {
+                .map_or(0, |m| m.targets.len() as u64 * 12);
+        MeshBuffers {
             positions,
             uvs,
             morph,
-            mip_shift: data
-                .morph
-                .as_ref()
-                .map_or([0.0; 2], |m| [m.colour_shift, m.normal_shift]),
             indices,
-            index_count: data.mesh.triangles.len() as u32 * 3,
-            box_lines,
-            textures,
-            colour_view: cv,
-            normal_view: nv,
-            origin,
-            extent_rel: [
-                (e.min_x - origin.x) as f32,
-                (e.max_y - origin.y) as f32,
-                e.width() as f32,
-                e.height() as f32,
-            ],
-            level: rec.level,
-            relief_m: if data.relief.is_some() {
-                data.relief_m
-            } else {
-                0.0
-            },
-            relief_min_normal_z: data.relief_min_normal_z,
-            share_relief: data.base_mips.is_some() && data.relief.is_some(),
-            ortho_beside: data.ortho_mips.is_some() && data.relief.is_some(),
-            triangles: data.mesh.triangles.len() as u32,
             bytes,
-        })
+        }
     }
+
+    /// The relief map as an R8 texture (one level, read texel by texel) and its bytes.
+    fn relief_view(&self, img: &image::GrayImage) -> (wgpu::TextureView, u64) {
+        let tex = self.ctx.device.create_texture_with_data(
+            &self.ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("relief"),
+                size: wgpu::Extent3d {
+                    width: img.width(),
+                    height: img.height(),
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R8Unorm,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            img.as_raw(),
+        );
+        (
+            tex.create_view(&Default::default()),
+            img.as_raw().len() as u64,
+        )
+    }
+
+    /// The cell's bind group: colour, normal map, sampler, relief map, base colour and the
+    /// chart's orthographic colour (`views` in that order, the sampler between).
+    fn cell_bind_group(&self, label: &str, views: [&wgpu::TextureView; 5]) -> wgpu::BindGroup {
+        let [cv, nv, rv, bv, ov] = views;
+        self.ctx
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &self.cell_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(cv),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(nv),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(rv),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(bv),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(ov),
+                    },
+                ],
+            })
+    }
+}
+
+/// A cell's mesh on the GPU.
+struct MeshBuffers {
+    positions: wgpu::Buffer,
+    uvs: Option<wgpu::Buffer>,
+    morph: Option<wgpu::Buffer>,
+    indices: wgpu::Buffer,
+    /// Bytes of the four buffers.
+    bytes: u64,
+}
+
+/// Refuses an empty mesh, morph targets that do not match the vertices, and an empty
+/// texture or one over the device's `max` side.
+fn check_uploadable(rec: &CellRecord, data: &CellData, max: u32) -> Result<()> {
+    let first = |m: &[image::RgbaImage]| m.first().map_or((0, 0), |i| i.dimensions());
+    // the chart texture under a photo texture (relief mapping by share), the chart's
+    // orthographic texture and the relief map are optional
+    for (what, size) in [
+        ("texture", Some(first(&data.colour_mips))),
+        ("normal map", Some(first(&data.normal_mips))),
+        ("chart texture", data.base_mips.as_deref().map(first)),
+        (
+            "orthographic texture",
+            data.ortho_mips.as_deref().map(first),
+        ),
+        ("relief map", data.relief.as_ref().map(|r| r.dimensions())),
+    ] {
+        if let Some((w, h)) = size
+            && (w == 0 || h == 0 || w > max || h > max)
+        {
+            return Err(Error::Gpu(format!(
+                "cell {}: {what} of {w}x{h} texels cannot be uploaded (limit {max})",
+                rec.id
+            )));
+        }
+    }
+    if data.mesh.triangles.is_empty() {
+        return Err(Error::Gpu(format!("cell {}: empty mesh", rec.id)));
+    }
+    if let Some(m) = &data.morph
+        && m.targets.len() != data.mesh.positions.len()
+    {
+        return Err(Error::Gpu(format!(
+            "cell {}: {} morph targets for {} vertices",
+            rec.id,
+            m.targets.len(),
+            data.mesh.positions.len()
+        )));
+    }
+    Ok(())
+}
+
+/// The twelve edges of the cell's bounding box as line-list vertices in its local frame.
+fn bbox_lines(rec: &CellRecord) -> Vec<f32> {
+    let origin = DVec3::from(rec.origin);
+    let (lo, hi) = (
+        (DVec3::from(rec.bbox_min) - origin).as_vec3(),
+        (DVec3::from(rec.bbox_max) - origin).as_vec3(),
+    );
+    let corner = |k: usize| {
+        [
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        ]
+    };
+    let mut lines = Vec::with_capacity(72);
+    for a in 0..8usize {
+        for bit in [1, 2, 4] {
+            if a & bit == 0 {
+                lines.extend(corner(a));
+                lines.extend(corner(a | bit));
+            }
+        }
+    }
+    lines
 }
