@@ -92,15 +92,6 @@ pub enum Textures {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let v =
         super::parse_list(&a.search_deg, 3).map_err(|e| anyhow::anyhow!("--search-deg: {e}"))?;
-    if v.iter().any(|&x| !(0.0..=30.0).contains(&x)) {
-        anyhow::bail!(
-            "--search-deg: each half-width must be in 0..=30 degrees, got {}",
-            a.search_deg
-        );
-    }
-    if !(a.repeat_px.is_finite() && a.repeat_px > 0.0) {
-        anyhow::bail!("--repeat-px must be positive, got {}", a.repeat_px);
-    }
     let opts = TerrainOptions {
         free: parse_free(&a.free)?,
         search_deg: [v[0], v[1], v[2]],
@@ -113,30 +104,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ..TerrainOptions::default()
     };
     opts.validate()?;
-    if !(a.tie_distance_m.is_finite() && a.tie_distance_m >= 0.0) {
-        anyhow::bail!("--tie-distance-m must be >= 0, got {}", a.tie_distance_m);
-    }
-    if !(a.tie_rmse_px.is_finite() && a.tie_rmse_px > 0.0) {
-        anyhow::bail!("--tie-rmse-px must be positive, got {}", a.tie_rmse_px);
-    }
     let moving_mask = match &a.moving_mask {
         Some(p) => {
             Some(image::DynamicImage::ImageRgb8(cliffmap::fsutil::decode_rgb8(p)?).to_luma8())
         }
         None => None,
     };
-    if !(a.resect_distance_m.is_finite() && a.resect_distance_m >= 0.0) {
-        anyhow::bail!(
-            "--resect-distance-m must be >= 0, got {}",
-            a.resect_distance_m
-        );
-    }
-    if !(a.resect_rmse_px.is_finite() && a.resect_rmse_px > 0.0) {
-        anyhow::bail!(
-            "--resect-rmse-px must be positive, got {}",
-            a.resect_rmse_px
-        );
-    }
     let ties = TieSettings {
         known: a
             .known
@@ -156,6 +129,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ..ResectOptions::default()
         },
     };
+    ties.validate()?;
     let entries = cliffmap::photo::read_photo_entries(&a.photos)?;
     let quiet = a.quiet;
     let specs = resolve_photo_entries(&a.store, entries, &mut |name, line| {

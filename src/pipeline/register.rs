@@ -71,6 +71,31 @@ pub struct TieSettings {
     pub resection: ResectOptions,
 }
 
+impl TieSettings {
+    /// Errors for a negative or non-finite tie or resection distance and a non-positive
+    /// RMSE bound (messages name the command's flags).
+    pub fn validate(&self) -> Result<()> {
+        let checks = [
+            ("--tie-distance-m", self.options.max_distance_m, true),
+            ("--tie-rmse-px", self.options.max_rmse_px, false),
+            ("--resect-distance-m", self.resect_distance_m, true),
+            ("--resect-rmse-px", self.resection.max_rmse_px, false),
+        ];
+        for (flag, v, zero_ok) in checks {
+            let ok = v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
+            if !ok {
+                let want = if zero_ok {
+                    "must be >= 0"
+                } else {
+                    "must be positive"
+                };
+                return Err(Error::BadOption(format!("{flag} {want}, got {v}")));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for TieSettings {
     fn default() -> Self {
         TieSettings {
@@ -168,6 +193,8 @@ pub fn register_photos_with(
     ties: &TieSettings,
     warn: &mut dyn FnMut(&str),
 ) -> Result<Vec<PhotoRegistration>> {
+    opts.validate()?;
+    ties.validate()?;
     let store = Store::open(store_dir)?;
     check_tie_settings(&store, specs, ties)?;
     if opts.labels == LabelTexture::Best {
@@ -857,4 +884,47 @@ fn set_label_photos(
         sources.iter().map(|(c, img)| (*c, img.as_ref())).collect();
     terrain.set_label_photos(&refs);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_library_checks_the_options_the_command_line_used_to() {
+        assert!(TieSettings::default().validate().is_ok());
+        let mut t = TieSettings::default();
+        t.options.max_distance_m = -1.0;
+        let e = t.validate().unwrap_err().to_string();
+        assert!(e.contains("--tie-distance-m"), "{e}");
+        let mut t = TieSettings::default();
+        t.resection.max_rmse_px = 0.0;
+        let e = t.validate().unwrap_err().to_string();
+        assert!(e.contains("--resect-rmse-px"), "{e}");
+        let t = TieSettings {
+            resect_distance_m: 0.0, // resection off
+            ..TieSettings::default()
+        };
+        assert!(t.validate().is_ok());
+        let o = TerrainOptions {
+            search_deg: [4.0, 40.0, 2.0],
+            ..TerrainOptions::default()
+        };
+        assert!(
+            o.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("--search-deg")
+        );
+        let o = TerrainOptions {
+            repeat_px: f64::NAN,
+            ..TerrainOptions::default()
+        };
+        assert!(
+            o.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("--repeat-px")
+        );
+    }
 }

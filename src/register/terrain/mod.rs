@@ -102,11 +102,24 @@ impl Default for TerrainOptions {
 
 impl TerrainOptions {
     /// Errors for a free parameter that cannot be refined against the terrain (k1, k2, cx,
-    /// cy; x, y, z unless `experimental_position`), an empty free set, a free position
-    /// without the three angles, or a non-positive position prior.
+    /// cy; x, y, z unless `experimental_position`), an empty free set, a search half-width
+    /// outside 0..=30°, a non-positive repeatability bound, a free position without the
+    /// three angles, or a non-positive position prior.
     pub fn validate(&self) -> Result<()> {
         if self.free.is_empty() {
             return Err(Error::BadOption("register: no free parameters".into()));
+        }
+        if self.search_deg.iter().any(|&x| !(0.0..=30.0).contains(&x)) {
+            return Err(Error::BadOption(format!(
+                "--search-deg: each half-width must be in 0..=30 degrees, got {:?}",
+                self.search_deg
+            )));
+        }
+        if !(self.repeat_px.is_finite() && self.repeat_px > 0.0) {
+            return Err(Error::BadOption(format!(
+                "--repeat-px must be positive, got {}",
+                self.repeat_px
+            )));
         }
         if let Some(p) = self.free.iter().find(|p| {
             !matches!(
