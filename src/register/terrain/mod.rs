@@ -272,8 +272,6 @@ const POSITION_REPEAT_M: f64 = 0.5;
 /// module docs. Errors for parameters that cannot be registered this way or a camera not
 /// sized like the photo; a search that does not converge is a result with
 /// `converged: false`, not an error.
-// indexed loops: each index serves more than one array or lookup
-#[allow(clippy::needless_range_loop)]
 pub fn register_to_terrain(
     terrain: &LabelledTerrain,
     photo: &RgbImage,
@@ -302,104 +300,17 @@ pub fn register_to_terrain(
     let mut evals = 0usize;
     let start = CameraParams::from_camera(rough);
     let depth = median_depth(terrain, rough);
-
     // Coarse grid over the angles on the photo reduced to about 100 pixels across.
     let q = (photo.width() / 100).max(1);
     let coarse = (1u32 << (31 - q.leading_zeros())).max(finest);
-    let grey16 = GreyImage::from_photo(photo, coarse);
-    let cam16 = scaled(rough, &grey16);
-    let samples = terrain.sample(&cam16, 1.0, 0.08, Some(band_width(coarse)))?;
-    let f16 = cam16.fx;
-    let angle_free = [Param::Yaw, Param::Pitch, Param::Roll].map(|p| mi_free.contains(&p));
-    let step = 0.7 / f16; // radians: 0.7 px at this scale
-    let counts: [i64; 3] = [0, 1, 2].map(|k| {
-        if angle_free[k] {
-            (opts.search_deg[k].to_radians() / step).ceil() as i64
-        } else {
-            0
-        }
-    });
-    let roll_step = 0.7 / (cam16.width as f64 / 2.0).max(1.0); // radians: 0.7 px at the side
-    let roll_n = if angle_free[2] {
-        (opts.search_deg[2].to_radians() / roll_step).ceil() as i64
-    } else {
-        0
-    };
-    let mut grid: Vec<[f64; 3]> = Vec::new();
-    for r in -roll_n..=roll_n {
-        for p in -counts[1]..=counts[1] {
-            for y in -counts[0]..=counts[0] {
-                grid.push([y as f64 * step, p as f64 * step, r as f64 * roll_step]);
-            }
-        }
-    }
-    use rayon::prelude::*;
-    let scores: Vec<f64> = grid
-        .par_iter()
-        .map(|d| {
-            let mut c = start;
-            for k in 0..3 {
-                c.angles[k] += d[k];
-            }
-            nmi(&samples, &scaled(&c.camera(), &grey16), &grey16)
-        })
-        .collect();
-    evals += grid.len();
-    let mut order: Vec<usize> = (0..grid.len()).collect();
-    order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
-    let mut peaks: Vec<[f64; 3]> = Vec::new();
-    for &i in &order {
-        let g = grid[i];
-        if peaks
-            .iter()
-            .all(|p| (0..3).any(|k| (p[k] - g[k]).abs() > 4.0 * step))
-        {
-            peaks.push(g);
-        }
-        if peaks.len() == 3 {
-            break;
-        }
-    }
-
-    // Nelder-Mead from each peak on photos reduced 2 and 4 times less than the grid's; the
-    // best goes on through every finer scale.
+    let peaks = grid_peaks(terrain, photo, rough, &mi_free, opts, coarse, &mut evals)?;
     let mut space = Space {
         base: start,
-        free: mi_free.clone(),
+        free: mi_free,
         depth,
         bounds: opts.bounds,
     };
-    let mut best: Option<(CameraParams, f64)> = None;
-    let levels: Vec<u32> = [coarse / 2, coarse / 4]
-        .into_iter()
-        .filter(|&f| f > finest)
-        .collect();
-    for peak in &peaks {
-        let mut c = start;
-        for k in 0..3 {
-            c.angles[k] += peak[k];
-        }
-        let mut score = f64::NEG_INFINITY;
-        for &f in &levels {
-            let grey = GreyImage::from_photo(photo, f);
-            let (c2, s2, e) = refine(terrain, &space, &c, &grey, 3.0)?;
-            evals += e;
-            (c, score) = (c2, s2);
-        }
-        if best.as_ref().is_none_or(|b| score > b.1) {
-            best = Some((c, score));
-        }
-    }
-    let (mut cam, _) = best.ok_or_else(|| Error::BadOption("register: empty search".into()))?;
-
-    let mut f = levels.last().copied().unwrap_or(coarse) / 2;
-    while f > finest {
-        let grey = GreyImage::from_photo(photo, f);
-        let (c2, _, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
-        evals += e;
-        cam = c2;
-        f /= 2;
-    }
+    let mut cam = refine_from_peaks(terrain, &space, photo, &peaks, coarse, finest, &mut evals)?;
 
     // Finest scale: two rounds (samples re-cast in between), then restarts for the verdict.
     let grey = GreyImage::from_photo(photo, finest);
@@ -434,22 +345,12 @@ pub fn register_to_terrain(
     let photo_label_share = terrain
         .has_label_photos()
         .then(|| view::photo_label_share(&samples));
-    let mut repeat: f64 = 0.0;
     // (with the position free the edge stage restarts instead)
-    let kicks: &[[f64; 2]] = if opts.position_free() {
-        &[]
+    let repeat = if opts.position_free() {
+        0.0
     } else {
-        &[[3.0, -3.0], [-3.0, 3.0]]
+        restart_spread(terrain, &space, &cam, &grey, depth, &mut evals)?
     };
-    for kick in kicks {
-        let mut c = cam;
-        let f = scaled(&cam.camera(), &grey).fx;
-        c.angles[0] += kick[0] / f;
-        c.angles[1] += kick[1] / f;
-        let (c2, _, e) = refine(terrain, &space, &c, &grey, 2.0)?;
-        evals += e;
-        repeat = repeat.max(pixel_distance(&cam.camera(), &c2.camera(), depth));
-    }
     let found = cam.camera();
     let at_bound = space.outside(&cam, 0.98);
     if opts.position_free() {
@@ -464,7 +365,170 @@ pub fn register_to_terrain(
             t0,
         );
     }
-    let reason = if at_bound {
+    let reason = verdict_reason(at_bound, repeat, unsettled, (score_start, score), opts);
+    let mut fit = TerrainFit::judged(
+        rough,
+        found,
+        reason,
+        (score_start, score, evals),
+        repeat,
+        None,
+        t0,
+    );
+    if opts.position_search_m.is_none() {
+        fit.position_kept_parallax_px_per_m = parallax_px_per_m(terrain, &found);
+    }
+    fit.photo_label_share = photo_label_share;
+    Ok(fit)
+}
+
+/// The three best well-separated angle changes (yaw, pitch, roll in radians) on a grid over
+/// the search half-widths, scored on the photo reduced `coarse` times (0.7 px steps).
+fn grid_peaks(
+    terrain: &LabelledTerrain,
+    photo: &RgbImage,
+    rough: &CameraModel,
+    mi_free: &[Param],
+    opts: &TerrainOptions,
+    coarse: u32,
+    evals: &mut usize,
+) -> Result<Vec<[f64; 3]>> {
+    let start = CameraParams::from_camera(rough);
+    let grey16 = GreyImage::from_photo(photo, coarse);
+    let cam16 = scaled(rough, &grey16);
+    let samples = terrain.sample(&cam16, 1.0, 0.08, Some(band_width(coarse)))?;
+    let f16 = cam16.fx;
+    let angle_free = [Param::Yaw, Param::Pitch, Param::Roll].map(|p| mi_free.contains(&p));
+    let step = 0.7 / f16; // radians: 0.7 px at this scale
+    let counts: [i64; 3] = [0, 1, 2].map(|k| {
+        if angle_free[k] {
+            (opts.search_deg[k].to_radians() / step).ceil() as i64
+        } else {
+            0
+        }
+    });
+    let roll_step = 0.7 / (cam16.width as f64 / 2.0).max(1.0); // radians: 0.7 px at the side
+    let roll_n = if angle_free[2] {
+        (opts.search_deg[2].to_radians() / roll_step).ceil() as i64
+    } else {
+        0
+    };
+    let mut grid: Vec<[f64; 3]> = Vec::new();
+    for r in -roll_n..=roll_n {
+        for p in -counts[1]..=counts[1] {
+            for y in -counts[0]..=counts[0] {
+                grid.push([y as f64 * step, p as f64 * step, r as f64 * roll_step]);
+            }
+        }
+    }
+    use rayon::prelude::*;
+    let scores: Vec<f64> = grid
+        .par_iter()
+        .map(|d| {
+            let mut c = start;
+            for (a, dk) in c.angles.iter_mut().zip(d) {
+                *a += dk;
+            }
+            nmi(&samples, &scaled(&c.camera(), &grey16), &grey16)
+        })
+        .collect();
+    *evals += grid.len();
+    let mut order: Vec<usize> = (0..grid.len()).collect();
+    order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+    let mut peaks: Vec<[f64; 3]> = Vec::new();
+    for &i in &order {
+        let g = grid[i];
+        if peaks
+            .iter()
+            .all(|p| (0..3).any(|k| (p[k] - g[k]).abs() > 4.0 * step))
+        {
+            peaks.push(g);
+        }
+        if peaks.len() == 3 {
+            break;
+        }
+    }
+    Ok(peaks)
+}
+
+/// Nelder-Mead from each peak on photos reduced 2 and 4 times less than the grid's; the
+/// best goes on through every finer scale down to (not including) `finest`.
+fn refine_from_peaks(
+    terrain: &LabelledTerrain,
+    space: &Space,
+    photo: &RgbImage,
+    peaks: &[[f64; 3]],
+    coarse: u32,
+    finest: u32,
+    evals: &mut usize,
+) -> Result<CameraParams> {
+    let start = space.base;
+    let mut best: Option<(CameraParams, f64)> = None;
+    let levels: Vec<u32> = [coarse / 2, coarse / 4]
+        .into_iter()
+        .filter(|&f| f > finest)
+        .collect();
+    for peak in peaks {
+        let mut c = start;
+        for (a, dk) in c.angles.iter_mut().zip(peak) {
+            *a += dk;
+        }
+        let mut score = f64::NEG_INFINITY;
+        for &f in &levels {
+            let grey = GreyImage::from_photo(photo, f);
+            let (c2, s2, e) = refine(terrain, space, &c, &grey, 3.0)?;
+            *evals += e;
+            (c, score) = (c2, s2);
+        }
+        if best.as_ref().is_none_or(|b| score > b.1) {
+            best = Some((c, score));
+        }
+    }
+    let (mut cam, _) = best.ok_or_else(|| Error::BadOption("register: empty search".into()))?;
+    let mut f = levels.last().copied().unwrap_or(coarse) / 2;
+    while f > finest {
+        let grey = GreyImage::from_photo(photo, f);
+        let (c2, _, e) = refine(terrain, space, &cam, &grey, 2.0)?;
+        *evals += e;
+        cam = c2;
+        f /= 2;
+    }
+    Ok(cam)
+}
+
+/// How far (pixels at the median depth) searches restarted from `cam` turned by ±3 px in
+/// yaw and pitch end from it: the repeatability the verdict asks for.
+fn restart_spread(
+    terrain: &LabelledTerrain,
+    space: &Space,
+    cam: &CameraParams,
+    grey: &GreyImage,
+    depth: f64,
+    evals: &mut usize,
+) -> Result<f64> {
+    let mut repeat: f64 = 0.0;
+    for kick in [[3.0, -3.0], [-3.0, 3.0]] {
+        let mut c = *cam;
+        let f = scaled(&cam.camera(), grey).fx;
+        c.angles[0] += kick[0] / f;
+        c.angles[1] += kick[1] / f;
+        let (c2, _, e) = refine(terrain, space, &c, grey, 2.0)?;
+        *evals += e;
+        repeat = repeat.max(pixel_distance(&cam.camera(), &c2.camera(), depth));
+    }
+    Ok(repeat)
+}
+
+/// Why the search's camera is not accepted, if it is not: at the search's bounds, restarts
+/// that disagree, a position search that did not settle, or a score that did not rise.
+fn verdict_reason(
+    at_bound: bool,
+    repeat: f64,
+    unsettled: Option<f64>,
+    (score_start, score): (f64, f64),
+    opts: &TerrainOptions,
+) -> Option<String> {
+    if at_bound {
         Some("the search reached the largest change allowed".to_string())
     } else if repeat > opts.repeat_px {
         Some(format!(
@@ -489,21 +553,7 @@ pub fn register_to_terrain(
         ))
     } else {
         None
-    };
-    let mut fit = TerrainFit::judged(
-        rough,
-        found,
-        reason,
-        (score_start, score, evals),
-        repeat,
-        None,
-        t0,
-    );
-    if opts.position_search_m.is_none() {
-        fit.position_kept_parallax_px_per_m = parallax_px_per_m(terrain, &found);
     }
-    fit.photo_label_share = photo_label_share;
-    Ok(fit)
 }
 
 /// Pixels by which a sideways move of the camera by one metre shifts the near terrain it
