@@ -191,7 +191,81 @@ pub fn resect_photo(
     opts: &ResectOptions,
 ) -> Result<ResectFit> {
     let t0 = Instant::now();
-    let mut out = ResectFit {
+    let mut out = unplaced(rough, opts);
+    for (img, cam, what) in [(anchor_image, anchor, "anchor"), (photo, rough, "photo")] {
+        if img.dimensions() != (cam.width, cam.height) {
+            return Err(crate::error::Error::BadOption(format!(
+                "the {what} image is {}x{}, its camera {}x{}",
+                img.width(),
+                img.height(),
+                cam.width,
+                cam.height
+            )));
+        }
+    }
+    let (ga, gb) = (Grey::of(anchor_image), Grey::of(photo));
+    let half = opts.half.max(3) as i64;
+    let points = terrain_points(
+        anchor,
+        &ga,
+        half,
+        opts.spacing_px.max(1),
+        opts.max_slope_deg,
+        &surface,
+        &stable,
+    );
+    out.counts[0] = points.len();
+    let k = 4usize;
+    let coarse = coarse_matches(anchor, &ga, &gb, rough, &points, k, half, opts);
+    out.counts[1] = coarse.len();
+    if coarse.len() < opts.min_inliers {
+        out.reason = Some(format!(
+            "{} coarse matches of {} terrain points, fewer than {}",
+            coarse.len(),
+            points.len(),
+            opts.min_inliers
+        ));
+        out.seconds = t0.elapsed().as_secs_f64();
+        return Ok(out);
+    }
+    let start = coarse_start(rough, &coarse, k as f64, opts);
+    let fine = FineStage {
+        anchor,
+        ga: &ga,
+        gb: &gb,
+        points: &points,
+        half,
+        opts,
+        fit_opts: FitOptions {
+            free: opts.free.clone(),
+            ..FitOptions::default()
+        },
+    };
+    let (cam, last, n_fine, anchor_px) = fine.best_from(&start);
+    out.counts[2] = n_fine;
+    out.found = cam;
+    out.moved_m = cam.position.distance(rough.position);
+    let Some(fit) = last else {
+        out.reason = Some(format!(
+            "{} fine matches, fewer than {}",
+            out.counts[2], opts.min_inliers
+        ));
+        out.seconds = t0.elapsed().as_secs_f64();
+        return Ok(out);
+    };
+    record_fit(&mut out, &fit, &anchor_px);
+    out.reason = rejection_reason(&out, opts);
+    if out.reason.is_none() {
+        out.accepted = true;
+        out.camera = cam;
+    }
+    out.seconds = t0.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// The result before anything is found: the rough camera, not accepted.
+fn unplaced(rough: &CameraModel, opts: &ResectOptions) -> ResectFit {
+    ResectFit {
         camera: *rough,
         found: *rough,
         accepted: false,
@@ -206,37 +280,26 @@ pub fn resect_photo(
             .any(|p| matches!(p, Param::F | Param::Fx | Param::Fy)),
         seconds: 0.0,
         ties: Vec::new(),
-    };
-    for (img, cam, what) in [(anchor_image, anchor, "anchor"), (photo, rough, "photo")] {
-        if img.dimensions() != (cam.width, cam.height) {
-            return Err(crate::error::Error::BadOption(format!(
-                "the {what} image is {}x{}, its camera {}x{}",
-                img.width(),
-                img.height(),
-                cam.width,
-                cam.height
-            )));
-        }
     }
-    let (ga, gb) = (Grey::of(anchor_image), Grey::of(photo));
-    let k = 4usize;
-    let (ca, cb) = (ga.reduced(k), gb.reduced(k));
-    let half = opts.half.max(3) as i64;
-    let points = terrain_points(
-        anchor,
-        &ga,
-        half,
-        opts.spacing_px.max(1),
-        opts.max_slope_deg,
-        &surface,
-        &stable,
-    );
-    out.counts[0] = points.len();
+}
 
-    // coarse: templates on the 4x reduced photos, searched over the rough uncertainty
+/// Coarse matches: templates on the `k`× reduced images, searched over the rough camera's
+/// uncertainty (`opts.search_deg`); a match is the terrain point and where the photo shows it.
+#[allow(clippy::too_many_arguments)]
+fn coarse_matches(
+    anchor: &CameraModel,
+    ga: &Grey,
+    gb: &Grey,
+    rough: &CameraModel,
+    points: &[Point],
+    k: usize,
+    half: i64,
+    opts: &ResectOptions,
+) -> Vec<Gcp> {
+    let (ca, cb) = (ga.reduced(k), gb.reduced(k));
     let coarse_half = (half / 2).max(4);
     let rad = ((opts.search_deg.to_radians() * rough.fx) / k as f64).ceil() as i64 + 1;
-    let coarse: Vec<Gcp> = points
+    points
         .par_iter()
         .filter_map(|p| {
             let (t, tn, b) = template(anchor, &ca, k as f64, rough, p, coarse_half)?;
@@ -255,38 +318,35 @@ pub fn resect_photo(
                 weight: 1.0,
             })
         })
-        .collect();
-    out.counts[1] = coarse.len();
-    if coarse.len() < opts.min_inliers {
-        out.reason = Some(format!(
-            "{} coarse matches of {} terrain points, fewer than {}",
-            coarse.len(),
-            points.len(),
-            opts.min_inliers
-        ));
-        out.seconds = t0.elapsed().as_secs_f64();
-        return Ok(out);
-    }
-    let start = coarse_start(rough, &coarse, k as f64, opts);
-    let fit_opts = FitOptions {
-        free: opts.free.clone(),
-        ..FitOptions::default()
-    };
-    // fine: full-resolution templates from the current camera, twice; from the coarse
-    // camera and from it turned by 2 px each way in yaw and pitch (matches of a texture
-    // that repeats within the search can hold a pose a pixel off), the fit with the most
-    // inliers kept (then the lower RMSE)
-    let matches = |cam: &CameraModel| -> Vec<(Gcp, [f64; 2])> {
-        points
+        .collect()
+}
+
+/// The fine stage: full-resolution templates from the current camera, matched and fitted.
+struct FineStage<'a> {
+    anchor: &'a CameraModel,
+    ga: &'a Grey,
+    gb: &'a Grey,
+    points: &'a [Point],
+    half: i64,
+    opts: &'a ResectOptions,
+    fit_opts: FitOptions,
+}
+
+impl FineStage<'_> {
+    /// The fine matches seen from `cam`: each a GCP (terrain point, sub-pixel photo
+    /// position, weight by how far the TIN's error moves it) and the anchor pixel.
+    fn matches(&self, cam: &CameraModel) -> Vec<(Gcp, [f64; 2])> {
+        let (half, opts) = (self.half, self.opts);
+        self.points
             .par_iter()
             .filter_map(|p| {
-                let (t, tn, b) = template(anchor, &ga, 1.0, cam, p, half)?;
+                let (t, tn, b) = template(self.anchor, self.ga, 1.0, cam, p, half)?;
                 let c = (b[0].round() as i64, b[1].round() as i64);
-                let (x, y, s, edge) = gb.search(&t, tn, c, 6, half)?;
+                let (x, y, s, edge) = self.gb.search(&t, tn, c, 6, half)?;
                 if edge || s < opts.min_ncc {
                     return None;
                 }
-                let q = gb.peak_sub_pixel(&t, tn, (x, y), s, half)?;
+                let q = self.gb.peak_sub_pixel(&t, tn, (x, y), s, half)?;
                 let g = Gcp {
                     name: String::new(),
                     world: p.world,
@@ -296,16 +356,20 @@ pub fn resect_photo(
                 Some((g, p.pixel))
             })
             .collect()
-    };
-    let fine_from = |from: CameraModel| -> FineRun {
+    }
+
+    /// Two rounds of matching and fitting from `from` (each from the camera the last fit
+    /// found): the camera, the last fit, the fine matches of the last round and their
+    /// anchor pixels.
+    fn run_from(&self, from: CameraModel) -> FineRun {
         let (mut cam, mut last, mut n, mut at) = (from, None, 0, Vec::new());
         for _ in 0..2 {
-            let (fine, from_px): (Vec<Gcp>, Vec<[f64; 2]>) = matches(&cam).into_iter().unzip();
+            let (fine, from_px): (Vec<Gcp>, Vec<[f64; 2]>) = self.matches(&cam).into_iter().unzip();
             n = fine.len();
-            if fine.len() < opts.min_inliers {
+            if fine.len() < self.opts.min_inliers {
                 break;
             }
-            match fit_camera_local(&cam, &fine, &fit_opts) {
+            match fit_camera_local(&cam, &fine, &self.fit_opts) {
                 Ok(f) => {
                     cam = f.camera;
                     last = Some(f);
@@ -315,55 +379,57 @@ pub fn resect_photo(
             }
         }
         (cam, last, n, at)
-    };
-    let inliers_of = |f: &CameraFit| {
-        f.gcps
-            .iter()
-            .filter(|g| g.status == GcpStatus::Inlier)
-            .count()
-    };
-    // (inliers, −RMSE) of a run's final fit: larger is better
-    let key = |r: &FineRun| r.1.as_ref().map(|f| (inliers_of(f), -f.rmse_inliers_px));
-    let turn = 2.0 / start.fx;
-    let mut best: Option<FineRun> = None;
-    for (dy, dp) in [
-        (0.0, 0.0),
-        (turn, 0.0),
-        (-turn, 0.0),
-        (0.0, turn),
-        (0.0, -turn),
-    ] {
-        let mut p = CameraParams::from_camera(&start);
-        p.angles[0] += dy;
-        p.angles[1] += dp;
-        let r = fine_from(p.camera());
-        let better = match (&best, key(&r)) {
-            (None, _) => true,
-            (Some(b), Some((n, e))) => key(b).is_none_or(|(bn, be)| n > bn || (n == bn && e > be)),
-            (Some(_), None) => false,
-        };
-        if better {
-            best = Some(r);
-        }
     }
-    let (cam, last, n_fine, anchor_px) = best.unwrap_or((start, None, 0, Vec::new()));
-    out.counts[2] = n_fine;
-    out.found = cam;
-    out.moved_m = cam.position.distance(rough.position);
-    let Some(fit) = last else {
-        out.reason = Some(format!(
-            "{} fine matches, fewer than {}",
-            out.counts[2], opts.min_inliers
-        ));
-        out.seconds = t0.elapsed().as_secs_f64();
-        return Ok(out);
-    };
-    let inliers = inliers_of(&fit);
-    out.counts[3] = inliers;
+
+    /// Runs from the coarse camera and from it turned by 2 px each way in yaw and pitch
+    /// (matches of a texture that repeats within the search can hold a pose a pixel off):
+    /// the run with the most inliers (then the lower RMSE).
+    fn best_from(&self, start: &CameraModel) -> FineRun {
+        // (inliers, −RMSE) of a run's final fit: larger is better
+        let key = |r: &FineRun| r.1.as_ref().map(|f| (inliers_of(f), -f.rmse_inliers_px));
+        let turn = 2.0 / start.fx;
+        let mut best: Option<FineRun> = None;
+        for (dy, dp) in [
+            (0.0, 0.0),
+            (turn, 0.0),
+            (-turn, 0.0),
+            (0.0, turn),
+            (0.0, -turn),
+        ] {
+            let mut p = CameraParams::from_camera(start);
+            p.angles[0] += dy;
+            p.angles[1] += dp;
+            let r = self.run_from(p.camera());
+            let better = match (&best, key(&r)) {
+                (None, _) => true,
+                (Some(b), Some((n, e))) => {
+                    key(b).is_none_or(|(bn, be)| n > bn || (n == bn && e > be))
+                }
+                (Some(_), None) => false,
+            };
+            if better {
+                best = Some(r);
+            }
+        }
+        best.unwrap_or((*start, None, 0, Vec::new()))
+    }
+}
+
+/// The inlier GCPs of a fit.
+fn inliers_of(f: &CameraFit) -> usize {
+    f.gcps
+        .iter()
+        .filter(|g| g.status == GcpStatus::Inlier)
+        .count()
+}
+
+/// The fit's inliers, ties (anchor pixel → photo pixel), RMSE and position deviations.
+fn record_fit(out: &mut ResectFit, fit: &CameraFit, anchor_px: &[[f64; 2]]) {
+    out.counts[3] = inliers_of(fit);
     out.ties = fit
         .gcps
         .iter()
-        .zip(&anchor_px)
+        .zip(anchor_px)
         .filter(|(g, _)| g.status == GcpStatus::Inlier)
         .map(|(g, &a)| PairTie {
             anchor_px: a,
@@ -380,15 +446,21 @@ pub fn resect_photo(
         };
         out.sigma_position_m[i] = p.sigma;
     }
-    out.reason = if inliers < opts.min_inliers {
+}
+
+/// Why the fit is refused, if it is: too few inliers, an RMSE above the bound, a position
+/// not pinned down, or a move beyond reach.
+fn rejection_reason(out: &ResectFit, opts: &ResectOptions) -> Option<String> {
+    let inliers = out.counts[3];
+    if inliers < opts.min_inliers {
         Some(format!(
             "{inliers} inlier matches, fewer than {}",
             opts.min_inliers
         ))
-    } else if !(fit.rmse_inliers_px <= opts.max_rmse_px) {
+    } else if !(out.rmse_inliers_px <= opts.max_rmse_px) {
         Some(format!(
             "inlier match RMSE {:.2} px above {} px",
-            fit.rmse_inliers_px, opts.max_rmse_px
+            out.rmse_inliers_px, opts.max_rmse_px
         ))
     } else if let Some(sig) = out
         .sigma_position_m
@@ -414,13 +486,7 @@ pub fn resect_photo(
         ))
     } else {
         None
-    };
-    if out.reason.is_none() {
-        out.accepted = true;
-        out.camera = cam;
     }
-    out.seconds = t0.elapsed().as_secs_f64();
-    Ok(out)
 }
 
 /// The camera the fine stage starts from (module docs, step 3): P3P inside RANSAC over the
