@@ -310,6 +310,49 @@ pub fn adjust_bundle(
     opts: &BundleOptions,
 ) -> Result<BundleFit> {
     let n = start.len();
+    check_bundle_inputs(n, prior, fixed, pairs, opts)?;
+    let blocks = free_blocks(fixed, opts)?;
+    let prior_sigma = prior_sigmas(&blocks, prior, opts)?;
+    let (rays, rays_of) = tie_rays(pairs, n);
+    let k = blocks.len() * opts.free.len();
+    let problem = Problem {
+        start: start.to_vec(),
+        base: start.iter().map(CameraParams::from_camera).collect(),
+        prior: prior.iter().map(CameraParams::from_camera).collect(),
+        blocks,
+        free: &opts.free,
+        prior_sigma,
+        rays,
+        rays_of,
+        surface: &surface,
+    };
+    let lsq = Lsq {
+        problem,
+        x: DVector::zeros(k),
+    };
+    let (lsq, inlier, rounds) = robust_rounds(lsq, opts)?;
+    let (sigma_position_m, sigma_angles_deg) = parameter_sigmas(&lsq, opts, n, k);
+    let cams = lsq.problem.cameras_at(&lsq.x);
+    let (rmse_px, inliers) = inlier_residuals(&lsq.problem, &cams, pairs, &inlier);
+    Ok(BundleFit {
+        cameras: cams,
+        sigma_position_m,
+        sigma_angles_deg,
+        rmse_px,
+        inliers,
+        rounds,
+    })
+}
+
+/// Refuses lists of different lengths, a pair naming a camera out of range or the same
+/// camera twice, and an empty free set.
+fn check_bundle_inputs(
+    n: usize,
+    prior: &[CameraModel],
+    fixed: &[bool],
+    pairs: &[BundlePair],
+    opts: &BundleOptions,
+) -> Result<()> {
     if prior.len() != n || fixed.len() != n {
         return Err(Error::BadOption(format!(
             "bundle: {n} start cameras, {} priors, {} fixed flags",
@@ -326,8 +369,13 @@ pub fn adjust_bundle(
     if opts.free.is_empty() {
         return Err(Error::BadOption("bundle: no free parameters".into()));
     }
+    Ok(())
+}
+
+/// A block of columns per camera not `fixed`; an error when every camera is.
+fn free_blocks(fixed: &[bool], opts: &BundleOptions) -> Result<Vec<Block>> {
     let mut blocks = Vec::new();
-    for c in (0..n).filter(|&c| !fixed[c]) {
+    for c in (0..fixed.len()).filter(|&c| !fixed[c]) {
         blocks.push(Block {
             camera: c,
             col: blocks.len() * opts.free.len(),
@@ -336,6 +384,11 @@ pub fn adjust_bundle(
     if blocks.is_empty() {
         return Err(Error::BadOption("bundle: every camera is fixed".into()));
     }
+    Ok(blocks)
+}
+
+/// Per block and free parameter, the prior's standard deviation (all must be positive).
+fn prior_sigmas(blocks: &[Block], prior: &[CameraModel], opts: &BundleOptions) -> Result<Vec<f64>> {
     let prior_sigma: Vec<f64> = blocks
         .iter()
         .flat_map(|b| {
@@ -354,6 +407,12 @@ pub fn adjust_bundle(
             "bundle: prior standard deviations must be positive".into(),
         ));
     }
+    Ok(prior_sigma)
+}
+
+/// Two rays per tie (each photo's pixel transferred into the other), pair by pair, and per
+/// camera the rays it takes part in.
+fn tie_rays(pairs: &[BundlePair], n: usize) -> (Vec<Ray>, Vec<Vec<usize>>) {
     let mut rays = Vec::new();
     for p in pairs {
         for t in &p.ties {
@@ -376,22 +435,17 @@ pub fn adjust_bundle(
         rays_of[r.from].push(i);
         rays_of[r.to].push(i);
     }
-    let k = blocks.len() * opts.free.len();
-    let problem = Problem {
-        start: start.to_vec(),
-        base: start.iter().map(CameraParams::from_camera).collect(),
-        prior: prior.iter().map(CameraParams::from_camera).collect(),
-        blocks,
-        free: &opts.free,
-        prior_sigma,
-        rays,
-        rays_of,
-        surface: &surface,
-    };
-    let mut lsq = Lsq {
-        problem,
-        x: DVector::zeros(k),
-    };
+    (rays, rays_of)
+}
+
+/// Levenberg-Marquardt rounds, the rays' scales and Huber weights renewed from each
+/// round's residuals until the weights settle: the solved problem, each ray's inlier flag
+/// and the rounds run.
+fn robust_rounds<'a, S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync>(
+    mut lsq: Lsq<Problem<'a, S>>,
+    opts: &BundleOptions,
+) -> Result<(Lsq<Problem<'a, S>>, Vec<bool>, usize)> {
+    let surface = lsq.problem.surface;
     let solver = LevenbergMarquardt::new().with_patience(100);
     let mut rho = vec![1.0f64; lsq.problem.rays.len()];
     let mut rounds = 0;
@@ -404,15 +458,7 @@ pub fn adjust_bundle(
             .problem
             .rays
             .par_iter()
-            .map(|r| {
-                ray_scale(
-                    &cams,
-                    r,
-                    &surface,
-                    opts.match_sigma_px,
-                    opts.surface_error_m,
-                )
-            })
+            .map(|r| ray_scale(&cams, r, surface, opts.match_sigma_px, opts.surface_error_m))
             .collect();
         for ((r, s), w) in lsq.problem.rays.iter_mut().zip(scales).zip(&rho) {
             r.scale = s * w.sqrt();
@@ -441,7 +487,7 @@ pub fn adjust_bundle(
                 if r.scale == 0.0 {
                     return None;
                 }
-                let q = transfer(&cams, r, &surface)?;
+                let q = transfer(&cams, r, surface)?;
                 let unweighted = r.scale / w.sqrt();
                 Some((q[0] - r.to_px[0]).hypot(q[1] - r.to_px[1]) * unweighted)
             })
@@ -467,7 +513,18 @@ pub fn adjust_bundle(
             break;
         }
     }
-    // covariance: s² (JᵀJ)⁻¹ with the tie rows' variance
+    Ok((lsq, inlier, rounds))
+}
+
+/// Standard deviations of each free camera's position (m) and angles (°): s² (JᵀJ)⁻¹ with
+/// the tie rows' variance; NaN where not free or not determined.
+#[allow(clippy::type_complexity)]
+fn parameter_sigmas<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync>(
+    lsq: &Lsq<Problem<'_, S>>,
+    opts: &BundleOptions,
+    n: usize,
+    k: usize,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
     let x = lsq.x.clone();
     let j = lsq.problem.jacobian_matrix(&x);
     let r = lsq.problem.all_residuals(&x);
@@ -480,7 +537,6 @@ pub fn adjust_bundle(
         f64::NAN
     };
     let cov = (j.transpose() * &j).try_inverse();
-    let cams = lsq.problem.cameras_at(&x);
     let mut sigma_position_m = vec![[f64::NAN; 3]; n];
     let mut sigma_angles_deg = vec![[f64::NAN; 3]; n];
     for b in &lsq.problem.blocks {
@@ -500,13 +556,22 @@ pub fn adjust_bundle(
             }
         }
     }
-    // unweighted pixel residuals of the inliers, and inliers per pair
-    let px: Vec<Option<f64>> = lsq
-        .problem
+    (sigma_position_m, sigma_angles_deg)
+}
+
+/// The RMSE (px, unweighted) of the inlier rays at `cams`, and per pair its inlier rays
+/// and all its rays.
+fn inlier_residuals<S: Fn(DVec3, DVec3) -> Option<DVec3> + Sync>(
+    problem: &Problem<'_, S>,
+    cams: &[CameraModel],
+    pairs: &[BundlePair],
+    inlier: &[bool],
+) -> (f64, Vec<(usize, usize)>) {
+    let px: Vec<Option<f64>> = problem
         .rays
         .par_iter()
         .map(|r| {
-            let q = transfer(&cams, r, &surface)?;
+            let q = transfer(cams, r, problem.surface)?;
             Some((q[0] - r.to_px[0]).hypot(q[1] - r.to_px[1]))
         })
         .collect();
@@ -528,18 +593,12 @@ pub fn adjust_bundle(
         inliers.push((good, m));
         at += m;
     }
-    Ok(BundleFit {
-        cameras: cams,
-        sigma_position_m,
-        sigma_angles_deg,
-        rmse_px: if cnt > 0 {
-            (sum / cnt as f64).sqrt()
-        } else {
-            f64::NAN
-        },
-        inliers,
-        rounds,
-    })
+    let rmse = if cnt > 0 {
+        (sum / cnt as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    (rmse, inliers)
 }
 
 #[cfg(test)]
