@@ -239,80 +239,18 @@ impl<'a> LabelledTerrain<'a> {
     ) -> Result<Vec<Sample>> {
         let (w, h) = (cam.width as f64, cam.height as f64);
         let (u0, v0) = (margin * w, margin * h);
-        let (nu, nv) = (
-            ((w - 2.0 * u0) / step).floor() as usize,
-            ((h - 2.0 * v0) / step).floor() as usize,
-        );
-        let caster = cam.ray_caster();
-        let origin = (cam.position - self.scene.frame_origin).as_vec3();
+        let grid = SampleGrid {
+            u0,
+            v0,
+            nu: ((w - 2.0 * u0) / step).floor() as usize,
+            nv: ((h - 2.0 * v0) / step).floor() as usize,
+            step,
+        };
         let Some(bvh) = self.scene.bvh() else {
             return Ok(Vec::new());
         };
-        // (direction, hit: (triangle, t, bary))
-        let raw: Vec<Option<(DVec3, Option<crate::raycast::TriHit>)>> = (0..nu * nv)
-            .into_par_iter()
-            .map(|i| {
-                // Jittered inside the grid cell (a fixed hash of the index): samples on the
-                // photo's pixel centres would make the score favour whole-pixel shifts.
-                let (ju, jv) = jitter(i as u64);
-                let u = u0 + ((i % nu) as f64 + 0.5 + ju) * step - 0.5;
-                let v = v0 + ((i / nu) as f64 + 0.5 + jv) * step - 0.5;
-                let dir = caster.ray(u, v)?;
-                Some((dir, bvh.nearest(origin, dir.as_vec3(), 0.05, f32::INFINITY)))
-            })
-            .collect();
-        // Textures of the cells hit.
-        let mut need: Vec<usize> = raw
-            .iter()
-            .flatten()
-            .filter_map(|(_, h)| h.map(|h| self.scene.cell_of(h.triangle) as usize))
-            .collect();
-        need.sort_unstable();
-        need.dedup();
-        self.load_textures(&need)?;
-        let textures = self
-            .textures
-            .lock()
-            .map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?
-            .clone();
-        // Per terrain hit: grey, steep, distance.
-        struct Hit {
-            point: DVec3,
-            grey: f32,
-            steep: bool,
-            dist: f32,
-            photo: bool,
-        }
-        let mut out_at: Vec<Option<Result<Hit, DVec3>>> = Vec::with_capacity(raw.len());
-        for r in &raw {
-            let Some((dir, hit)) = r else {
-                out_at.push(None);
-                continue;
-            };
-            match hit {
-                Some(hh) => {
-                    let point = cam.position + *dir * hh.t as f64;
-                    let plane = self.scene.plane(hh.triangle);
-                    let steep = plane[2].abs() < std::f32::consts::FRAC_1_SQRT_2;
-                    let tex = self.scene.tri_texcoords(hh.triangle);
-                    let p = [0, 1].map(|k| {
-                        hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]
-                    });
-                    let grey = textures[self.scene.cell_of(hh.triangle) as usize]
-                        .as_deref()
-                        .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)));
-                    out_at.push(Some(Ok(Hit {
-                        point,
-                        grey,
-                        steep,
-                        dist: hh.t,
-                        photo: false,
-                    })));
-                }
-                None if self.rises_above(cam.position, *dir) => out_at.push(Some(Err(*dir))),
-                None => out_at.push(None),
-            }
-        }
+        let raw = self.cast_grid(cam, &grid, bvh);
+        let mut out_at = self.label_hits(cam, &raw)?;
         let mut dists: Vec<f32> = out_at
             .iter()
             .flatten()
@@ -320,44 +258,9 @@ impl<'a> LabelledTerrain<'a> {
             .collect();
         dists.sort_unstable_by(f32::total_cmp);
         let median = dists.get(dists.len() / 2).copied().unwrap_or(0.0);
-        // Layers for the band: 0 dropped, 1 sky, else the hit's distance.
-        let keep: Vec<bool> = match band {
+        let keep = match band {
             None => vec![true; out_at.len()],
-            Some(wb) => {
-                let layer = |i: usize| match &out_at[i] {
-                    None => -1.0f32,
-                    Some(Err(_)) => 0.0,
-                    Some(Ok(h)) => h.dist,
-                };
-                let differs = |a: f32, b: f32| {
-                    if a <= 0.0 || b <= 0.0 {
-                        a != b
-                    } else {
-                        a.max(b) > 1.25 * a.min(b)
-                    }
-                };
-                let mut edge = vec![false; out_at.len()];
-                for r in 0..nv {
-                    for c in 0..nu {
-                        let i = r * nu + c;
-                        if c + 1 < nu && differs(layer(i), layer(i + 1)) {
-                            edge[i] = true;
-                            edge[i + 1] = true;
-                        }
-                        if r + 1 < nv && differs(layer(i), layer(i + nu)) {
-                            edge[i] = true;
-                            edge[i + nu] = true;
-                        }
-                    }
-                }
-                let mut keep = dilate(&edge, nu, nv, wb);
-                for r in (0..nv).step_by(INNER_STRIDE) {
-                    for c in (0..nu).step_by(INNER_STRIDE) {
-                        keep[r * nu + c] = true;
-                    }
-                }
-                keep
-            }
+            Some(wb) => band_keep(&out_at, grid.nu, grid.nv, wb),
         };
         // Greys from the label photos, where one shows the point: only for the samples
         // kept (each costs a ray to test the point's visibility from every label photo).
@@ -380,54 +283,105 @@ impl<'a> LabelledTerrain<'a> {
         // grey class boundaries per source (texture, label photo): quantiles of the view's
         // own greys; with label photos and a band, over the uniform one-in-`INNER_STRIDE`²
         // grid of samples (kept, so their source is known; an unbiased subset of the view)
+        let nu = grid.nu;
         let uniform = |i: usize| {
             (i / nu).is_multiple_of(INNER_STRIDE) && (i % nu).is_multiple_of(INNER_STRIDE)
         };
         let quantile_set = |i: usize| self.label_photos.is_empty() || band.is_none() || uniform(i);
-        let cuts_of = |photo: bool| -> Vec<f32> {
-            let mut greys: Vec<f32> = out_at
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| quantile_set(*i))
-                .filter_map(|(_, a)| a.as_ref()?.as_ref().ok())
-                .filter(|h| h.photo == photo)
-                .map(|h| h.grey)
-                .collect();
-            greys.sort_unstable_by(f32::total_cmp);
-            (1..GREY_CLASSES as usize)
-                .map(|k| {
-                    greys
-                        .get(k * greys.len() / GREY_CLASSES as usize)
-                        .copied()
-                        .unwrap_or(0.5)
-                })
-                .collect()
-        };
-        let cuts = [cuts_of(false), cuts_of(true)];
+        let cuts = [false, true].map(|photo| grey_cuts(&out_at, photo, &quantile_set));
         Ok(out_at
             .into_iter()
             .zip(keep)
             .filter_map(|(a, k)| if k { a } else { None })
-            .map(|a| match a {
-                Ok(hit) => {
-                    let g = cuts[usize::from(hit.photo)]
-                        .iter()
-                        .filter(|&&c| hit.grey > c)
-                        .count() as u8;
-                    let class = 4 * u8::from(hit.photo)
-                        + 2 * u8::from(hit.dist > median)
-                        + u8::from(hit.steep);
-                    Sample {
-                        at: SampleAt::Point(hit.point),
-                        label: 1 + g + GREY_CLASSES * class,
-                    }
-                }
-                Err(dir) => Sample {
-                    at: SampleAt::Sky(dir),
-                    label: SKY,
-                },
-            })
+            .map(|a| labelled(a, &cuts, median))
             .collect())
+    }
+
+    /// One ray per grid cell (jittered inside it by a fixed hash of its index: samples on
+    /// the photo's pixel centres would make the score favour whole-pixel shifts): its
+    /// direction and nearest hit, `None` where the camera has no ray.
+    #[allow(clippy::type_complexity)]
+    fn cast_grid(
+        &self,
+        cam: &CameraModel,
+        grid: &SampleGrid,
+        bvh: &crate::raycast::TriangleBvh,
+    ) -> Vec<Option<(DVec3, Option<crate::raycast::TriHit>)>> {
+        let caster = cam.ray_caster();
+        let origin = (cam.position - self.scene.frame_origin).as_vec3();
+        let SampleGrid {
+            u0,
+            v0,
+            nu,
+            nv,
+            step,
+        } = *grid;
+        (0..nu * nv)
+            .into_par_iter()
+            .map(|i| {
+                let (ju, jv) = jitter(i as u64);
+                let u = u0 + ((i % nu) as f64 + 0.5 + ju) * step - 0.5;
+                let v = v0 + ((i / nu) as f64 + 0.5 + jv) * step - 0.5;
+                let dir = caster.ray(u, v)?;
+                Some((dir, bvh.nearest(origin, dir.as_vec3(), 0.05, f32::INFINITY)))
+            })
+            .collect()
+    }
+
+    /// Per ray: a terrain hit with its texture grey, steepness and distance; the ray's
+    /// direction where it is sky; `None` where it is dropped (no ray, or it leaves the
+    /// store below its top).
+    #[allow(clippy::type_complexity)]
+    fn label_hits(
+        &self,
+        cam: &CameraModel,
+        raw: &[Option<(DVec3, Option<crate::raycast::TriHit>)>],
+    ) -> Result<Vec<Option<std::result::Result<ViewHit, DVec3>>>> {
+        // Textures of the cells hit.
+        let mut need: Vec<usize> = raw
+            .iter()
+            .flatten()
+            .filter_map(|(_, h)| h.map(|h| self.scene.cell_of(h.triangle) as usize))
+            .collect();
+        need.sort_unstable();
+        need.dedup();
+        self.load_textures(&need)?;
+        let textures = self
+            .textures
+            .lock()
+            .map_err(|_| crate::error::Error::BadOption("texture cache poisoned".into()))?
+            .clone();
+        let mut out_at = Vec::with_capacity(raw.len());
+        for r in raw {
+            let Some((dir, hit)) = r else {
+                out_at.push(None);
+                continue;
+            };
+            match hit {
+                Some(hh) => {
+                    let point = cam.position + *dir * hh.t as f64;
+                    let plane = self.scene.plane(hh.triangle);
+                    let steep = plane[2].abs() < std::f32::consts::FRAC_1_SQRT_2;
+                    let tex = self.scene.tri_texcoords(hh.triangle);
+                    let p = [0, 1].map(|k| {
+                        hh.bary[0] * tex[0][k] + hh.bary[1] * tex[1][k] + hh.bary[2] * tex[2][k]
+                    });
+                    let grey = textures[self.scene.cell_of(hh.triangle) as usize]
+                        .as_deref()
+                        .map_or(0.5, |t| grey_at(&t.0, p.map(|v| v * t.1)));
+                    out_at.push(Some(Ok(ViewHit {
+                        point,
+                        grey,
+                        steep,
+                        dist: hh.t,
+                        photo: false,
+                    })));
+                }
+                None if self.rises_above(cam.position, *dir) => out_at.push(Some(Err(*dir))),
+                None => out_at.push(None),
+            }
+        }
+        Ok(out_at)
     }
 
     /// Whether a ray from `from` along `dir` (no terrain hit) is sky: it climbs above the
@@ -594,6 +548,120 @@ impl LabelPhoto {
         let top = l[y0 * w + x0] * (1.0 - fx) + l[y0 * w + x1] * fx;
         let bot = l[y1 * w + x0] * (1.0 - fx) + l[y1 * w + x1] * fx;
         Some(top * (1.0 - fy) + bot * fy)
+    }
+}
+
+/// The grid of a view's samples: `nu × nv` cells of `step` pixels from `(u0, v0)`.
+#[derive(Clone, Copy)]
+struct SampleGrid {
+    u0: f64,
+    v0: f64,
+    nu: usize,
+    nv: usize,
+    step: f64,
+}
+
+/// A terrain hit of a view sample: where, its grey (texture or label photo), whether the
+/// surface is steep, the ray's length and whether a label photo gave the grey.
+struct ViewHit {
+    point: DVec3,
+    grey: f32,
+    steep: bool,
+    dist: f32,
+    photo: bool,
+}
+
+/// Which samples a band of `wb` grid steps keeps: those within it of a layer boundary (sky
+/// against terrain, dropped against kept, or a distance jump of more than 25 %) and one in
+/// `INNER_STRIDE`² of the others.
+fn band_keep(
+    out_at: &[Option<std::result::Result<ViewHit, DVec3>>],
+    nu: usize,
+    nv: usize,
+    wb: usize,
+) -> Vec<bool> {
+    // Layers: -1 dropped, 0 sky, else the hit's distance.
+    let layer = |i: usize| match &out_at[i] {
+        None => -1.0f32,
+        Some(Err(_)) => 0.0,
+        Some(Ok(h)) => h.dist,
+    };
+    let differs = |a: f32, b: f32| {
+        if a <= 0.0 || b <= 0.0 {
+            a != b
+        } else {
+            a.max(b) > 1.25 * a.min(b)
+        }
+    };
+    let mut edge = vec![false; out_at.len()];
+    for r in 0..nv {
+        for c in 0..nu {
+            let i = r * nu + c;
+            if c + 1 < nu && differs(layer(i), layer(i + 1)) {
+                edge[i] = true;
+                edge[i + 1] = true;
+            }
+            if r + 1 < nv && differs(layer(i), layer(i + nu)) {
+                edge[i] = true;
+                edge[i + nu] = true;
+            }
+        }
+    }
+    let mut keep = dilate(&edge, nu, nv, wb);
+    for r in (0..nv).step_by(INNER_STRIDE) {
+        for c in (0..nu).step_by(INNER_STRIDE) {
+            keep[r * nu + c] = true;
+        }
+    }
+    keep
+}
+
+/// The grey class boundaries of the hits whose grey came from a label photo (`photo`) or
+/// from the texture: quantiles over the samples `in_set` selects.
+fn grey_cuts(
+    out_at: &[Option<std::result::Result<ViewHit, DVec3>>],
+    photo: bool,
+    in_set: &dyn Fn(usize) -> bool,
+) -> Vec<f32> {
+    let mut greys: Vec<f32> = out_at
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| in_set(*i))
+        .filter_map(|(_, a)| a.as_ref()?.as_ref().ok())
+        .filter(|h| h.photo == photo)
+        .map(|h| h.grey)
+        .collect();
+    greys.sort_unstable_by(f32::total_cmp);
+    (1..GREY_CLASSES as usize)
+        .map(|k| {
+            greys
+                .get(k * greys.len() / GREY_CLASSES as usize)
+                .copied()
+                .unwrap_or(0.5)
+        })
+        .collect()
+}
+
+/// A kept sample with its label: sky, or a terrain class (grey class from `cuts`, source,
+/// beyond the `median` distance, steep).
+fn labelled(a: std::result::Result<ViewHit, DVec3>, cuts: &[Vec<f32>; 2], median: f32) -> Sample {
+    match a {
+        Ok(hit) => {
+            let g = cuts[usize::from(hit.photo)]
+                .iter()
+                .filter(|&&c| hit.grey > c)
+                .count() as u8;
+            let class =
+                4 * u8::from(hit.photo) + 2 * u8::from(hit.dist > median) + u8::from(hit.steep);
+            Sample {
+                at: SampleAt::Point(hit.point),
+                label: 1 + g + GREY_CLASSES * class,
+            }
+        }
+        Err(dir) => Sample {
+            at: SampleAt::Sky(dir),
+            label: SKY,
+        },
     }
 }
 
