@@ -6,6 +6,8 @@
 //! outside the trailing `#[cfg(test)] mod tests` (tests may use anything), and within a
 //! folder every `super::NAME` / `crate::FOLDER::NAME` naming a sibling file or subfolder.
 
+mod cli_util;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
@@ -52,18 +54,10 @@ fn documented_layers() -> BTreeMap<String, u32> {
 
 /// Every `.rs` file under `dir`, sorted.
 fn rust_files(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).expect("read src") {
-            let p = e.expect("dir entry").path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                out.push(p);
-            }
-        }
-    }
+    let mut out: Vec<PathBuf> = cli_util::files_under(dir)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .collect();
     out.sort();
     out
 }
