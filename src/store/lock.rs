@@ -4,8 +4,8 @@
 //! `File::try_lock`) on `STORE/.lock` and writes the holder's pid and command into it; a
 //! second writer is refused at once with a message naming the holder. The operating
 //! system releases the lock when the process ends, however it ends (a `kill -9` leaves no
-//! stale lock; the file itself stays). Re-entrant within one process (a repair that re-runs
-//! the build holds it once). Readers do not lock: every file is replaced atomically and the
+//! stale lock; the file itself stays); a normal release unlocks explicitly on drop.
+//! Re-entrant within one process (a repair that re-runs the build holds it once). Readers do not lock: every file is replaced atomically and the
 //! manifest is written last.
 
 use std::io::Write;
@@ -88,7 +88,13 @@ impl Drop for StoreLock {
                 held.remove(i);
             }
         }
-        // the file's lock is released when `_file` closes
+        // Unlock explicitly rather than on close: `flock` belongs to the open file
+        // description, which a child process forked by another thread shares until it
+        // execs; closing only our descriptor would leave the lock held for that moment and
+        // refuse this process's next writer (seen in CI while a test spawned `python3`).
+        if let Some(file) = &self._file {
+            let _ = file.unlock();
+        }
     }
 }
 
