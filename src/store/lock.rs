@@ -5,8 +5,8 @@
 //! second writer is refused at once with a message naming the holder. The operating
 //! system releases the lock when the process ends, however it ends (a `kill -9` leaves no
 //! stale lock; the file itself stays); a normal release unlocks explicitly on drop.
-//! Re-entrant within one process (a repair that re-runs the build holds it once). Readers do not lock: every file is replaced atomically and the
-//! manifest is written last.
+//! Re-entrant within one process (a repair that re-runs the build holds it once). Readers
+//! do not lock: every file is replaced atomically and the manifest is written last.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
