@@ -35,8 +35,10 @@ pub struct Args {
     #[arg(long, value_parser = super::parse_pair, allow_hyphen_values = true)]
     origin: Option<(f64, f64)>,
     /// Stored value meaning no-data (overrides GDAL_NODATA); "nan" declares NaN as no-data.
-    #[arg(long, allow_hyphen_values = true)]
-    nodata: Option<f64>,
+    /// Without it (and without a no-data tag) the common markers -9999, -32768, -3.4e38 and
+    /// NaN are taken as no-data, with a message; "none" keeps every value as a height.
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_nodata)]
+    nodata: Option<NodataArg>,
     /// Finest level's max vertical error in world units; doubles per coarser level.
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     max_error: f64,
@@ -127,6 +129,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A `--nodata` value: a number (or nan), or `none` (no value, no sentinels).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum NodataArg {
+    Value(f64),
+    None,
+}
+
+fn parse_nodata(s: &str) -> Result<NodataArg, String> {
+    if s.eq_ignore_ascii_case("none") {
+        return Ok(NodataArg::None);
+    }
+    s.trim()
+        .parse::<f64>()
+        .map(NodataArg::Value)
+        .map_err(|_| format!("{s:?} is not a number, nan or none"))
+}
+
 /// The build recipe the flags describe (paths as given).
 pub(super) fn recipe_of(a: &Args) -> BuildRecipe {
     BuildRecipe {
@@ -140,7 +159,11 @@ pub(super) fn recipe_of(a: &Args) -> BuildRecipe {
             z_offset: a.z_offset,
             spacing: a.spacing,
             origin: a.origin,
-            nodata: a.nodata,
+            nodata: match a.nodata {
+                Some(NodataArg::Value(v)) => Some(v),
+                _ => None,
+            },
+            nodata_sentinels: a.nodata != Some(NodataArg::None),
             max_memory: a.max_memory,
         },
         ortho: a.ortho.clone(),

@@ -95,6 +95,11 @@ pub struct Args {
     /// No progress bars or summary.
     #[arg(long)]
     pub quiet: bool,
+    /// Print the run's report as JSON on stdout (per photo: terrain pixels, the pixels and
+    /// texels it supplied, warnings; per level: cells and texture memory) instead of the
+    /// summary.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The library options these flags describe.
@@ -134,7 +139,7 @@ pub fn options(a: &Args) -> ProjectOptions {
             ..Default::default()
         },
         png_compression: a.png_compression.into(),
-        progress: super::progress::progress_sink(a.quiet),
+        progress: super::progress::progress_sink(a.quiet || a.json),
         ..ProjectOptions::default()
     }
 }
@@ -188,15 +193,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         t.elapsed().as_secs_f64()
     );
     let report = project_store(&a.store, &photos, &options(&a))?;
-    if !a.quiet {
+    if a.json {
+        let out = serde_json::json!({
+            "cells_written": report.cells_written,
+            "photos": report.settings.photos,
+            "levels": report.settings.levels,
+            "level_colours": report.settings.level_colours,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else if !a.quiet {
         println!("photo textures for {} cells", report.cells_written);
         for p in &report.settings.photos {
             println!(
-                "{}: {} texels written, {} supplied, {} pixels hit, {} silhouette pixels rejected, {} footprints reconstructed, gain {:.3?}, offset {:.3?} ({} samples)",
+                "{}: {} pixels hit the terrain, {} ({:.1} %) supplied a texture; {} texels written, {} supplied, {} silhouette pixels rejected, {} footprints reconstructed, gain {:.3?}, offset {:.3?} ({} samples)",
                 p.name,
+                p.pixels_hit,
+                p.pixels_supplying,
+                100.0 * p.supplying_share(),
                 p.texels_written,
                 p.texels_supplied,
-                p.pixels_hit,
                 p.rejected_silhouette,
                 p.reconstructed_footprints,
                 p.colour_gain,

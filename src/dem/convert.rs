@@ -66,6 +66,78 @@ impl Sample for f64 {
     }
 }
 
+/// Values commonly stored for missing data without a declared no-data value: −9999 (ESRI
+/// ASCII grids and many exports), −32768 (SRTM and other i16 grids), the lowest f32
+/// (−3.4028235e38, GDAL's and ArcGIS's float default) and its rounded form −3.4e38, and NaN.
+/// Without `--nodata` and without a no-data tag a reader takes them as no-data
+/// ([`VoidRule::Sentinels`]); `--nodata none` turns this off.
+pub const NODATA_SENTINELS: [f64; 5] = [-9999.0, -32768.0, f32::MIN as f64, -3.4e38, f64::NAN];
+
+/// How a reader tells no-data samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum VoidRule {
+    /// The declared value (option or file tag) and nothing else.
+    Declared(f64),
+    /// None declared: the common sentinels ([`NODATA_SENTINELS`]).
+    Sentinels,
+    /// None declared and sentinels off: every value is a height.
+    Off,
+}
+
+impl VoidRule {
+    /// The rule for a declared value (the option, else the file's tag) and whether
+    /// undeclared sentinels count.
+    pub fn new(declared: Option<f64>, sentinels: bool) -> VoidRule {
+        match declared {
+            Some(nd) => VoidRule::Declared(nd),
+            None if sentinels => VoidRule::Sentinels,
+            None => VoidRule::Off,
+        }
+    }
+
+    /// Whether a value was declared (for the hints of errors).
+    pub fn declared(self) -> bool {
+        matches!(self, VoidRule::Declared(_))
+    }
+
+    /// Which no-data value `v` is: `Some(k)` for the declared value (k = 0) or the k-th
+    /// sentinel, `None` for a height.
+    #[inline]
+    pub fn matches<T: Sample>(self, v: T) -> Option<usize> {
+        match self {
+            VoidRule::Declared(nd) => v.is_nodata(nd).then_some(0),
+            VoidRule::Sentinels => NODATA_SENTINELS.iter().position(|&s| v.is_nodata(s)),
+            VoidRule::Off => None,
+        }
+    }
+}
+
+/// Per sentinel, how many samples a reader took as no-data by [`VoidRule::Sentinels`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct SentinelCounts(pub [u64; NODATA_SENTINELS.len()]);
+
+impl SentinelCounts {
+    /// Counts match `k` of `rule` (only sentinel matches count) and says whether it is void.
+    #[inline]
+    pub fn note(&mut self, rule: VoidRule, k: Option<usize>) -> bool {
+        if let (VoidRule::Sentinels, Some(k)) = (rule, k) {
+            self.0[k] += 1;
+        }
+        k.is_some()
+    }
+
+    /// "1234 samples of -9999, 12 of NaN", or `None` if no sentinel was met.
+    pub fn describe(&self) -> Option<String> {
+        let parts: Vec<String> = NODATA_SENTINELS
+            .iter()
+            .zip(self.0)
+            .filter(|(_, n)| *n > 0)
+            .map(|(s, n)| format!("{n} samples of {}", num(*s)))
+            .collect();
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
+}
+
 /// Formats a value compactly (scientific notation when huge) but exactly enough to be
 /// passed back as `--nodata` (Rust's shortest round-trip representation).
 fn num(v: f64) -> String {

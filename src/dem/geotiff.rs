@@ -10,7 +10,7 @@ use std::path::Path;
 use tiff::ColorType;
 use tiff::decoder::DecodingResult;
 
-use super::convert::{self, Sample, Scaling};
+use super::convert::{self, Sample, Scaling, SentinelCounts, VoidRule};
 use super::{Decoded, DemLoadOptions, limits};
 use crate::error::{Error, Result};
 use crate::geotiff as gt;
@@ -20,11 +20,13 @@ fn convert_all<T: Sample>(
     w: usize,
     v: &[T],
     s: Scaling,
-    nodata: Option<f64>,
-) -> Result<(Vec<f32>, Vec<bool>)> {
-    convert::to_heights(path, w, v.len(), s, nodata.is_some(), |i| {
-        (v[i].to_f64(), nodata.is_some_and(|nd| v[i].is_nodata(nd)))
-    })
+    rule: VoidRule,
+) -> Result<(Vec<f32>, Vec<bool>, SentinelCounts)> {
+    let mut counts = SentinelCounts::default();
+    let (heights, void) = convert::to_heights(path, w, v.len(), s, rule.declared(), |i| {
+        (v[i].to_f64(), counts.note(rule, rule.matches(v[i])))
+    })?;
+    Ok((heights, void, counts))
 }
 
 /// Reads a single-band (Geo)TIFF DEM.
@@ -90,11 +92,11 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
     )?;
 
     let tags = gt::read_geo_tags(path, &mut dec)?;
-    let nodata = opts.nodata.or(tags.nodata);
+    let nodata = VoidRule::new(opts.nodata.or(tags.nodata), opts.nodata_sentinels);
     let data = dec.read_image().map_err(|e| gt::tiff_err(path, e))?;
     let n = w * h;
     let s = super::scaling(opts);
-    let (heights, void) = match &data {
+    let (heights, void, sentinels) = match &data {
         DecodingResult::U8(v) => convert_all(path, w, short(path, v, n)?, s, nodata)?,
         DecodingResult::I8(v) => convert_all(path, w, short(path, v, n)?, s, nodata)?,
         DecodingResult::U16(v) => convert_all(path, w, short(path, v, n)?, s, nodata)?,
@@ -118,6 +120,7 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         );
     }
     Ok(Decoded {
+        sentinels,
         width: w,
         height: h,
         heights,

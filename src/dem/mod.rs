@@ -21,11 +21,12 @@ mod detect;
 pub mod fill;
 mod geotiff;
 pub(crate) mod limits;
+mod plausibility;
 mod png16;
 mod raw_f32;
 mod terrain_rgb;
 
-pub use convert::MAX_ABS_HEIGHT;
+pub use convert::{MAX_ABS_HEIGHT, NODATA_SENTINELS};
 pub use terrain_rgb::decode_terrain_rgb;
 
 use std::path::Path;
@@ -67,8 +68,18 @@ pub struct DemLoadOptions {
     pub origin: Option<(f64, f64)>,
     /// Value that marks no-data (overrides GDAL_NODATA). `Some(NAN)` declares NaN as no-data.
     pub nodata: Option<f64>,
+    /// Without a declared no-data value (neither `nodata` nor the file's tag), take the
+    /// common sentinels ([`NODATA_SENTINELS`]: −9999, −32768, −3.4e38, NaN) as no-data, with
+    /// a message naming value and count (raw f32 and GeoTIFF). Default on (`--nodata none`
+    /// turns it off).
+    #[serde(default = "sentinels_on")]
+    pub nodata_sentinels: bool,
     /// Refuse inputs whose decoded size would exceed this many bytes.
     pub max_memory: u64,
+}
+
+fn sentinels_on() -> bool {
+    true
 }
 
 impl Default for DemLoadOptions {
@@ -82,6 +93,7 @@ impl Default for DemLoadOptions {
             spacing: None,
             origin: None,
             nodata: None,
+            nodata_sentinels: true,
             max_memory: 8 << 30,
         }
     }
@@ -221,6 +233,8 @@ pub(crate) struct Decoded {
     pub crs: Option<String>,
     #[allow(dead_code)]
     pub geographic: bool,
+    /// Samples taken as no-data by the undeclared sentinels (raw f32 and GeoTIFF).
+    pub sentinels: convert::SentinelCounts,
 }
 
 /// Refuses grids smaller than 2x2 (and absurd sizes that overflow indices).
@@ -333,8 +347,16 @@ pub fn load_dem(path: &Path, opts: &DemLoadOptions) -> Result<Dem> {
         void,
         georef,
         crs,
+        sentinels,
         ..
     } = d;
+    if let Some(found) = sentinels.describe() {
+        tracing::warn!(
+            "{}: taken as no-data (no --nodata given and no no-data tag in the file): {found}; \
+             `--nodata none` keeps every value as a height",
+            path.display()
+        );
+    }
     if format != DemFormat::F32 {
         for (flag, v, actual) in [
             ("--width", opts.width, width),
@@ -400,6 +422,9 @@ pub fn load_dem(path: &Path, opts: &DemLoadOptions) -> Result<Dem> {
     }
     g.validate()
         .map_err(|e| Error::bad_input(path, e.to_string()))?;
+    if let Some(w) = plausibility::implausible_walls(width, height, &heights, &void, &g) {
+        tracing::warn!("{}: {w}", path.display());
+    }
     Ok(Dem {
         width,
         height,

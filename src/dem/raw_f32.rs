@@ -5,7 +5,7 @@ use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
-use super::convert::{self, Sample};
+use super::convert;
 use super::{Decoded, DemLoadOptions, limits};
 use crate::error::{Error, Result};
 
@@ -55,7 +55,8 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
     if bytes.len() as u64 != len {
         return Err(Error::bad_input(path, "file shrank while being read"));
     }
-    let nodata = opts.nodata;
+    let rule = convert::VoidRule::new(opts.nodata, opts.nodata_sentinels);
+    let mut sentinels = convert::SentinelCounts::default();
     let value = |i: usize| {
         f32::from_le_bytes([
             bytes[4 * i],
@@ -64,18 +65,13 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
             bytes[4 * i + 3],
         ])
     };
-    let (heights, void) = convert::to_heights(
-        path,
-        w,
-        w * h,
-        super::scaling(opts),
-        nodata.is_some(),
-        |i| {
+    let (heights, void) =
+        convert::to_heights(path, w, w * h, super::scaling(opts), rule.declared(), |i| {
             let v = value(i);
-            (v as f64, nodata.is_some_and(|nd| v.is_nodata(nd)))
-        },
-    )?;
+            (v as f64, sentinels.note(rule, rule.matches(v)))
+        })?;
     Ok(Decoded {
+        sentinels,
         width: w,
         height: h,
         heights,

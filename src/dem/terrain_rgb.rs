@@ -49,6 +49,7 @@ pub(crate) fn read(path: &Path, opts: &DemLoadOptions) -> Result<Decoded> {
         },
     )?;
     Ok(Decoded {
+        sentinels: Default::default(),
         width: w,
         height: h,
         heights,

@@ -385,9 +385,44 @@ pub struct PhotoReport {
     /// identity).
     #[serde(default)]
     pub colour_samples: u64,
+    /// Of `pixels_hit` (full-resolution pixels, finest level), those with a footprint whose
+    /// colour the resolution rule lets dominate the existing texture at the texel under it
+    /// (weight at least 1/2; docs/projection.md, "What a photo supplied").
+    #[serde(default)]
+    pub pixels_supplying: u64,
+    /// Of `pixels_hit`, those with a footprint where the existing texture resolves the
+    /// surface about as finely or more (the photo's colour counts for less than half).
+    #[serde(default)]
+    pub pixels_outweighed: u64,
+    /// Of `pixels_hit`, those whose footprint could not be completed.
+    #[serde(default)]
+    pub pixels_dropped: u64,
+    /// What the run found wrong with this photo, each also logged as a warning.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+}
+
+impl PhotoReport {
+    /// The share of the photo's terrain pixels (`pixels_hit`) whose colour reached a
+    /// texture (`pixels_supplying`), in [0, 1]; 0 for a photo that hit no terrain.
+    pub fn supplying_share(&self) -> f64 {
+        if self.pixels_hit == 0 {
+            0.0
+        } else {
+            self.pixels_supplying as f64 / self.pixels_hit as f64
+        }
+    }
 }
 
 impl Manifest {
+    /// Whether the cells' own textures hold image information: an ortho was given (by its
+    /// source or its spacing). `false` for textures derived from the DEM (tint and
+    /// hillshade), which any photo that sees the surface replaces (docs/projection.md,
+    /// "What an existing texture holds").
+    pub fn textures_hold_an_image(&self) -> bool {
+        self.ortho.is_some() || self.ortho_spacing.is_some()
+    }
+
     /// Reads and validates `manifest.json` in `dir`.
     pub fn read(dir: &Path) -> Result<Manifest> {
         let path = dir.join("manifest.json");

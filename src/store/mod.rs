@@ -26,6 +26,7 @@ mod manifest;
 mod mesh;
 mod obj;
 pub mod photo_texture;
+mod surface;
 mod writer;
 
 use std::path::{Path, PathBuf};
@@ -39,6 +40,7 @@ pub use manifest::{
 };
 pub use obj::obj_text;
 pub use photo_texture::{PHOTO_BLOCK, PhotoBlocks, magnify};
+pub use surface::{CameraPlacement, SurfacePoint};
 pub use writer::BackgroundWriter;
 
 use crate::cells::CellMesh;

@@ -6,7 +6,9 @@
 //! r_p)` ([`ConfidenceParams::photo_weight`]): photo colour fades in across the edge of photo
 //! coverage instead of ending in a seam, and only where the photo resolves the surface more
 //! finely than the existing texture does. The existing texel (alpha `α`, the known fraction
-//! of its colour) counts with weight `(1 − β)·α`, so the photo's share of the result is
+//! of its colour) claims its resolution only for that fraction: `β = blend_weight(c) · (α ·
+//! resolution_weight + 1 − α)` (where the texture has no data, α = 0, any photo that sees
+//! the texel supplies it). It counts with weight `(1 − β)·α`, so the photo's share of the result is
 //! `s = β / (β + (1 − β) α)` (`s = β` on fully known texels, 1 where the existing colour is
 //! unknown and the photo saw the texel, 0 where `β = 0`). Result: `rgb = s·p + (1 − s)·existing`
 //! mixed in the working [`ColourSpace`], alpha `max(α, β)`; the confidence map stores `s`
@@ -154,9 +156,9 @@ pub fn blend_cell(
             None => ctx.existing_resolution(b) as f64,
         };
         let ratio = e_res / resolution as f64;
-        // (= params.photo_weight(confidence, ratio))
-        let beta = params.blend_weight(confidence as f64) * resolution_weight(ratio);
-        if !(beta > 0.0) {
+        let coverage = params.blend_weight(confidence as f64);
+        let sharper = resolution_weight(ratio);
+        if !(coverage > 0.0) {
             return;
         }
         let block = block_index(t);
@@ -167,6 +169,16 @@ pub fn blend_cell(
         let at = slot as usize * bt + within_block(t);
         let e = &mut px[4 * at..4 * at + 4];
         let alpha = alphas[e[3] as usize];
+        // (= params.photo_weight(confidence, ratio) on a fully known texel; the resolution
+        // rule holds only for the known fraction α of the existing colour)
+        let beta = if e[3] == 255 {
+            coverage * sharper
+        } else {
+            coverage * (alpha * sharper + 1.0 - alpha)
+        };
+        if !(beta > 0.0) {
+            return;
+        }
         // (x / 1 is x: most texels are fully known and most such denominators are 1)
         let d = beta + (1.0 - beta) * alpha;
         let s = if d == 1.0 { beta } else { beta / d };

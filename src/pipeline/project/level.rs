@@ -59,7 +59,9 @@ pub(super) fn splat_batch(
 
 /// The resolution rule's view of cell `rec` ([`CellContext`]): slopes from its active normal
 /// map, its TIN's measured error, and the ground sample distance of its existing texture
-/// (the larger of the ortho's spacing, when the store records it, and the texel size).
+/// (the larger of the ortho's spacing, when the store records it, and the texel size;
+/// infinite where the texture was derived from the DEM: it holds no image detail, so any
+/// photo that sees the surface resolves more).
 pub(super) fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContext> {
     let normals = store.read_active_normal_map(rec)?;
     let t = active_texels(rec);
@@ -73,7 +75,11 @@ pub(super) fn cell_context(store: &Store, rec: &CellRecord) -> Result<CellContex
         ));
     }
     let texel = rec.extent.width().max(rec.extent.height()) / rec.texels.max(1) as f64;
-    let ground = store.manifest.ortho_spacing.unwrap_or(0.0).max(texel);
+    let ground = if store.manifest.textures_hold_an_image() {
+        store.manifest.ortho_spacing.unwrap_or(0.0).max(texel)
+    } else {
+        f64::INFINITY
+    };
     Ok(CellContext {
         base_texels: t,
         cos_slope: normals
@@ -189,9 +195,15 @@ impl LevelRun<'_> {
             }
             // This photo's deposits per manifest cell, filled batch by batch in row order.
             let mut pas: Vec<Option<PhotoAccum>> = vec![None; ncells];
+            // (finest level: per pixel, whether its colour reaches a texture)
+            let focal = (cam.fx * cam.fy).sqrt();
+            let mut supply = SupplyCounts::default();
             let counts = match cached[pi].take() {
                 Some((l, fs)) if l == level => {
                     splat_batch(&fs, &mut pas, cells, &sizing.scales, level as u8, &samples);
+                    if level == self.finest {
+                        supply.add(self.count_supplying(&fs, &mut sizing.contexts, focal));
+                    }
                     let mut counts = FootprintSet::default();
                     counts.add_counts(&fs);
                     self.buffers.recycle(fs);
@@ -231,6 +243,9 @@ impl LevelRun<'_> {
                                 &samples,
                             );
                             counts.add_counts(batch);
+                            if level == self.finest {
+                                supply.add(self.count_supplying(batch, contexts, focal));
+                            }
                             let done: Vec<Finishing> = pas
                                 .iter_mut()
                                 .zip(accs.iter_mut())
@@ -259,6 +274,10 @@ impl LevelRun<'_> {
             timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
             if level == self.finest {
                 let r = &mut reports[pi];
+                let [supplying, outweighed] = supply.result()?;
+                r.pixels_supplying = supplying;
+                r.pixels_outweighed = outweighed;
+                r.pixels_dropped = counts.dropped;
                 r.pixels_hit = counts.pixels_hit;
                 r.rejected_silhouette = counts.rejected_silhouette;
                 r.reconstructed_footprints = counts.reconstructed;
@@ -295,6 +314,48 @@ impl LevelRun<'_> {
             sizing,
             early,
         })
+    }
+
+    /// Splits the footprints of `batch` (of the finest level, cast from an image of focal
+    /// length `focal` pixels) into `[supplying, outweighed]`: pixels whose colour the
+    /// resolution rule lets dominate the existing texture ([`resolves_more`]) and the rest.
+    /// Loads the contexts of cells not seen before into `contexts` (kept for the merge).
+    fn count_supplying(
+        &self,
+        batch: &FootprintSet,
+        contexts: &mut [Option<CellContext>],
+        focal: f64,
+    ) -> Result<[u64; 2]> {
+        let cells = &self.store.manifest.cells;
+        let missing: Vec<usize> = batch
+            .cells
+            .iter()
+            .map(|c| c.cell as usize)
+            .filter(|&ci| contexts.get(ci).is_some_and(Option::is_none))
+            .collect();
+        let loaded: Vec<(usize, CellContext)> = missing
+            .into_par_iter()
+            .map(|ci| cell_context(self.store, &cells[ci]).map(|c| (ci, c)))
+            .collect::<Result<_>>()?;
+        for (ci, c) in loaded {
+            contexts[ci] = Some(c);
+        }
+        let contexts = &*contexts;
+        let weights = &self.opts.confidence;
+        let supplying: u64 = batch
+            .cells
+            .par_iter()
+            .map(
+                |cf| match contexts.get(cf.cell as usize).and_then(Option::as_ref) {
+                    Some(ctx) => cf
+                        .iter()
+                        .filter(|fp| resolves_more(ctx, fp, focal, weights))
+                        .count() as u64,
+                    None => 0,
+                },
+            )
+            .sum();
+        Ok([supplying, batch.len() as u64 - supplying])
     }
 
     /// Blends and writes the cells `done` that the last photo `pi`'s remaining rows cannot
@@ -586,6 +647,34 @@ pub(super) const OCCLUSION_STEP: usize = SIZING_STEPS;
 
 /// Pyramid halvings between a level's image and its sizing cast's.
 pub(super) const SIZING_STEPS: usize = 2;
+
+/// A photo's `[supplying, outweighed]` pixels summed over batches, or the first error.
+#[derive(Default)]
+struct SupplyCounts {
+    counts: [u64; 2],
+    failed: Option<Error>,
+}
+
+impl SupplyCounts {
+    fn add(&mut self, batch: Result<[u64; 2]>) {
+        match batch {
+            Ok([a, b]) => {
+                self.counts[0] += a;
+                self.counts[1] += b;
+            }
+            Err(e) => {
+                self.failed.get_or_insert(e);
+            }
+        }
+    }
+
+    fn result(self) -> Result<[u64; 2]> {
+        match self.failed {
+            Some(e) => Err(e),
+            None => Ok(self.counts),
+        }
+    }
+}
 
 /// The photo texture sizes of one level.
 #[derive(Clone, Debug, Default)]

@@ -38,8 +38,8 @@ use crate::progress::{ProgressSink, ProgressTask};
 use crate::raycast::{LevelScene, RayAccel};
 use crate::stats::texel_stretch;
 use crate::store::{
-    BackgroundWriter, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport, PhotoReport,
-    PhotoSettings, Store, active_texels, cell_stem,
+    BackgroundWriter, CameraPlacement, CellRecord, FileRef, PhotoCellRecord, PhotoLevelReport,
+    PhotoReport, PhotoSettings, Store, active_texels, cell_stem,
 };
 
 /// Texels steeper than this (degrees from horizontal) count as steep.
@@ -253,6 +253,8 @@ pub fn project_store(
     let _lock = crate::store::StoreLock::acquire(dir, "cliffmap project")?;
     let mut store = Store::open(dir)?;
     check_photo_sizes(photos)?;
+    let opts = &options_for_store(&store, opts);
+    let placements = check_camera_placements(&store, photos)?;
     let levels = store.manifest.quadtree.levels as usize;
     let finest = levels.saturating_sub(1);
     timer.lap("open store");
@@ -321,7 +323,7 @@ pub fn project_store(
     for pb in &bars {
         pb.finish();
     }
-    warn_photos_without_terrain(&reports);
+    explain_photos(&store, &placements, &mut reports);
 
     let cells_written = records.iter().filter(|r| r.is_some()).count();
     for (c, r) in store.manifest.cells.iter_mut().zip(records) {
@@ -339,6 +341,20 @@ pub fn project_store(
         cells_written,
         stage_seconds: timer.laps,
     })
+}
+
+/// `opts` as they apply to `store`: no colour leveling where its textures were derived from
+/// the DEM (a tint is no colour to level a photo towards; logged).
+fn options_for_store(store: &Store, opts: &ProjectOptions) -> ProjectOptions {
+    let mut o = opts.clone();
+    if o.level_colours && !store.manifest.textures_hold_an_image() {
+        tracing::info!(
+            "project: no colour leveling: the store's textures were derived from the DEM \
+             (built without an ortho)"
+        );
+        o.level_colours = false;
+    }
+    o
 }
 
 /// Refuses invalid confidence or texture options and more photos than a run can number.
@@ -387,6 +403,10 @@ fn empty_report(p: &PhotoInput, dir: &Path) -> PhotoReport {
         colour_gain: [1.0; 3],
         colour_offset: [0.0; 3],
         colour_samples: 0,
+        pixels_supplying: 0,
+        pixels_outweighed: 0,
+        pixels_dropped: 0,
+        warnings: Vec::new(),
     }
 }
 
@@ -524,16 +544,78 @@ fn project_levels(
     Ok((records, level_reports))
 }
 
-/// Logs a warning for each photo that wrote no texel.
-fn warn_photos_without_terrain(reports: &[PhotoReport]) {
-    for r in reports {
-        if r.texels_written == 0 {
-            tracing::warn!(
-                "photo {}: it sees no terrain of the store (no texels written)",
-                r.name
-            );
+/// Each photo's camera against the terrain; refuses a camera below the surface (by more
+/// than the TIN's error there), naming the photo: it would see only back faces.
+fn check_camera_placements(store: &Store, photos: &[PhotoInput]) -> Result<Vec<CameraPlacement>> {
+    photos
+        .iter()
+        .map(|p| {
+            let placement = CameraPlacement::of(store, &p.camera)?;
+            if placement.is_underground() {
+                return Err(Error::bad_input(
+                    &p.image_path,
+                    format!(
+                        "its camera is {}: a camera below the ground sees no terrain to \
+                         texture (a camera fitted without the DEM can end up there; check \
+                         its position and height datum)",
+                        placement.describe()
+                    ),
+                ));
+            }
+            Ok(placement)
+        })
+        .collect()
+}
+
+/// A photo whose terrain pixels mostly did not reach a texture gets a warning.
+pub const LOW_SUPPLY_SHARE: f64 = 0.25;
+
+/// Records (and logs) a warning for each photo that supplied little, with the reasons the
+/// counts give: no terrain seen (and where the camera stands), terrain pixels outweighed by
+/// a sharper existing texture, on silhouettes, incomplete, or outweighed by other photos.
+fn explain_photos(store: &Store, placements: &[CameraPlacement], reports: &mut [PhotoReport]) {
+    for (r, place) in reports.iter_mut().zip(placements) {
+        if let Some(w) = supply_warning(store, place, r) {
+            tracing::warn!("photo {}: {w}", r.name);
+            r.warnings.push(w);
         }
     }
+}
+
+/// The warning for photo report `r` (camera at `place`), if it supplied little.
+fn supply_warning(store: &Store, place: &CameraPlacement, r: &PhotoReport) -> Option<String> {
+    if r.pixels_hit == 0 {
+        return Some(format!(
+            "it sees no terrain of the store (no texels written); its camera is {}",
+            place.describe()
+        ));
+    }
+    let share = r.supplying_share();
+    let pct = |n: u64| 100.0 * n as f64 / r.pixels_hit as f64;
+    if share < LOW_SUPPLY_SHARE {
+        let existing = match store.manifest.ortho_spacing {
+            Some(g) => format!("the existing texture (an ortho of {g:.2} m)"),
+            None => "the existing texture".to_string(),
+        };
+        return Some(format!(
+            "only {:.1} % of its {} terrain pixels supplied a texture: {:.1} % where {existing} \
+             resolves the surface as finely or more, {:.1} % on silhouette edges, {:.1} % with \
+             incomplete footprints",
+            100.0 * share,
+            r.pixels_hit,
+            pct(r.pixels_outweighed),
+            pct(r.rejected_silhouette),
+            pct(r.pixels_dropped),
+        ));
+    }
+    if r.texels_supplied == 0 {
+        return Some(format!(
+            "{:.1} % of its terrain pixels could supply a texture, but sharper photos \
+             outweighed it on every texel",
+            100.0 * share
+        ));
+    }
+    None
 }
 
 /// The run's settings and reports as the manifest records them.

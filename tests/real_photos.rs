@@ -1,0 +1,315 @@
+//! Issue #52, "Real photos on real terrain": projection works on stores without an ortho and
+//! with a coarse one, says what each photo supplied, refuses a camera below the terrain,
+//! and DEMs with undeclared no-data markers load without pits.
+
+mod cli_util;
+mod common;
+
+use std::path::Path;
+
+use cliffmap::demo_scene::{DemoPhotoOptions, DemoScene};
+use cliffmap::photo::{PhotoInput, read_photo_list};
+use cliffmap::pipeline::{BuildInputs, BuildOptions, ProjectOptions, build_store, project_store};
+use cliffmap::store::{PhotoReport, Store};
+use cliffmap::{Dem, Ortho};
+
+/// The demo scene at 129 × 129 samples of 4 m (the terrain of `common::small_demo_store`).
+fn scene() -> DemoScene {
+    DemoScene {
+        samples: 129,
+        spacing: 4.0,
+        ..DemoScene::default()
+    }
+}
+
+/// Builds a store of `dem` with `ortho` (or none) into `dir`.
+fn build(dir: &Path, dem: &Dem, ortho: Option<&Ortho>) {
+    let inputs = BuildInputs {
+        dem,
+        ortho,
+        dem_source: "demo".into(),
+        ortho_source: ortho.map(|_| "demo".to_string()),
+        fingerprint: format!("real-photos-{}", ortho.map_or(0, |o| o.image.width())),
+    };
+    let opts = BuildOptions {
+        max_error: 0.5,
+        cell_intervals: 32,
+        cell_texels: 64,
+        force: true,
+        ..BuildOptions::default()
+    };
+    build_store(&inputs, &opts, dir).unwrap();
+}
+
+/// The demo's ground photos at 320 × 240, written into `dir`.
+fn photos(scene: &DemoScene, dem: &Dem, dir: &Path) -> Vec<PhotoInput> {
+    let opts = DemoPhotoOptions {
+        width: 320,
+        height: 240,
+        supersample: 1,
+    };
+    let list = scene.write_demo_photos(dem, dir, &opts).unwrap();
+    read_photo_list(&list).unwrap()
+}
+
+fn project(dir: &Path, photos: &[PhotoInput]) -> Vec<PhotoReport> {
+    project_store(dir, photos, &ProjectOptions::default())
+        .unwrap()
+        .settings
+        .photos
+}
+
+#[test]
+fn a_store_without_an_ortho_takes_the_colour_of_every_photo_that_sees_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = scene();
+    let (dem, ortho) = scene.generate().unwrap();
+    let ps = photos(&scene, &dem, &tmp.path().join("photos"));
+    let (bare, with_ortho) = (tmp.path().join("bare"), tmp.path().join("ortho"));
+    build(&bare, &dem, None);
+    build(&with_ortho, &dem, Some(&ortho));
+    let bare_reports = project(&bare, &ps);
+    let ortho_reports = project(&with_ortho, &ps);
+    for (b, o) in bare_reports.iter().zip(&ortho_reports) {
+        assert!(
+            b.pixels_hit > 10_000,
+            "{}: {} pixels hit",
+            b.name,
+            b.pixels_hit
+        );
+        // the counts account for every terrain pixel
+        assert_eq!(
+            b.pixels_supplying + b.pixels_outweighed + b.rejected_silhouette + b.pixels_dropped,
+            b.pixels_hit,
+            "{}",
+            b.name
+        );
+        // a DEM-derived texture holds no image: every terrain pixel but those on silhouette
+        // edges or off a chart supplies it
+        assert!(
+            b.supplying_share() >= 0.9,
+            "{}: {:.3} of the terrain pixels supplied",
+            b.name,
+            b.supplying_share()
+        );
+        assert!(b.warnings.is_empty(), "{}: {:?}", b.name, b.warnings);
+        // ... and more texels than against the (sharper) ortho
+        assert!(
+            b.texels_supplied > o.texels_supplied && b.pixels_supplying > o.pixels_supplying,
+            "{}: {} / {} texels, {} / {} pixels",
+            b.name,
+            b.texels_supplied,
+            o.texels_supplied,
+            b.pixels_supplying,
+            o.pixels_supplying
+        );
+    }
+    // no leveling towards a hypsometric tint
+    let m = Store::open(&bare).unwrap().manifest;
+    let settings = m.photos.unwrap();
+    assert!(!settings.level_colours);
+    assert!(settings.photos.iter().all(|p| p.colour_gain == [1.0; 3]));
+}
+
+#[test]
+fn a_coarse_ortho_yields_to_the_photos_where_they_resolve_more() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = scene();
+    let (dem, fine) = scene.generate().unwrap();
+    // the same terrain's ortho at 8x the spacing (17 x 17 pixels of 32 m), its georef
+    // recorded: the cell textures are 8x finer than what the ortho holds
+    let (_, coarse) = DemoScene {
+        samples: 17,
+        spacing: 32.0,
+        ..scene
+    }
+    .generate()
+    .unwrap();
+    assert_eq!(coarse.georef.origin_x, fine.georef.origin_x);
+    let ps = photos(&scene, &dem, &tmp.path().join("photos"));
+    let (a, b) = (tmp.path().join("fine"), tmp.path().join("coarse"));
+    build(&a, &dem, Some(&fine));
+    build(&b, &dem, Some(&coarse));
+    assert_eq!(Store::open(&b).unwrap().manifest.ortho_spacing, Some(32.0));
+    let (fine_r, coarse_r) = (project(&a, &ps), project(&b, &ps));
+    let total = |r: &[PhotoReport], f: fn(&PhotoReport) -> u64| r.iter().map(f).sum::<u64>();
+    let (pf, pc) = (
+        total(&fine_r, |p| p.pixels_supplying),
+        total(&coarse_r, |p| p.pixels_supplying),
+    );
+    let (tf, tc) = (
+        total(&fine_r, |p| p.texels_supplied),
+        total(&coarse_r, |p| p.texels_supplied),
+    );
+    assert!(
+        pc > pf && tc > tf,
+        "pixels {pf} -> {pc}, texels {tf} -> {tc}"
+    );
+}
+
+#[test]
+fn a_camera_below_the_terrain_is_refused_and_the_store_is_left_as_it_was() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = scene();
+    let (dem, _) = scene.generate().unwrap();
+    let mut ps = photos(&scene, &dem, &tmp.path().join("photos"));
+    let dir = tmp.path().join("store");
+    build(&dir, &dem, None);
+    let before = std::fs::read(dir.join("manifest.json")).unwrap();
+    let store = Store::open(&dir).unwrap();
+    let p = ps[0].camera.position;
+    let ground = store.surface_at(p.x, p.y).unwrap().unwrap();
+    ps[0].camera.position.z = ground.height - 5.0;
+    let e = project_store(&dir, &ps, &ProjectOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(&ps[0].name) && e.contains("5.0 m below the terrain surface"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(dir.join("manifest.json")).unwrap(), before);
+    // within the TIN's error below the surface is still accepted (the DEM may be above)
+    ps[0].camera.position.z = ground.height - 0.5 * ground.max_error;
+    assert!(project_store(&dir, &ps[..1], &ProjectOptions::default()).is_ok());
+}
+
+#[test]
+fn a_photo_that_sees_no_terrain_is_reported_with_where_its_camera_stands() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = scene();
+    let (dem, _) = scene.generate().unwrap();
+    let mut ps = photos(&scene, &dem, &tmp.path().join("photos"));
+    let dir = tmp.path().join("store");
+    build(&dir, &dem, None);
+    // looking straight up
+    let c = &mut ps[0].camera;
+    c.world_to_camera = cliffmap::camera::rotation_look_at(
+        c.position,
+        c.position + glam::DVec3::new(0.0, 0.001, 100.0),
+    )
+    .unwrap();
+    let r = &project(&dir, &ps[..1])[0];
+    assert_eq!(r.pixels_hit, 0);
+    assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+    assert!(
+        r.warnings[0].contains("sees no terrain") && r.warnings[0].contains("above the terrain"),
+        "{:?}",
+        r.warnings
+    );
+}
+
+/// A raw f32 DEM of `w × h` with `hole` written into a 3 × 3 block.
+fn dem_with_hole(path: &Path, w: usize, h: usize, hole: f32) {
+    let v: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (r, c) = (i / w, i % w);
+            if (5..8).contains(&r) && (5..8).contains(&c) {
+                hole
+            } else {
+                2000.0 + (r as f32 * 0.7).sin() * 5.0 + c as f32 * 0.5
+            }
+        })
+        .collect();
+    std::fs::write(
+        path,
+        v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(),
+    )
+    .unwrap();
+}
+
+#[test]
+fn undeclared_nodata_sentinels_are_voids_unless_turned_off() {
+    use cliffmap::DemLoadOptions;
+    let tmp = tempfile::tempdir().unwrap();
+    for hole in [-9999.0, -32768.0, f32::MIN, -3.4e38, f32::NAN] {
+        let p = tmp.path().join("d.f32");
+        dem_with_hole(&p, 20, 16, hole);
+        let opts = DemLoadOptions {
+            width: Some(20),
+            height: Some(16),
+            spacing: Some(4.0),
+            ..DemLoadOptions::default()
+        };
+        let d = cliffmap::load_dem(&p, &opts).unwrap();
+        assert_eq!(d.void.iter().filter(|v| **v).count(), 9, "{hole}");
+        assert!(d.heights.iter().all(|h| *h > 1900.0), "{hole}: filled");
+        // off: the marker is a height (a plausible one) or an error naming the file
+        let off = DemLoadOptions {
+            nodata_sentinels: false,
+            ..opts
+        };
+        match cliffmap::load_dem(&p, &off) {
+            Ok(d) => {
+                assert!(hole > -1e5, "{hole}");
+                assert!(d.void.iter().all(|v| !v) && d.heights.contains(&hole));
+            }
+            Err(e) => assert!(
+                (hole.is_nan() || hole < -1e5) && e.to_string().contains("d.f32"),
+                "{hole}: {e}"
+            ),
+        }
+    }
+}
+
+#[test]
+fn the_command_line_names_sentinels_walls_and_accepts_nodata_none() {
+    use cli_util::{cliffmap, ok, s};
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("d.f32");
+    let args = |p: &Path, out: &Path, extra: &[&str]| -> Vec<String> {
+        let mut a: Vec<String> = [
+            "build",
+            "--dem",
+            s(p),
+            "--dem-format",
+            "f32",
+            "--width",
+            "20",
+            "--height",
+            "16",
+            "--spacing",
+            "4",
+            "--origin",
+            "1000,2000",
+            "--out",
+            s(out),
+            "--quiet",
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    let run = |a: &[String]| {
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        cliffmap(&a)
+    };
+    // -9999 without --nodata: voids, named with their count
+    dem_with_hole(&p, 20, 16, -9999.0);
+    let o = run(&args(&p, &tmp.path().join("a"), &[]));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("9 samples of -9999") && err.contains("--nodata none"),
+        "{err}"
+    );
+    // --nodata none: the marker is a height, and the 2000-m walls around it are named
+    let o = run(&args(&p, &tmp.path().join("b"), &["--nodata", "none"]));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("12 pairs") && err.contains("--nodata -9999"),
+        "{err}"
+    );
+    // 0 m for missing cells (a GeoTIFF habit): the wall warning proposes --nodata 0
+    dem_with_hole(&p, 20, 16, 0.0);
+    let o = run(&args(&p, &tmp.path().join("c"), &[]));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--nodata 0"), "{err}");
+    // the contract's explicit form
+    ok(&args(&p, &tmp.path().join("d"), &["--nodata", "-9999"])
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>());
+}
