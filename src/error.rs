@@ -35,6 +35,10 @@ pub enum Error {
     /// An option or combination of options is invalid (no file involved).
     #[error("invalid option: {0}")]
     BadOption(String),
+    /// The inputs are well-formed but do not allow the computation asked for (e.g. too few
+    /// usable ground control points for the free parameters); the message says why.
+    #[error("{0}")]
+    Unusable(String),
     /// The input would need more memory than the configured limit.
     #[error(
         "{path}: would need {needed} bytes, over the memory limit of {limit} bytes (raise --max-memory if this is intended)"

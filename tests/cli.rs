@@ -277,6 +277,8 @@ fn bad_inputs_fail_cleanly_without_output() {
             "4",
             "--height",
             "4",
+            "--nodata",
+            "none",
             "--out",
             s(&out),
         ],

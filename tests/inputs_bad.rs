@@ -142,7 +142,12 @@ fn undeclared_nan_inf_and_absurd_heights() {
         v[3 * w + 4] = val;
         let p = d.path().join(name);
         write_f32(&p, &v);
-        bad(load_dem(&p, &raw_opts(w, h)), &p, words);
+        // (NaN and the lowest f32 are no-data markers by default: tests/real_photos.rs)
+        let opts = DemLoadOptions {
+            nodata_sentinels: false,
+            ..raw_opts(w, h)
+        };
+        bad(load_dem(&p, &opts), &p, words);
     }
     // same in a GeoTIFF
     let mut v = grid(w, h);
@@ -157,8 +162,12 @@ fn undeclared_nan_inf_and_absurd_heights() {
         Predictor::None,
         Some(&geo()),
     );
+    let no_sentinels = DemLoadOptions {
+        nodata_sentinels: false,
+        ..Default::default()
+    };
     bad(
-        load_dem(&p, &Default::default()),
+        load_dem(&p, &no_sentinels),
         &p,
         &["row 1, column 2", "--nodata nan"],
     );

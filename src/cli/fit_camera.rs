@@ -8,7 +8,8 @@ use cliffmap::camera::{
 };
 use cliffmap::fsutil::write_atomic;
 use cliffmap::register::{
-    CameraFit, FitOptions, PixelOrigin, fit_camera, parse_free, read_gcps, start_from_position,
+    CameraFit, FitOptions, GcpColumns, PixelOrigin, fit_camera, parse_free, read_gcps_for_image,
+    start_from_position,
 };
 use glam::DVec3;
 use serde_json::json;
@@ -79,6 +80,11 @@ pub struct Args {
     /// Print the fit as JSON on stdout instead of the table.
     #[arg(long)]
     json: bool,
+    /// A store of the terrain the photo shows: the GCPs' heights are compared with its
+    /// surface and the fitted camera is checked against it (a warning when it ends up below
+    /// the ground; "terrain" in the JSON).
+    #[arg(long)]
+    store: Option<PathBuf>,
 }
 
 /// Runs `fit-camera`.
@@ -89,7 +95,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "1" => PixelOrigin::One,
         o => anyhow::bail!("--pixel-origin must be format, 0 or 1, got {o}"),
     };
-    let gcps = read_gcps(&a.gcps, origin)?;
+    let size = match &a.camera {
+        Some(path) => {
+            let c = camera_from_json_file(path, (0, 0))?;
+            (c.width, c.height)
+        }
+        None => image_size(&a)?,
+    };
+    let (gcps, columns) = read_gcps_for_image(&a.gcps, origin, size)?;
+    if columns == GcpColumns::PixelThenWorld {
+        eprintln!(
+            "note: {}: read as U V X Y Z (its pixel columns come first: in the documented order \
+             X Y Z U V they fall outside the {}x{} image)",
+            a.gcps.display(),
+            size.0,
+            size.1
+        );
+    }
     let free = parse_free(&a.free)?;
     let position = a.position.as_deref().map(parse_position).transpose()?;
     if let Some(f) = a.focal_px {
@@ -121,7 +143,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ..FitOptions::default()
     };
     let fit = fit_camera(&start, &gcps, &opts).with_context(|| format!("{}", a.gcps.display()))?;
-    let report = fit_json(&fit, &a.gcps.display().to_string());
+    let mut report = fit_json(&fit, &a.gcps.display().to_string());
+    if let Some(dir) = &a.store {
+        let terrain = check_against_terrain(dir, &fit.camera, &gcps)?;
+        if let Some(obj) = report.as_object_mut() {
+            obj.insert("terrain".into(), terrain);
+        }
+    }
     let mut doc = camera_to_imgraft_json(&fit.camera);
     if let Some(obj) = doc.as_object_mut() {
         obj.insert("fit".into(), report.clone());
@@ -282,6 +310,60 @@ fn image_size(a: &Args) -> anyhow::Result<(u32, u32)> {
         return Ok((w, h));
     }
     anyhow::bail!("without --camera, give the image size: --size WxH or --image PHOTO")
+}
+
+/// GCP heights above the terrain of the store in `dir` differ from its surface by more
+/// than this (median, metres): warned as a likely datum or column mix-up.
+const GCP_HEIGHT_WARN_M: f64 = 5.0;
+
+/// Compares the GCPs' heights with the store's surface and places the fitted camera
+/// against it; warns (stderr) on a camera below the ground or GCPs far off the surface.
+/// Returns the findings as JSON.
+fn check_against_terrain(
+    dir: &std::path::Path,
+    camera: &cliffmap::camera::CameraModel,
+    gcps: &[cliffmap::register::Gcp],
+) -> anyhow::Result<serde_json::Value> {
+    let store = cliffmap::store::Store::open(dir)?;
+    let place = cliffmap::store::CameraPlacement::of(&store, camera)?;
+    if place.is_underground() {
+        eprintln!(
+            "warning: the fitted camera is {}: it would see no terrain; check the GCPs' \
+             heights and datum, or give the position (--position) and keep x, y, z fixed",
+            place.describe()
+        );
+    }
+    let mut dz: Vec<f64> = Vec::new();
+    for g in gcps {
+        if let Some(s) = store.surface_at(g.world.x, g.world.y)? {
+            dz.push(g.world.z - s.height);
+        }
+    }
+    let mut abs: Vec<f64> = dz.iter().map(|d| d.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let median = abs.get(abs.len() / 2).copied();
+    if let Some(m) = median.filter(|m| *m > GCP_HEIGHT_WARN_M) {
+        eprintln!(
+            "warning: the GCPs' heights differ from the terrain's surface by {m:.1} m (median \
+             of {} on the terrain): another vertical datum, or columns in another order?",
+            abs.len()
+        );
+    }
+    if abs.len() < gcps.len() {
+        eprintln!(
+            "note: {} of {} GCPs lie outside the store's terrain",
+            gcps.len() - abs.len(),
+            gcps.len()
+        );
+    }
+    Ok(json!({
+        "camera_height_above_ground_m": place.height_above_ground(),
+        "camera_underground": place.is_underground(),
+        "camera_placement": place.describe(),
+        "gcps_on_terrain": abs.len(),
+        "gcp_height_minus_surface_median_abs_m": median,
+        "gcp_height_minus_surface_max_abs_m": abs.last(),
+    }))
 }
 
 /// The fit as the JSON of `--json` (also stored under "fit" in the camera file).

@@ -162,6 +162,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         relief: !a.no_relief,
         ..Default::default()
     };
+    let store = cliffmap::store::Store::open(&a.store)?;
+    let place = cliffmap::store::CameraPlacement::of(&store, &cam)?;
+    if place.is_underground() {
+        eprintln!(
+            "warning: {}: the camera is {}; it sees the terrain from below",
+            a.camera.display(),
+            place.describe()
+        );
+    }
     let mut scene = StoreRenderer::open(&a.store, w, h, opts)?;
     eprintln!("adapter: {}", scene.gpu().describe());
     if matches!(a.mode, TextureMode::Photo) && !scene.has_photo() {

@@ -119,6 +119,14 @@ mod tests {
         v2[5] = -9999.0;
         v2[6] = f32::NAN;
         write(&p, &v2);
+        // undeclared, both are common no-data markers: voids
+        let dem = load_dem(&p, &opts).unwrap();
+        assert!(dem.void[5] && dem.void[6] && dem.void.iter().filter(|v| **v).count() == 2);
+        // without the markers the NaN is an error naming its place
+        let opts = DemLoadOptions {
+            nodata_sentinels: false,
+            ..opts
+        };
         let e = load_dem(&p, &opts).unwrap_err().to_string();
         assert!(
             e.contains("dem.f32") && e.contains("row 1, column 2") && e.contains("--nodata"),

@@ -51,7 +51,9 @@ pub mod terrain;
 pub use bundle::{BundleFit, BundleOptions, BundlePair, PairTie, adjust_bundle};
 pub use gcps::bearings::rotation_from_bearings;
 pub use gcps::fit::{CameraFit, FitOptions, FittedParam, GcpResidual, GcpStatus, fit_camera};
-pub use gcps::gcp::{Gcp, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps};
+pub use gcps::gcp::{
+    Gcp, GcpColumns, PixelOrigin, gcp_rmse_px, parse_gcps, read_gcps, read_gcps_for_image,
+};
 pub use gcps::p3p::{p3p, start_from_gcps_p3p};
 pub use gcps::start::{start_from_gcps, start_from_position, start_without_position};
 pub use pairs::consensus::{RotationConsensus, rotation_consensus};

@@ -238,8 +238,14 @@ fn fit_from(start: &CameraModel, gcps: &[Gcp], opts: &FitOptions) -> Result<Came
     let used: Vec<usize> = (0..gcps.len()).filter(|&i| status[i].is_none()).collect();
     let k = opts.free.len();
     if 2 * used.len() < k {
-        return Err(Error::BadOption(format!(
-            "fit-camera: {} usable GCPs give {} equations for {} free parameters ({} outside the image or behind the camera)",
+        let hint = if used.is_empty() {
+            "; check the column order (X Y Z U V: world metres, then pixels), the pixel origin \
+             and that the start camera faces the points"
+        } else {
+            ""
+        };
+        return Err(Error::Unusable(format!(
+            "fit-camera: {} usable GCPs give {} equations for {} free parameters ({} outside the image or behind the camera){hint}",
             used.len(),
             2 * used.len(),
             k,
@@ -426,7 +432,7 @@ fn check_determined(j: &nalgebra::DMatrix<f64>, used: usize, free: &[Param]) -> 
     let (lo, hi) = (sv.min(), sv.max());
     if !(lo > 1e-7 * hi) {
         let names: Vec<&str> = free.iter().map(|p| p.name()).collect();
-        return Err(Error::BadOption(format!(
+        return Err(Error::Unusable(format!(
             "fit-camera: the {used} usable GCPs do not determine the free parameters {} (repeated points, points on one ray, or too many free parameters)",
             names.join(",")
         )));

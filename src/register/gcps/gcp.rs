@@ -66,6 +66,85 @@ pub fn read_gcps(path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
     parse_gcps(&text, path, origin)
 }
 
+/// The column order an ImGRAFT-text GCP file was read in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GcpColumns {
+    /// `X Y Z U V`, the documented order.
+    WorldThenPixel,
+    /// `U V X Y Z`, a common order of other tools.
+    PixelThenWorld,
+}
+
+/// Reads a GCP file for a photo of `size` (width, height) pixels. A CSV names its columns;
+/// for ImGRAFT text the order is detected when unambiguous: when the documented `X Y Z U V`
+/// puts some pixels outside the image and `U V X Y Z` puts every one inside, the file is
+/// read in the second order (returned, so that the caller can say so). When at most half of
+/// the points fit the image in either order, an error names the file, the expected order
+/// and the first line.
+pub fn read_gcps_for_image(
+    path: &Path,
+    origin: PixelOrigin,
+    size: (u32, u32),
+) -> Result<(Vec<Gcp>, GcpColumns)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let gcps = parse_gcps(&text, path, origin)?;
+    let first = text
+        .lines()
+        .map(|l| strip_comment(l).trim())
+        .find(|l| !l.is_empty())
+        .unwrap_or_default();
+    let csv = is_csv_header(first);
+    let inside = |gs: &[Gcp]| gs.iter().filter(|g| pixel_inside(g.pixel, size)).count();
+    let n = gcps.len();
+    let as_given = inside(&gcps);
+    if as_given == n || csv {
+        return Ok((gcps, GcpColumns::WorldThenPixel));
+    }
+    let one = origin != PixelOrigin::Zero;
+    let swapped: Vec<Gcp> = gcps.iter().map(|g| pixel_first(g, one)).collect();
+    let other = inside(&swapped);
+    if other == n {
+        return Ok((swapped, GcpColumns::PixelThenWorld));
+    }
+    if 2 * as_given > n {
+        return Ok((gcps, GcpColumns::WorldThenPixel));
+    }
+    Err(Error::bad_input(
+        path,
+        format!(
+            "the GCPs' pixels do not fit the {}x{} image in either column order (X Y Z U V: \
+             {as_given} of {n} inside, U V X Y Z: {other} of {n}); expected X Y Z U V (world \
+             metres, then pixels, 1-based unless --pixel-origin 0), e.g. \
+             \"446003.2 7396345.1 512.3 1960 1494\"; the first line is \"{first}\"",
+            size.0, size.1
+        ),
+    ))
+}
+
+/// Whether a 0-based pixel lies in a `size` image (pixel edges, half a pixel out).
+fn pixel_inside(p: [f64; 2], size: (u32, u32)) -> bool {
+    (-0.5..=size.0 as f64 - 0.5).contains(&p[0]) && (-0.5..=size.1 as f64 - 0.5).contains(&p[1])
+}
+
+/// The GCP a line `A B C D E` read as `X Y Z U V` (`g`) gives when read as `U V X Y Z`
+/// (`one`: 1-based pixels).
+fn pixel_first(g: &Gcp, one: bool) -> Gcp {
+    let shift = if one { 1.0 } else { 0.0 };
+    let v = [
+        g.world.x,
+        g.world.y,
+        g.world.z,
+        g.pixel[0] + shift,
+        g.pixel[1] + shift,
+    ];
+    Gcp {
+        name: g.name.clone(),
+        world: DVec3::new(v[2], v[3], v[4]),
+        pixel: to_zero_based([v[0], v[1]], one),
+        weight: g.weight,
+    }
+}
+
 /// Parses the text of a GCP file; `path` only names it in errors.
 pub fn parse_gcps(text: &str, path: &Path, origin: PixelOrigin) -> Result<Vec<Gcp>> {
     let lines: Vec<(usize, &str)> = text
@@ -80,10 +159,7 @@ pub fn parse_gcps(text: &str, path: &Path, origin: PixelOrigin) -> Result<Vec<Gc
             "no ground control points in the file",
         ));
     };
-    let header = first.chars().any(|c| c.is_ascii_alphabetic())
-        && first.contains(',')
-        && !looks_numeric(first);
-    let gcps = if header {
+    let gcps = if is_csv_header(first) {
         parse_csv(&lines, path, origin)?
     } else {
         parse_imgraft(&lines, path, origin)?
@@ -95,6 +171,11 @@ pub fn parse_gcps(text: &str, path: &Path, origin: PixelOrigin) -> Result<Vec<Gc
         ));
     }
     Ok(gcps)
+}
+
+/// Whether the first data line is a CSV header (letters, commas, not all numbers).
+fn is_csv_header(first: &str) -> bool {
+    first.chars().any(|c| c.is_ascii_alphabetic()) && first.contains(',') && !looks_numeric(first)
 }
 
 fn strip_comment(line: &str) -> &str {
@@ -302,6 +383,36 @@ mod tests {
         assert_eq!(number("abc"), None);
         assert_eq!(number("1+"), None);
         assert_eq!(number("nan"), None);
+    }
+
+    #[test]
+    fn pixel_first_files_are_read_in_their_order_and_misfits_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.txt");
+        let world_first = "446003.2 7396345.1 512.3 1960 1494\n446100 7396400 600 120 30\n";
+        std::fs::write(&p, world_first).unwrap();
+        let (a, order) = read_gcps_for_image(&p, PixelOrigin::Format, (4290, 2856)).unwrap();
+        assert_eq!(order, GcpColumns::WorldThenPixel);
+        let pixel_first = "1960 1494 446003.2 7396345.1 512.3\n120 30 446100 7396400 600\n";
+        std::fs::write(&p, pixel_first).unwrap();
+        let (b, order) = read_gcps_for_image(&p, PixelOrigin::Format, (4290, 2856)).unwrap();
+        assert_eq!(order, GcpColumns::PixelThenWorld);
+        assert_eq!(a, b);
+        // pixels that fit neither order: an error with the expected order and the line
+        std::fs::write(
+            &p,
+            "446003 7396345 512 9000 9000\n446100 7396400 600 9100 9100\n",
+        )
+        .unwrap();
+        let e = read_gcps_for_image(&p, PixelOrigin::Format, (4290, 2856))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("g.txt")
+                && e.contains("X Y Z U V")
+                && e.contains("\"446003 7396345 512 9000 9000\""),
+            "{e}"
+        );
     }
 
     #[test]
