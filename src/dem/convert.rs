@@ -70,7 +70,7 @@ impl Sample for f64 {
 /// ASCII grids and many exports), −32768 (SRTM and other i16 grids), the lowest f32
 /// (−3.4028235e38, GDAL's and ArcGIS's float default) and its rounded form −3.4e38, and NaN.
 /// Without `--nodata` and without a no-data tag a reader takes them as no-data
-/// ([`VoidRule::Sentinels`]); `--nodata none` turns this off.
+/// (`DemLoadOptions::nodata_sentinels`); `--nodata none` turns this off.
 pub const NODATA_SENTINELS: [f64; 5] = [-9999.0, -32768.0, f32::MIN as f64, -3.4e38, f64::NAN];
 
 /// How a reader tells no-data samples.
