@@ -415,3 +415,87 @@ fn exif_gps_fix_gives_the_start_position_in_the_crs() {
         "EPSG:1",
     );
 }
+
+/// `fit-camera --store` (issue #52): the GCPs' heights against the terrain, the fitted camera
+/// placed above it; the same GCPs in `U V X Y Z` order give the same camera, with a note.
+#[test]
+fn fit_camera_checks_against_the_store_and_reads_pixel_first_gcps() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("store");
+    let dem = common::real_data("engabreen/engabreen_dem_3m_507x590.f32");
+    cli_util::ok(&[
+        "build",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--width",
+        "507",
+        "--height",
+        "590",
+        "--spacing",
+        "3",
+        "--origin",
+        "445302.17,7396769.45",
+        "--max-error",
+        "2",
+        "--cell-texels",
+        "32",
+        "--out",
+        store.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let gcps = path("engabreen/gcp8902.txt");
+    let cam = path("engabreen/engabreen_camera_IMG_8902.json");
+    let out = dir.path().join("cam.json");
+    let fit = |gcps: &str, out: &std::path::Path| {
+        cliffmap(&[
+            "fit-camera",
+            "--gcps",
+            gcps,
+            "--camera",
+            &cam,
+            "--store",
+            store.to_str().unwrap(),
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = fit(&gcps, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let t = &j["terrain"];
+    // the fixed camera stands ~20-60 m above the valley side below it; the GCPs lie on the DEM
+    let above = t["camera_height_above_ground_m"].as_f64().unwrap();
+    assert!(
+        above > 0.0 && !t["camera_underground"].as_bool().unwrap(),
+        "{t}"
+    );
+    assert!(t["gcps_on_terrain"].as_u64().unwrap() >= 20, "{t}");
+    assert!(
+        t["gcp_height_minus_surface_median_abs_m"].as_f64().unwrap() < 5.0,
+        "{t}"
+    );
+    // the same file with the pixel columns first
+    let text = std::fs::read_to_string(&gcps).unwrap();
+    let swapped: String = text
+        .lines()
+        .map(|l| {
+            let t: Vec<&str> = l.split_whitespace().collect();
+            if t.len() >= 5 && !l.trim_start().starts_with('%') {
+                format!("{} {} {} {} {}\n", t[3], t[4], t[0], t[1], t[2])
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let p = dir.path().join("uvxyz.txt");
+    std::fs::write(&p, swapped).unwrap();
+    let out2 = dir.path().join("cam2.json");
+    let o = fit(p.to_str().unwrap(), &out2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && err.contains("read as U V X Y Z"),
+        "{err}"
+    );
+    assert!((rmse_of(&out2) - rmse_of(&out)).abs() < 1e-6);
+}
