@@ -44,6 +44,7 @@ fn the_oracle_of_a_photo_taken_from_the_view_is_the_truth() {
         image_path: "self.png".into(),
         image: photo,
         camera: view.camera,
+        mask: None,
     }];
     let tracer = DemTracer::new(&dem, tracer_origin(&dem)).unwrap();
     let src = ReferenceSources {

@@ -74,6 +74,7 @@ fn photo(position: DVec3, target: DVec3) -> PhotoInput {
         image_path: PathBuf::from("wall.png"),
         image,
         camera,
+        mask: None,
     }
 }
 

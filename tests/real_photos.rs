@@ -79,7 +79,12 @@ fn a_store_without_an_ortho_takes_the_colour_of_every_photo_that_sees_it() {
         );
         // the counts account for every terrain pixel
         assert_eq!(
-            b.pixels_supplying + b.pixels_outweighed + b.rejected_silhouette + b.pixels_dropped,
+            b.pixels_supplying
+                + b.pixels_outweighed
+                + b.pixels_masked
+                + b.pixels_near
+                + b.rejected_silhouette
+                + b.pixels_dropped,
             b.pixels_hit,
             "{}",
             b.name
@@ -409,5 +414,177 @@ fn engabreen_without_its_ortho_takes_the_photo_and_renders_it_back() {
     assert!(
         n > 400_000 && mae < 20.0,
         "{n} terrain pixels, MAE {mae:.1}"
+    );
+}
+
+/// Texels of the store's photo textures that are near white (every channel > 245) where the
+/// photo supplied most of the colour (share > 1/2).
+fn white_photo_texels(dir: &Path) -> u64 {
+    let store = Store::open(dir).unwrap();
+    let mut n = 0;
+    for c in &store.manifest.cells {
+        if let Some(p) = &c.photo {
+            let (tex, share) = store.read_photo_texture(c, p).unwrap();
+            n += tex
+                .pixels()
+                .zip(share.pixels())
+                .filter(|(t, s)| s.0[0] > 127 && t.0[..3].iter().all(|v| *v > 245))
+                .count() as u64;
+        }
+    }
+    n
+}
+
+/// The demo photos with a 12-px white frame (a scanned print) and a 16-px black banner
+/// with white text at the bottom (a webcam's), written next to the originals; the new list.
+fn framed_photos(photos: &[PhotoInput], dir: &Path) -> std::path::PathBuf {
+    let mut entries = Vec::new();
+    for (k, p) in photos.iter().enumerate() {
+        let (w, h) = p.image.dimensions();
+        let mut img = p.image.clone();
+        for (x, y, px) in img.enumerate_pixels_mut() {
+            if y >= h - 16 {
+                let text = (30..200).contains(&x) && (h - 12..h - 4).contains(&y) && x % 4 < 2;
+                *px = if text {
+                    image::Rgb([255, 255, 255])
+                } else {
+                    image::Rgb([0, 0, 0])
+                };
+            } else if x < 12 || y < 12 || x >= w - 12 {
+                *px = image::Rgb([252, 252, 250]);
+            }
+        }
+        let image = dir.join(format!("framed{k}.png"));
+        img.save(&image).unwrap();
+        let camera = dir.join(format!("framed{k}.json"));
+        std::fs::write(
+            &camera,
+            cliffmap::camera::camera_to_json(&p.camera).to_string(),
+        )
+        .unwrap();
+        entries.push(serde_json::json!({"image": image, "camera": camera}));
+    }
+    let list = dir.join("framed.json");
+    std::fs::write(&list, serde_json::json!({ "photos": entries }).to_string()).unwrap();
+    list
+}
+
+#[test]
+fn photo_frames_and_banners_stay_off_the_terrain() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = scene();
+    let (dem, _) = scene.generate().unwrap();
+    let ps = photos(&scene, &dem, &tmp.path().join("photos"));
+    let framed = read_photo_list(&framed_photos(&ps, tmp.path())).unwrap();
+    let (masked, unmasked) = (tmp.path().join("masked"), tmp.path().join("unmasked"));
+    build(&masked, &dem, None);
+    build(&unmasked, &dem, None);
+    let with = project(&masked, &framed);
+    let without = project_store(
+        &unmasked,
+        &framed,
+        &ProjectOptions {
+            mask_borders: false,
+            ..ProjectOptions::default()
+        },
+    )
+    .unwrap()
+    .settings
+    .photos;
+    // the frame and the banner draped onto the terrain without the mask, not with it
+    let (w_with, w_without) = (white_photo_texels(&masked), white_photo_texels(&unmasked));
+    eprintln!("white photo texels: {w_with} with the border mask, {w_without} without");
+    assert!(
+        w_without > 200 && w_with == 0,
+        "white texels {w_with} / {w_without}"
+    );
+    for (a, b) in with.iter().zip(&without) {
+        // the bottom banner (and the frame where it meets terrain) is named and counted
+        assert!(
+            a.border_masked.iter().any(|s| s.starts_with("bottom")),
+            "{}: {:?}",
+            a.name,
+            a.border_masked
+        );
+        assert!(a.pixels_masked > 0 && b.pixels_masked == 0, "{}", a.name);
+        assert_eq!(a.pixels_hit, b.pixels_hit);
+    }
+}
+
+#[test]
+fn a_mask_file_and_a_minimum_distance_leave_pixels_out() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = scene();
+    let (dem, _) = scene.generate().unwrap();
+    let dir = tmp.path().join("photos");
+    let ps = photos(&scene, &dem, &dir);
+    let store = tmp.path().join("store");
+    build(&store, &dem, None);
+    // a mask leaving out the left half of the first photo
+    let p = &ps[0];
+    let (w, h) = p.image.dimensions();
+    let mask =
+        image::GrayImage::from_fn(w, h, |x, _| image::Luma([if x < w / 2 { 0 } else { 255 }]));
+    let mask_path = dir.join("mask0.png");
+    mask.save(&mask_path).unwrap();
+    let camera = dir.join("cam0.json");
+    std::fs::write(
+        &camera,
+        cliffmap::camera::camera_to_json(&p.camera).to_string(),
+    )
+    .unwrap();
+    let list = dir.join("masked.json");
+    let entry = |m: &Path| serde_json::json!({"photos": [{"image": p.image_path, "camera": camera, "mask": m}]});
+    std::fs::write(&list, entry(&mask_path).to_string()).unwrap();
+    let masked = read_photo_list(&list).unwrap();
+    let r = &project(&store, &masked)[0];
+    let full = &project(&store, &ps[..1])[0];
+    assert_eq!(r.pixels_hit, full.pixels_hit);
+    assert!(
+        r.pixels_masked > full.pixels_hit / 5 && r.pixels_supplying < full.pixels_supplying,
+        "{} masked of {}",
+        r.pixels_masked,
+        r.pixels_hit
+    );
+    // a mask of another size is refused, naming it
+    let small = dir.join("small.png");
+    image::GrayImage::new(w / 2, h).save(&small).unwrap();
+    std::fs::write(&list, entry(&small).to_string()).unwrap();
+    let e = read_photo_list(&list).unwrap_err().to_string();
+    assert!(e.contains("small.png") && e.contains("its photo"), "{e}");
+    // what is nearer than the median distance is left out
+    let near = project_store(
+        &store,
+        &ps[..1],
+        &ProjectOptions {
+            min_distance_m: 60.0,
+            ..ProjectOptions::default()
+        },
+    )
+    .unwrap()
+    .settings
+    .photos;
+    let n = &near[0];
+    assert!(n.pixels_near > 0 && n.pixels_near < n.pixels_hit, "{n:?}");
+    assert_eq!(
+        n.pixels_supplying
+            + n.pixels_outweighed
+            + n.pixels_masked
+            + n.pixels_near
+            + n.rejected_silhouette
+            + n.pixels_dropped,
+        n.pixels_hit
+    );
+    // refused: a negative distance
+    assert!(
+        project_store(
+            &store,
+            &ps[..1],
+            &ProjectOptions {
+                min_distance_m: -1.0,
+                ..ProjectOptions::default()
+            },
+        )
+        .is_err_and(|e| e.to_string().contains("--min-distance"))
     );
 }

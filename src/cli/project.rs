@@ -95,6 +95,14 @@ pub struct Args {
     /// No progress bars or summary.
     #[arg(long)]
     pub quiet: bool,
+    /// Use the whole frame: do not leave out uniform borders (a scan's white frame, the
+    /// black padding of a stabilised video frame, a banner of one colour with text).
+    #[arg(long)]
+    pub no_border_mask: bool,
+    /// Leave out what is nearer to the camera than M metres (people, rocks, roofs in the
+    /// foreground); a per-photo "mask" in the photo list leaves out chosen pixels.
+    #[arg(long, default_value_t = 0.0, value_name = "M")]
+    pub min_distance: f64,
     /// Print the run's report as JSON on stdout (per photo: terrain pixels, the pixels and
     /// texels it supplied, warnings; per level: cells and texture memory) instead of the
     /// summary.
@@ -140,6 +148,8 @@ pub fn options(a: &Args) -> ProjectOptions {
         },
         png_compression: a.png_compression.into(),
         progress: super::progress::progress_sink(a.quiet || a.json),
+        mask_borders: !a.no_border_mask,
+        min_distance_m: a.min_distance,
         ..ProjectOptions::default()
     }
 }
@@ -218,6 +228,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 p.colour_offset,
                 p.colour_samples
             );
+            if !p.border_masked.is_empty() {
+                println!("  uniform border left out: {}", p.border_masked.join("; "));
+            }
+            if p.pixels_masked + p.pixels_near > 0 {
+                println!(
+                    "  of its terrain pixels: {} masked, {} nearer than --min-distance",
+                    p.pixels_masked, p.pixels_near
+                );
+            }
         }
         for l in &report.settings.levels {
             if l.cells_with_photo > 0 {

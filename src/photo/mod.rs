@@ -48,6 +48,7 @@ pub use inputs::input::{
     PhotoEntry, PhotoSpec, image_size, photo_spec, read_photo_entries, read_photo_list,
     read_photo_specs,
 };
+pub use inputs::mask::{BorderSide, PixelMask, uniform_border};
 pub use inputs::pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
 pub use leveling::colour_leveling::{
     ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
@@ -56,7 +57,7 @@ pub use leveling::colour_leveling::{
 pub use splatting::accumulate::{PhotoAccum, TexelSums};
 pub use splatting::confidence::{BorderFeather, ConfidenceParams, smoothstep};
 pub use splatting::occlusion::{OcclusionMap, occlusion_weight};
-pub use splatting::samples::PhotoSamples;
+pub use splatting::samples::{Exclusion, PhotoSamples};
 pub use splatting::sizing::{SIZING_BINS, SizeRequest, SizingBins, choose_scales, texture_bytes};
 pub use splatting::splat::{
     MAX_SPLAT_BBOX, MIN_SPLAT_AREA, Splat, SplatKind, footprint_area, splat_footprint,
@@ -75,6 +76,8 @@ pub struct PhotoInput {
     pub image: image::RgbImage,
     /// The camera, in the store's georeferenced frame, for an image of exactly this size.
     pub camera: crate::camera::CameraModel,
+    /// The pixels not to use (the photo list's `"mask"`: 0 = ignore), if any.
+    pub mask: Option<PixelMask>,
 }
 
 /// One photo pixel's footprint in one cell's texture.

@@ -105,6 +105,7 @@ mod tests {
                     .save(&path)
                     .unwrap();
                 PhotoSpec {
+                    mask_path: None,
                     name: format!("p{k}.png"),
                     image_path: path,
                     camera: CameraModel::pinhole(

@@ -150,6 +150,7 @@ pub fn resolve_photo_entries(
                 image_path,
                 size,
                 pose,
+                mask_path,
             } => {
                 let r = rough_camera(&image_path, size, &pose, m.crs.as_deref(), &ground)?;
                 for line in &r.notes {
@@ -160,6 +161,7 @@ pub fn resolve_photo_entries(
                     image_path,
                     camera: r.camera,
                     unregistered: None,
+                    mask_path,
                 });
             }
         }
@@ -646,6 +648,9 @@ fn write_photo_list(
         .zip(results)
         .map(|(s, r)| {
             let mut e = json!({ "image": relative_or_absolute(&s.image_path, dir), "camera": file_name(&r.camera_file) });
+            if let Some(m) = &s.mask_path {
+                e["mask"] = json!(relative_or_absolute(m, dir));
+            }
             if !r.fit.converged {
                 // the given camera is kept; `project` leaves the photo out unless asked
                 e["registered"] = json!(false);

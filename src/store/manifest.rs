@@ -397,6 +397,17 @@ pub struct PhotoReport {
     /// Of `pixels_hit`, those whose footprint could not be completed.
     #[serde(default)]
     pub pixels_dropped: u64,
+    /// Of `pixels_hit`, those a mask left out (the photo list's `"mask"` or a uniform
+    /// border).
+    #[serde(default)]
+    pub pixels_masked: u64,
+    /// Of `pixels_hit`, those nearer to the camera than `--min-distance`.
+    #[serde(default)]
+    pub pixels_near: u64,
+    /// What the automatic mask of uniform borders left out, per side ("top: 12000 pixels
+    /// of colour [255, 255, 255]"); absent when nothing.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub border_masked: Vec<String>,
     /// What the run found wrong with this photo, each also logged as a warning.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,

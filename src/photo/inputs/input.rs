@@ -17,7 +17,7 @@ use crate::camera::{
     validate_camera,
 };
 use crate::error::{Error, Result};
-use crate::photo::PhotoInput;
+use crate::photo::{PhotoInput, PixelMask};
 
 /// A photo's image file and its camera, fitted to the image's real size (pixels not decoded
 /// yet; [`PhotoSpec::load`] decodes them).
@@ -33,6 +33,8 @@ pub struct PhotoSpec {
     /// from a registered list's `"registered": false` entry; `None` for a camera to trust.
     /// `cliffmap project` leaves such photos out unless asked (docs/formats.md).
     pub unregistered: Option<String>,
+    /// The photo's mask image (`"mask"` in the list: 0 = ignore the pixel), if any.
+    pub mask_path: Option<PathBuf>,
 }
 
 impl PhotoSpec {
@@ -52,11 +54,21 @@ impl PhotoSpec {
                 ),
             ));
         }
+        let mask = match &self.mask_path {
+            Some(p) => {
+                let m = image::open(p)
+                    .map_err(|e| Error::bad_input(p, format!("cannot read mask image: {e}")))?
+                    .to_luma8();
+                Some(PixelMask::from_image(&m, image.width(), image.height(), p)?)
+            }
+            None => None,
+        };
         Ok(PhotoInput {
             name: self.name.clone(),
             image_path: self.image_path.clone(),
             image,
             camera: self.camera,
+            mask,
         })
     }
 }
@@ -94,6 +106,7 @@ fn spec_for_size(
         image_path: image_path.to_path_buf(),
         camera,
         unregistered: None,
+        mask_path: None,
     })
 }
 
@@ -121,6 +134,9 @@ struct Entry {
     /// Why not, with `"registered": false`.
     #[serde(default)]
     reason: Option<String>,
+    /// A mask image of the photo's size: 0 = ignore the pixel.
+    #[serde(default)]
+    mask: Option<PathBuf>,
 }
 
 /// One entry of a photo list: a photo with its camera, or with a rough pose only.
@@ -138,6 +154,8 @@ pub enum PhotoEntry {
         size: (u32, u32),
         /// What the list gives.
         pose: RoughPose,
+        /// The photo's mask image (0 = ignore the pixel), if any.
+        mask_path: Option<PathBuf>,
     },
 }
 
@@ -213,9 +231,11 @@ pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
                         ),
                     ));
                 }
+                let size = image_size(&image)?;
                 out.push(PhotoEntry::Rough {
                     name: file_name(&image),
-                    size: image_size(&image)?,
+                    mask_path: mask_for(base, &e.mask, &image, size)?,
+                    size,
                     image_path: image,
                     pose: pose.clone(),
                 });
@@ -247,6 +267,7 @@ pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
             cam = apply_rotation_delta(&cam, d);
         }
         let mut spec = spec_for_size(&image, size, cam, &cam_file)?;
+        spec.mask_path = mask_for(base, &e.mask, &image, size)?;
         if e.registered == Some(false) {
             spec.unregistered = Some(
                 e.reason
@@ -257,6 +278,33 @@ pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
         out.push(PhotoEntry::Fitted(spec));
     }
     Ok(out)
+}
+
+/// The mask file of a list entry (`mask`, relative to the list's folder `base`), checked to
+/// exist and to have the size of its photo `image`.
+fn mask_for(
+    base: &Path,
+    mask: &Option<PathBuf>,
+    image: &Path,
+    size: (u32, u32),
+) -> Result<Option<PathBuf>> {
+    let Some(m) = mask else { return Ok(None) };
+    let m = base.join(m);
+    let msize = image_size(&m)?;
+    if msize != size {
+        return Err(Error::bad_input(
+            &m,
+            format!(
+                "mask is {}x{} pixels but its photo {} is {}x{}",
+                msize.0,
+                msize.1,
+                image.display(),
+                size.0,
+                size.1
+            ),
+        ));
+    }
+    Ok(Some(m))
 }
 
 /// Reads `photos.json` (docs/formats.md): each entry's image (decoded to RGB8) and camera

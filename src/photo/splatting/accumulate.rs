@@ -159,7 +159,7 @@ impl PhotoAccum {
         let sc = self.scale as f32;
         for fp in footprints {
             let [c, r] = fp.pixel;
-            if c >= w || r >= h {
+            if c >= w || r >= h || photo.excluded(fp).is_some() {
                 continue;
             }
             let o = 3 * (r as usize * w as usize + c as usize);

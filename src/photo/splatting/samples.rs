@@ -1,15 +1,16 @@
 //! A photo image prepared for splatting ([`PhotoSamples`]): its colours through the
 //! leveling transform into the working colour space, the border feather of every pixel,
-//! the angle a pixel subtends and, if on, the occlusion margin's inputs. Made once per photo
+//! the angle a pixel subtends, the pixels left out (a mask, a minimum distance) and, if on,
+//! the occlusion margin's inputs. Made once per photo
 //! and level; [`crate::photo::PhotoAccum::add_samples`] reads it per footprint.
 
 use image::RgbImage;
 
 use crate::colour::ColourSpace;
-use crate::photo::PixelFootprint;
 use crate::photo::splatting::colour_transform::ColourTransform;
 use crate::photo::splatting::confidence::{BorderFeather, ConfidenceParams};
 use crate::photo::splatting::occlusion::{OcclusionMap, occlusion_weight};
+use crate::photo::{PixelFootprint, PixelMask};
 
 /// A photo image prepared for splatting: its 8-bit values mapped by a colour transform and
 /// decoded into the working colour space (per channel, the same numbers as transforming and
@@ -25,6 +26,19 @@ pub struct PhotoSamples<'a> {
     pub(in crate::photo) pixel_angle: f32,
     /// The occlusion margin's inputs, if on.
     occlusion: Option<OcclusionTerm<'a>>,
+    /// Pixels not to use (of this image's size), if any.
+    mask: Option<&'a PixelMask>,
+    /// Surface points nearer to the camera than this (metres) are left out (0: none).
+    min_distance: f32,
+}
+
+/// Why a footprint's pixel is left out ([`PhotoSamples::excluded`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Exclusion {
+    /// The photo's mask leaves it out (a mask file or a uniform border).
+    Masked,
+    /// The surface there is nearer to the camera than the minimum distance.
+    Near,
 }
 
 /// What [`PhotoSamples`] needs for the occlusion margin ([`crate::photo::splatting::occlusion`]).
@@ -70,6 +84,8 @@ impl<'a> PhotoSamples<'a> {
             feather: params.border_feather(image.width(), image.height()),
             pixel_angle,
             occlusion: None,
+            mask: None,
+            min_distance: 0.0,
         }
     }
 }
@@ -97,6 +113,30 @@ impl<'a> PhotoSamples<'a> {
             });
         }
         self
+    }
+
+    /// Leaves out the pixels `mask` marks (a mask of this image's size; another size leaves
+    /// every pixel out).
+    pub fn with_mask(mut self, mask: Option<&'a PixelMask>) -> PhotoSamples<'a> {
+        self.mask = mask;
+        self
+    }
+
+    /// Leaves out surface points nearer to the camera than `metres` (foreground objects).
+    pub fn with_min_distance(mut self, metres: f64) -> PhotoSamples<'a> {
+        self.min_distance = metres.max(0.0) as f32;
+        self
+    }
+
+    /// Why footprint `fp`'s pixel is left out, if it is.
+    #[inline]
+    pub fn excluded(&self, fp: &PixelFootprint) -> Option<Exclusion> {
+        if let Some(m) = self.mask
+            && ((m.width, m.height) != self.image.dimensions() || m.is_masked(fp.pixel))
+        {
+            return Some(Exclusion::Masked);
+        }
+        (fp.distance < self.min_distance).then_some(Exclusion::Near)
     }
 
     /// The occlusion weight of footprint `fp` (1 without the margin).

@@ -2,6 +2,7 @@
 //! per-cell accumulators, with the photo texture sizes chosen first ([`LevelRun`]).
 
 use super::*;
+use crate::photo::Exclusion;
 
 /// Per manifest cell, its footprints in `fs`; cells not on `level` (a footprint set from a
 /// foreign scene) get none.
@@ -105,6 +106,8 @@ pub(super) fn active_normal_path(rec: &CellRecord) -> String {
 pub(super) struct LevelRun<'a> {
     pub(super) store: &'a Store,
     pub(super) pyramids: &'a [PhotoPyramid<'a>],
+    /// Per photo, its masks by pyramid step.
+    pub(super) masks: &'a [super::PhotoMasks],
     /// Per photo, its colour leveling.
     pub(super) transforms: &'a [ColourTransform],
     pub(super) opts: &'a ProjectOptions,
@@ -182,7 +185,9 @@ impl LevelRun<'_> {
                 &self.transforms[pi],
                 &self.opts.confidence,
                 self.opts.colour_space,
-            );
+            )
+            .with_mask(self.masks[pi].at(step))
+            .with_min_distance(self.opts.min_distance_m);
             if let Some(map) = &occlusion[pi] {
                 let (_, full) = pyr.level(0);
                 samples = samples.with_occlusion(
@@ -202,7 +207,12 @@ impl LevelRun<'_> {
                 Some((l, fs)) if l == level => {
                     splat_batch(&fs, &mut pas, cells, &sizing.scales, level as u8, &samples);
                     if level == self.finest {
-                        supply.add(self.count_supplying(&fs, &mut sizing.contexts, focal));
+                        supply.add(self.count_supplying(
+                            &fs,
+                            &mut sizing.contexts,
+                            focal,
+                            &samples,
+                        ));
                     }
                     let mut counts = FootprintSet::default();
                     counts.add_counts(&fs);
@@ -244,7 +254,7 @@ impl LevelRun<'_> {
                             );
                             counts.add_counts(batch);
                             if level == self.finest {
-                                supply.add(self.count_supplying(batch, contexts, focal));
+                                supply.add(self.count_supplying(batch, contexts, focal, &samples));
                             }
                             let done: Vec<Finishing> = pas
                                 .iter_mut()
@@ -274,9 +284,11 @@ impl LevelRun<'_> {
             timer.lap(&format!("level {level} photo {pi}: footprints and splat"));
             if level == self.finest {
                 let r = &mut reports[pi];
-                let [supplying, outweighed] = supply.result()?;
+                let [supplying, outweighed, masked, near] = supply.result()?;
                 r.pixels_supplying = supplying;
                 r.pixels_outweighed = outweighed;
+                r.pixels_masked = masked;
+                r.pixels_near = near;
                 r.pixels_dropped = counts.dropped;
                 r.pixels_hit = counts.pixels_hit;
                 r.rejected_silhouette = counts.rejected_silhouette;
@@ -317,15 +329,18 @@ impl LevelRun<'_> {
     }
 
     /// Splits the footprints of `batch` (of the finest level, cast from an image of focal
-    /// length `focal` pixels) into `[supplying, outweighed]`: pixels whose colour the
-    /// resolution rule lets dominate the existing texture ([`resolves_more`]) and the rest.
-    /// Loads the contexts of cells not seen before into `contexts` (kept for the merge).
+    /// length `focal` pixels, splatted with `samples`) into `[supplying, outweighed, masked,
+    /// near]`: pixels whose colour the resolution rule lets dominate the existing texture
+    /// ([`resolves_more`]), the others it splats, and those it leaves out
+    /// ([`crate::photo::Exclusion`]). Loads the contexts of cells not seen before into
+    /// `contexts` (kept for the merge).
     fn count_supplying(
         &self,
         batch: &FootprintSet,
         contexts: &mut [Option<CellContext>],
         focal: f64,
-    ) -> Result<[u64; 2]> {
+        samples: &PhotoSamples,
+    ) -> Result<[u64; 4]> {
         let cells = &self.store.manifest.cells;
         let missing: Vec<usize> = batch
             .cells
@@ -342,20 +357,25 @@ impl LevelRun<'_> {
         }
         let contexts = &*contexts;
         let weights = &self.opts.confidence;
-        let supplying: u64 = batch
+        let counts = batch
             .cells
             .par_iter()
-            .map(
-                |cf| match contexts.get(cf.cell as usize).and_then(Option::as_ref) {
-                    Some(ctx) => cf
-                        .iter()
-                        .filter(|fp| resolves_more(ctx, fp, focal, weights))
-                        .count() as u64,
-                    None => 0,
-                },
-            )
-            .sum();
-        Ok([supplying, batch.len() as u64 - supplying])
+            .map(|cf| {
+                let ctx = contexts.get(cf.cell as usize).and_then(Option::as_ref);
+                let mut n = [0u64; 4];
+                for fp in cf.iter() {
+                    let k = match (samples.excluded(fp), ctx) {
+                        (Some(Exclusion::Masked), _) => 2,
+                        (Some(Exclusion::Near), _) => 3,
+                        (None, Some(ctx)) if resolves_more(ctx, fp, focal, weights) => 0,
+                        (None, _) => 1,
+                    };
+                    n[k] += 1;
+                }
+                n
+            })
+            .reduce(|| [0; 4], |a, b| [0, 1, 2, 3].map(|k| a[k] + b[k]));
+        Ok(counts)
     }
 
     /// Blends and writes the cells `done` that the last photo `pi`'s remaining rows cannot
@@ -648,19 +668,21 @@ pub(super) const OCCLUSION_STEP: usize = SIZING_STEPS;
 /// Pyramid halvings between a level's image and its sizing cast's.
 pub(super) const SIZING_STEPS: usize = 2;
 
-/// A photo's `[supplying, outweighed]` pixels summed over batches, or the first error.
+/// A photo's `[supplying, outweighed, masked, near]` pixels summed over batches, or the
+/// first error.
 #[derive(Default)]
 struct SupplyCounts {
-    counts: [u64; 2],
+    counts: [u64; 4],
     failed: Option<Error>,
 }
 
 impl SupplyCounts {
-    fn add(&mut self, batch: Result<[u64; 2]>) {
+    fn add(&mut self, batch: Result<[u64; 4]>) {
         match batch {
-            Ok([a, b]) => {
-                self.counts[0] += a;
-                self.counts[1] += b;
+            Ok(n) => {
+                for (c, v) in self.counts.iter_mut().zip(n) {
+                    *c += v;
+                }
             }
             Err(e) => {
                 self.failed.get_or_insert(e);
@@ -668,7 +690,7 @@ impl SupplyCounts {
         }
     }
 
-    fn result(self) -> Result<[u64; 2]> {
+    fn result(self) -> Result<[u64; 4]> {
         match self.failed {
             Some(e) => Err(e),
             None => Ok(self.counts),

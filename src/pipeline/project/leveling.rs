@@ -16,6 +16,7 @@ pub(super) type Leveled = (ColourTransform, usize, Option<(usize, FootprintSet)>
 pub(super) fn estimate_leveling(
     store: &Store,
     pyr: &PhotoPyramid,
+    masks: &super::PhotoMasks,
     finest: usize,
     opts: &ProjectOptions,
     buffers: &FootprintBuffers,
@@ -36,7 +37,9 @@ pub(super) fn estimate_leveling(
             &ColourTransform::IDENTITY,
             &opts.confidence,
             ColourSpace::Srgb,
-        );
+        )
+        .with_mask(masks.at(step))
+        .with_min_distance(opts.min_distance_m);
         let mut pas: Vec<Option<PhotoAccum>> = vec![None; cells.len()];
         splat_batch(&fs, &mut pas, cells, &[], level as u8, &samples);
         let parts: Vec<Result<ColourPairs>> = pas

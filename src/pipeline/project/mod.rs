@@ -74,6 +74,12 @@ pub struct ProjectOptions {
     /// `photo::CellRelief`, slopes up to 75.5°), as the renderer draws it; `false`: onto the
     /// TIN. Reparameterized cells are projected onto the TIN either way. Default on.
     pub onto_relief: bool,
+    /// Leave out the uniform borders of each photo ([`crate::photo::uniform_border`]: a
+    /// scan's frame, a stabilised frame's padding, a banner), reported. Default on.
+    pub mask_borders: bool,
+    /// Leave out surface points nearer to the camera than this (metres; foreground people,
+    /// rocks, roofs), >= 0. Default 0.
+    pub min_distance_m: f64,
 }
 
 impl Default for ProjectOptions {
@@ -91,6 +97,8 @@ impl Default for ProjectOptions {
             png_compression: PngCompression::default(),
             progress: ProgressSink::none(),
             onto_relief: true,
+            mask_borders: true,
+            min_distance_m: 0.0,
         }
     }
 }
@@ -262,7 +270,12 @@ pub fn project_store(
         .iter()
         .map(|p| PhotoPyramid::new_in(&p.image, p.camera, finest + SIZING_STEPS, opts.colour_space))
         .collect();
-    timer.lap("photo pyramids");
+    let masks: Vec<PhotoMasks> = photos
+        .iter()
+        .zip(&pyramids)
+        .map(|(p, pyr)| PhotoMasks::of(p, pyr.steps(), opts.mask_borders))
+        .collect();
+    timer.lap("photo pyramids and masks");
 
     let steps = levels as u64 + opts.level_colours as u64;
     let bars: Vec<Box<dyn ProgressTask>> = photos
@@ -270,6 +283,9 @@ pub fn project_store(
         .map(|p| opts.progress.task(steps, &p.name))
         .collect();
     let mut reports: Vec<PhotoReport> = photos.iter().map(|p| empty_report(p, dir)).collect();
+    for (r, m) in reports.iter_mut().zip(&masks) {
+        m.report(r);
+    }
     // Scratch memory of all casts of this run.
     let buffers = FootprintBuffers::default();
     let LevelStart {
@@ -279,6 +295,7 @@ pub fn project_store(
     } = level_colours(
         &store,
         &pyramids,
+        &masks,
         photos,
         opts,
         &buffers,
@@ -297,6 +314,7 @@ pub fn project_store(
     let run = LevelRun {
         store: &store,
         pyramids: &pyramids,
+        masks: &masks,
         transforms: &transforms,
         opts,
         buffers: &buffers,
@@ -361,6 +379,12 @@ fn options_for_store(store: &Store, opts: &ProjectOptions) -> ProjectOptions {
 fn check_project_options(photos: &[PhotoInput], opts: &ProjectOptions) -> Result<()> {
     opts.confidence.validate()?;
     opts.texture.validate()?;
+    if !(opts.min_distance_m >= 0.0 && opts.min_distance_m.is_finite()) {
+        return Err(Error::BadOption(format!(
+            "--min-distance must be a finite number of metres >= 0, got {}",
+            opts.min_distance_m
+        )));
+    }
     if photos.len() >= u16::MAX as usize {
         return Err(Error::BadOption(format!(
             "at most {} photos per run, got {}",
@@ -406,6 +430,9 @@ fn empty_report(p: &PhotoInput, dir: &Path) -> PhotoReport {
         pixels_supplying: 0,
         pixels_outweighed: 0,
         pixels_dropped: 0,
+        pixels_masked: 0,
+        pixels_near: 0,
+        border_masked: Vec::new(),
         warnings: Vec::new(),
     }
 }
@@ -426,6 +453,7 @@ struct LevelStart {
 fn level_colours(
     store: &Store,
     pyramids: &[PhotoPyramid],
+    masks: &[PhotoMasks],
     photos: &[PhotoInput],
     opts: &ProjectOptions,
     buffers: &FootprintBuffers,
@@ -448,7 +476,8 @@ fn level_colours(
             }
             pyramids
                 .iter()
-                .map(|pyr| estimate_leveling(store, pyr, finest, opts, buffers))
+                .zip(masks)
+                .map(|(pyr, m)| estimate_leveling(store, pyr, m, finest, opts, buffers))
                 .collect()
         },
         || {
@@ -599,11 +628,13 @@ fn supply_warning(store: &Store, place: &CameraPlacement, r: &PhotoReport) -> Op
         };
         return Some(format!(
             "only {:.1} % of its {} terrain pixels supplied a texture: {:.1} % where {existing} \
-             resolves the surface as finely or more, {:.1} % on silhouette edges, {:.1} % with \
-             incomplete footprints",
+             resolves the surface as finely or more, {:.1} % masked, {:.1} % nearer than \
+             --min-distance, {:.1} % on silhouette edges, {:.1} % with incomplete footprints",
             100.0 * share,
             r.pixels_hit,
             pct(r.pixels_outweighed),
+            pct(r.pixels_masked),
+            pct(r.pixels_near),
             pct(r.rejected_silhouette),
             pct(r.pixels_dropped),
         ));
@@ -652,10 +683,12 @@ pub(crate) fn remove_stale_photo_files(dir: &Path, cells: &[CellRecord]) {
 mod finish;
 mod level;
 mod leveling;
+mod masks;
 
 use finish::{CellOutcome, finish_cell, finish_level, read_checked_active};
 use level::{LevelProjection, LevelRun, SIZING_STEPS, cell_context, splat_batch};
 use leveling::{MAX_CACHED_FOOTPRINTS, estimate_leveling, leveling_step};
+use masks::PhotoMasks;
 
 #[cfg(test)]
 mod tests {
