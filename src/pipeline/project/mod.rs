@@ -296,7 +296,6 @@ pub fn project_store(
         &store,
         &pyramids,
         &masks,
-        photos,
         opts,
         &buffers,
         &mut reports,
@@ -454,16 +453,15 @@ fn level_colours(
     store: &Store,
     pyramids: &[PhotoPyramid],
     masks: &[PhotoMasks],
-    photos: &[PhotoInput],
     opts: &ProjectOptions,
     buffers: &FootprintBuffers,
     reports: &mut [PhotoReport],
     bars: &[Box<dyn ProgressTask>],
 ) -> Result<LevelStart> {
     let finest = (store.manifest.quadtree.levels as usize).saturating_sub(1);
-    let mut transforms = vec![ColourTransform::IDENTITY; photos.len()];
+    let mut transforms = vec![ColourTransform::IDENTITY; pyramids.len()];
     // Footprints cast for the leveling are kept for the main loop while they are few.
-    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; photos.len()];
+    let mut cached: Vec<Option<(usize, FootprintSet)>> = vec![None; pyramids.len()];
     let mut cached_len = 0usize;
     let prebuild = !opts.level_colours
         || pyramids
@@ -481,9 +479,9 @@ fn level_colours(
                 .collect()
         },
         || {
-            let first = photos.first().filter(|_| prebuild);
+            let first = pyramids.first().filter(|_| prebuild);
             first
-                .map(|p| level_scene(store, finest as u8, p.camera.position, opts))
+                .map(|pyr| level_scene(store, finest as u8, pyr.level(0).1.position, opts))
                 .transpose()
         },
     );
