@@ -241,3 +241,48 @@ fn the_resampling_pass_alone_reproduces_the_direct_frame() {
     );
     assert!(d0.mean_abs < 0.01, "{d0:?}");
 }
+
+/// Issue #52's one validity rule: a barrel model that folds in the image's corners (as
+/// `fit-camera` can fit it) is accepted and rendered; the corners beyond the fold, which the
+/// model gives no ray, show the sky, and the markers elsewhere land on the projection.
+#[test]
+fn a_model_folding_in_the_corners_renders_with_sky_beyond_the_fold() {
+    let dir = marker_store();
+    let opts = SceneOptions {
+        frame: FrameOptions {
+            lit: false,
+            sky: [20, 200, 30],
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut on = StoreRenderer::open(dir.path(), W, H, opts).unwrap();
+    let cam = camera(-0.5, 0.0);
+    assert_eq!(cam.problem(), None);
+    let share = cam.rayless_share();
+    assert!(share > 0.01 && share < 0.3, "{share}");
+    assert!(cam.pixel_ray(0.0, 0.0).is_none());
+    let r = on.frame(&cam, true).unwrap();
+    assert!(r.distorted);
+    let img = on.read_rgba().unwrap();
+    let sky = |u: u32, v: u32| img.get_pixel(u, v).0[..3] == [20, 200, 30];
+    assert!(
+        sky(0, 0) && sky(W - 1, H - 1),
+        "corners beyond the fold are sky"
+    );
+    assert!(!sky(W / 2, H / 2) && !sky(W / 2, 5), "the rest is terrain");
+    let (max, rms, n) = marker_errors(&img, |p| {
+        let q = cam.project(p)?;
+        // markers whose window lies within the fold
+        let r = ((q[0] - cam.cx) / cam.fx).hypot((q[1] - cam.cy) / cam.fy);
+        (r < 0.9 * cam.fold_radius()).then_some(q)
+    });
+    eprintln!(
+        "k1 -0.5: {n} markers within the fold, max {max:.3} px, rms {rms:.3} px; {:.1} % of the pixels beyond it",
+        100.0 * share
+    );
+    assert!(
+        n >= 20 && max <= 1.0 && rms <= 0.5,
+        "{n} markers, max {max}, rms {rms}"
+    );
+}

@@ -29,8 +29,12 @@ pub fn yaw_pitch_roll_from_rotation(r: &DMat3) -> (f64, f64, f64) {
 impl CameraModel {
     /// Why this camera is unusable, or `None`: a non-finite value anywhere, a zero size,
     /// non-positive focal lengths, a rotation that is not orthonormal with determinant +1
-    /// (tolerance 1e-6), or a distortion that folds over inside the image (the radial map
-    /// must increase up to the image corner farthest from the principal point).
+    /// (tolerance 1e-6), or a radial distortion that folds before the nearest image edge
+    /// (the radial map must increase up to the distorted radius of the image edge nearest
+    /// the principal point). A model that folds only
+    /// beyond that, in the image's corners, is accepted: pixels beyond the fold have no ray
+    /// ([`CameraModel::rayless_share`]; `project` casts none there, `render` shows them as
+    /// sky). This is the one rule every command applies (docs/formats.md, "Validity").
     pub fn problem(&self) -> Option<String> {
         if self.width == 0 || self.height == 0 {
             return Some(format!(
@@ -65,28 +69,56 @@ impl CameraModel {
             ));
         }
         if self.k1 != 0.0 || self.k2 != 0.0 {
-            let corner_x = self.cx.abs().max((self.width as f64 - 1.0 - self.cx).abs()) / self.fx;
-            let corner_y = self
-                .cy
-                .abs()
-                .max((self.height as f64 - 1.0 - self.cy).abs())
-                / self.fy;
-            // Undistorted radius of the corner is at most its distorted radius / min factor;
-            // check monotonicity up to the distorted corner radius (and r² ≤ 4, the clamp).
-            let rmax = corner_x.hypot(corner_y);
-            let steps = 256;
-            for i in 0..=steps {
-                let r = (rmax * i as f64 / steps as f64).min(2.0);
-                let r2 = r * r;
-                if 1.0 + 3.0 * self.k1 * r2 + 5.0 * self.k2 * r2 * r2 <= 0.0 {
-                    return Some(format!(
-                        "radial distortion k1 {} k2 {} folds over inside the image (radius {r:.3})",
-                        self.k1, self.k2
-                    ));
-                }
+            let f_fold = super::undistort::Radial::new(self.k1, self.k2).fold_radius();
+            let edge = self.nearest_edge_radius();
+            if f_fold < edge {
+                return Some(format!(
+                    "radial distortion k1 {} k2 {} folds at {:.0} % of the distance from the \
+                     principal point to the nearest image edge: the model has no ray for most \
+                     of the image",
+                    self.k1,
+                    self.k2,
+                    100.0 * f_fold / edge
+                ));
             }
         }
         None
+    }
+
+    /// The largest normalized distorted radius the radial model gives a ray (its fold;
+    /// infinite when the model increases everywhere): pixels farther from the principal
+    /// point (in `((u − cx)/fx, (v − cy)/fy)`) have none.
+    pub fn fold_radius(&self) -> f64 {
+        super::undistort::Radial::new(self.k1, self.k2).fold_radius()
+    }
+
+    /// Normalized distorted radius of the image edge nearest the principal point (pixel
+    /// edges: the centres of the outer pixels plus half a pixel).
+    fn nearest_edge_radius(&self) -> f64 {
+        let x = (self.cx + 0.5).min(self.width as f64 - 0.5 - self.cx) / self.fx;
+        let y = (self.cy + 0.5).min(self.height as f64 - 0.5 - self.cy) / self.fy;
+        x.min(y).max(0.0)
+    }
+
+    /// The share of the image's pixels (sampled on a grid of at most 256 × 256 pixel
+    /// centres) whose distorted radius lies beyond the radial model's fold: pixels the model
+    /// gives no ray (0 for a model that increases over the whole image).
+    pub fn rayless_share(&self) -> f64 {
+        let f_fold = super::undistort::Radial::new(self.k1, self.k2).fold_radius();
+        if !f_fold.is_finite() {
+            return 0.0;
+        }
+        let (nu, nv) = (self.width.min(256), self.height.min(256));
+        let mut beyond = 0u64;
+        for j in 0..nv {
+            let v = (j as f64 + 0.5) * self.height as f64 / nv as f64 - 0.5;
+            for i in 0..nu {
+                let u = (i as f64 + 0.5) * self.width as f64 / nu as f64 - 0.5;
+                let r = ((u - self.cx) / self.fx).hypot((v - self.cy) / self.fy);
+                beyond += (r > f_fold) as u64;
+            }
+        }
+        beyond as f64 / (nu as f64 * nv as f64)
     }
 }
 
@@ -141,6 +173,16 @@ mod tests {
         let mut bad = c;
         bad.k1 = -2.0;
         assert!(bad.problem().unwrap().contains("folds"));
+        assert!(bad.rayless_share() > 0.5);
+        // folding only in the corners: accepted, with the corners' share without a ray
+        let mut corners = c;
+        corners.k1 = -0.4;
+        assert_eq!(corners.problem(), None);
+        let share = corners.rayless_share();
+        assert!(share > 0.0 && share < 0.3, "{share}");
+        assert!(corners.pixel_ray(0.0, 0.0).is_none());
+        assert!(corners.pixel_ray(c.cx, 10.0).is_some());
+        assert_eq!(c.rayless_share(), 0.0);
         bad = c;
         bad.fx = 0.0;
         assert!(bad.problem().unwrap().contains("focal"));

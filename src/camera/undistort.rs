@@ -61,6 +61,16 @@ impl Radial {
         r
     }
 
+    /// The largest distorted radius with a ray: `f(r_fold)` (∞ when `f` increases
+    /// everywhere).
+    pub(crate) fn fold_radius(&self) -> f64 {
+        if self.k1 == 0.0 && self.k2 == 0.0 {
+            f64::INFINITY
+        } else {
+            self.f_fold
+        }
+    }
+
     /// Distortion factor for a squared radius (clamped at 4 as in the forward model).
     fn d(&self, r2: f64) -> f64 {
         let s = r2.min(4.0);

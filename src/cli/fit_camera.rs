@@ -143,7 +143,30 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ..FitOptions::default()
     };
     let fit = fit_camera(&start, &gcps, &opts).with_context(|| format!("{}", a.gcps.display()))?;
+    if let Some(problem) = fit.camera.problem() {
+        anyhow::bail!(
+            "{}: the fitted camera is unusable: {problem} (nothing written; fit with fewer \
+             distortion terms free, e.g. without k2, or more GCPs towards the image corners)",
+            a.gcps.display()
+        );
+    }
+    let rayless = fit.camera.rayless_share();
+    if rayless > 0.0 {
+        eprintln!(
+            "warning: the fitted distortion (k1 {:.4}, k2 {:.4}) folds inside the image: {:.1} % \
+             of its pixels (the corners beyond {:.0} px from the principal point) have no ray \
+             in this model; every command accepts the camera (projection leaves those pixels \
+             out, renders show sky there)",
+            fit.camera.k1,
+            fit.camera.k2,
+            100.0 * rayless,
+            fit.camera.fold_radius() * fit.camera.fx
+        );
+    }
     let mut report = fit_json(&fit, &a.gcps.display().to_string());
+    if let Some(obj) = report.as_object_mut() {
+        obj.insert("rayless_share".into(), json!(rayless));
+    }
     if let Some(dir) = &a.store {
         let terrain = check_against_terrain(dir, &fit.camera, &gcps)?;
         if let Some(obj) = report.as_object_mut() {

@@ -109,7 +109,8 @@ impl DistortPass {
             o.k1,
             o.k2,
             NEWTON_STEPS as f64,
-            0.0,
+            // the largest distorted radius with a ray (beyond: sky); f32::MAX for none
+            o.fold_radius().min(f32::MAX as f64),
             p.fx,
             p.fy,
             p.cx,

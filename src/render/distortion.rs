@@ -62,7 +62,9 @@ pub struct DistortedView {
 
 impl DistortedView {
     /// The pinhole view of `output` with sides at most `max_side` pixels. Fails if the camera
-    /// is unusable ([`CameraModel::problem`]) or its distortion folds at the image border.
+    /// is unusable ([`CameraModel::problem`]). Where the distortion folds inside the image
+    /// (in its corners) the view reaches the fold: pixels beyond it have no ray and the
+    /// distortion pass shows them as sky.
     pub fn new(output: &CameraModel, max_side: u32) -> Result<DistortedView> {
         if let Some(p) = output.problem() {
             return Err(Error::BadOption(format!("camera cannot be rendered: {p}")));
@@ -83,14 +85,19 @@ impl DistortedView {
         }
         let (mut lo, mut hi, mut r_max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], 0.0f64);
         for (u, v) in pts {
-            let xd = (u - output.cx) / output.fx;
-            let yd = (v - output.cy) / output.fy;
-            let [x, y] = output.undistort(xd, yd).ok_or_else(|| {
-                Error::BadOption(format!(
+            let (mut xd, mut yd) = ((u - output.cx) / output.fx, (v - output.cy) / output.fy);
+            // beyond the fold: the fold's radius in that direction (just inside it)
+            let rd = xd.hypot(yd);
+            let fold = output.fold_radius() * (1.0 - 1e-9);
+            if rd > fold {
+                (xd, yd) = (xd * fold / rd, yd * fold / rd);
+            }
+            let Some([x, y]) = output.undistort(xd, yd) else {
+                return Err(Error::BadOption(format!(
                     "radial distortion k1 {} k2 {} has no inverse at the image border (pixel {u}, {v})",
                     output.k1, output.k2
-                ))
-            })?;
+                )));
+            };
             lo = [lo[0].min(x), lo[1].min(y)];
             hi = [hi[0].max(x), hi[1].max(y)];
             r_max = r_max.max(x.hypot(y));

@@ -6,7 +6,8 @@
 struct Params {
     // Output (distorted) camera: fx, fy, cx, cy (pixels, 0-based pixel-centre convention).
     out_f: vec4<f32>,
-    // k1, k2, Newton steps, unused.
+    // k1, k2, Newton steps, the largest normalized distorted radius with a ray (the model's
+    // fold; pixels beyond it have no ray and show the sky).
     k: vec4<f32>,
     // Pinhole view: fx, fy, cx, cy.
     src_f: vec4<f32>,
@@ -56,6 +57,9 @@ fn fs_distort(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let xd = (u - params.out_f.z) / params.out_f.x;
     let yd = (v - params.out_f.w) / params.out_f.y;
     let rd = sqrt(xd * xd + yd * yd);
+    if rd > params.k.w {
+        return params.sky;
+    }
     var s = 1.0;
     if rd > 0.0 {
         s = undistort_radius(rd) / rd;
