@@ -240,3 +240,84 @@ fn photo_lists_keep_rough_entries_for_register_and_refuse_them_elsewhere() {
         assert!(e.contains(says), "{body}: {e}");
     }
 }
+
+/// Issue #52: a rough entry can carry its lens: `focal_px` with `k1`/`k2`, or a `lens`
+/// camera file (its intrinsics scaled to the photo, its pose ignored), the entry's values
+/// over the file's; the photo list resolves `lens` against its folder.
+#[test]
+fn a_rough_entry_carries_its_lens() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = dir.path().join("webcam.png");
+    image::RgbImage::new(400, 300).save(&img).unwrap();
+    let ground = |_x: f64, _y: f64| Some(100.0);
+    let base = RoughPose {
+        position: Some(vec![10.0, 20.0]),
+        heading_deg: Some(45.0),
+        ..RoughPose::default()
+    };
+    // focal length and distortion in the entry
+    let given = RoughPose {
+        focal_px: Some(350.0),
+        k1: Some(-0.25),
+        k2: Some(0.02),
+        ..base.clone()
+    };
+    let c = rough_camera(&img, (400, 300), &given, None, &ground)
+        .unwrap()
+        .camera;
+    assert_eq!((c.fx, c.fy, c.k1, c.k2), (350.0, 350.0, -0.25, 0.02));
+    // a lens file for a camera of twice the size: intrinsics halved, pose ignored
+    let lens = dir.path().join("lens.json");
+    std::fs::write(
+        &lens,
+        r#"{"position": [0, 0, 0], "yaw_deg": 0, "pitch_deg": 0, "width": 800, "height": 600,
+            "fx": 700, "fy": 710, "cx": 404, "cy": 296, "k1": -0.2, "k2": 0.01}"#,
+    )
+    .unwrap();
+    let with_lens = RoughPose {
+        lens: Some(lens.clone()),
+        ..base.clone()
+    };
+    let r = rough_camera(&img, (400, 300), &with_lens, None, &ground).unwrap();
+    let c = r.camera;
+    assert!(
+        (c.fx - 350.0).abs() < 1e-9 && (c.fy - 355.0).abs() < 1e-9,
+        "{c:?}"
+    );
+    assert!(
+        (c.cx - 201.75).abs() < 1e-9 && (c.cy - 147.75).abs() < 1e-9,
+        "{c:?}"
+    );
+    assert_eq!((c.k1, c.k2), (-0.2, 0.01));
+    assert_eq!(c.position, glam::DVec3::new(10.0, 20.0, 101.6));
+    assert!(r.notes.join("\n").contains("lens from"), "{:?}", r.notes);
+    // the entry's k1 over the file's
+    let over = RoughPose {
+        k1: Some(-0.1),
+        ..with_lens
+    };
+    let c = rough_camera(&img, (400, 300), &over, None, &ground)
+        .unwrap()
+        .camera;
+    assert_eq!((c.k1, c.k2), (-0.1, 0.01));
+    // an implausible coefficient is refused by name
+    let bad = RoughPose {
+        k1: Some(f64::NAN),
+        ..base
+    };
+    let e = rough_camera(&img, (400, 300), &bad, None, &ground)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("\"k1\"") && e.contains("webcam.png"), "{e}");
+    // in a photo list, "lens" is relative to the list's folder
+    let list = dir.path().join("photos.json");
+    std::fs::write(
+        &list,
+        r#"{"photos": [{"image": "webcam.png", "rough": {"lens": "lens.json", "heading_deg": 45}}]}"#,
+    )
+    .unwrap();
+    match &read_photo_entries(&list).unwrap()[0] {
+        PhotoEntry::Rough { pose, .. } => assert_eq!(pose.lens.as_deref(), Some(lens.as_path())),
+        other => panic!("{other:?}"),
+    }
+}

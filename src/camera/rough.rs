@@ -15,8 +15,11 @@
 //! - focal length: `focal_px`, else EXIF ([`exif_focal_px`], `sensor_width_mm` for
 //!   cameras that record the focal length in mm alone).
 //!
-//! The principal point is the image centre, no distortion. A value that is nowhere to be
-//! found is an error naming the image and the field to add.
+//! - lens: `lens` (a Camera JSON's intrinsics: focal lengths, principal point, `k1`, `k2`),
+//!   with `focal_px`, `k1`, `k2` of the entry over it; without either the principal point is
+//!   the image centre and there is no distortion.
+//!
+//! A value that is nowhere to be found is an error naming the image and the field to add.
 
 use std::path::Path;
 
@@ -61,6 +64,15 @@ pub struct RoughPose {
     pub focal_px: Option<f64>,
     /// Sensor width (mm) for EXIF data that gives the focal length in mm alone.
     pub sensor_width_mm: Option<f64>,
+    /// Radial distortion `k1` of the lens (ImGRAFT model, docs/formats.md "Camera JSON");
+    /// default the `lens` file's, else 0.
+    pub k1: Option<f64>,
+    /// Radial distortion `k2`; default the `lens` file's, else 0.
+    pub k2: Option<f64>,
+    /// A Camera JSON whose intrinsics (focal lengths, principal point, `k1`, `k2`, scaled to
+    /// the photo's size) describe the lens, e.g. one `fit-camera` wrote for another photo of
+    /// the same camera; its pose is not used. Relative to the photo list's folder.
+    pub lens: Option<std::path::PathBuf>,
 }
 
 impl RoughPose {
@@ -86,6 +98,15 @@ impl RoughPose {
             {
                 return Some(format!(
                     "\"{name}\" must be a finite angle within ±360, got {v}"
+                ));
+            }
+        }
+        for (name, v) in [("k1", self.k1), ("k2", self.k2)] {
+            if let Some(v) = v
+                && !(finite(v) && v.abs() <= 10.0)
+            {
+                return Some(format!(
+                    "\"{name}\" must be a finite distortion coefficient within ±10, got {v}"
                 ));
             }
         }
@@ -241,13 +262,31 @@ pub fn rough_camera(
         pose.roll_deg.to_radians(),
     );
 
+    // the lens: its file's intrinsics, the entry's values over them
+    let lens = match &pose.lens {
+        Some(path) => {
+            let l = super::camera_from_json_file(path, size)?;
+            let l = super::fit_camera_to_image(l, size, path, image)?;
+            notes.push(format!(
+                "lens from {}: focal {:.1} px, k1 {}, k2 {}",
+                path.display(),
+                l.fx,
+                l.k1,
+                l.k2
+            ));
+            Some(l)
+        }
+        None => None,
+    };
+
     // focal length
-    let focal = match pose.focal_px {
-        Some(f) => {
+    let focal = match (pose.focal_px, &lens) {
+        (Some(f), _) => {
             notes.push(format!("focal length {f:.1} px given"));
             f
         }
-        None => {
+        (None, Some(l)) => l.fx,
+        (None, None) => {
             let f = exif_focal_px(image, size.0, size.1, pose.sensor_width_mm)?.ok_or_else(|| {
                 bad("no focal length: the EXIF data gives none, give \"focal_px\" (or \"sensor_width_mm\" if EXIF has the focal length in mm)".into())
             })?;
@@ -258,7 +297,24 @@ pub fn rough_camera(
             f.focal_px
         }
     };
-    let camera = CameraModel::pinhole(DVec3::new(xy[0], xy[1], z), r, size.0, size.1, focal);
+    let mut camera = CameraModel::pinhole(DVec3::new(xy[0], xy[1], z), r, size.0, size.1, focal);
+    if let Some(l) = &lens {
+        camera.fy = if pose.focal_px.is_some() {
+            focal * l.fy / l.fx
+        } else {
+            l.fy
+        };
+        (camera.cx, camera.cy, camera.k1, camera.k2) = (l.cx, l.cy, l.k1, l.k2);
+    }
+    for (name, given, slot) in [
+        ("k1", pose.k1, &mut camera.k1),
+        ("k2", pose.k2, &mut camera.k2),
+    ] {
+        if let Some(k) = given {
+            *slot = k;
+            notes.push(format!("{name} {k} given"));
+        }
+    }
     validate_camera(&camera, image)?;
     Ok(RoughCamera { camera, notes })
 }

@@ -232,12 +232,14 @@ pub fn read_photo_entries(path: &Path) -> Result<Vec<PhotoEntry>> {
                     ));
                 }
                 let size = image_size(&image)?;
+                let mut pose = pose.clone();
+                pose.lens = pose.lens.map(|l| base.join(l));
                 out.push(PhotoEntry::Rough {
                     name: file_name(&image),
                     mask_path: mask_for(base, &e.mask, &image, size)?,
                     size,
                     image_path: image,
-                    pose: pose.clone(),
+                    pose,
                 });
                 continue;
             }
