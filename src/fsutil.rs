@@ -270,3 +270,52 @@ pub fn decode_rgb8(path: &Path) -> Result<image::RgbImage> {
         .map(|i| i.to_rgb8())
         .map_err(|e| Error::bad_input(path, format!("cannot decode image: {e}")))
 }
+
+/// The EXIF orientation (1–8) of the image file at `path`: how its stored pixels turn into
+/// the picture as viewers show it; 1 (as stored) without EXIF data, without the tag, or with
+/// EXIF data that cannot be read.
+pub fn exif_orientation(path: &Path) -> u8 {
+    let Ok(file) = std::fs::File::open(path) else {
+        return 1;
+    };
+    let Ok(data) = exif::Reader::new().read_from_container(&mut std::io::BufReader::new(file))
+    else {
+        return 1;
+    };
+    data.get_field(exif::Tag::Orientation, exif::In::PRIMARY)
+        .and_then(|f| f.value.get_uint(0))
+        .filter(|v| (1..=8).contains(v))
+        .map_or(1, |v| v as u8)
+}
+
+/// A photo decoded as [`decode_rgb8`] and turned as its EXIF orientation says (a phone's
+/// portrait photo stored sideways comes out upright), so that its pixels are those a
+/// viewer shows and a camera or GCPs picked on it refer to.
+pub fn decode_photo_rgb8(path: &Path) -> Result<image::RgbImage> {
+    let img = decode_rgb8(path)?;
+    match image::metadata::Orientation::from_exif(exif_orientation(path)) {
+        Some(o) if o != image::metadata::Orientation::NoTransforms => {
+            let mut d = image::DynamicImage::ImageRgb8(img);
+            d.apply_orientation(o);
+            Ok(d.to_rgb8())
+        }
+        _ => Ok(img),
+    }
+}
+
+/// The size of a photo as [`decode_photo_rgb8`] gives it (the header's, its sides swapped
+/// for EXIF orientations 5–8). Errors name the file.
+pub fn photo_dimensions(path: &Path) -> Result<(u32, u32)> {
+    if let Err(e) = std::fs::metadata(path) {
+        return Err(Error::io(path, e));
+    }
+    let (w, h) = image::image_dimensions(path).map_err(|e| match e {
+        image::ImageError::IoError(io) => Error::io(path, io),
+        other => Error::bad_input(path, format!("cannot read image: {other}")),
+    })?;
+    Ok(if exif_orientation(path) >= 5 {
+        (h, w)
+    } else {
+        (w, h)
+    })
+}

@@ -588,3 +588,39 @@ fn a_mask_file_and_a_minimum_distance_leave_pixels_out() {
         .is_err_and(|e| e.to_string().contains("--min-distance"))
     );
 }
+
+/// Issue #52: a photo stored sideways with an EXIF orientation is decoded upright, and its
+/// size (for the camera) is the upright one.
+#[test]
+fn exif_orientation_turns_a_photo_upright() {
+    let dir = tempfile::tempdir().unwrap();
+    // stored 32 x 16: left half dark, right half light; orientation 6 = turn 90° clockwise
+    let stored = image::RgbImage::from_fn(32, 16, |x, _| {
+        image::Rgb(if x < 16 {
+            [10, 10, 10]
+        } else {
+            [240, 240, 240]
+        })
+    });
+    let mut jpeg = Vec::new();
+    stored
+        .write_to(
+            &mut std::io::Cursor::new(&mut jpeg),
+            image::ImageFormat::Jpeg,
+        )
+        .unwrap();
+    let field = common::exif::exif_field(exif::Tag::Orientation, exif::Value::Short(vec![6]));
+    let path = dir.path().join("portrait.jpg");
+    std::fs::write(&path, common::exif::insert_exif(&jpeg, &[field])).unwrap();
+    assert_eq!(cliffmap::fsutil::exif_orientation(&path), 6);
+    assert_eq!(cliffmap::photo::image_size(&path).unwrap(), (16, 32));
+    let up = cliffmap::fsutil::decode_photo_rgb8(&path).unwrap();
+    assert_eq!(up.dimensions(), (16, 32));
+    // turned clockwise: the stored left (dark) half is now the top
+    assert!(up.get_pixel(8, 4).0[0] < 60 && up.get_pixel(8, 28).0[0] > 200);
+    // without the tag: as stored
+    let plain = dir.path().join("plain.jpg");
+    std::fs::write(&plain, &jpeg).unwrap();
+    assert_eq!(cliffmap::fsutil::exif_orientation(&plain), 1);
+    assert_eq!(cliffmap::photo::image_size(&plain).unwrap(), (32, 16));
+}

@@ -328,9 +328,8 @@ fn image_size(a: &Args) -> anyhow::Result<(u32, u32)> {
         return Ok((w, h));
     }
     if let Some(p) = &a.image {
-        let (w, h) = image::image_dimensions(p)
-            .with_context(|| format!("{}: cannot read the image size", p.display()))?;
-        return Ok((w, h));
+        // (as shown: turned by its EXIF orientation, as `project` decodes it)
+        return Ok(cliffmap::fsutil::photo_dimensions(p)?);
     }
     anyhow::bail!("without --camera, give the image size: --size WxH or --image PHOTO")
 }

@@ -39,9 +39,10 @@ pub struct PhotoSpec {
 
 impl PhotoSpec {
     /// Decodes the image (sRGB, converted to RGB8; JPEG strictly, so a truncated or damaged
-    /// photo is refused, [`crate::fsutil::decode_rgb8`]). Errors name the file.
+    /// photo is refused, [`crate::fsutil::decode_rgb8`]), turned as its EXIF orientation
+    /// says ([`crate::fsutil::decode_photo_rgb8`]). Errors name the file.
     pub fn load(&self) -> Result<PhotoInput> {
-        let image = crate::fsutil::decode_rgb8(&self.image_path)?;
+        let image = crate::fsutil::decode_photo_rgb8(&self.image_path)?;
         if image.dimensions() != (self.camera.width, self.camera.height) {
             return Err(Error::bad_input(
                 &self.image_path,
@@ -73,15 +74,11 @@ impl PhotoSpec {
     }
 }
 
-/// The real pixel size of an image file (header only). Errors name the file.
+/// The real pixel size of a photo file (header only), as shown: sides swapped for EXIF
+/// orientations that turn it by 90° ([`crate::fsutil::photo_dimensions`]). Errors name the
+/// file.
 pub fn image_size(path: &Path) -> Result<(u32, u32)> {
-    if let Err(e) = std::fs::metadata(path) {
-        return Err(Error::io(path, e));
-    }
-    image::image_dimensions(path).map_err(|e| match e {
-        image::ImageError::IoError(io) => Error::io(path, io),
-        other => Error::bad_input(path, format!("cannot read image: {other}")),
-    })
+    crate::fsutil::photo_dimensions(path)
 }
 
 /// A validated [`PhotoSpec`] from an image file and the camera read for it.
