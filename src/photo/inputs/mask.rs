@@ -112,6 +112,12 @@ pub const BORDER_TOLERANCE: u8 = 10;
 /// have a border.
 pub const BORDER_EDGE_SHARE: f64 = 0.9;
 
+/// A side with at least this share of near-black edge pixels (every channel at most
+/// [`BORDER_TOLERANCE`]) has black padding there even when the rest of the edge is image (the
+/// corner wedges of a rotated, stabilised video frame). Black only: a white run along an
+/// edge may be clipped snow, which must stay.
+pub const PADDING_EDGE_SHARE: f64 = 0.2;
+
 /// A border reaches at most this share of the image's side into it.
 pub const BORDER_MAX_DEPTH: f64 = 0.25;
 
@@ -128,8 +134,8 @@ pub struct BorderSide {
 
 /// The automatic mask of uniform borders of `image`: per side whose edge pixels (at least
 /// [`BORDER_EDGE_SHARE`] of them) share one colour (within [`BORDER_TOLERANCE`] of their
-/// median), the pixels of that colour connected to the edge, at most [`BORDER_MAX_DEPTH`]
-/// of the image deep; then the pixels the borders enclose (cut off from the image's
+/// median), or at least [`PADDING_EDGE_SHARE`] of them are near black (padding), the pixels
+/// of that colour connected to the edge, at most [`BORDER_MAX_DEPTH`] of the image deep; then the pixels the borders enclose (cut off from the image's
 /// centre: a banner's text). Returns the mask and what each side gave (empty: no border).
 pub fn uniform_border(image: &RgbImage) -> (PixelMask, Vec<BorderSide>) {
     let (w, h) = image.dimensions();
@@ -261,7 +267,11 @@ fn side_colour(image: &RgbImage, side: Side) -> Option<[u8; 3]> {
     };
     let colour = [median(0), median(1), median(2)];
     let share = px.iter().filter(|p| close(**p, colour)).count() as f64 / n as f64;
-    (share >= BORDER_EDGE_SHARE).then_some(colour)
+    if share >= BORDER_EDGE_SHARE {
+        return Some(colour);
+    }
+    let black = px.iter().filter(|p| close(**p, [0, 0, 0])).count() as f64 / n as f64;
+    (black >= PADDING_EDGE_SHARE).then_some([0, 0, 0])
 }
 
 /// Masks the pixels of `colour` 4-connected to `side`'s edge, within the depth limit.
@@ -365,6 +375,24 @@ mod tests {
         assert_eq!(sides.iter().map(|s| s.side).collect::<Vec<_>>(), ["left"]);
         let wedge: u32 = (0..h).map(|y| 20u32.saturating_sub(y / 8)).sum();
         assert_eq!(m.count() as u32, wedge);
+    }
+
+    #[test]
+    fn corner_wedges_of_black_padding_are_masked() {
+        // a rotated stabilised frame: black wedges in two corners, covering part of the edges
+        let (w, h) = (200u32, 150u32);
+        let mut img = photo(w, h);
+        let wedge = |x: u32, y: u32| x * 3 + y * 2 < 120 || (w - 1 - x) * 3 + (h - 1 - y) * 2 < 100;
+        for (x, y, p) in img.enumerate_pixels_mut() {
+            if wedge(x, y) {
+                *p = image::Rgb([2, 1, 3]);
+            }
+        }
+        let (m, sides) = uniform_border(&img);
+        assert!(!sides.is_empty());
+        let n = (0..w * h).filter(|i| wedge(i % w, i / w)).count() as u64;
+        assert_eq!(m.count(), n, "{sides:?}");
+        assert!(!m.is_masked([100, 75]));
     }
 
     #[test]
