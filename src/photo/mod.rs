@@ -48,7 +48,10 @@ pub use inputs::input::{
     PhotoEntry, PhotoSpec, image_size, photo_spec, read_photo_entries, read_photo_list,
     read_photo_specs,
 };
-pub use inputs::mask::{BorderSide, PixelMask, uniform_border};
+pub use inputs::mask::{
+    BORDER_EDGE_SHARE, BORDER_MAX_DEPTH, BORDER_TOLERANCE, BorderSide, PADDING_EDGE_SHARE,
+    PixelMask, uniform_border,
+};
 pub use inputs::pyramid::{PhotoPyramid, downsample2, downsample2_in, half_camera};
 pub use leveling::colour_leveling::{
     ColourPairs, ColourTransform, LevelingParams, collect_pairs, fit_colour_transform,
