@@ -27,8 +27,9 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::photo::{PhotoEntry, PhotoSpec};
 use crate::register::{
-    CameraParams, LabelTexture, LabelledTerrain, Param, ResectFit, ResectOptions, TerrainFit,
-    TerrainOptions, TieFit, TieOptions, register_to_terrain, resect_photo, tie_photo,
+    CameraParams, LabelTexture, LabelledTerrain, MaskedPhoto, Param, ResectFit, ResectOptions,
+    TerrainFit, TerrainOptions, TieFit, TieOptions, register_masked_to_terrain, resect_photo,
+    tie_photo,
 };
 use crate::store::Store;
 
@@ -489,7 +490,12 @@ impl<'a> Registration<'a> {
                 j != i && trusted[j]
             })?;
         }
-        let fit = register_to_terrain(&terrain, &photo, &spec.camera, self.opts)
+        let mask = registration_mask(spec, &photo)?;
+        let masked = MaskedPhoto {
+            image: &photo,
+            mask: mask.as_ref(),
+        };
+        let fit = register_masked_to_terrain(&terrain, &masked, &spec.camera, self.opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         if fit.photo_label_share.is_some_and(|s| s < 0.01) {
             warn(&format!(
@@ -853,7 +859,12 @@ fn second_pass_against_photos(
         }
         let photo = images.get(i)?;
         let start = first.camera;
-        let fit = register_to_terrain(&terrain, &photo, &start, opts)
+        let mask = registration_mask(spec, &photo)?;
+        let masked = MaskedPhoto {
+            image: &photo,
+            mask: mask.as_ref(),
+        };
+        let fit = register_masked_to_terrain(&terrain, &masked, &start, opts)
             .map_err(|e| Error::BadOption(format!("{}: {e}", spec.image_path.display())))?;
         if fit.converged {
             let mut f = fit;
@@ -889,6 +900,23 @@ fn set_label_photos(
         sources.iter().map(|(c, img)| (*c, img.as_ref())).collect();
     terrain.set_label_photos(&refs);
     Ok(())
+}
+
+/// The pixels of photo `spec` (decoded as `image`) registration leaves out: its mask file
+/// (`"mask"`) and its uniform borders ([`crate::photo::uniform_border`]); `None` when none.
+fn registration_mask(
+    spec: &PhotoSpec,
+    image: &image::RgbImage,
+) -> Result<Option<crate::photo::PixelMask>> {
+    let (mut mask, _) = crate::photo::uniform_border(image);
+    if let Some(p) = &spec.mask_path {
+        mask.union(&crate::photo::PixelMask::read(
+            p,
+            image.width(),
+            image.height(),
+        )?);
+    }
+    Ok((mask.count() > 0).then_some(mask))
 }
 
 #[cfg(test)]

@@ -62,6 +62,6 @@ pub use pairs::ties::{TieFit, TieOptions, tie_photo};
 pub use params::{CameraParams, Param, parse_free};
 pub use resection::{ResectFit, ResectOptions, resect_photo};
 pub use terrain::{
-    EdgeFit, EdgeOptions, LabelTexture, LabelledTerrain, TerrainFit, TerrainOptions,
-    parallax_px_per_m, refine_edges, register_to_terrain,
+    EdgeFit, EdgeOptions, LabelTexture, LabelledTerrain, MaskedPhoto, TerrainFit, TerrainOptions,
+    parallax_px_per_m, refine_edges, register_masked_to_terrain, register_to_terrain,
 };

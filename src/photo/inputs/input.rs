@@ -56,12 +56,7 @@ impl PhotoSpec {
             ));
         }
         let mask = match &self.mask_path {
-            Some(p) => {
-                let m = image::open(p)
-                    .map_err(|e| Error::bad_input(p, format!("cannot read mask image: {e}")))?
-                    .to_luma8();
-                Some(PixelMask::from_image(&m, image.width(), image.height(), p)?)
-            }
+            Some(p) => Some(PixelMask::read(p, image.width(), image.height())?),
             None => None,
         };
         Ok(PhotoInput {

@@ -54,6 +54,15 @@ impl PixelMask {
         })
     }
 
+    /// Reads the mask image at `path` for a `width × height` photo ([`PixelMask::from_image`]).
+    /// Errors name the file.
+    pub fn read(path: &std::path::Path, width: u32, height: u32) -> Result<PixelMask> {
+        let m = image::open(path)
+            .map_err(|e| Error::bad_input(path, format!("cannot read mask image: {e}")))?
+            .to_luma8();
+        PixelMask::from_image(&m, width, height, path)
+    }
+
     /// Whether pixel `[column, row]` is left out (pixels outside the image are).
     #[inline]
     pub fn is_masked(&self, pixel: [u32; 2]) -> bool {
@@ -135,7 +144,9 @@ pub struct BorderSide {
 /// The automatic mask of uniform borders of `image`: per side whose edge pixels (at least
 /// [`BORDER_EDGE_SHARE`] of them) share one colour (within [`BORDER_TOLERANCE`] of their
 /// median), or at least [`PADDING_EDGE_SHARE`] of them are near black (padding), the pixels
-/// of that colour connected to the edge, at most [`BORDER_MAX_DEPTH`] of the image deep; then the pixels the borders enclose (cut off from the image's
+/// of that colour connected to the edge, at most [`BORDER_MAX_DEPTH`] of the image deep and
+/// ending before that depth in the middle half of the side (a clear sky or a snowfield that
+/// goes on is image, not a border); then the pixels the borders enclose (cut off from the image's
 /// centre: a banner's text). Returns the mask and what each side gave (empty: no border).
 pub fn uniform_border(image: &RgbImage) -> (PixelMask, Vec<BorderSide>) {
     let (w, h) = image.dimensions();
@@ -293,13 +304,24 @@ fn fill_from_side(image: &RgbImage, side: Side, colour: [u8; 3], mask: &mut Pixe
     for k in 0..n {
         stack.push(side.pixel(side.line(0, w, h), k));
     }
+    let mut filled: Vec<usize> = Vec::new();
+    // (depth, position along the side) of a pixel
+    let place = |c: u32, r: u32| match side {
+        Side::Top => (r, c),
+        Side::Bottom => (h - 1 - r, c),
+        Side::Left => (c, r),
+        Side::Right => (w - 1 - c, r),
+    };
+    let mut reaches_limit = false;
     while let Some([c, r]) = stack.pop() {
         let i = r as usize * w as usize + c as usize;
         if seen[i] || !inside(c, r) || !close(image.get_pixel(c, r).0, colour) {
             continue;
         }
         seen[i] = true;
-        mask.masked[i] = true;
+        filled.push(i);
+        let (d, k) = place(c, r);
+        reaches_limit |= d + 1 >= depth && (n / 4..3 * n / 4).contains(&k);
         if c > 0 {
             stack.push([c - 1, r]);
         }
@@ -311,6 +333,13 @@ fn fill_from_side(image: &RgbImage, side: Side, colour: [u8; 3], mask: &mut Pixe
         }
         if r + 1 < h {
             stack.push([c, r + 1]);
+        }
+    }
+    // a frame, banner or padding ends inside the image; a region that goes on through the
+    // depth limit in the side's middle half is image (a clear sky, a snowfield)
+    if !reaches_limit {
+        for i in filled {
+            mask.masked[i] = true;
         }
     }
 }
@@ -375,6 +404,27 @@ mod tests {
         assert_eq!(sides.iter().map(|s| s.side).collect::<Vec<_>>(), ["left"]);
         let wedge: u32 = (0..h).map(|y| 20u32.saturating_sub(y / 8)).sum();
         assert_eq!(m.count() as u32, wedge);
+    }
+
+    #[test]
+    fn a_uniform_sky_along_the_top_is_not_a_border() {
+        let (w, h) = (200u32, 150u32);
+        let mut img = photo(w, h);
+        for (_, y, p) in img.enumerate_pixels_mut() {
+            if y < 60 {
+                *p = image::Rgb([170, 200, 235]);
+            }
+        }
+        let (m, sides) = uniform_border(&img);
+        assert!(sides.is_empty() && m.count() == 0, "{sides:?}");
+        // the same sky above a white scan frame: the frame alone
+        for (x, y, p) in img.enumerate_pixels_mut() {
+            if x < 6 || y < 6 || x >= w - 6 || y >= h - 6 {
+                *p = image::Rgb([252, 252, 250]);
+            }
+        }
+        let (m, _) = uniform_border(&img);
+        assert_eq!(m.count() as u32, w * h - (w - 12) * (h - 12));
     }
 
     #[test]

@@ -183,6 +183,26 @@ pub fn contour(
         .collect()
 }
 
+/// Pixels (of the reduced image) around a masked one without gradient: the blur's reach.
+pub const MASK_EDGE_MARGIN: usize = 4;
+
+/// Per pixel of a `w × h` image reduced `factor` times from `mask`'s, whether none of the
+/// full-resolution pixels it averages is masked.
+pub(crate) fn reduced_validity(
+    mask: &crate::photo::PixelMask,
+    factor: u32,
+    w: usize,
+    h: usize,
+) -> Vec<bool> {
+    let f = factor.max(1);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x as u32, y as u32)))
+        .map(|(x, y)| {
+            (y * f..(y + 1) * f).all(|yy| (x * f..(x + 1) * f).all(|xx| !mask.is_masked([xx, yy])))
+        })
+        .collect()
+}
+
 /// A photo's luma gradient at one scale (box-filtered by a power of two, then Gaussian σ 1 px).
 pub struct EdgeImage {
     width: usize,
@@ -194,6 +214,42 @@ pub struct EdgeImage {
 impl EdgeImage {
     /// The gradient of `photo` box-filtered by `factor` per axis.
     pub fn from_photo(photo: &RgbImage, factor: u32) -> EdgeImage {
+        Self::from_photo_masked(photo, None, factor)
+    }
+
+    /// [`EdgeImage::from_photo`] with no gradient within `MASK_EDGE_MARGIN` (4) pixels of a
+    /// reduced pixel that holds a masked one (a border's edge is no terrain edge).
+    pub fn from_photo_masked(
+        photo: &RgbImage,
+        mask: Option<&crate::photo::PixelMask>,
+        factor: u32,
+    ) -> EdgeImage {
+        let mut e = Self::unmasked(photo, factor);
+        if let Some(m) = mask
+            && e.width > 0
+        {
+            let valid = reduced_validity(m, factor.max(1), e.width, e.height);
+            let r = MASK_EDGE_MARGIN as isize;
+            let (w, h) = (e.width as isize, e.height as isize);
+            for y in 0..h {
+                for x in 0..w {
+                    let near = (-r..=r).any(|dy| {
+                        (-r..=r).any(|dx| {
+                            let (xx, yy) = (x + dx, y + dy);
+                            xx >= 0 && yy >= 0 && xx < w && yy < h && !valid[(yy * w + xx) as usize]
+                        })
+                    });
+                    if near {
+                        let i = (y * w + x) as usize;
+                        (e.gx[i], e.gy[i]) = (0.0, 0.0);
+                    }
+                }
+            }
+        }
+        e
+    }
+
+    fn unmasked(photo: &RgbImage, factor: u32) -> EdgeImage {
         let Grey { w, h, v: luma } = Grey::of(photo).reduced(factor.max(1) as usize);
         if w == 0 || h == 0 {
             return EdgeImage {
@@ -381,6 +437,24 @@ pub fn refine_edges(
     prior: &CameraModel,
     opts: &EdgeOptions,
 ) -> Result<EdgeFit> {
+    refine_masked_edges(
+        terrain,
+        &super::MaskedPhoto::whole(photo),
+        start,
+        prior,
+        opts,
+    )
+}
+
+/// [`refine_edges`] with pixels of the photo left out: no edges within
+/// [`MASK_EDGE_MARGIN`] pixels (of the reduced image) of them.
+pub(crate) fn refine_masked_edges(
+    terrain: &LabelledTerrain,
+    photo: &super::MaskedPhoto,
+    start: &CameraModel,
+    prior: &CameraModel,
+    opts: &EdgeOptions,
+) -> Result<EdgeFit> {
     let mut cam = CameraParams::from_camera(start);
     let prior = CameraParams::from_camera(prior);
     let mut last = (0usize, f64::NAN, f64::NAN);
@@ -388,7 +462,7 @@ pub fn refine_edges(
     let mut rounds = 0;
     for &factor in &opts.factors {
         let f = factor.max(1);
-        let edges = EdgeImage::from_photo(photo, f);
+        let edges = EdgeImage::from_photo_masked(photo.image, photo.mask, f);
         let (w, h) = edges.dimensions();
         for _ in 0..6 {
             rounds += 1;
@@ -573,4 +647,56 @@ fn median(v: &[f64]) -> f64 {
     }
     s.sort_unstable_by(f64::total_cmp);
     s[s.len() / 2]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photo::uniform_border;
+    use crate::register::terrain::GreyImage;
+
+    /// A textured photo with a black banner and white text along its bottom 10 rows.
+    fn banner_photo() -> RgbImage {
+        RgbImage::from_fn(120, 80, |x, y| {
+            if y >= 70 {
+                let text = (10..100).contains(&x) && (73..77).contains(&y) && x % 3 == 0;
+                image::Rgb(if text { [255; 3] } else { [0; 3] })
+            } else {
+                let v = ((x * 37 + y * 91) % 97) as u8;
+                image::Rgb([60 + v, 50 + v / 2, 40 + v / 3])
+            }
+        })
+    }
+
+    #[test]
+    fn masked_pixels_give_no_grey_and_no_edges() {
+        let photo = banner_photo();
+        let (mask, sides) = uniform_border(&photo);
+        assert_eq!(sides.len(), 1);
+        assert_eq!(mask.count(), 120 * 10);
+        // unmasked: the banner's top is a strong edge and its pixels have grey values
+        let plain = EdgeImage::from_photo(&photo, 1);
+        assert!(
+            plain
+                .gradient([60.0, 69.5])
+                .is_some_and(|g| g[1].abs() > 5.0)
+        );
+        let grey = GreyImage::from_photo(&photo, 1);
+        assert!(grey.at(60.0, 75.0).is_some());
+        // masked: no gradient within the margin of the banner, none of its grey values
+        let edges = EdgeImage::from_photo_masked(&photo, Some(&mask), 1);
+        assert_eq!(edges.gradient([60.0, 69.5]), Some([0.0, 0.0]));
+        assert_eq!(edges.gradient([60.0, 66.0]), Some([0.0, 0.0]));
+        assert!(
+            edges
+                .gradient([60.0, 30.0])
+                .is_some_and(|g| g != [0.0, 0.0])
+        );
+        let masked = GreyImage::from_photo_masked(&photo, Some(&mask), 2);
+        assert!(masked.at(30.0, 36.0).is_none() && masked.at(30.0, 20.0).is_some());
+        // without a mask the masked constructors equal the plain ones
+        let none = GreyImage::from_photo_masked(&photo, None, 2);
+        let plain2 = GreyImage::from_photo(&photo, 2);
+        assert_eq!(none.at(17.3, 21.7), plain2.at(17.3, 21.7));
+    }
 }

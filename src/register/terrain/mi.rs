@@ -27,6 +27,8 @@ pub struct GreyImage {
     /// Height in pixels.
     pub height: u32,
     data: Vec<f32>,
+    /// Per pixel, whether it holds no masked photo pixel (`None`: every pixel is valid).
+    valid: Option<Vec<bool>>,
 }
 
 impl GreyImage {
@@ -34,6 +36,17 @@ impl GreyImage {
     /// (blue − red over their sum), each stretched so its 1st and 99th percentiles span
     /// its classes.
     pub fn from_photo(photo: &RgbImage, factor: u32) -> GreyImage {
+        Self::from_photo_masked(photo, None, factor)
+    }
+
+    /// [`GreyImage::from_photo`] with the pixels `mask` marks left out: a reduced pixel that
+    /// holds one is outside the photo ([`GreyImage::at`] gives `None` next to it), and the
+    /// stretch's percentiles come from the others.
+    pub fn from_photo_masked(
+        photo: &RgbImage,
+        mask: Option<&crate::photo::PixelMask>,
+        factor: u32,
+    ) -> GreyImage {
         let f = factor.max(1);
         let (w, h) = ((photo.width() / f).max(1), (photo.height() / f).max(1));
         let px: Vec<[f32; 2]> = (0..h)
@@ -59,8 +72,19 @@ impl GreyImage {
                 })
             })
             .collect();
+        let valid = mask
+            .map(|m| super::edges::reduced_validity(m, f, w as usize, h as usize))
+            .filter(|v| v.iter().any(|ok| *ok));
         let stretch = |k: usize, classes: usize| -> (f32, f32) {
-            let mut v: Vec<f32> = px.iter().map(|p| p[k]).collect();
+            let mut v: Vec<f32> = match &valid {
+                Some(ok) => px
+                    .iter()
+                    .zip(ok)
+                    .filter(|(_, ok)| **ok)
+                    .map(|(p, _)| p[k])
+                    .collect(),
+                None => px.iter().map(|p| p[k]).collect(),
+            };
             v.sort_unstable_by(f32::total_cmp);
             let lo = v[v.len() / 100];
             let hi = v[(v.len() * 99 / 100).min(v.len() - 1)];
@@ -84,6 +108,7 @@ impl GreyImage {
             width: w,
             height: h,
             data,
+            valid,
         }
     }
 
@@ -100,6 +125,11 @@ impl GreyImage {
         let w = self.width as usize;
         let x1 = (x0 + 1).min(w - 1);
         let y1 = (y0 + 1).min(self.height as usize - 1);
+        if let Some(ok) = &self.valid
+            && !(ok[y0 * w + x0] && ok[y0 * w + x1] && ok[y1 * w + x0] && ok[y1 * w + x1])
+        {
+            return None;
+        }
         let d = &self.data;
         let g = |k: usize| {
             let top = d[2 * (y0 * w + x0) + k] * (1.0 - fx) + d[2 * (y0 * w + x1) + k] * fx;

@@ -278,6 +278,46 @@ pub fn register_to_terrain(
     rough: &CameraModel,
     opts: &TerrainOptions,
 ) -> Result<TerrainFit> {
+    register_masked_to_terrain(terrain, &MaskedPhoto::whole(photo), rough, opts)
+}
+
+/// A photo and the pixels of it registration leaves out (the photo list's `"mask"`, its
+/// uniform borders): they count as outside the photo for the mutual information and give
+/// no edges. Dereferences to the image.
+#[derive(Clone, Copy, Debug)]
+pub struct MaskedPhoto<'a> {
+    /// The photo.
+    pub image: &'a RgbImage,
+    /// Its pixels to leave out (of its size), if any.
+    pub mask: Option<&'a crate::photo::PixelMask>,
+}
+
+impl<'a> MaskedPhoto<'a> {
+    /// The whole photo (nothing left out).
+    pub fn whole(image: &'a RgbImage) -> MaskedPhoto<'a> {
+        MaskedPhoto { image, mask: None }
+    }
+
+    /// Its grey classes reduced `factor` times ([`GreyImage::from_photo_masked`]).
+    fn grey(&self, factor: u32) -> GreyImage {
+        GreyImage::from_photo_masked(self.image, self.mask, factor)
+    }
+}
+
+impl std::ops::Deref for MaskedPhoto<'_> {
+    type Target = RgbImage;
+    fn deref(&self) -> &RgbImage {
+        self.image
+    }
+}
+
+/// [`register_to_terrain`] with pixels of the photo left out ([`MaskedPhoto`]).
+pub fn register_masked_to_terrain(
+    terrain: &LabelledTerrain,
+    photo: &MaskedPhoto,
+    rough: &CameraModel,
+    opts: &TerrainOptions,
+) -> Result<TerrainFit> {
     let t0 = Instant::now();
     if (rough.width, rough.height) != photo.dimensions() {
         return Err(Error::BadOption(format!(
@@ -313,7 +353,7 @@ pub fn register_to_terrain(
     let mut cam = refine_from_peaks(terrain, &space, photo, &peaks, coarse, finest, &mut evals)?;
 
     // Finest scale: two rounds (samples re-cast in between), then restarts for the verdict.
-    let grey = GreyImage::from_photo(photo, finest);
+    let grey = photo.grey(finest);
     let mut score = 0.0;
     for _ in 0..2 {
         let (c2, s2, e) = refine(terrain, &space, &cam, &grey, 2.0)?;
@@ -386,7 +426,7 @@ pub fn register_to_terrain(
 /// the search half-widths, scored on the photo reduced `coarse` times (0.7 px steps).
 fn grid_peaks(
     terrain: &LabelledTerrain,
-    photo: &RgbImage,
+    photo: &MaskedPhoto,
     rough: &CameraModel,
     mi_free: &[Param],
     opts: &TerrainOptions,
@@ -394,7 +434,7 @@ fn grid_peaks(
     evals: &mut usize,
 ) -> Result<Vec<[f64; 3]>> {
     let start = CameraParams::from_camera(rough);
-    let grey16 = GreyImage::from_photo(photo, coarse);
+    let grey16 = photo.grey(coarse);
     let cam16 = scaled(rough, &grey16);
     let samples = terrain.sample(&cam16, 1.0, 0.08, Some(band_width(coarse)))?;
     let f16 = cam16.fx;
@@ -456,7 +496,7 @@ fn grid_peaks(
 fn refine_from_peaks(
     terrain: &LabelledTerrain,
     space: &Space,
-    photo: &RgbImage,
+    photo: &MaskedPhoto,
     peaks: &[[f64; 3]],
     coarse: u32,
     finest: u32,
@@ -475,7 +515,7 @@ fn refine_from_peaks(
         }
         let mut score = f64::NEG_INFINITY;
         for &f in &levels {
-            let grey = GreyImage::from_photo(photo, f);
+            let grey = photo.grey(f);
             let (c2, s2, e) = refine(terrain, space, &c, &grey, 3.0)?;
             *evals += e;
             (c, score) = (c2, s2);
@@ -487,7 +527,7 @@ fn refine_from_peaks(
     let (mut cam, _) = best.ok_or_else(|| Error::BadOption("register: empty search".into()))?;
     let mut f = levels.last().copied().unwrap_or(coarse) / 2;
     while f > finest {
-        let grey = GreyImage::from_photo(photo, f);
+        let grey = photo.grey(f);
         let (c2, _, e) = refine(terrain, space, &cam, &grey, 2.0)?;
         *evals += e;
         cam = c2;
@@ -578,7 +618,7 @@ pub fn parallax_px_per_m(terrain: &LabelledTerrain, cam: &CameraModel) -> Option
 #[allow(clippy::too_many_arguments)]
 fn finish_with_edges(
     terrain: &LabelledTerrain,
-    photo: &RgbImage,
+    photo: &MaskedPhoto,
     rough: &CameraModel,
     mi: &CameraModel,
     opts: &TerrainOptions,
@@ -603,7 +643,7 @@ fn finish_with_edges(
         )
     };
     // (an edge fit that cannot be made, e.g. too few silhouettes matched, is a verdict)
-    let first = match refine_edges(terrain, photo, mi, rough, &eopts) {
+    let first = match edges::refine_masked_edges(terrain, photo, mi, rough, &eopts) {
         Ok(f) => f,
         Err(e) => return Ok(not_fitted(e.to_string())),
     };
@@ -616,7 +656,7 @@ fn finish_with_edges(
     for kick in [DVec3::new(2.0, -2.0, 0.0), back] {
         let mut kicked = *mi;
         kicked.position += kick;
-        let again = match refine_edges(terrain, photo, &kicked, rough, &eopts) {
+        let again = match edges::refine_masked_edges(terrain, photo, &kicked, rough, &eopts) {
             Ok(f) => f,
             Err(e) => return Ok(not_fitted(format!("restart: {e}"))),
         };

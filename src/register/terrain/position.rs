@@ -79,7 +79,7 @@ pub(super) fn search_position(
     terrain: &LabelledTerrain,
     space: &Space,
     cam: CameraParams,
-    photo: &image::RgbImage,
+    photo: &super::MaskedPhoto,
     finest: u32,
     step_m: f64,
     rounds: usize,
@@ -88,7 +88,7 @@ pub(super) fn search_position(
     let mut above = 0.0f64;
     let depth = space.depth;
     let factor = dense_factor(photo.width(), photo.height()).max(finest);
-    let grey = GreyImage::from_photo(photo, factor);
+    let grey = photo.grey(factor);
     let grey = &grey;
     // a trial: moved, sampled on the full grid, refitted, sampled and refitted again
     let trial = |from: &CameraParams, p: DVec3| -> Result<(CameraParams, f64, usize)> {
