@@ -149,6 +149,47 @@ pub struct BorderSide {
 /// goes on is image, not a border); then the pixels the borders enclose (cut off from the image's
 /// centre: a banner's text). Returns the mask and what each side gave (empty: no border).
 pub fn uniform_border(image: &RgbImage) -> (PixelMask, Vec<BorderSide>) {
+    let (mut mask, mut sides) = one_border_layer(image);
+    // a border inside a border (a banner inside a scan's frame): once more inside the rows
+    // and columns the first layer masks whole
+    if let Some([x0, y0, x1, y1]) = inner_rectangle(&mask)
+        && (x1 - x0, y1 - y0) != image.dimensions()
+    {
+        let inner = image::imageops::crop_imm(image, x0, y0, x1 - x0, y1 - y0).to_image();
+        let (m, more) = one_border_layer(&inner);
+        let mut new = 0u64;
+        for y in 0..m.height {
+            for x in 0..m.width {
+                let i = (y + y0) as usize * mask.width as usize + (x + x0) as usize;
+                if m.is_masked([x, y]) && !mask.masked[i] {
+                    mask.masked[i] = true;
+                    new += 1;
+                }
+            }
+        }
+        // (the rest of a first-layer border seen again adds nothing)
+        if new > 0 {
+            sides.extend(more);
+        }
+    }
+    (mask, sides)
+}
+
+/// The rectangle `[x0, y0, x1, y1)` left after the rows and columns `mask` masks whole from
+/// each edge; `None` when nothing (or everything) is masked that way.
+fn inner_rectangle(mask: &PixelMask) -> Option<[u32; 4]> {
+    let (w, h) = (mask.width, mask.height);
+    let row = |y: u32| (0..w).all(|x| mask.is_masked([x, y]));
+    let col = |x: u32| (0..h).all(|y| mask.is_masked([x, y]));
+    let y0 = (0..h).find(|&y| !row(y))?;
+    let y1 = (0..h).rev().find(|&y| !row(y))? + 1;
+    let x0 = (0..w).find(|&x| !col(x))?;
+    let x1 = (0..w).rev().find(|&x| !col(x))? + 1;
+    (x1 > x0 + 4 && y1 > y0 + 4).then_some([x0, y0, x1, y1])
+}
+
+/// One layer of [`uniform_border`]: the borders along the image's own edges.
+fn one_border_layer(image: &RgbImage) -> (PixelMask, Vec<BorderSide>) {
     let (w, h) = image.dimensions();
     let mut mask = PixelMask::none(w, h);
     let mut sides = Vec::new();
@@ -404,6 +445,30 @@ mod tests {
         assert_eq!(sides.iter().map(|s| s.side).collect::<Vec<_>>(), ["left"]);
         let wedge: u32 = (0..h).map(|y| 20u32.saturating_sub(y / 8)).sum();
         assert_eq!(m.count() as u32, wedge);
+    }
+
+    #[test]
+    fn a_banner_inside_a_scan_frame_is_masked_too() {
+        let (w, h) = (200u32, 150u32);
+        let mut img = photo(w, h);
+        for (x, y, p) in img.enumerate_pixels_mut() {
+            if x < 6 || y < 6 || x >= w - 6 || y >= h - 6 {
+                *p = image::Rgb([252, 252, 250]);
+            } else if y >= h - 18 {
+                let text = (40..120).contains(&x) && (h - 15..h - 9).contains(&y) && x % 3 == 0;
+                *p = if text {
+                    image::Rgb([255, 255, 255])
+                } else {
+                    image::Rgb([0, 0, 0])
+                };
+            }
+        }
+        let (m, sides) = uniform_border(&img);
+        // the frame, and the 12 banner rows inside it with their text
+        let frame = w * h - (w - 12) * (h - 12);
+        assert_eq!(m.count() as u32, frame + 12 * (w - 12), "{sides:?}");
+        assert!(sides.iter().any(|s| s.colour == [0, 0, 0]), "{sides:?}");
+        assert!(!m.is_masked([100, 60]));
     }
 
     #[test]
