@@ -89,13 +89,9 @@ impl CameraPlacement {
     /// Measures where `camera` stands against the terrain of `store`.
     pub fn of(store: &Store, camera: &CameraModel) -> Result<CameraPlacement> {
         let p = camera.position;
-        let g = &store.manifest.georef;
-        let (w, h) = (
-            store.manifest.dem.width as f64,
-            store.manifest.dem.height as f64,
-        );
-        let (x0, y1) = (g.origin_x, g.origin_y);
-        let (x1, y0) = (x0 + (w - 1.0) * g.spacing_x, y1 - (h - 1.0) * g.spacing_y);
+        let (g, d) = (&store.manifest.georef, &store.manifest.dem);
+        let (x0, y0) = g.world(0.0, 0.0);
+        let (x1, y1) = g.world((d.height - 1) as f64, (d.width - 1) as f64);
         Ok(CameraPlacement {
             position: p.to_array(),
             ground: store.surface_at(p.x, p.y)?,
